@@ -1,0 +1,77 @@
+"""The one gripper-frame convention (docs/gripper_frame.md).
+
+A gripper pose is a (4, 4) float64 homogeneous transform from the gripper frame to the object frame.
+Its rotation columns are the gripper axes expressed in the object frame: column 0 = u (approach,
+palm to fingertips), column 1 = v (closing axis), column 2 = t = u x v (finger height).
+The origin is the palm centre. The closing region is 0 <= u < depth, |v| < width/2, |t| < height/2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def pose_from_axes(origins: np.ndarray, approach: np.ndarray, closing: np.ndarray) -> np.ndarray:
+    """Build gripper poses.
+
+    origins : (n, 3) float   palm centres in the object frame
+    approach : (n, 3) float  u axes (need not be unit)
+    closing : (n, 3) float   v axes; made orthogonal to u
+    returns : (n, 4, 4) float64
+    """
+    u = _unit(np.asarray(approach, dtype=np.float64))
+    v = np.asarray(closing, dtype=np.float64)
+    v = _unit(v - np.sum(v * u, axis=1, keepdims=True) * u)
+    t = np.cross(u, v)
+    poses = np.zeros((len(u), 4, 4))
+    poses[:, :3, 0], poses[:, :3, 1], poses[:, :3, 2] = u, v, t
+    poses[:, :3, 3] = origins
+    poses[:, 3, 3] = 1.0
+    return poses
+
+
+def invert_poses(poses: np.ndarray) -> np.ndarray:
+    """Inverse of rigid transforms. poses : (..., 4, 4) -> (..., 4, 4)."""
+    rot = np.swapaxes(poses[..., :3, :3], -1, -2)
+    out = np.zeros_like(poses)
+    out[..., :3, :3] = rot
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", rot, poses[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def to_gripper_frame(points: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """Express object-frame points in each gripper frame.
+
+    points : (m, 3) float, poses : (n, 4, 4) float -> (n, m, 3) float64
+    """
+    rot = poses[:, :3, :3]
+    offset = np.einsum("nj,nji->ni", poses[:, :3, 3], rot)
+    return np.matmul(points[None, :, :], rot) - offset[:, None, :]
+
+
+def transform_points(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """Apply one (4, 4) transform to (m, 3) points."""
+    return points @ pose[:3, :3].T + pose[:3, 3]
+
+
+def in_box(points_g: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Mask of gripper-frame points with lower <= p < upper on every axis. (..., 3) -> (...) bool."""
+    return np.all((points_g >= lower) & (points_g < upper), axis=-1)
+
+
+def closing_region_bounds(depth: float, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) corners of the closing region in the gripper frame, each (3,) float64."""
+    return np.array([0.0, -width / 2, -height / 2]), np.array([depth, width / 2, height / 2])
+
+
+def perpendicular(vectors: np.ndarray) -> np.ndarray:
+    """A unit vector perpendicular to each of (n, 3) vectors."""
+    vectors = _unit(vectors)
+    helper = np.where(np.abs(vectors[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    return _unit(np.cross(vectors, helper))
+
+
+def _unit(vectors: np.ndarray) -> np.ndarray:
+    norms = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return vectors / np.where(norms > 0, norms, 1.0)

@@ -1,0 +1,159 @@
+"""Grasp candidate samplers: antipodal (ray cast along the inward normal) and the paper's normal-based one.
+
+Both are deterministic for a given object content id and seed, vectorized, and reject poses whose palm or
+fingers (fully open) would intersect the object.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from onepiece_dist.core.frames import in_box, perpendicular, pose_from_axes, to_gripper_frame
+from onepiece_dist.core.mesh import TriangleMesh
+from onepiece_dist.spec import GripperSpec, SamplerSpec
+
+_RAY_START = 1e-5
+_COLLISION_POINTS = 4000
+_POINTS_PER_BATCH = 4_000_000
+
+
+@dataclass(frozen=True)
+class GraspCandidates:
+    """poses : (n, 4, 4) float64 gripper poses in the object frame; widths : (n,) float64 contact distance."""
+
+    poses: np.ndarray
+    widths: np.ndarray
+    tried: int
+    rejected_collision: int
+
+
+def object_rng(content_id: str, seed: int, stream: int = 0) -> np.random.Generator:
+    """Generator seeded by the object's content id, the job seed and a stream number."""
+    return np.random.default_rng([int(content_id[:16], 16), int(content_id[16:32] or "0", 16), seed, stream])
+
+
+def sample_candidates(mesh: TriangleMesh, points: np.ndarray, normals: np.ndarray, count: int,
+                      gripper: GripperSpec, sampler: SamplerSpec, rng: np.random.Generator) -> GraspCandidates:
+    """Up to ``count`` collision-free candidates by ``sampler.method``.
+
+    points, normals : (m, 3) float64 dense surface samples of ``mesh`` with their normals
+    """
+    if sampler.method == "antipodal":
+        poses, widths = _antipodal_poses(mesh, points, normals, count, gripper, sampler, rng)
+    else:
+        poses, widths = _normal_poses(points, normals, count, gripper, sampler, rng)
+    probe = points[rng.permutation(len(points))[:_COLLISION_POINTS]]
+    order = rng.permutation(len(poses))
+    kept: list[np.ndarray] = []
+    tried = found = 0
+    while found < count and tried < len(order):
+        batch = order[tried:tried + max(2 * (count - found), 64)]
+        free = batch[~collides(probe, poses[batch], gripper)]
+        kept.append(free[: count - found])
+        tried += len(batch)
+        found += len(kept[-1])
+    pick = np.sort(np.concatenate(kept)) if kept else np.zeros(0, dtype=np.int64)
+    return GraspCandidates(poses[pick], widths[pick], tried, tried - found)
+
+
+def _antipodal_poses(mesh, points, normals, count, gripper, sampler, rng):
+    """Contact pairs by ray casting along -normal, friction-cone test, then K approach angles each."""
+    seeds = rng.permutation(len(points))[: max(4 * count, 64)]
+    p, n = points[seeds], normals[seeds]
+    t_hit, n_q = cast_rays(mesh, p - n * _RAY_START, -n)
+    width = t_hit + _RAY_START
+    cos_cone = np.cos(np.arctan(sampler.friction_cone))
+    ok = np.isfinite(t_hit) & (width >= sampler.min_width) & (width <= gripper.max_opening * 0.95)
+    ok &= np.abs(np.sum(n_q * n, axis=1)) >= cos_cone
+    p, n, width = p[ok], n[ok], width[ok]
+    centre = p - n * (width[:, None] / 2)
+    return _poses_around_axes(centre, -n, width, gripper, sampler, rng)
+
+
+def _poses_around_axes(centre, closing, width, gripper, sampler, rng):
+    """K approach directions around each closing axis; contact depth sampled in depth_range."""
+    k = sampler.approach_angles
+    e1 = perpendicular(closing)
+    e2 = np.cross(closing, e1)
+    angles = rng.random(len(centre))[:, None] * 2 * np.pi + np.arange(k)[None, :] * 2 * np.pi / k
+    approach = (np.cos(angles)[..., None] * e1[:, None] + np.sin(angles)[..., None] * e2[:, None]).reshape(-1, 3)
+    lo, hi = sampler.depth_range
+    depth = (lo + (hi - lo) * rng.random(len(approach))) * gripper.closing_depth
+    origins = np.repeat(centre, k, axis=0) - approach * depth[:, None]
+    return pose_from_axes(origins, approach, np.repeat(closing, k, axis=0)), np.repeat(width, k)
+
+
+def _normal_poses(points, normals, count, gripper, sampler, rng):
+    """The paper's sampler: approach along the inward point-cloud normal, random closing axis."""
+    seeds = rng.permutation(len(points))[: max(4 * count, 64)]
+    p = points[seeds]
+    n = estimate_normals(points, p)
+    approach = -n
+    e1 = perpendicular(approach)
+    e2 = np.cross(approach, e1)
+    ang = rng.random(len(p))[:, None] * np.pi
+    closing = np.cos(ang) * e1 + np.sin(ang) * e2
+    lo, hi = sampler.depth_range
+    depth = (lo + (hi - lo) * rng.random(len(p))) * gripper.closing_depth
+    poses = pose_from_axes(p - approach * depth[:, None], approach, closing)
+    return poses, np.full(len(p), gripper.max_opening)
+
+
+def estimate_normals(points: np.ndarray, query: np.ndarray, neighbours: int = 16) -> np.ndarray:
+    """Unit normals at ``query`` (k, 3) from PCA of their nearest ``points`` (m, 3), pointing away from the
+    centroid. -> (k, 3) float64"""
+    import open3d as o3d
+
+    tree = o3d.geometry.KDTreeFlann(o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points)))
+    idx = np.array([np.asarray(tree.search_knn_vector_3d(q, neighbours)[1]) for q in query])
+    local = points[idx] - points[idx].mean(axis=1, keepdims=True)
+    _, _, vt = np.linalg.svd(local, full_matrices=False)
+    normal = vt[:, -1, :]
+    outward = np.sum(normal * (query - points.mean(axis=0)), axis=1) < 0
+    return np.where(outward[:, None], -normal, normal)
+
+
+def cast_rays(mesh: TriangleMesh, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First hit of each ray on the mesh (open3d raycasting).
+
+    origins, directions : (k, 3) float64 (directions unit)
+    returns : t_hit (k,) float64 (inf for a miss), hit normals (k, 3) float64
+    """
+    import open3d as o3d
+
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(mesh.vertices.astype(np.float32)),
+                        o3d.core.Tensor(mesh.faces.astype(np.uint32)))
+    rays = np.hstack([origins, directions]).astype(np.float32)
+    hit = scene.cast_rays(o3d.core.Tensor(rays))
+    return hit["t_hit"].numpy().astype(np.float64), hit["primitive_normals"].numpy().astype(np.float64)
+
+
+def gripper_boxes(gripper: GripperSpec, opening: float | None = None) -> np.ndarray:
+    """Palm and finger boxes in the gripper frame at ``opening`` (default: fully open).
+
+    returns : (3, 2, 3) float64, boxes x (lower, upper) x (u, v, t)
+    """
+    half = (gripper.max_opening if opening is None else opening) / 2
+    f = gripper.finger_thickness
+    fl, fh = gripper.finger_length, gripper.finger_height / 2
+    palm = [[-gripper.palm_depth, -half - f, -gripper.palm_height / 2], [0.0, half + f, gripper.palm_height / 2]]
+    left = [[0.0, -half - f, -fh], [fl, -half, fh]]
+    right = [[0.0, half, -fh], [fl, half + f, fh]]
+    return np.array([palm, left, right])
+
+
+def collides(points: np.ndarray, poses: np.ndarray, gripper: GripperSpec) -> np.ndarray:
+    """(n,) bool: does any of the (m, 3) object points lie inside the open gripper at each pose?"""
+    boxes = gripper_boxes(gripper)
+    hit = np.zeros(len(poses), dtype=bool)
+    step = max(1, _POINTS_PER_BATCH // max(len(points), 1))
+    for start in range(0, len(poses), step):
+        pts_g = to_gripper_frame(points, poses[start:start + step])
+        inside = np.zeros(pts_g.shape[:2], dtype=bool)
+        for lower, upper in boxes:
+            inside |= in_box(pts_g, lower, upper)
+        hit[start:start + step] = inside.any(axis=1)
+    return hit

@@ -1,0 +1,84 @@
+"""Voxel codes: the occupancy of the closing region at the network's resolution, packed into bits.
+
+Bit order (the dataset contract): occupancy ``occ`` of shape (a, b, c) over (u, v, t), voxel (i, j, k)
+covering u in [i r, (i+1) r), v in [-W/2 + j r, ...), t in [-H/2 + k r, ...). The flat index is
+``f = (i * b + j) * c + k`` (C order) and lives in byte ``f // 8`` at bit ``7 - f % 8``
+(``np.packbits`` with ``bitorder="big"``). A code has ``B = ceil(a b c / 8)`` bytes; padding bits are 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from onepiece_dist.core.frames import closing_region_bounds, to_gripper_frame
+
+_MAX_POINTS_PER_BATCH = 2_000_000
+
+
+def pack_codes(occupancy: np.ndarray) -> np.ndarray:
+    """occupancy : (n, a, b, c) bool -> (n, B) uint8."""
+    flat = occupancy.reshape(len(occupancy), -1)
+    return np.packbits(flat, axis=1, bitorder="big")
+
+
+def unpack_codes(codes: np.ndarray, grid_shape: tuple[int, int, int]) -> np.ndarray:
+    """codes : (n, B) uint8 -> (n, a, b, c) bool."""
+    nbits = int(np.prod(grid_shape))
+    bits = np.unpackbits(codes, axis=1, count=nbits, bitorder="big")
+    return bits.reshape((len(codes), *grid_shape)).astype(bool)
+
+
+def canonical_codes(codes: np.ndarray, grid_shape: tuple[int, int, int]) -> np.ndarray:
+    """Canonical form under the 180-degree turn about u, (v, t) -> (-v, -t).
+
+    Of a code and its turned twin, the one whose bytes compare smaller is kept.
+    codes : (n, B) uint8 -> (n, B) uint8
+    """
+    turned = pack_codes(unpack_codes(codes, grid_shape)[:, :, ::-1, ::-1])
+    differs = codes != turned
+    first = np.argmax(differs, axis=1)
+    rows = np.arange(len(codes))
+    turned_smaller = differs.any(axis=1) & (turned[rows, first] < codes[rows, first])
+    return np.where(turned_smaller[:, None], turned, codes)
+
+
+def voxel_indices(points_g: np.ndarray, grid_shape: tuple[int, int, int], resolution: float) -> np.ndarray:
+    """Flat voxel index of gripper-frame points, -1 for points outside the closing region.
+
+    points_g : (..., 3) float -> (...) int64
+    """
+    a, b, c = grid_shape
+    lower, upper = closing_region_bounds(a * resolution, b * resolution, c * resolution)
+    ijk = np.floor((points_g - lower) / resolution).astype(np.int64)
+    inside = np.all((points_g >= lower) & (points_g < upper), axis=-1)
+    ijk = np.clip(ijk, 0, np.array([a - 1, b - 1, c - 1]))
+    flat = (ijk[..., 0] * b + ijk[..., 1]) * c + ijk[..., 2]
+    return np.where(inside, flat, -1)
+
+
+def crop_codes(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int],
+               resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """Voxel codes of an object's surface points seen from many gripper poses.
+
+    points : (m, 3) float   object-frame surface points
+    poses : (n, 4, 4) float gripper poses in the object frame
+    returns : codes (n, B) uint8, counts (n,) int64 points inside each closing region
+    """
+    nvox = int(np.prod(grid_shape))
+    occupancy = np.zeros((len(poses), nvox), dtype=bool)
+    counts = np.zeros(len(poses), dtype=np.int64)
+    step = max(1, _MAX_POINTS_PER_BATCH // max(len(points), 1))
+    for start in range(0, len(poses), step):
+        batch = poses[start:start + step]
+        flat = voxel_indices(to_gripper_frame(points, batch), grid_shape, resolution)
+        rows, cols = np.nonzero(flat >= 0)
+        occupancy[start + rows, flat[rows, cols]] = True
+        counts[start:start + len(batch)] = np.bincount(rows, minlength=len(batch))
+    return np.packbits(occupancy, axis=1, bitorder="big"), counts
+
+
+def crop_points(points: np.ndarray, pose: np.ndarray, grid_shape: tuple[int, int, int],
+                resolution: float) -> np.ndarray:
+    """Gripper-frame points of one pose that fall inside the closing region. -> (k, 3) float64."""
+    points_g = to_gripper_frame(points, pose[None])[0]
+    return points_g[voxel_indices(points_g, grid_shape, resolution) >= 0]

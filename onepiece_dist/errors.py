@@ -1,0 +1,37 @@
+"""One error family. Each error also inherits the builtin it refines, and its message names the
+offending file, field or value."""
+
+from __future__ import annotations
+
+
+class OnePieceError(Exception):
+    """Base of every error this package raises on purpose."""
+
+
+class SpecError(OnePieceError, ValueError):
+    """A job, gripper, voxel or sampler spec is invalid (message names field, value and rule)."""
+
+
+class SourceError(OnePieceError, ValueError):
+    """An object source string or folder cannot be resolved."""
+
+
+class MeshRejected(OnePieceError, ValueError):
+    """One object cannot be used; ``source`` names the file and ``reason`` says why."""
+
+    def __init__(self, source: str, reason: str):
+        super().__init__(f"{source}: {reason}")
+        self.source = source
+        self.reason = reason
+
+
+class PathEscape(MeshRejected):
+    """A path resolves outside the root it must stay in."""
+
+
+class StoreError(OnePieceError, OSError):
+    """A dataset store is missing, incomplete or of an unknown format."""
+
+
+class JobError(OnePieceError, RuntimeError):
+    """A job failed or was cancelled."""

@@ -1,0 +1,164 @@
+"""Object sources: a built-in set, a folder or a glob, resolved to a sorted list of :class:`ObjectRef`.
+
+Grammar: ``pybullet:named``, ``pybullet:random_urdfs[START:STOP]``, ``primitives`` or ``primitives[START:STOP]``,
+a folder path, or a glob (``meshes/**/*.obj``). Several sources may be joined with ``+``.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from onepiece_dist.errors import SourceError
+
+MESH_SUFFIXES = (".obj", ".stl", ".ply", ".glb")
+OBJECT_SUFFIXES = (*MESH_SUFFIXES, ".urdf")
+COMPANION_SUFFIXES = (".mtl", ".png", ".jpg", ".jpeg", ".tga", ".bmp", ".gif", ".txt", ".md", ".dae", ".json")
+
+# name -> (path inside pybullet_data, scale applied to a bare mesh)
+PYBULLET_NAMED = {
+    "bunny": ("bunny.obj", 0.06),
+    "cube_small": ("cube_small.urdf", 1.0),
+    "domino": ("domino/domino.urdf", 1.0),
+    "duck": ("duck_vhacd.urdf", 1.0),
+    "jenga": ("jenga/jenga.urdf", 1.0),
+    "lego": ("lego/lego.urdf", 1.0),
+    "mug": ("objects/mug.urdf", 1.0),
+    "sphere_small": ("sphere_small.urdf", 1.0),
+    "teddy": ("teddy_vhacd.urdf", 1.0),
+}
+
+# name -> (kind, dimensions in metres)
+PRIMITIVES = (
+    ("box_40x30x60", "box", (0.04, 0.03, 0.06)),
+    ("box_20x50x50", "box", (0.02, 0.05, 0.05)),
+    ("box_60x60x15", "box", (0.06, 0.06, 0.015)),
+    ("cylinder_r20_h80", "cylinder", (0.02, 0.08)),
+    ("cylinder_r30_h30", "cylinder", (0.03, 0.03)),
+    ("cylinder_r10_h120", "cylinder", (0.01, 0.12)),
+    ("sphere_r25", "sphere", (0.025,)),
+    ("sphere_r35", "sphere", (0.035,)),
+)
+
+_SLICE = re.compile(r"^(?P<base>[^\[\]]+?)(?:\[(?P<start>-?\d*):(?P<stop>-?\d*)\])?$")
+
+
+@dataclass(frozen=True)
+class ObjectRef:
+    """One object to ingest. ``path`` is a file for kind 'mesh'/'urdf'; ``root`` bounds every file it may open."""
+
+    name: str
+    kind: str  # "mesh" | "urdf" | "primitive" | "unsupported"
+    path: str = ""
+    root: str = ""
+    scale: float = 1.0
+    primitive: tuple = ()
+
+
+def resolve_source(source: str) -> list[ObjectRef]:
+    """Resolve a source string to object references (deterministic order)."""
+    refs: list[ObjectRef] = []
+    for part in (p.strip() for p in source.split("+")):
+        if not part:
+            raise SourceError(f"objects source {source!r} has an empty part")
+        refs.extend(_resolve_one(part))
+    return refs
+
+
+def _resolve_one(part: str) -> list[ObjectRef]:
+    match = _SLICE.match(part)
+    base, window = (match["base"], slice(_int(match["start"]), _int(match["stop"]))) if match else (part, slice(None))
+    if base == "pybullet:named":
+        return _pybullet_named()[window]
+    if base == "pybullet:random_urdfs":
+        return _pybullet_random()[window]
+    if base == "primitives":
+        return [ObjectRef(name, "primitive", primitive=(kind, dims)) for name, kind, dims in PRIMITIVES][window]
+    if base.startswith("pybullet:"):
+        raise SourceError(f"unknown built-in set {base!r}; known: pybullet:named, pybullet:random_urdfs[a:b]")
+    if os.path.isdir(part):
+        return folder_refs(Path(part))
+    if glob.has_magic(part):
+        return _glob_refs(part)
+    if os.path.isfile(part):
+        path = Path(part)
+        return [_file_ref(path, path.parent)]
+    raise SourceError(f"objects source {part!r} is neither a built-in set, a folder, a file nor a glob")
+
+
+def _int(text: str | None) -> int | None:
+    return int(text) if text else None
+
+
+def _pybullet_root() -> Path:
+    import pybullet_data  # data only; does not import pybullet
+
+    return Path(pybullet_data.getDataPath())
+
+
+def _pybullet_named() -> list[ObjectRef]:
+    root = _pybullet_root()
+    return [ObjectRef(name, _kind(Path(rel)), str(root / rel), str((root / rel).parent), scale)
+            for name, (rel, scale) in sorted(PYBULLET_NAMED.items())]
+
+
+def _pybullet_random() -> list[ObjectRef]:
+    root = _pybullet_root() / "random_urdfs"
+    urdfs = sorted(root.glob("[0-9][0-9][0-9]/[0-9][0-9][0-9].urdf"))
+    return [ObjectRef(f"random_urdfs/{p.stem}", "urdf", str(p), str(p.parent)) for p in urdfs]
+
+
+def folder_refs(folder: Path) -> list[ObjectRef]:
+    """Every object file under ``folder`` (recursively); meshes referenced by a URDF there are not listed
+    twice; companion files (materials, textures) are skipped; anything else is listed as unsupported so
+    that it gets a rejection with a reason."""
+    files = sorted(p for p in folder.rglob("*") if p.is_file() or p.is_symlink())
+    claimed = _urdf_claimed_meshes(f for f in files if f.suffix.lower() == ".urdf")
+    refs = []
+    for path in files:
+        if path.suffix.lower() in COMPANION_SUFFIXES or Path(os.path.normpath(path)) in claimed:
+            continue
+        refs.append(_file_ref(path, folder))
+    return refs
+
+
+def _glob_refs(pattern: str) -> list[ObjectRef]:
+    root = Path(pattern.split("*")[0].split("?")[0].split("[")[0] or ".")
+    root = root if root.is_dir() else root.parent
+    files = sorted(Path(p) for p in glob.glob(pattern, recursive=True) if os.path.isfile(p) or os.path.islink(p))
+    if not files:
+        raise SourceError(f"glob {pattern!r} matches no files")
+    return [_file_ref(p, root) for p in files]
+
+
+def _file_ref(path: Path, root: Path) -> ObjectRef:
+    name = str(path.relative_to(root)) if path.is_relative_to(root) else path.name
+    return ObjectRef(name, _kind(path), str(path), str(root))
+
+
+def _kind(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix == ".urdf":
+        return "urdf"
+    return "mesh" if suffix in MESH_SUFFIXES else "unsupported"
+
+
+def _urdf_claimed_meshes(urdfs) -> set[Path]:
+    """Lexically normalised paths of the mesh files that the given URDFs name (best effort; bad URDFs and
+    paths are judged at load time)."""
+    claimed: set[Path] = set()
+    for urdf in urdfs:
+        real = Path(os.path.realpath(urdf))
+        if not real.is_relative_to(os.path.realpath(urdf.parent)):
+            continue  # a symlink out of the folder: never opened, rejected at load time
+        try:
+            text = real.read_text(errors="replace")[:1_000_000]
+        except OSError:
+            continue
+        for name in re.findall(r'filename\s*=\s*"([^"]+)"', text):
+            if "://" not in name and not os.path.isabs(name):
+                claimed.add(Path(os.path.normpath(urdf.parent / name)))
+    return claimed

@@ -1,0 +1,1 @@
+"""Job execution: per-object extraction, the central commit (dedup + dataset), runners and status."""

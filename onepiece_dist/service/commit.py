@@ -1,0 +1,74 @@
+"""The central commit: merge every committed part, dedup the codes globally, write the dataset.
+
+Only this code writes the global arrays (``unique/``, ``grasps/*``), so there is one committer.
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+import numpy as np
+
+from onepiece_dist.core.dedup import DedupIndex
+from onepiece_dist.service.extract import ObjectResult
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import PartStore, write_dataset
+from onepiece_dist.store.dataset import ObjectTable
+
+GRASP_ARRAYS = ("pose", "candidate_pose", "width", "code")
+
+
+def package_version() -> str:
+    try:
+        return version("onepiece-dist")
+    except PackageNotFoundError:
+        return "0+unknown"
+
+
+def dataset_attrs(spec: JobSpec, results: list[ObjectResult]) -> dict:
+    a, b, c = spec.grid_shape()
+    return {
+        "job_spec": spec.model_dump(mode="json"),
+        "gripper": spec.gripper.model_dump(mode="json"),
+        "voxel": spec.voxel.model_dump(mode="json"),
+        "grid_shape": [a, b, c],
+        "code_bytes": spec.code_bytes(),
+        "code_bit_order": "C order over (u, v, t), np.packbits bitorder='big'",
+        "pose_convention": "gripper-to-object (4, 4); columns u=approach, v=closing, t=u x v; origin palm centre",
+        "provenance": {"package_version": package_version(), "seed": spec.seed, "result_key": spec.result_key()},
+        "rejected": [{"name": r.name, "reason": r.reason} for r in results if r.status == "rejected"],
+        "stats": _stats(results),
+    }
+
+
+def _stats(results: list[ObjectResult]) -> dict:
+    ok = [r for r in results if r.status == "ok"]
+    return {"objects_total": len(results), "objects_ok": len(ok), "objects_rejected": len(results) - len(ok),
+            "grasps": sum(r.grasps for r in ok), "empty_crops": sum(r.empty_crops for r in ok),
+            "candidates_tried": sum(r.candidates_tried for r in ok), "collisions": sum(r.collisions for r in ok)}
+
+
+def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore, out: str) -> dict:
+    """Merge the parts of the ok results (in object order) and write the dataset at ``out``."""
+    ok = sorted((r for r in results if r.status == "ok"), key=lambda r: r.index)
+    index = DedupIndex(spec.code_bytes())
+    loaded = []
+    for result in ok:
+        arrays = parts.read(result.part_key)
+        index.add(arrays["code"])
+        loaded.append(arrays)
+    grasps = _concatenate(loaded, spec.code_bytes())
+    grasps["object"] = np.repeat(np.arange(len(ok), dtype=np.int32), [len(a["code"]) for a in loaded])
+    grasps["code_index"] = index.lookup(grasps["code"]) if len(grasps["code"]) else np.zeros(0, np.int64)
+    objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
+    unique = {"code": index.unique, "count": index.counts}
+    write_dataset(out, dataset_attrs(spec, results), objects, {"grasps": grasps, "unique": unique})
+    return {"grasps": int(len(grasps["code"])), "unique_codes": int(len(index.unique))}
+
+
+def _concatenate(loaded: list[dict[str, np.ndarray]], code_bytes: int) -> dict[str, np.ndarray]:
+    empty = {"pose": np.zeros((0, 4, 4), np.float32), "candidate_pose": np.zeros((0, 4, 4), np.float32),
+             "width": np.zeros(0, np.float32), "code": np.zeros((0, code_bytes), np.uint8)}
+    names = [n for n in empty if not loaded or n in loaded[0]] + [n for n in (loaded[0] if loaded else {})
+                                                                  if n not in empty]
+    return {n: np.concatenate([a[n] for a in loaded]) if loaded else empty[n] for n in names}

@@ -1,0 +1,63 @@
+"""In-process runner: the same per-object and commit functions the Ray runner uses, one object at a time.
+
+Used for debugging and as the reference that the distributed runner must match byte for byte.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from onepiece_dist.objects import resolve_source
+from onepiece_dist.service.commit import commit_dataset
+from onepiece_dist.service.extract import ObjectResult, extract_object
+from onepiece_dist.service.status import JobStatus, Rejection
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import PartStore
+
+ProgressFn = Callable[[JobStatus], None]
+
+
+def parts_for(spec: JobSpec) -> PartStore:
+    """Parts live in ``spec.cache_dir`` (shared across jobs) or beside the dataset in ``<output>.parts``."""
+    return PartStore(spec.cache_dir or f"{Path(spec.output)}.parts")
+
+
+def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None = None) -> JobStatus:
+    """Run ingest, extract and dedup in this process and commit the dataset."""
+    status = JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output)
+    t0 = time.perf_counter()
+    refs = resolve_source(spec.objects)
+    status.progress.objects_total = len(refs)
+    status.timings["ingest"] = time.perf_counter() - t0
+    status.stage = "extract"
+    parts = parts_for(spec)
+    results: list[ObjectResult] = []
+    t0 = time.perf_counter()
+    for index, ref in enumerate(refs):
+        results.append(extract_object(spec, ref, index, parts))
+        record_result(status, results[-1])
+        if progress:
+            progress(status)
+    status.timings["extract"] = time.perf_counter() - t0
+    return finish(spec, status, results, parts)
+
+
+def record_result(status: JobStatus, result: ObjectResult) -> None:
+    status.progress.objects_done += 1
+    status.progress.objects_reused += int(result.reused)
+    status.progress.grasps += result.grasps
+    if result.status == "rejected":
+        status.rejections.append(Rejection(name=result.name, reason=result.reason))
+
+
+def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts: PartStore) -> JobStatus:
+    status.stage = "dedup"
+    t0 = time.perf_counter()
+    summary = commit_dataset(spec, results, parts, spec.output)
+    status.timings["dedup"] = time.perf_counter() - t0
+    status.progress.unique_codes = summary["unique_codes"]
+    status.state, status.stage = "succeeded", "done"
+    status.save(spec.output)
+    return status

@@ -1,0 +1,63 @@
+"""Job status: a pydantic model written into the dataset folder, so it is readable after the cluster is gone."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+JobState = Literal["pending", "running", "succeeded", "failed", "cancelled"]
+STATUS_SUFFIX = ".status.json"
+
+
+def status_path(output: str | os.PathLike) -> Path:
+    """The status file of the dataset at ``output``: ``<output>.status.json`` beside it."""
+    return Path(f"{Path(output)}{STATUS_SUFFIX}")
+
+
+class Rejection(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    name: str
+    reason: str
+
+
+class Progress(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    objects_done: int = 0
+    objects_total: int = 0
+    objects_reused: int = 0
+    grasps: int = 0
+    unique_codes: int = 0
+
+
+class JobStatus(BaseModel):
+    """State of one job. ``timings`` holds seconds per stage."""
+
+    model_config = ConfigDict(extra="forbid")
+    job_id: str
+    state: JobState = "pending"
+    stage: str = ""
+    output: str = ""
+    progress: Progress = Field(default_factory=Progress)
+    timings: dict[str, float] = Field(default_factory=dict)
+    rejections: list[Rejection] = Field(default_factory=list)
+    error: str = ""
+    created: float = Field(default_factory=time.time)
+    updated: float = Field(default_factory=time.time)
+
+    def save(self, output: str | os.PathLike) -> None:
+        """Write atomically beside the dataset at ``output``."""
+        self.updated = time.time()
+        path = status_path(output)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(self.model_dump_json(indent=2))
+        os.replace(tmp, path)
+
+    @classmethod
+    def load(cls, output: str | os.PathLike) -> JobStatus:
+        return cls.model_validate(json.loads(status_path(output).read_text()))

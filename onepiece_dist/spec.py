@@ -1,0 +1,182 @@
+"""Frozen, validated specs: the one description of a job that flows from the CLI or API to every worker.
+
+Parsed once at the boundary (:func:`load_job_spec`, :func:`parse_job_spec`); workers only read attributes.
+Lengths are metres, forces newtons, angles radians.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from onepiece_dist.errors import SpecError
+
+STAGES = ("ingest", "extract", "dedup", "assemble", "label", "train", "evaluate")
+Stage = Literal["ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"]
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class GripperSpec(_Frozen):
+    """Parallel-jaw gripper, close to a Franka Panda hand.
+
+    Gripper frame (see docs/gripper_frame.md): u = approach (palm to fingertips), v = closing axis,
+    t = finger height, origin at the palm centre. Closing region: 0 <= u < closing_depth,
+    |v| < closing_width / 2, |t| < closing_height / 2.
+    """
+
+    max_opening: float = Field(0.08, gt=0, le=0.5, description="Largest distance between the finger pads (m).")
+    finger_length: float = Field(0.04, gt=0, le=0.3, description="Finger extent along u (m).")
+    finger_thickness: float = Field(0.01, gt=0, le=0.1, description="Finger extent along v (m).")
+    finger_height: float = Field(0.02, gt=0, le=0.2, description="Finger extent along t (m).")
+    palm_depth: float = Field(0.02, gt=0, le=0.3, description="Palm extent along -u behind the origin (m).")
+    palm_height: float = Field(0.06, gt=0, le=0.3, description="Palm extent along t (m).")
+    closing_depth: float = Field(0.04, gt=0, description="Closing region extent along u (m).")
+    closing_width: float = Field(0.08, gt=0, description="Closing region extent along v (m).")
+    closing_height: float = Field(0.02, gt=0, description="Closing region extent along t (m).")
+    friction: float = Field(1.0, gt=0, le=5, description="Finger pad friction coefficient.")
+    closing_force: float = Field(40.0, gt=0, le=1000, description="Force limit of each finger (N).")
+    finger_mass: float = Field(0.02, gt=0, description="Mass of one finger (kg).")
+
+    @model_validator(mode="after")
+    def _region_fits_fingers(self) -> GripperSpec:
+        if self.closing_width > self.max_opening + 1e-12:
+            raise ValueError(
+                f"closing_width={self.closing_width} must not exceed max_opening={self.max_opening}"
+            )
+        if self.closing_depth > self.finger_length + 1e-12:
+            raise ValueError(
+                f"closing_depth={self.closing_depth} must not exceed finger_length={self.finger_length}"
+            )
+        return self
+
+
+class VoxelSpec(_Frozen):
+    """Voxel grid over the closing region; ``resolution`` must divide each region extent."""
+
+    resolution: float = Field(0.01, gt=0, le=0.1, description="Voxel edge length (m).")
+    canonical: bool = Field(False, description="Map each code to its canonical form under the gripper's "
+                            "180-degree symmetry about the approach axis.")
+
+    def grid_shape(self, gripper: GripperSpec) -> tuple[int, int, int]:
+        """(a, b, c) voxels along (u, v, t) for this gripper's closing region."""
+        extents = {"closing_depth": gripper.closing_depth, "closing_width": gripper.closing_width,
+                   "closing_height": gripper.closing_height}
+        shape = []
+        for name, extent in extents.items():
+            n = extent / self.resolution
+            if abs(n - round(n)) > 1e-6 or round(n) < 1:
+                raise SpecError(f"voxel.resolution={self.resolution} must divide gripper.{name}={extent} "
+                                f"into a whole number of voxels (got {n:.4f})")
+            shape.append(int(round(n)))
+        return (shape[0], shape[1], shape[2])
+
+
+class SamplerSpec(_Frozen):
+    """Grasp candidate sampling."""
+
+    method: Literal["antipodal", "normal"] = "antipodal"
+    surface_points: int = Field(10000, ge=500, le=2_000_000, description="Dense surface points per object.")
+    approach_angles: int = Field(8, ge=1, le=64, description="Approach directions tried around each grasp axis.")
+    friction_cone: float = Field(0.5, gt=0, le=3, description="Friction coefficient of the antipodal cone test.")
+    min_width: float = Field(0.002, ge=0, description="Narrowest accepted contact distance (m).")
+    depth_range: tuple[float, float] = Field((0.3, 0.9), description="Contact depth along u, as fractions "
+                                             "of closing_depth, sampled uniformly.")
+    max_object_extent: float = Field(1.0, gt=0, description="Objects with a larger bounding-box diagonal "
+                                     "are rejected (m; catches wrong units).")
+
+    @model_validator(mode="after")
+    def _depth_range_ordered(self) -> SamplerSpec:
+        lo, hi = self.depth_range
+        if not 0 <= lo <= hi <= 1:
+            raise ValueError(f"depth_range={self.depth_range} must satisfy 0 <= low <= high <= 1")
+        return self
+
+
+class JobSpec(_Frozen):
+    """Everything a job needs. Workers receive exactly this object."""
+
+    objects: str = Field("pybullet:named", description="Object source: a built-in set "
+                         "(pybullet:named, pybullet:random_urdfs[0:64], primitives), a folder or a glob.")
+    grasps_per_object: int = Field(64, ge=1, le=100_000)
+    seed: int = Field(0, ge=0, lt=2**63)
+    output: str = Field("onepiece-out/dataset.zarr", description="Dataset path (Zarr v3 directory).")
+    cache_dir: str | None = Field(None, description="Folder of per-object results shared across jobs; "
+                                  "defaults to the dataset's own parts/ folder.")
+    stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup"))
+    max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
+    gripper: GripperSpec = GripperSpec()
+    voxel: VoxelSpec = VoxelSpec()
+    sampler: SamplerSpec = SamplerSpec()
+
+    @model_validator(mode="after")
+    def _grid_is_whole(self) -> JobSpec:
+        try:
+            self.voxel.grid_shape(self.gripper)
+        except SpecError as err:
+            raise ValueError(str(err)) from None
+        return self
+
+    def grid_shape(self) -> tuple[int, int, int]:
+        return self.voxel.grid_shape(self.gripper)
+
+    def code_bytes(self) -> int:
+        a, b, c = self.grid_shape()
+        return math.ceil(a * b * c / 8)
+
+    def result_key(self) -> str:
+        """Hash of every field that changes an object's extraction result (not output paths)."""
+        relevant = self.model_dump(mode="json", include={"grasps_per_object", "seed", "gripper", "voxel",
+                                                         "sampler"})
+        return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
+
+
+def parse_job_spec(data: dict[str, Any], source: str = "<spec>") -> JobSpec:
+    """Validate a mapping into a :class:`JobSpec`; errors name the field, the value and the rule."""
+    try:
+        return JobSpec.model_validate(data)
+    except ValidationError as err:
+        raise SpecError(describe_validation_error(err, source)) from None
+
+
+def describe_validation_error(err: ValidationError, source: str) -> str:
+    lines = [f"{source}: invalid job spec"]
+    for item in err.errors():
+        field = ".".join(str(p) for p in item["loc"]) or "<root>"
+        value = item.get("input")
+        shown = json.dumps(value, default=str)[:80] if not isinstance(value, dict) else "{...}"
+        lines.append(f"  {field} = {shown}: {item['msg']}")
+    return "\n".join(lines)
+
+
+def load_job_spec(path: str | Path, overrides: dict[str, Any] | None = None) -> JobSpec:
+    """Load a YAML or JSON spec file, apply ``overrides`` (top-level fields), and validate."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as err:
+        raise SpecError(f"{path}: cannot read spec: {err.strerror}") from None
+    data = _parse_mapping(text, path)
+    data.update(overrides or {})
+    return parse_job_spec(data, str(path))
+
+
+def _parse_mapping(text: str, path: Path) -> dict[str, Any]:
+    import yaml
+
+    try:
+        data = json.loads(text) if path.suffix == ".json" else yaml.safe_load(text)
+    except (json.JSONDecodeError, yaml.YAMLError) as err:
+        raise SpecError(f"{path}: not valid {'JSON' if path.suffix == '.json' else 'YAML'}: {err}") from None
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise SpecError(f"{path}: a spec must be a mapping of fields, got {type(data).__name__}")
+    return data

@@ -1,0 +1,138 @@
+"""The dataset: a Zarr v3 group in format v1 (schemas/dataset_layout.json, docs/dataset_format.md).
+
+Only one committer writes it. Root attribute ``complete`` is written last: a reader refuses a dataset
+without it, so a crash mid-commit never looks like a finished dataset.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import zarr
+
+from onepiece_dist.errors import StoreError
+from onepiece_dist.store.codecs import write_array
+
+FORMAT_VERSION = 1
+NAME_BYTES = 64
+
+
+@dataclass(frozen=True)
+class ObjectTable:
+    """Accepted objects, in job order. ids (n, 16) uint8 content-id digests; names (n, 64) uint8 UTF-8."""
+
+    names: list[str]
+    content_ids: list[str]
+    grasp_counts: np.ndarray
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        counts = np.asarray(self.grasp_counts, dtype=np.int64)
+        return {
+            "id": np.array([np.frombuffer(bytes.fromhex(c), np.uint8) for c in self.content_ids],
+                           dtype=np.uint8).reshape(-1, 16),
+            "name": encode_names(self.names),
+            "grasp_start": (np.cumsum(counts) - counts).astype(np.int64),
+            "grasp_count": counts,
+        }
+
+
+def encode_names(names: list[str]) -> np.ndarray:
+    """(n, 64) uint8, UTF-8 truncated and zero-padded."""
+    out = np.zeros((len(names), NAME_BYTES), dtype=np.uint8)
+    for i, name in enumerate(names):
+        raw = name.encode("utf-8")[:NAME_BYTES]
+        out[i, :len(raw)] = np.frombuffer(raw, np.uint8)
+    return out
+
+
+def decode_names(rows: np.ndarray) -> list[str]:
+    return [bytes(row).rstrip(b"\0").decode("utf-8", errors="replace") for row in rows]
+
+
+def write_dataset(path: str | os.PathLike, attrs: dict, objects: ObjectTable,
+                  groups: dict[str, dict[str, np.ndarray]]) -> None:
+    """Write the global arrays and attributes, then mark the dataset complete.
+
+    groups : {"grasps": {...}, "unique": {...}, ...} arrays by group; written under the root
+    """
+    root = zarr.open_group(str(path), mode="a")
+    root.attrs.update({**attrs, "onepiece_format": FORMAT_VERSION, "complete": False})
+    all_groups = {"objects": objects.arrays(), **groups}
+    for group_name, arrays in all_groups.items():
+        group = root.require_group(group_name)
+        for name, data in arrays.items():
+            write_array(group, name, data)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Consolidated metadata", UserWarning)
+        zarr.consolidate_metadata(str(path))
+    root = zarr.open_group(str(path), mode="a")
+    root.attrs["complete"] = True
+
+
+class DatasetReader:
+    """Read access to a complete dataset. Arrays load lazily through :meth:`array`."""
+
+    def __init__(self, path: str | os.PathLike, allow_incomplete: bool = False):
+        self.path = Path(path)
+        if not (self.path / "zarr.json").is_file():
+            raise StoreError(f"{self.path}: not a Zarr dataset (no zarr.json)")
+        self.root = zarr.open_group(str(self.path), mode="r")
+        attrs = dict(self.root.attrs)
+        if attrs.get("onepiece_format") != FORMAT_VERSION:
+            raise StoreError(f"{self.path}: onepiece_format={attrs.get('onepiece_format')!r}, "
+                             f"this reader knows {FORMAT_VERSION}")
+        if not attrs.get("complete") and not allow_incomplete:
+            raise StoreError(f"{self.path}: dataset is incomplete (its job has not committed it)")
+        self.attrs = attrs
+
+    def array(self, name: str) -> zarr.Array:
+        try:
+            return self.root[name]
+        except KeyError:
+            raise StoreError(f"{self.path}: no array {name!r}") from None
+
+    def has(self, name: str) -> bool:
+        try:
+            self.root[name]
+        except KeyError:
+            return False
+        return True
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.array(name)[...]
+
+    @property
+    def object_names(self) -> list[str]:
+        return decode_names(self["objects/name"])
+
+    def summary(self) -> dict:
+        """Counts and sizes for `onepiece inspect`."""
+        grasps = int(self.array("grasps/code").shape[0])
+        unique = int(self.array("unique/code").shape[0])
+        out = {
+            "path": str(self.path),
+            "objects": int(self.array("objects/name").shape[0]),
+            "rejected": len(self.attrs.get("rejected", [])),
+            "grasps": grasps,
+            "unique_codes": unique,
+            "unique_fraction": unique / grasps if grasps else 0.0,
+            "grid_shape": self.attrs.get("grid_shape"),
+            "bytes_on_disk": disk_bytes(self.path),
+        }
+        if self.has("grasps/success"):
+            out["success_rate"] = float(np.mean(self["grasps/success"])) if grasps else 0.0
+        return out
+
+
+def open_dataset(path: str | os.PathLike) -> DatasetReader:
+    """Open a complete dataset for reading."""
+    return DatasetReader(path)
+
+
+def disk_bytes(path: Path) -> int:
+    """Bytes of the files under ``path``."""
+    return sum(os.path.getsize(os.path.join(top, f)) for top, _, files in os.walk(path) for f in files)

@@ -1,0 +1,48 @@
+"""The dataset layout as data: the contract for outside readers, exported to schemas/dataset_layout.json."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+# (path, dtype, shape, meaning). N grasps, U unique codes, n objects, B code bytes.
+ARRAYS: tuple[tuple[str, str, str, str], ...] = (
+    ("objects/id", "uint8", "(n, 16)", "content id of each accepted object (blake2b-128 of scaled geometry)"),
+    ("objects/name", "uint8", "(n, 64)", "object name, UTF-8, zero-padded"),
+    ("objects/grasp_start", "int64", "(n,)", "first row of the object's grasps"),
+    ("objects/grasp_count", "int64", "(n,)", "number of the object's grasps"),
+    ("grasps/object", "int32", "(N,)", "row in objects/ of each grasp"),
+    ("grasps/pose", "float32", "(N, 4, 4)", "gripper pose in the object frame whose crop gives grasps/code"),
+    ("grasps/candidate_pose", "float32", "(N, 4, 4)", "nominal (static) candidate pose"),
+    ("grasps/width", "float32", "(N,)", "finger opening at the grasp (m)"),
+    ("grasps/code", "uint8", "(N, B)", "packed voxel code of the crop, C order over (u, v, t), bitorder big"),
+    ("grasps/code_index", "int64", "(N,)", "row in unique/ of each grasp's code"),
+    ("unique/code", "uint8", "(U, B)", "distinct codes in ascending byte order"),
+    ("unique/count", "int64", "(U,)", "grasps per distinct code"),
+)
+
+
+class ArraySpec(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    path: str
+    dtype: str
+    shape: str
+    meaning: str
+
+
+class DatasetAttributes(BaseModel):
+    """Root attributes of a dataset (Zarr v3 group, format v1). Arrays are listed under ``x-arrays``."""
+
+    model_config = ConfigDict(extra="allow", json_schema_extra={
+        "x-arrays": [ArraySpec(path=p, dtype=d, shape=s, meaning=m).model_dump() for p, d, s, m in ARRAYS]})
+    onepiece_format: int = Field(1, description="Format version of this layout.")
+    complete: bool = Field(description="Written true last by the committer; readers refuse false.")
+    job_spec: dict = Field(description="The JobSpec that made the dataset.")
+    gripper: dict
+    voxel: dict
+    grid_shape: list[int] = Field(description="(a, b, c) voxels along (u, v, t).")
+    code_bytes: int = Field(description="B = ceil(a*b*c/8).")
+    code_bit_order: str
+    pose_convention: str
+    provenance: dict = Field(description="package_version, seed, result_key.")
+    rejected: list[dict] = Field(description="Objects rejected with a reason: {name, reason}.")
+    stats: dict

@@ -1,0 +1,83 @@
+"""Per-object result parts: one writer each, committed by an atomic directory rename.
+
+A part lives at ``PARTS_DIR/<key>.zarr`` where ``key`` = object content id + job result key. It is written
+into a private temporary folder (arrays first, its metadata attributes last), then the folder is renamed
+into place: the rename is the commit marker, atomic on POSIX file systems. A reader sees a part only if
+the final folder exists, so a crash never leaves a half-written part that looks complete; a second writer
+of the same key (a retried task) finds it committed and discards its own copy, so writes are idempotent.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import uuid
+from pathlib import Path
+
+import numpy as np
+import zarr
+
+from onepiece_dist.store.codecs import write_array
+
+_TMP = ".tmp-"
+
+
+class PartStore:
+    """Folder of committed per-object parts."""
+
+    def __init__(self, folder: str | os.PathLike):
+        self.folder = Path(folder)
+
+    def path(self, key: str) -> Path:
+        return self.folder / f"{key}.zarr"
+
+    def is_committed(self, key: str) -> bool:
+        return (self.path(key) / "zarr.json").is_file()
+
+    def write(self, key: str, arrays: dict[str, np.ndarray], meta: dict) -> bool:
+        """Write and commit a part. Returns False if the key was already committed (nothing changed)."""
+        if self.is_committed(key):
+            return False
+        self.folder.mkdir(parents=True, exist_ok=True)
+        tmp = self.folder / f"{_TMP}{key}-{uuid.uuid4().hex[:8]}"
+        try:
+            group = zarr.open_group(str(tmp), mode="w")
+            for name, data in arrays.items():
+                write_array(group, name, data)
+            group.attrs.update({"key": key, **meta})
+            return self._publish(tmp, key)
+        finally:
+            if tmp.exists():
+                shutil.rmtree(tmp, ignore_errors=True)
+
+    def _publish(self, tmp: Path, key: str) -> bool:
+        try:
+            os.rename(tmp, self.path(key))
+            return True
+        except OSError:
+            if self.is_committed(key):
+                return False  # a concurrent writer of the same deterministic content won
+            raise
+
+    def read_meta(self, key: str) -> dict:
+        return dict(zarr.open_group(str(self.path(key)), mode="r").attrs)
+
+    def read(self, key: str) -> dict[str, np.ndarray]:
+        """All arrays of a committed part (KeyError if it is not committed)."""
+        if not self.is_committed(key):
+            raise KeyError(f"part {key} is not committed in {self.folder}")
+        group = zarr.open_group(str(self.path(key)), mode="r")
+        return {name: array[...] for name, array in group.arrays()}
+
+    def committed_keys(self) -> list[str]:
+        if not self.folder.is_dir():
+            return []
+        return sorted(p.name[:-5] for p in self.folder.glob("*.zarr") if (p / "zarr.json").is_file())
+
+    def remove_stale_temporaries(self) -> int:
+        """Delete temporaries left by writers that crashed. Returns how many were removed."""
+        stale = list(self.folder.glob(f"{_TMP}*")) if self.folder.is_dir() else []
+        for path in stale:
+            shutil.rmtree(path, ignore_errors=True)
+        return len(stale)
+

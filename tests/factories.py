@@ -1,0 +1,79 @@
+"""Tiny synthetic inputs built by factory functions."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.spec import JobSpec
+
+
+def small_spec(tmp_path: Path, **overrides) -> JobSpec:
+    fields = {"objects": "primitives[0:3]", "grasps_per_object": 16, "output": str(tmp_path / "ds.zarr"),
+              "sampler": {"surface_points": 3000}}
+    fields.update(overrides)
+    return JobSpec.model_validate(fields)
+
+
+def box_obj_text(size: float = 0.04) -> str:
+    h = size / 2
+    verts = [(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)]
+    faces = [(1, 2, 4), (1, 4, 3), (5, 7, 8), (5, 8, 6), (1, 5, 6), (1, 6, 2),
+             (3, 4, 8), (3, 8, 7), (1, 3, 7), (1, 7, 5), (2, 6, 8), (2, 8, 4)]
+    return "".join(f"v {x} {y} {z}\n" for x, y, z in verts) + "".join(f"f {a} {b} {c}\n" for a, b, c in faces)
+
+
+def urdf_text(mesh_filename: str, scale: float = 1.0) -> str:
+    return (f'<robot name="obj"><link name="base"><visual><geometry><mesh filename="{mesh_filename}" '
+            f'scale="{scale} {scale} {scale}"/></geometry></visual></link></robot>')
+
+
+def broken_inputs_folder(root: Path, outside: Path) -> dict[str, str]:
+    """Write good and hostile inputs under ``root``; returns {file name: 'ok' or expected reason fragment}.
+
+    ``outside`` is a folder beside ``root`` holding a valid mesh that nothing may open.
+    """
+    root.mkdir(parents=True, exist_ok=True)
+    outside.mkdir(parents=True, exist_ok=True)
+    (outside / "secret.obj").write_text(box_obj_text())
+    good = box_obj_text()
+    lines = good.splitlines()
+    files = {
+        "good_box.obj": (good, "ok"),
+        "good_urdf/obj.urdf": (urdf_text("box.obj"), "ok"),
+        "good_urdf/box.obj": (good, None),
+        "nan_vertices.obj": (good.replace(lines[0], "v nan 0 0"), "not finite"),
+        "inf_vertices.obj": (good.replace(lines[1], "v inf 0 0"), "not finite"),
+        "empty.obj": ("", "empty"),
+        "out_of_range.obj": (good + "f 1 2 99\n", "out of range"),
+        "garbage.stl": (None, "cannot parse"),
+        "wrong_ext.xyz": ("v 0 0 0\n", "unsupported file extension"),
+        "escape_urdf/obj.urdf": (urdf_text("../../outside/secret.obj"), "'..'"),
+        "abs_urdf/obj.urdf": (urdf_text(str(outside / "secret.obj")), "absolute"),
+        "file_urdf/obj.urdf": (urdf_text(f"file://{outside}/secret.obj"), "URL scheme"),
+        "pkg_urdf/obj.urdf": (urdf_text("package://outside/secret.obj"), "URL scheme"),
+        "bad_xml/obj.urdf": ("<robot><link", "malformed URDF XML"),
+        "degenerate.obj": ("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "degenerate"),
+        "huge_units.obj": (box_obj_text(40.0), "wrong units"),
+    }
+    expected = {}
+    rng = np.random.default_rng(0)
+    for name, (text, outcome) in files.items():
+        path = root / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if text is None:
+            path.write_bytes(rng.integers(0, 256, 300, dtype=np.uint8).tobytes())
+        else:
+            path.write_text(text)
+        if outcome is not None:
+            expected[name] = outcome
+    os.symlink(outside / "secret.obj", root / "symlink_out.obj")
+    expected["symlink_out.obj"] = "outside its root"
+    link_dir = root / "link_urdf"
+    link_dir.mkdir()
+    os.symlink(outside / "secret.obj", link_dir / "box.obj")
+    (link_dir / "obj.urdf").write_text(urdf_text("box.obj"))
+    expected["link_urdf/obj.urdf"] = "outside its root"
+    return expected

@@ -1,0 +1,97 @@
+import os
+import sys
+
+import numpy as np
+import pytest
+
+from onepiece_dist.errors import SourceError
+from onepiece_dist.objects import load_object, resolve_source
+from onepiece_dist.service.extract import extract_object
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import PartStore
+from tests.factories import box_obj_text, broken_inputs_folder
+
+
+@pytest.fixture
+def broken(tmp_path):
+    root, outside = tmp_path / "inputs", tmp_path / "outside"
+    return root, outside, broken_inputs_folder(root, outside)
+
+
+class OpenAudit:
+    """Records every file path opened while active (sys.addaudithook cannot be removed, so it gates)."""
+
+    installed = False
+    active: list | None = None
+
+    @classmethod
+    def record(cls):
+        if not cls.installed:
+            sys.addaudithook(lambda event, args: cls.active is not None and event == "open"
+                             and isinstance(args[0], str | bytes) and cls.active.append(os.fsdecode(args[0])))
+            cls.installed = True
+        cls.active = []
+        return cls
+
+    @classmethod
+    def stop(cls):
+        opened, cls.active = cls.active, None
+        return opened
+
+
+def test_each_bad_file_is_rejected_with_its_reason_and_good_files_proceed(broken, tmp_path):
+    root, outside, expected = broken
+    spec = JobSpec(objects=str(root), grasps_per_object=8, sampler={"surface_points": 1000})
+    refs = resolve_source(spec.objects)
+    assert sorted(r.name for r in refs) == sorted(expected)
+    parts = PartStore(tmp_path / "parts")
+    OpenAudit.record()
+    try:
+        results = {r.name: extract_object(spec, r, i, parts) for i, r in enumerate(refs)}
+    finally:
+        opened = OpenAudit.stop()
+    for name, outcome in expected.items():
+        result = results[name]
+        if outcome == "ok":
+            assert result.status == "ok" and result.grasps > 0, name
+        else:
+            assert result.status == "rejected", name
+            assert outcome in result.reason, (name, result.reason)
+    real_outside = os.path.realpath(outside)
+    assert not [p for p in opened if os.path.realpath(p).startswith(real_outside)]
+
+
+def test_pybullet_sets_resolve_and_load():
+    spec = JobSpec()
+    named = resolve_source("pybullet:named")
+    assert {"duck", "teddy", "mug", "bunny"} <= {r.name for r in named}
+    randoms = resolve_source("pybullet:random_urdfs[0:3]")
+    assert [r.name for r in randoms] == ["random_urdfs/000", "random_urdfs/001", "random_urdfs/002"]
+    duck = load_object(named[[r.name for r in named].index("duck")], spec)
+    assert 0.04 < duck.mesh.extents.max() < 0.12  # the URDF's 0.05 scale was applied
+
+
+def test_content_id_depends_on_geometry_and_scale(tmp_path):
+    (tmp_path / "a.obj").write_text(box_obj_text(0.04))
+    (tmp_path / "b.obj").write_text(box_obj_text(0.04))
+    (tmp_path / "c.obj").write_text(box_obj_text(0.05))
+    spec = JobSpec()
+    ids = [load_object(r, spec).content_id for r in resolve_source(str(tmp_path))]
+    assert ids[0] == ids[1] != ids[2]
+
+
+def test_glob_source_and_unknown_sources(tmp_path):
+    (tmp_path / "a.obj").write_text(box_obj_text())
+    (tmp_path / "b.stl").write_text("solid x\nendsolid x\n")
+    assert [r.name for r in resolve_source(str(tmp_path / "*.obj"))] == ["a.obj"]
+    with pytest.raises(SourceError, match="unknown built-in set"):
+        resolve_source("pybullet:nothing")
+    with pytest.raises(SourceError, match="neither"):
+        resolve_source(str(tmp_path / "missing"))
+
+
+def test_primitive_set_is_graspable():
+    spec = JobSpec()
+    for ref in resolve_source("primitives"):
+        mesh = load_object(ref, spec).mesh
+        assert np.isfinite(mesh.vertices).all() and len(mesh.faces) >= 12

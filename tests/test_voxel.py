@@ -1,0 +1,58 @@
+import numpy as np
+import pytest
+
+from onepiece_dist.core.frames import pose_from_axes, to_gripper_frame
+from onepiece_dist.core.voxel import canonical_codes, crop_codes, pack_codes, unpack_codes, voxel_indices
+
+GRID = (4, 8, 2)
+RES = 0.01
+
+
+def test_pack_unpack_round_trip_and_bit_order():
+    occ = np.zeros((1, *GRID), dtype=bool)
+    occ[0, 0, 0, 1] = True  # flat index 1 -> byte 0, bit 6 (MSB first)
+    occ[0, 3, 7, 1] = True  # flat index 63 -> byte 7, bit 0
+    codes = pack_codes(occ)
+    assert codes.shape == (1, 8)
+    assert codes[0, 0] == 0b0100_0000 and codes[0, 7] == 0b0000_0001
+    assert np.array_equal(unpack_codes(codes, GRID), occ)
+
+
+def test_voxel_indices_follow_the_closing_region_convention():
+    pts = np.array([[0.0, -0.04, -0.01], [0.0399, 0.0399, 0.0099], [-0.001, 0, 0], [0.01, 0.04, 0]])
+    flat = voxel_indices(pts, GRID, RES)
+    assert flat[0] == 0 and flat[1] == 63
+    assert flat[2] == -1 and flat[3] == -1  # behind the palm; on the open edge |v| = width/2
+
+
+def test_crop_codes_of_a_plane_between_the_fingers():
+    # a square patch of points in the plane v = 0 in front of an identity-pose gripper
+    grid = np.stack(np.meshgrid(np.linspace(0.001, 0.039, 20), [0.001], np.linspace(-0.009, 0.009, 10)),
+                    -1).reshape(-1, 3)
+    codes, counts = crop_codes(grid, np.eye(4)[None], GRID, RES)
+    occ = unpack_codes(codes, GRID)[0]
+    assert counts[0] == len(grid)
+    assert occ[:, 4, :].all() and occ.sum() == 8  # every u, both t, only the voxel column just above v = 0
+
+
+def test_crop_codes_moves_points_into_each_gripper_frame():
+    rng = np.random.default_rng(1)
+    pts = rng.uniform(-0.05, 0.05, (500, 3))
+    poses = pose_from_axes(rng.normal(size=(5, 3)) * 0.01, rng.normal(size=(5, 3)), rng.normal(size=(5, 3)))
+    codes, _ = crop_codes(pts, poses, GRID, RES)
+    for k in range(5):
+        flat = voxel_indices(to_gripper_frame(pts, poses[k:k + 1])[0], GRID, RES)
+        occ = np.zeros(64, bool)
+        occ[flat[flat >= 0]] = True
+        assert np.array_equal(unpack_codes(codes[k:k + 1], GRID)[0].ravel(), occ)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_canonical_form_is_shared_by_a_code_and_its_turned_twin(seed):
+    rng = np.random.default_rng(seed)
+    occ = rng.random((50, *GRID)) < 0.3
+    codes = pack_codes(occ)
+    turned = pack_codes(occ[:, :, ::-1, ::-1])
+    assert np.array_equal(canonical_codes(codes, GRID), canonical_codes(turned, GRID))
+    canon = canonical_codes(codes, GRID)
+    assert all(c.tobytes() in (a.tobytes(), b.tobytes()) for c, a, b in zip(canon, codes, turned, strict=True))
