@@ -100,6 +100,18 @@ class SamplerSpec(_Frozen):
         return self
 
 
+class SimSpec(_Frozen):
+    """Physics of the extract stage (docs/trials.md)."""
+
+    physics: bool = Field(True, description="Simulate each candidate (extract protocol) and crop at the settled "
+                          "pose; false crops at the static candidate pose.")
+    collision: Literal["vhacd", "hull"] = Field("vhacd", description="Object collision geometry: convex "
+                                                "decomposition (default) or the plain convex hull.")
+    label: bool = Field(False, description="Also lift and shake each grasp and store success labels.")
+    points_per_grasp: int = Field(750, ge=0, le=4096, description="Gripper-frame points stored per grasp "
+                                  "(resampled with replacement; 0 stores none).")
+
+
 class JobSpec(_Frozen):
     """Everything a job needs. Workers receive exactly this object."""
 
@@ -115,6 +127,7 @@ class JobSpec(_Frozen):
     gripper: GripperSpec = GripperSpec()
     voxel: VoxelSpec = VoxelSpec()
     sampler: SamplerSpec = SamplerSpec()
+    sim: SimSpec = SimSpec()
 
     @model_validator(mode="after")
     def _grid_is_whole(self) -> JobSpec:
@@ -134,7 +147,7 @@ class JobSpec(_Frozen):
     def result_key(self) -> str:
         """Hash of every field that changes an object's extraction result (not output paths)."""
         relevant = self.model_dump(mode="json", include={"grasps_per_object", "seed", "gripper", "voxel",
-                                                         "sampler"})
+                                                         "sampler", "sim"})
         return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
 
 

@@ -150,3 +150,17 @@ def merge_meshes(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray
     offsets = np.cumsum([0] + [len(v) for v, _ in parts])[:-1]
     return (np.vstack([v for v, _ in parts]),
             np.vstack([np.asarray(f, dtype=np.int64) + o for (_, f), o in zip(parts, offsets, strict=True)]))
+
+
+def enclosed_volume(mesh: TriangleMesh) -> float:
+    """Volume by the divergence theorem (exact for closed meshes); half the bounding box when that gives ~0."""
+    tri = mesh.vertices[mesh.faces]
+    volume = abs(float(np.sum(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2]))) / 6.0))
+    return volume if volume > 1e-9 else 0.5 * float(np.prod(np.maximum(mesh.extents, 1e-3)))
+
+
+def resample_points(points: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """(k, 3) -> (count, 3) drawn with replacement (zeros when k == 0)."""
+    if len(points) == 0:
+        return np.zeros((count, 3))
+    return points[rng.integers(0, len(points), count)]

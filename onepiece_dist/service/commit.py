@@ -15,8 +15,6 @@ from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore, write_dataset
 from onepiece_dist.store.dataset import ObjectTable
 
-GRASP_ARRAYS = ("pose", "candidate_pose", "width", "code")
-
 
 def package_version() -> str:
     try:
@@ -45,7 +43,8 @@ def _stats(results: list[ObjectResult]) -> dict:
     ok = [r for r in results if r.status == "ok"]
     return {"objects_total": len(results), "objects_ok": len(ok), "objects_rejected": len(results) - len(ok),
             "grasps": sum(r.grasps for r in ok), "empty_crops": sum(r.empty_crops for r in ok),
-            "candidates_tried": sum(r.candidates_tried for r in ok), "collisions": sum(r.collisions for r in ok)}
+            "candidates_tried": sum(r.candidates_tried for r in ok), "collisions": sum(r.collisions for r in ok),
+            "settled_code_differs": sum(r.settled_code_differs for r in ok)}
 
 
 def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore, out: str) -> dict:
@@ -67,8 +66,8 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
 
 
 def _concatenate(loaded: list[dict[str, np.ndarray]], code_bytes: int) -> dict[str, np.ndarray]:
-    empty = {"pose": np.zeros((0, 4, 4), np.float32), "candidate_pose": np.zeros((0, 4, 4), np.float32),
-             "width": np.zeros(0, np.float32), "code": np.zeros((0, code_bytes), np.uint8)}
-    names = [n for n in empty if not loaded or n in loaded[0]] + [n for n in (loaded[0] if loaded else {})
-                                                                  if n not in empty]
-    return {n: np.concatenate([a[n] for a in loaded]) if loaded else empty[n] for n in names}
+    if not loaded:
+        return {"pose": np.zeros((0, 4, 4), np.float32), "candidate_pose": np.zeros((0, 4, 4), np.float32),
+                "width": np.zeros(0, np.float32), "code": np.zeros((0, code_bytes), np.uint8),
+                "candidate_code": np.zeros((0, code_bytes), np.uint8)}
+    return {name: np.concatenate([arrays[name] for arrays in loaded]) for name in sorted(loaded[0])}

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.mesh import sample_surface
-from onepiece_dist.core.sampling import object_rng, sample_candidates
-from onepiece_dist.core.voxel import canonical_codes, crop_codes
+from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_points, sample_surface
+from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_candidates
+from onepiece_dist.core.voxel import canonical_codes, crop_codes, crop_points
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
 from onepiece_dist.spec import JobSpec
@@ -34,6 +35,7 @@ class ObjectResult:
     empty_crops: int = 0
     candidates_tried: int = 0
     collisions: int = 0
+    settled_code_differs: int = 0
     reused: bool = False
     seconds: float = 0.0
 
@@ -52,16 +54,19 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
     if parts.is_committed(key):
         return _from_meta(index, ref.name, key, parts.read_meta(key), reused=True, start=start)
     try:
-        arrays, meta = extract_arrays(spec, loaded.mesh)
+        arrays, meta = extract_arrays(spec, loaded.mesh, parts.folder / "collision")
     except MeshRejected as err:
         return ObjectResult(index, ref.name, "rejected", reason=err.reason, content_id=loaded.content_id,
                             seconds=time.perf_counter() - start)
+    except (ArithmeticError, ValueError, RuntimeError) as err:  # numerical trouble in one object stays there
+        return ObjectResult(index, ref.name, "rejected", reason=f"extraction failed: {type(err).__name__}: {err}",
+                            content_id=loaded.content_id, seconds=time.perf_counter() - start)
     parts.write(key, arrays, {"name": ref.name, "content_id": loaded.content_id, **meta})
     return _from_meta(index, ref.name, key, parts.read_meta(key), reused=False, start=start)
 
 
-def extract_arrays(spec: JobSpec, mesh) -> tuple[dict[str, np.ndarray], dict]:
-    """Candidates and their codes at the candidate pose, empty crops dropped."""
+def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tuple[dict[str, np.ndarray], dict]:
+    """Candidates, their simulated settled poses and the codes cropped there; empty crops dropped."""
     rng = object_rng(mesh.content_id, spec.seed)
     points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
     cands = sample_candidates(mesh, points, normals, spec.grasps_per_object, spec.gripper, spec.sampler, rng)
@@ -69,17 +74,60 @@ def extract_arrays(spec: JobSpec, mesh) -> tuple[dict[str, np.ndarray], dict]:
         raise MeshRejected(mesh.name, f"no collision-free antipodal grasp narrower than max_opening="
                                       f"{spec.gripper.max_opening} m among {cands.tried} tried: "
                                       "the object cannot fit the gripper")
-    codes, counts = crop_codes(points, cands.poses, spec.grid_shape(), spec.voxel.resolution)
+    grasps, meta = _simulate(spec, mesh, cands, collision_dir)
+    grid, res = spec.grid_shape(), spec.voxel.resolution
+    codes, counts = crop_codes(points, grasps["pose"], grid, res)
+    static, _ = crop_codes(points, grasps["candidate_pose"], grid, res)
     keep = counts > 0
-    codes = canonical_codes(codes[keep], spec.grid_shape()) if spec.voxel.canonical else codes[keep]
-    arrays = {"pose": cands.poses[keep].astype(np.float32), "candidate_pose": cands.poses[keep].astype(np.float32),
-              "width": cands.widths[keep].astype(np.float32), "code": codes}
-    meta = {"grasps": int(keep.sum()), "empty_crops": int((~keep).sum()),
-            "candidates_tried": cands.tried, "collisions": cands.rejected_collision}
+    grasps = {name: value[keep] for name, value in grasps.items()}
+    codes, static = codes[keep], static[keep]
+    if spec.voxel.canonical:
+        codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
+    arrays = {**{k: v.astype(np.float32) if v.dtype.kind == "f" else v for k, v in grasps.items()},
+              "code": codes, "candidate_code": static}
+    if spec.sim.points_per_grasp:
+        arrays["points"] = _grasp_points(points, grasps["pose"], spec, rng)
+    meta.update({"grasps": int(keep.sum()), "empty_crops": int((~keep).sum()), "candidates_tried": cands.tried,
+                 "collisions": cands.rejected_collision,
+                 "settled_code_differs": int(np.any(codes != static, axis=1).sum())})
     return arrays, meta
+
+
+def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
+              collision_dir: Path) -> tuple[dict[str, np.ndarray], dict]:
+    """Run the extract (and label) protocol; keep the trials whose fingers hold the object."""
+    if not spec.sim.physics:
+        return {"pose": cands.poses, "candidate_pose": cands.poses, "width": cands.widths}, {"trials": 0}
+    from onepiece_dist.sim.collision import convex_pieces
+    from onepiece_dist.sim.trials import OUTCOMES, run_trials
+    from onepiece_dist.sim.world import process_world
+
+    world = process_world(spec.gripper)
+    world.load_object(convex_pieces(mesh, collision_dir, spec.sim.collision), enclosed_volume(mesh),
+                      spec.gripper.friction)
+    batch = run_trials(world, cands.poses, label=spec.sim.label)
+    ok = batch.outcome == 0
+    grasps = {"pose": batch.settled_pose[ok], "candidate_pose": cands.poses[ok], "width": batch.width[ok],
+              "shift": batch.shift[ok]}
+    if batch.success is not None:
+        grasps["success"] = batch.success[ok].astype(np.uint8)
+        grasps["quality"] = batch.success[ok].astype(np.float32)
+    dropped = {f"dropped_{name}": int(np.sum(batch.outcome == k)) for k, name in enumerate(OUTCOMES) if k}
+    return grasps, {"trials": len(cands.poses), **dropped}
+
+
+def _grasp_points(points: np.ndarray, poses: np.ndarray, spec: JobSpec, rng: np.random.Generator) -> np.ndarray:
+    """(n, P, 3) float16 gripper-frame points inside the closing region at each pose, resampled to P."""
+    count = spec.sim.points_per_grasp
+    out = np.zeros((len(poses), count, 3), dtype=np.float16)
+    for i, pose in enumerate(poses):
+        inside = crop_points(points, pose, spec.grid_shape(), spec.voxel.resolution)
+        out[i] = resample_points(inside, count, rng)
+    return out
 
 
 def _from_meta(index: int, name: str, key: str, meta: dict, reused: bool, start: float) -> ObjectResult:
     return ObjectResult(index, name, "ok", content_id=meta["content_id"], part_key=key, grasps=meta["grasps"],
                         empty_crops=meta["empty_crops"], candidates_tried=meta["candidates_tried"],
-                        collisions=meta["collisions"], reused=reused, seconds=time.perf_counter() - start)
+                        collisions=meta["collisions"], settled_code_differs=meta.get("settled_code_differs", 0),
+                        reused=reused, seconds=time.perf_counter() - start)

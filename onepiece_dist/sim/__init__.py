@@ -1,0 +1,1 @@
+"""pybullet grasp trials. Only validated, sanitized meshes (from ``objects``) ever reach pybullet."""

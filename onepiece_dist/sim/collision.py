@@ -1,0 +1,81 @@
+"""Collision geometry for dynamic objects: a convex decomposition (pybullet's VHACD), computed once per object
+content id and cached as an OBJ of convex pieces; the plain convex hull only when asked (with a warning).
+
+VHACD runs in a child process: it segfaults on some meshes, and a crash there must not take the worker down.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.core.mesh import TriangleMesh
+from onepiece_dist.objects.meshio import parse_obj
+
+_VHACD_SCRIPT = """
+import sys, pybullet as p
+p.connect(p.DIRECT)
+p.vhacd(sys.argv[1], sys.argv[2], sys.argv[3], resolution=int(sys.argv[4]), maxNumVerticesPerCH=32)
+"""
+
+
+def write_obj(mesh: TriangleMesh, path: Path) -> None:
+    """A plain OBJ (vertices and faces only) of an already validated mesh."""
+    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in mesh.vertices]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces]
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+
+
+def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
+                  resolution: int = 50_000) -> list[np.ndarray]:
+    """Convex pieces of ``mesh`` as a list of (k, 3) float64 vertex arrays (each the hull of its points)."""
+    if method == "hull":
+        warnings.warn(f"{mesh.name}: collision geometry is the convex hull; grasps on concave parts are distorted",
+                      stacklevel=2)
+        return [mesh.vertices]
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    out = cache_dir / f"{mesh.content_id}-vhacd{resolution}.obj"
+    if not out.is_file():
+        _run_vhacd(mesh, cache_dir, out, resolution)
+    if not out.is_file():
+        warnings.warn(f"{mesh.name}: convex decomposition failed; using the convex hull", stacklevel=2)
+        return [mesh.vertices]
+    return _split_pieces(out.read_bytes(), mesh.name)
+
+
+def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) -> None:
+    source = cache_dir / f"{mesh.content_id}.src.obj"
+    write_obj(mesh, source)
+    tmp_out = out.with_suffix(f".{os.getpid()}.part")
+    try:
+        subprocess.run([sys.executable, "-c", _VHACD_SCRIPT, str(source), str(tmp_out), os.devnull,
+                        str(resolution)], capture_output=True, timeout=120, check=False)
+        if tmp_out.is_file() and tmp_out.stat().st_size > 0:
+            os.replace(tmp_out, out)
+    except subprocess.TimeoutExpired:
+        pass
+    finally:
+        for path in (source, tmp_out):
+            path.unlink(missing_ok=True)
+
+
+def _split_pieces(data: bytes, name: str) -> list[np.ndarray]:
+    """VHACD writes one 'o' group per convex piece; vertex indices are global across the file."""
+    vertices, faces = parse_obj(data, name)
+    pieces, group = [], []
+    text_groups = data.decode().split("\no ")
+    offset = 0
+    for chunk in text_groups:
+        count = sum(1 for line in chunk.splitlines() if line.startswith("v "))
+        if count >= 4:
+            group = vertices[offset:offset + count]
+            pieces.append(group)
+        offset += count
+    return pieces or [vertices]
