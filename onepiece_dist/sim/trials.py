@@ -8,6 +8,7 @@ that start in collision, or whose fingers do not both touch the object, are drop
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +24,7 @@ CHECK_EVERY = 4  # steps between stall checks
 MAX_SHIFT = 0.1  # m: an object that moves further has flown off (invalid trial)
 LIFT_HEIGHT, LIFT_TIME = 0.1, 0.3
 SHAKE_AMPLITUDE, SHAKE_PERIOD, SHAKES = 0.02, 0.15, 2
+DROP_CHECK_EVERY = 12  # steps between drop checks while lifting and shaking
 
 OUTCOMES = ("ok", "start_collision", "no_contact", "invalid")
 
@@ -118,18 +120,24 @@ def extract_trial(world: SimWorld, pose: np.ndarray) -> tuple[int, np.ndarray, f
 
 
 def lift_and_shake(world: SimWorld, start: np.ndarray) -> bool:
-    """After closing: gravity on, lift, shake along the world axes; success = both fingers still touch."""
+    """After closing: gravity on, lift, shake along the world axes; success = both fingers still touch.
+
+    Exits early (failure) as soon as a periodic check finds a finger without contact.
+    """
     c = world.client
     pb.setGravity(0, 0, -9.81, physicsClientId=c)
-    for offset in _trajectory():
-        target = start.copy()
-        target[:3, 3] += offset
-        move_gripper(world, target)
+    quat = quat_from_matrix(start[:3, :3])
+    for step, offset in enumerate(_trajectory() + start[:3, 3]):
+        pb.changeConstraint(world.constraint, jointChildPivot=offset.tolist(), jointChildFrameOrientation=quat,
+                            maxForce=2000, physicsClientId=c)
         pb.stepSimulation(physicsClientId=c)
+        if step % DROP_CHECK_EVERY == DROP_CHECK_EVERY - 1 and not any(finger_contacts(world)):
+            return False
     obj = world.object_pose()
     return bool(np.all(np.isfinite(obj)) and all(finger_contacts(world)))
 
 
+@functools.cache
 def _trajectory() -> np.ndarray:
     """(steps, 3) world offsets of the gripper: lift, then shakes along x and y at the lifted height."""
     lift_steps = int(LIFT_TIME / TIME_STEP)

@@ -1,0 +1,87 @@
+"""Trial throughput on pybullet:random_urdfs objects with the default gripper, one core.
+
+Run: .venv/bin/python benchmarks/bench_sim.py  (writes benchmarks/results/sim.json)
+Measures the extract protocol (early stall exit), the label protocol (extract + lift + shake), and a plain
+fixed-step baseline (close then lift, 240 steps of 1/240 s, no early exit) on the same candidates.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import sys
+import tempfile
+import time
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+import pybullet as pb
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from onepiece_dist.core.mesh import enclosed_volume, sample_surface  # noqa: E402
+from onepiece_dist.core.sampling import object_rng, sample_candidates  # noqa: E402
+from onepiece_dist.objects import load_object, resolve_source  # noqa: E402
+from onepiece_dist.sim.collision import convex_pieces  # noqa: E402
+from onepiece_dist.sim.trials import place, run_trials  # noqa: E402
+from onepiece_dist.sim.world import process_world  # noqa: E402
+from onepiece_dist.spec import JobSpec  # noqa: E402
+
+OBJECTS = os.environ.get("BENCH_SIM_OBJECTS", "pybullet:random_urdfs[0:8]")
+GRASPS = int(os.environ.get("BENCH_SIM_GRASPS", 64))
+
+
+def baseline(world, poses: np.ndarray) -> None:
+    """Fixed-step loop: close for 120 steps and lift for 120 steps, whatever happens."""
+    c, g = world.client, world.gripper
+    for pose in poses:
+        place(world, pose)
+        pb.setGravity(0, 0, 0, physicsClientId=c)
+        pb.setJointMotorControlArray(g, [0, 1], pb.VELOCITY_CONTROL, targetVelocities=[0.1, 0.1],
+                                     forces=[world.spec.closing_force] * 2, physicsClientId=c)
+        for step in range(240):
+            if step == 120:
+                pb.setGravity(0, 0, -9.81, physicsClientId=c)
+            pb.stepSimulation(physicsClientId=c)
+
+
+def main() -> dict:
+    spec = JobSpec(grasps_per_object=GRASPS)
+    world = process_world(spec.gripper)
+    timings = {"extract": 0.0, "label": 0.0, "baseline": 0.0}
+    trials = held = 0
+    with tempfile.TemporaryDirectory() as cache:
+        for ref in resolve_source(OBJECTS):
+            try:
+                mesh = load_object(ref, spec).mesh
+            except ValueError:
+                continue
+            rng = object_rng(mesh.content_id, spec.seed)
+            points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
+            poses = sample_candidates(mesh, points, normals, GRASPS, spec.gripper, spec.sampler, rng).poses
+            world.load_object(convex_pieces(mesh, Path(cache), "vhacd"), enclosed_volume(mesh), 1.0)
+            for name, run in (("extract", lambda p: run_trials(world, p)),
+                              ("label", lambda p: run_trials(world, p, label=True)),
+                              ("baseline", lambda p: baseline(world, p))):
+                start = time.perf_counter()
+                batch = run(poses)
+                timings[name] += time.perf_counter() - start
+                if name == "extract":
+                    held += int(np.sum(batch.outcome == 0))
+            trials += len(poses)
+    rates = {f"{k}_trials_per_s_per_core": round(trials / v, 1) for k, v in timings.items()}
+    out = {"benchmark": "sim", "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {os.cpu_count()} cores (one used)", "objects": OBJECTS,
+           "trials": trials, "extract_held_fraction": round(held / max(trials, 1), 3), **rates,
+           "extract_speedup_vs_baseline": round(timings["baseline"] / timings["extract"], 2),
+           "label_speedup_vs_baseline": round(timings["baseline"] / timings["label"], 2),
+           "targets": {"extract_trials_per_s_per_core": 300, "label_trials_per_s_per_core": 150},
+           "command": "python benchmarks/bench_sim.py"}
+    (Path(__file__).parent / "results" / "sim.json").write_text(json.dumps(out, indent=2) + "\n")
+    print(json.dumps(out, indent=2))
+    return out
+
+
+if __name__ == "__main__":
+    main()
