@@ -10,6 +10,6 @@ from onepiece_dist.store import DatasetReader, open_dataset
 __all__ = ["DatasetReader", "JobSpec", "JobStatus", "open_dataset", "run_job"]
 
 
-def run_job(spec: JobSpec, local: bool = True, progress: ProgressFn | None = None) -> JobStatus:
-    """Run ``spec`` to completion and return its final status."""
+def run_job(spec: JobSpec, progress: ProgressFn | None = None) -> JobStatus:
+    """Run ``spec`` to completion in this process and return its final status (the Ray runner is issue #4)."""
     return run_local(spec, progress=progress)
