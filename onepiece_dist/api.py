@@ -10,6 +10,16 @@ from onepiece_dist.store import DatasetReader, open_dataset
 __all__ = ["DatasetReader", "JobSpec", "JobStatus", "open_dataset", "run_job"]
 
 
-def run_job(spec: JobSpec, progress: ProgressFn | None = None) -> JobStatus:
-    """Run ``spec`` to completion in this process and return its final status (the Ray runner is issue #4)."""
-    return run_local(spec, progress=progress)
+def run_job(spec: JobSpec, use_ray: bool = False, progress: ProgressFn | None = None) -> JobStatus:
+    """Run ``spec`` to completion and return its final status: in this process, or on an embedded Ray with
+    extraction worker actors (``use_ray``; then Ray is shut down again)."""
+    if not use_ray:
+        return run_local(spec, progress=progress)
+    import ray
+
+    from onepiece_dist.service.ray_runner import run_ray
+
+    try:
+        return run_ray(spec, progress=progress)
+    finally:
+        ray.shutdown()

@@ -41,13 +41,14 @@ def run(
     out: Annotated[str | None, typer.Option(help="Dataset path (Zarr directory).")] = None,
     grasps: Annotated[int | None, typer.Option(help="Grasp candidates per object.")] = None,
     seed: Annotated[int | None, typer.Option(help="Random seed.")] = None,
+    ray: Annotated[bool, typer.Option("--ray", help="Run on an embedded Ray (127.0.0.1, worker actors).")] = False,
 ) -> None:
     """Run a job end to end and print the dataset path."""
     from onepiece_dist.api import run_job
 
     try:
         spec = build_spec(spec_file, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
-        status = run_job(spec, progress=_progress_printer())
+        status = run_job(spec, use_ray=ray, progress=_progress_printer())
     except (SpecError, SourceError) as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
