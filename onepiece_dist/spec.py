@@ -108,6 +108,11 @@ class SimSpec(_Frozen):
     collision: Literal["vhacd", "hull"] = Field("vhacd", description="Object collision geometry: convex "
                                                 "decomposition (default) or the plain convex hull.")
     label: bool = Field(False, description="Also lift and shake each grasp and store success labels.")
+    label_trials: int = Field(1, ge=1, le=32, description="K: label trials per grasp (the nominal one plus K-1 "
+                              "with pose and friction noise); quality = success fraction.")
+    pose_noise: float = Field(0.003, ge=0, le=0.05, description="Translation noise of perturbed trials (m).")
+    rotation_noise: float = Field(0.05, ge=0, le=1, description="Rotation noise of perturbed trials (rad).")
+    friction_noise: float = Field(0.2, ge=0, le=1, description="Relative friction noise of perturbed trials.")
     points_per_grasp: int = Field(750, ge=0, le=4096, description="Gripper-frame points stored per grasp "
                                   "(resampled with replacement; 0 stores none).")
 

@@ -99,19 +99,22 @@ def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
     if not spec.sim.physics:
         return {"pose": cands.poses, "candidate_pose": cands.poses, "width": cands.widths}, {"trials": 0}
     from onepiece_dist.sim.collision import convex_pieces
-    from onepiece_dist.sim.trials import OUTCOMES, run_trials
+    from onepiece_dist.sim.trials import OUTCOMES, LabelNoise, run_trials
     from onepiece_dist.sim.world import process_world
 
     world = process_world(spec.gripper)
     world.load_object(convex_pieces(mesh, collision_dir, spec.sim.collision), enclosed_volume(mesh),
                       spec.gripper.friction)
-    batch = run_trials(world, cands.poses, label=spec.sim.label)
+    noise = LabelNoise(spec.sim.label_trials, spec.sim.pose_noise, spec.sim.rotation_noise, spec.sim.friction_noise)
+    batch = run_trials(world, cands.poses, label=spec.sim.label, noise=noise,
+                       rng=object_rng(mesh.content_id, spec.seed, stream=1))
     ok = batch.outcome == 0
     grasps = {"pose": batch.settled_pose[ok], "candidate_pose": cands.poses[ok], "width": batch.width[ok],
               "shift": batch.shift[ok]}
     if batch.success is not None:
         grasps["success"] = batch.success[ok].astype(np.uint8)
-        grasps["quality"] = batch.success[ok].astype(np.float32)
+        grasps["quality"] = batch.quality[ok]
+        grasps["slip"] = batch.slip[ok]
     dropped = {f"dropped_{name}": int(np.sum(batch.outcome == k)) for k, name in enumerate(OUTCOMES) if k}
     return grasps, {"trials": len(cands.poses), **dropped}
 

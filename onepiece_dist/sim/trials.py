@@ -3,7 +3,8 @@
 *extract*: gripper at the candidate, gravity off, fingers close at constant speed under a force limit until they
 stall, then settle; the settled object pose relative to the gripper and the final width are recorded. Candidates
 that start in collision, or whose fingers do not both touch the object, are dropped with a reason.
-*label*: extract, then gravity on, lift and shake; success = both fingers still touch the object.
+*label*: extract, then gravity on, lift, shake linearly and rotationally; success = both fingers still touch the
+object; quality = success fraction over K trials with friction and pose noise.
 """
 
 from __future__ import annotations
@@ -22,8 +23,9 @@ SETTLE_TIME = 0.05  # s after the fingers stall
 STALL_SPEED = 2e-3  # m/s
 CHECK_EVERY = 4  # steps between stall checks
 MAX_SHIFT = 0.1  # m: an object that moves further has flown off (invalid trial)
-LIFT_HEIGHT, LIFT_TIME = 0.1, 0.3
-SHAKE_AMPLITUDE, SHAKE_PERIOD, SHAKES = 0.02, 0.15, 2
+LIFT_HEIGHT, LIFT_TIME = 0.1, 0.15
+SHAKE_AMPLITUDE, SHAKE_PERIOD, SHAKES = 0.02, 0.12, 1
+ROTATION_AMPLITUDE = np.radians(30.0)  # rotational shake about world z
 DROP_CHECK_EVERY = 12  # steps between drop checks while lifting and shaking
 
 OUTCOMES = ("ok", "start_collision", "no_contact", "invalid")
@@ -32,7 +34,9 @@ OUTCOMES = ("ok", "start_collision", "no_contact", "invalid")
 @dataclass(frozen=True)
 class TrialBatch:
     """outcome (n,) int8 index into OUTCOMES; settled_pose (n, 4, 4) gripper pose in the object frame after
-    closing; width (n,) final opening (m); shift (n,) object displacement during closing (m); steps (n,)."""
+    closing; width (n,) final opening (m); shift (n,) object displacement during closing (m); steps (n,) closing
+    steps. With labels: success (n,) bool, quality (n,) float in [0, 1], slip (n,) object motion in the gripper
+    frame while lifting and shaking (m)."""
 
     outcome: np.ndarray
     settled_pose: np.ndarray
@@ -40,6 +44,8 @@ class TrialBatch:
     shift: np.ndarray
     steps: np.ndarray
     success: np.ndarray | None = None
+    quality: np.ndarray | None = None
+    slip: np.ndarray | None = None
 
 
 def place(world: SimWorld, pose: np.ndarray) -> None:
@@ -119,45 +125,112 @@ def extract_trial(world: SimWorld, pose: np.ndarray) -> tuple[int, np.ndarray, f
     return 0, settled, world.spec.max_opening - q[0] - q[1], shift, steps
 
 
-def lift_and_shake(world: SimWorld, start: np.ndarray) -> bool:
-    """After closing: gravity on, lift, shake along the world axes; success = both fingers still touch.
+def lift_and_shake(world: SimWorld, start: np.ndarray) -> tuple[bool, float]:
+    """After closing: gravity on, lift, shake linearly along world x and y, then rotationally about world z.
 
-    Exits early (failure) as soon as a periodic check finds a finger without contact.
+    Exits early (failure) when a periodic check finds no finger touching the object.
+    returns : success (both fingers still touch at the end), slip (m) = largest change of the object's position
+              in the gripper frame during lifting and shaking
     """
     c = world.client
     pb.setGravity(0, 0, -9.81, physicsClientId=c)
-    quat = quat_from_matrix(start[:3, :3])
-    for step, offset in enumerate(_trajectory() + start[:3, 3]):
-        pb.changeConstraint(world.constraint, jointChildPivot=offset.tolist(), jointChildFrameOrientation=quat,
-                            maxForce=2000, physicsClientId=c)
+    held = invert_poses(start) @ world.object_pose()
+    slip = 0.0
+    for step, (offset, rotation) in enumerate(zip(*_trajectory(), strict=True)):
+        orientation = quat_from_matrix(rotation @ start[:3, :3])
+        pb.changeConstraint(world.constraint, jointChildPivot=(start[:3, 3] + offset).tolist(),
+                            jointChildFrameOrientation=orientation, maxForce=2000, physicsClientId=c)
         pb.stepSimulation(physicsClientId=c)
-        if step % DROP_CHECK_EVERY == DROP_CHECK_EVERY - 1 and not any(finger_contacts(world)):
-            return False
-    obj = world.object_pose()
-    return bool(np.all(np.isfinite(obj)) and all(finger_contacts(world)))
+        if step % DROP_CHECK_EVERY == DROP_CHECK_EVERY - 1:
+            slip = max(slip, _slip(world, held))
+            if not any(finger_contacts(world)):
+                return False, slip
+    slip = max(slip, _slip(world, held))
+    return bool(np.isfinite(slip) and all(finger_contacts(world))), slip
+
+
+def _slip(world: SimWorld, held: np.ndarray) -> float:
+    """Distance between the object's current position in the gripper frame and ``held`` (the start)."""
+    now = invert_poses(world.gripper_pose()) @ world.object_pose()
+    return float(np.linalg.norm(now[:3, 3] - held[:3, 3]))
 
 
 @functools.cache
-def _trajectory() -> np.ndarray:
-    """(steps, 3) world offsets of the gripper: lift, then shakes along x and y at the lifted height."""
-    lift_steps = int(LIFT_TIME / TIME_STEP)
+def _trajectory() -> tuple[np.ndarray, np.ndarray]:
+    """World offsets (steps, 3) and rotations (steps, 3, 3) of the gripper: lift; linear shakes along x and y;
+    a rotational shake about z."""
+    dt = TIME_STEP
+    lift_steps = int(round(LIFT_TIME / dt))
     lift = np.zeros((lift_steps, 3))
     lift[:, 2] = np.linspace(0, LIFT_HEIGHT, lift_steps)
-    t = np.arange(int(SHAKES * SHAKE_PERIOD / TIME_STEP)) * TIME_STEP
-    wave = SHAKE_AMPLITUDE * np.sin(2 * np.pi * t / SHAKE_PERIOD)
-    shakes = [np.c_[wave, np.zeros_like(wave), np.full_like(wave, LIFT_HEIGHT)],
-              np.c_[np.zeros_like(wave), wave, np.full_like(wave, LIFT_HEIGHT)]]
-    return np.vstack([lift, *shakes])
+    t = np.arange(int(round(SHAKES * SHAKE_PERIOD / dt))) * dt
+    wave = np.sin(2 * np.pi * t / SHAKE_PERIOD)
+    up = np.full_like(wave, LIFT_HEIGHT)
+    zeros = np.zeros_like(wave)
+    offsets = np.vstack([lift, np.c_[SHAKE_AMPLITUDE * wave, zeros, up], np.c_[zeros, SHAKE_AMPLITUDE * wave, up],
+                         np.c_[zeros, zeros, up]])
+    angles = np.concatenate([np.zeros(lift_steps + 2 * len(t)), ROTATION_AMPLITUDE * wave])
+    cos, sin = np.cos(angles), np.sin(angles)
+    rotations = np.zeros((len(angles), 3, 3))
+    rotations[:, 0, 0], rotations[:, 0, 1], rotations[:, 1, 0], rotations[:, 1, 1] = cos, -sin, sin, cos
+    rotations[:, 2, 2] = 1.0
+    return offsets, rotations
 
 
-def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False) -> TrialBatch:
-    """Extract (and optionally label) every candidate pose (n, 4, 4) on the loaded object."""
+@dataclass(frozen=True)
+class LabelNoise:
+    """Perturbations of the robust-quality trials: translation (m), rotation (rad), relative friction."""
+
+    trials: int = 1
+    translation: float = 0.003
+    rotation: float = 0.05
+    friction: float = 0.2
+
+
+def perturbed(pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> np.ndarray:
+    """``pose`` moved by Gaussian translation noise and turned by a small random rotation (gripper frame)."""
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    angle = rng.normal(0, noise.rotation)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    turn = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+    out = pose.copy()
+    out[:3, :3] = pose[:3, :3] @ turn
+    out[:3, 3] += rng.normal(0, noise.translation, 3)
+    return out
+
+
+def label_quality(world: SimWorld, pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> float:
+    """Success fraction over ``noise.trials - 1`` perturbed label trials (friction and pose noise)."""
+    wins = 0
+    base_friction = world.spec.friction
+    for _ in range(noise.trials - 1):
+        friction = base_friction * max(0.05, 1 + rng.normal(0, noise.friction))
+        world.set_finger_friction(friction)
+        try:
+            if extract_trial(world, perturbed(pose, rng, noise))[0] == 0:
+                wins += lift_and_shake(world, world.gripper_pose())[0]
+        finally:
+            world.set_finger_friction(base_friction)
+    return wins
+
+
+def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False, noise: LabelNoise | None = None,
+               rng: np.random.Generator | None = None) -> TrialBatch:
+    """Extract (and optionally label) every candidate pose (n, 4, 4) on the loaded object.
+
+    With ``label``, each held grasp is lifted and shaken once at its candidate pose (``success``), plus
+    ``noise.trials - 1`` perturbed repetitions; ``quality`` = success fraction over all of them.
+    """
     n = len(poses)
+    noise = noise or LabelNoise()
+    rng = rng or np.random.default_rng(0)
     outcome, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
     settled, width, shift = poses.copy(), np.full(n, np.nan), np.zeros(n)
-    success = np.zeros(n, bool) if label else None
+    success, quality, slip = (np.zeros(n, bool), np.zeros(n), np.full(n, np.nan)) if label else (None,) * 3
     for i, pose in enumerate(poses):
         outcome[i], settled[i], width[i], shift[i], steps[i] = extract_trial(world, pose)
         if label and outcome[i] == 0:
-            success[i] = lift_and_shake(world, world.gripper_pose())
-    return TrialBatch(outcome, settled, width, shift, steps, success)
+            success[i], slip[i] = lift_and_shake(world, world.gripper_pose())
+            quality[i] = (success[i] + label_quality(world, pose, rng, noise)) / noise.trials
+    return TrialBatch(outcome, settled, width, shift, steps, success, quality, slip)

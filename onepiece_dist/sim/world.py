@@ -17,6 +17,7 @@ import pybullet as pb
 from onepiece_dist.spec import GripperSpec
 
 TIME_STEP = 1.0 / 240.0
+SOLVER_ITERATIONS = 50
 DENSITY = 150.0  # kg/m^3, as ACRONYM
 MIN_MASS, MAX_MASS = 0.05, 2.0  # kg
 
@@ -59,7 +60,7 @@ class SimWorld:
         self.spec = gripper
         self.client = pb.connect(pb.DIRECT)
         pb.setTimeStep(TIME_STEP, physicsClientId=self.client)
-        pb.setPhysicsEngineParameter(numSolverIterations=50, deterministicOverlappingPairs=1,
+        pb.setPhysicsEngineParameter(numSolverIterations=SOLVER_ITERATIONS, deterministicOverlappingPairs=1,
                                      physicsClientId=self.client)
         self.gripper, self.constraint = self._build_gripper()
         self.obj: int | None = None
@@ -92,6 +93,10 @@ class SimWorld:
                                          physicsClientId=c)
         pb.changeConstraint(constraint, maxForce=2000, physicsClientId=c)
         return body, constraint
+
+    def set_finger_friction(self, friction: float) -> None:
+        for link in (0, 1):
+            pb.changeDynamics(self.gripper, link, lateralFriction=friction, physicsClientId=self.client)
 
     def load_object(self, pieces: list[np.ndarray], volume: float, friction: float) -> None:
         """Replace the object by a compound of convex ``pieces`` ((k, 3) vertex arrays in the mesh frame)."""

@@ -19,6 +19,7 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("grasps/points", "float16", "(N, P, 3)", "gripper-frame points in the closing region, resampled to P"),
     ("grasps/success", "uint8", "(N,)", "label protocol outcome (only when sim.label is true)"),
     ("grasps/quality", "float32", "(N,)", "success fraction over label trials (only when sim.label is true)"),
+    ("grasps/slip", "float32", "(N,)", "object motion in the gripper frame while lifting and shaking (m)"),
     ("grasps/code", "uint8", "(N, B)", "packed voxel code of the crop, C order over (u, v, t), bitorder big"),
     ("grasps/code_index", "int64", "(N,)", "row in unique/ of each grasp's code"),
     ("unique/code", "uint8", "(U, B)", "distinct codes in ascending byte order"),
