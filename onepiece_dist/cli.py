@@ -34,6 +34,10 @@ def build_spec(spec_file: Path | None, overrides: dict[str, Any]):
     return parse_job_spec(given, "command line")
 
 
+Address = Annotated[str | None, typer.Option(help="Ray address: 'auto', 'host:port' (run) or the Jobs API "
+                                           "URL 'http://host:8265' (submit, status, wait, cancel, logs, list).")]
+
+
 @app.command()
 def run(
     spec_file: Annotated[Path | None, typer.Argument(metavar="[SPEC]", help="YAML or JSON job spec.")] = None,
@@ -41,25 +45,187 @@ def run(
     out: Annotated[str | None, typer.Option(help="Dataset path (Zarr directory).")] = None,
     grasps: Annotated[int | None, typer.Option(help="Grasp candidates per object.")] = None,
     seed: Annotated[int | None, typer.Option(help="Random seed.")] = None,
-    ray: Annotated[bool, typer.Option("--ray", help="Run on an embedded Ray (127.0.0.1, worker actors).")] = False,
+    address: Address = None,
+    job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
+    workers: Annotated[int | None, typer.Option(help="Extraction workers (default: the cluster's CPUs).")] = None,
+    spec_json: Annotated[str | None, typer.Option(hidden=True, help="The whole spec as JSON (used by submit).")] = None,
+    in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
 ) -> None:
-    """Run a job end to end and print the dataset path."""
-    from onepiece_dist.api import run_job
+    """Run a job end to end (embedded Ray on 127.0.0.1 unless --address) and print the dataset path."""
+    overrides = {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed}
+    spec = _spec_or_exit(spec_file, overrides, spec_json)
+    _run_and_report(spec, address, job_id, workers, in_process)
 
+
+def _spec_or_exit(spec_file: Path | None, overrides: dict, spec_json: str | None = None):
     try:
-        spec = build_spec(spec_file, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
-        status = run_job(spec, use_ray=ray, progress=_progress_printer())
-    except (SpecError, SourceError) as err:
+        if spec_json is not None:
+            from onepiece_dist.spec import parse_job_spec
+
+            return parse_job_spec(json.loads(spec_json), "--spec-json")
+        return build_spec(spec_file, overrides)
+    except (SpecError, json.JSONDecodeError) as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
+
+
+def _run_and_report(spec, address, job_id, workers, in_process) -> None:
+    from onepiece_dist.api import ClusterUnreachable, run_job
+
+    try:
+        status = run_job(spec, address=address, in_process=in_process, job_id=job_id, workers=workers,
+                         progress=_progress_printer())
+    except SourceError as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_USAGE) from None
+    except ClusterUnreachable as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_UNREACHABLE) from None
     except JobError as err:
         _err(f"job failed: {err}")
         raise typer.Exit(EXIT_FAILED) from None
     for rejection in status.rejections:
         _err(f"rejected {rejection.name}: {rejection.reason}")
-    _err(f"{status.progress.objects_done} objects, {status.progress.grasps} grasps, "
-         f"{status.progress.unique_codes} unique codes")
+    _err(f"job {status.job_id}: {status.progress.objects_done} objects ({status.progress.objects_reused} reused), "
+         f"{status.progress.grasps} grasps, {status.progress.unique_codes} unique codes")
     typer.echo(status.output)
+
+
+@app.command()
+def resume(
+    job: Annotated[str, typer.Argument(help="The dataset path of the job (its status file holds the spec).")],
+    address: Address = None,
+    workers: Annotated[int | None, typer.Option(help="Extraction workers.")] = None,
+) -> None:
+    """Run a job again from its status: committed objects are reused, the rest is extracted."""
+    from onepiece_dist.api import read_status
+    from onepiece_dist.spec import parse_job_spec
+
+    try:
+        status = read_status(job)
+        spec = parse_job_spec(status.spec, f"{job} status")
+    except (JobError, SpecError) as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_USAGE) from None
+    _run_and_report(spec, address, status.job_id, workers, in_process=False)
+
+
+@app.command()
+def submit(
+    spec_file: Annotated[Path | None, typer.Argument(metavar="[SPEC]", help="YAML or JSON job spec.")] = None,
+    address: Address = None,
+    objects: Annotated[str | None, typer.Option(help="Object source.")] = None,
+    out: Annotated[str | None, typer.Option(help="Dataset path, as seen by the cluster.")] = None,
+    grasps: Annotated[int | None, typer.Option(help="Grasp candidates per object.")] = None,
+    seed: Annotated[int | None, typer.Option(help="Random seed.")] = None,
+    job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
+) -> None:
+    """Submit a job to a cluster through the Ray Jobs API and print its id (it outlives this command)."""
+    if not address:
+        _err("error: submit needs --address (the cluster's Jobs API, e.g. http://127.0.0.1:8265)")
+        raise typer.Exit(EXIT_USAGE)
+    spec = _spec_or_exit(spec_file, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
+    handle = _cluster_call(lambda c: c.submit(spec, job_id=job_id, runtime_env=_worker_runtime_env()), address)
+    typer.echo(handle.job_id)
+
+
+def _worker_runtime_env() -> dict | None:
+    """workers/runtime_env.yaml when run from a checkout, else none (nodes run the installed package)."""
+    import yaml
+
+    path = Path(__file__).resolve().parents[1] / "workers" / "runtime_env.yaml"
+    return yaml.safe_load(path.read_text()) if path.is_file() else None
+
+
+def _cluster_call(action, address: str | None):
+    from onepiece_dist.api import Client, ClusterUnreachable
+
+    try:
+        return action(Client(address))
+    except ClusterUnreachable as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_UNREACHABLE) from None
+    except (ConnectionError, OSError) as err:
+        _err(f"error: cluster unreachable at {address}: {err}")
+        raise typer.Exit(EXIT_UNREACHABLE) from None
+
+
+@app.command()
+def status(
+    job: Annotated[str, typer.Argument(help="Job id (with --address) or dataset path.")],
+    address: Address = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
+) -> None:
+    """Show a job's state, stage and progress."""
+    from onepiece_dist.api import read_status
+
+    try:
+        current = _cluster_call(lambda c: c.status(job), address) if address else read_status(job)
+    except JobError as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_USAGE) from None
+    _print_status(current, as_json)
+
+
+def _print_status(current, as_json: bool) -> None:
+    if as_json:
+        typer.echo(current.model_dump_json())
+        return
+    p = current.progress
+    typer.echo(f"{current.job_id}: {current.state} ({current.stage}) objects {p.objects_done}/{p.objects_total}, "
+               f"grasps {p.grasps}, unique codes {p.unique_codes}", err=True)
+
+
+@app.command()
+def wait(
+    job: Annotated[str, typer.Argument(help="Job id.")],
+    address: Address = None,
+    timeout: Annotated[float | None, typer.Option(help="Give up after this many seconds.")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
+) -> None:
+    """Wait for a submitted job to end; exit 0 if it succeeded, 1 otherwise."""
+    from onepiece_dist.api import JobHandle
+
+    final = _cluster_call(lambda c: JobHandle(c, job, output="").wait(timeout=timeout), address)
+    _print_status(final, as_json)
+    if final.state != "succeeded":
+        raise typer.Exit(EXIT_FAILED)
+
+
+@app.command()
+def cancel(job: Annotated[str, typer.Argument(help="Job id.")], address: Address = None) -> None:
+    """Cancel a submitted job."""
+    _cluster_call(lambda c: c.cancel(job), address)
+    _err(f"cancel requested for {job}")
+
+
+@app.command()
+def logs(job: Annotated[str, typer.Argument(help="Job id.")], address: Address = None) -> None:
+    """Print a submitted job's driver log."""
+    typer.echo(_cluster_call(lambda c: c.logs(job), address))
+
+
+@app.command(name="list")
+def list_jobs(
+    address: Address = None,
+    folder: Annotated[Path, typer.Option(help="Without --address: where to look for job status files.")] = Path("."),
+    as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
+) -> None:
+    """List jobs: those of a cluster (--address) or the status files under a folder."""
+    if address:
+        rows = _cluster_call(lambda c: c.jobs(), address)
+    else:
+        from onepiece_dist.service.status import STATUS_SUFFIX, JobStatus
+
+        rows = []
+        for path in sorted(folder.glob(f"**/*{STATUS_SUFFIX}")):
+            found = JobStatus.load(str(path)[: -len(STATUS_SUFFIX)])
+            rows.append({"job_id": found.job_id, "state": found.state, "output": found.output})
+    if as_json:
+        typer.echo(json.dumps(rows))
+        return
+    for row in rows:
+        typer.echo(f"{row['job_id']}\t{row['state']}\t{row['output']}")
 
 
 def _progress_printer():

@@ -156,6 +156,12 @@ class JobSpec(_Frozen):
         return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
 
 
+def default_job_id(spec: JobSpec) -> str:
+    """A job id derived from the whole spec: submitting the same spec twice names the same job."""
+    digest = hashlib.blake2b(spec.model_dump_json().encode(), digest_size=6).hexdigest()
+    return f"job-{digest}"
+
+
 def parse_job_spec(data: dict[str, Any], source: str = "<spec>") -> JobSpec:
     """Validate a mapping into a :class:`JobSpec`; errors name the field, the value and the rule."""
     try:

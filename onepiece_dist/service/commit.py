@@ -47,14 +47,20 @@ def _stats(results: list[ObjectResult]) -> dict:
             "settled_code_differs": sum(r.settled_code_differs for r in ok)}
 
 
-def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore, out: str) -> dict:
-    """Merge the parts of the ok results (in object order) and write the dataset at ``out``."""
+def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore, out: str,
+                   index: DedupIndex | None = None) -> dict:
+    """Merge the parts of the ok results (in object order) and write the dataset at ``out``.
+
+    ``index`` : a DedupIndex that already holds every ok part's codes (the central actor's running state)
+    """
     ok = sorted((r for r in results if r.status == "ok"), key=lambda r: r.index)
-    index = DedupIndex(spec.code_bytes())
+    fold = index is None
+    index = DedupIndex(spec.code_bytes()) if fold else index
     loaded = []
     for result in ok:
         arrays = parts.read(result.part_key)
-        index.add(arrays["code"])
+        if fold:
+            index.add(arrays["code"])
         loaded.append(arrays)
     grasps = _concatenate(loaded, spec.code_bytes())
     grasps["object"] = np.repeat(np.arange(len(ok), dtype=np.int32), [len(a["code"]) for a in loaded])

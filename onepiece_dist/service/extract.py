@@ -38,9 +38,15 @@ class ObjectResult:
     settled_code_differs: int = 0
     reused: bool = False
     seconds: float = 0.0
+    node: str = ""
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+def parts_for(spec: JobSpec) -> PartStore:
+    """Parts live in ``spec.cache_dir`` (shared across jobs) or beside the dataset in ``<output>.parts``."""
+    return PartStore(spec.cache_dir or f"{Path(spec.output)}.parts")
 
 
 def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) -> ObjectResult:

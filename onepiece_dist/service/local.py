@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.service.commit import commit_dataset
-from onepiece_dist.service.extract import ObjectResult, extract_object
+from onepiece_dist.service.extract import ObjectResult, extract_object, parts_for
 from onepiece_dist.service.status import JobStatus, Rejection
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
@@ -19,14 +18,10 @@ from onepiece_dist.store import PartStore
 ProgressFn = Callable[[JobStatus], None]
 
 
-def parts_for(spec: JobSpec) -> PartStore:
-    """Parts live in ``spec.cache_dir`` (shared across jobs) or beside the dataset in ``<output>.parts``."""
-    return PartStore(spec.cache_dir or f"{Path(spec.output)}.parts")
-
-
 def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None = None) -> JobStatus:
     """Run ingest, extract and dedup in this process and commit the dataset."""
-    status = JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output)
+    status = JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output,
+                       spec=spec.model_dump(mode="json"))
     t0 = time.perf_counter()
     refs = resolve_source(spec.objects)
     status.progress.objects_total = len(refs)
@@ -46,16 +41,20 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
 
 def record_result(status: JobStatus, result: ObjectResult) -> None:
     status.progress.objects_done += 1
+    if result.node and result.node not in status.nodes:
+        status.nodes.append(result.node)
     status.progress.objects_reused += int(result.reused)
     status.progress.grasps += result.grasps
     if result.status == "rejected":
         status.rejections.append(Rejection(name=result.name, reason=result.reason))
 
 
-def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts: PartStore) -> JobStatus:
+def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts: PartStore,
+           commit=None) -> JobStatus:
+    """Commit the dataset (by ``commit(results)`` when given, e.g. the central dedup actor) and close the status."""
     status.stage = "dedup"
     t0 = time.perf_counter()
-    summary = commit_dataset(spec, results, parts, spec.output)
+    summary = commit(results) if commit else commit_dataset(spec, results, parts, spec.output)
     status.timings["dedup"] = time.perf_counter() - t0
     status.progress.unique_codes = summary["unique_codes"]
     status.state, status.stage = "succeeded", "done"

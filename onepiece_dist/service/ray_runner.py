@@ -1,80 +1,206 @@
-"""Ray runner (first cut): extraction worker actors, one pybullet client each, fed objects with bounded
-in-flight work through ``ray.wait``; results are small summaries, parts are written by the workers themselves;
-the driver is the single committer. Same per-object and commit functions as the in-process runner, so both give
-the same dataset.
+"""The Ray driver of a job: extraction worker actors fed with bounded in-flight work (``ray.wait``), a central
+dedup actor, the registry, retries of objects whose worker died, quarantine of poison objects, cancellation.
+
+Workers write their objects' parts themselves and return small :class:`ObjectResult` summaries; no large array
+travels through Ray's object store. The same per-object function and commit as the in-process runner, so both
+give the same dataset, with or without faults.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
+from collections import deque
 
+from onepiece_dist.errors import JobError
 from onepiece_dist.objects import ObjectRef, resolve_source
-from onepiece_dist.service.extract import ObjectResult, extract_object
-from onepiece_dist.service.local import ProgressFn, finish, parts_for, record_result
+from onepiece_dist.service.dedup_actor import CentralDedup
+from onepiece_dist.service.extract import ObjectResult, extract_object, parts_for
+from onepiece_dist.service.local import ProgressFn, finish, record_result
+from onepiece_dist.service.registry import registry
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 
-NAMESPACE = "onepiece"
 IN_FLIGHT_PER_WORKER = 2
+MAX_ATTEMPTS = 3  # an object whose worker dies this many times is quarantined
+POLL_SECONDS = 0.5
 
 
 class ExtractionWorker:
-    """Plain class (testable without Ray); wrapped by ``ray.remote`` in :func:`run_ray`."""
+    """One pybullet client per actor. A plain class, testable without Ray."""
 
     def __init__(self, spec: JobSpec):
         self.spec = spec
         self.parts = parts_for(spec)
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
-        return extract_object(self.spec, ref, index, self.parts)
+        result = extract_object(self.spec, ref, index, self.parts)
+        return dataclasses.replace(result, node=_node_id())
+
+    def ping(self) -> bool:
+        return True
 
 
-def start_local_ray(num_cpus: int | None = None) -> None:
-    """An embedded Ray bound to 127.0.0.1 with the dashboard off."""
+def _node_id() -> str:
+    try:
+        import ray
+
+        return ray.get_runtime_context().get_node_id() if ray.is_initialized() else ""
+    except Exception:  # noqa: BLE001 - outside a Ray worker there is no node
+        return ""
+
+
+def worker_count(spec_workers: int | None, objects: int) -> int:
     import ray
 
-    if not ray.is_initialized():
-        ray.init(num_cpus=num_cpus, include_dashboard=False, _node_ip_address="127.0.0.1", namespace=NAMESPACE,
-                 log_to_driver=False, configure_logging=False)
+    cpus = int(ray.cluster_resources().get("CPU", 1))
+    return max(1, min(spec_workers or cpus, objects or 1))
 
 
-def run_ray(spec: JobSpec, workers: int | None = None, job_id: str = "ray",
-            progress: ProgressFn | None = None) -> JobStatus:
-    """Run the job on the connected (or a new embedded) Ray; the driver commits the dataset."""
+def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
+               progress: ProgressFn | None = None) -> JobStatus:
+    """Run the job on the connected Ray. Raises :class:`JobError` if it fails, is cancelled, or a job with the
+    same id is already running."""
     import ray
 
-    start_local_ray()
-    status = JobStatus(job_id=job_id, state="running", stage="extract", output=spec.output)
-    refs = resolve_source(spec.objects)
-    status.progress.objects_total = len(refs)
-    count = max(1, min(workers or int(ray.available_resources().get("CPU", 1)), len(refs) or 1))
-    actor_cls = ray.remote(num_cpus=1, max_restarts=3, max_task_retries=3)(ExtractionWorker)
-    actors = [actor_cls.remote(spec) for _ in range(count)]
-    t0 = time.perf_counter()
-    results = _drain(refs, actors, status, progress)
-    status.timings["extract"] = time.perf_counter() - t0
-    for actor in actors:
-        ray.kill(actor)
-    return finish(spec, status, sorted(results, key=lambda r: r.index), parts_for(spec))
+    reg = registry()
+    status = JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output,
+                       spec=spec.model_dump(mode="json"))
+    if not ray.get(reg.claim.remote(job_id, status.model_dump(mode="json"))):
+        raise JobError(f"job {job_id} is already running")
+    actors: list = []
+    try:
+        refs = resolve_source(spec.objects)
+        status.progress.objects_total = len(refs)
+        parts = parts_for(spec)
+        parts.remove_stale_temporaries()
+        dedup = _actor(CentralDedup, f"dedup-{job_id}", num_cpus=0).remote(spec)
+        actors = [dedup] + [_actor(ExtractionWorker, f"extract-{job_id}-{k}", num_cpus=1,
+                                   scheduling_strategy="SPREAD").remote(spec)
+                            for k in range(worker_count(workers, len(refs)))]
+        status.stage = "extract"
+        t0 = time.perf_counter()
+        results = ExtractionPool(actors[1:], dedup, reg, status, progress).run(refs)
+        status.timings["extract"] = time.perf_counter() - t0
+        done = finish(spec, status, results, parts, commit=lambda rs: _call(dedup.commit, rs))
+        ray.get(reg.update.remote(job_id, done.model_dump(mode="json")))
+        return done
+    except BaseException as err:
+        status.state = "cancelled" if isinstance(err, JobCancelled) else "failed"
+        status.error = f"{type(err).__name__}: {err}"
+        status.save(spec.output)
+        ray.get(reg.update.remote(job_id, status.model_dump(mode="json")))
+        raise JobError(f"job {job_id} {status.state}: {err}") from err
+    finally:
+        for actor in actors:
+            ray.kill(actor)
 
 
-def _drain(refs: list[ObjectRef], actors: list, status: JobStatus, progress: ProgressFn | None) -> list[ObjectResult]:
-    """Keep at most IN_FLIGHT_PER_WORKER tasks per actor in flight; collect summaries as they finish."""
+class JobCancelled(Exception):
+    pass
+
+
+def _actor(cls, name: str, **options):
+    """Restartable named actor; methods are not retried by Ray (the pool decides what to re-run)."""
     import ray
 
-    pending: dict = {}
-    results: list[ObjectResult] = []
-    todo = list(enumerate(refs))
-    while todo or pending:
-        while todo and len(pending) < IN_FLIGHT_PER_WORKER * len(actors):
-            index, ref = todo.pop(0)
-            actor = actors[index % len(actors)]
-            pending[actor.extract.remote(ref, index)] = index
-        done, _ = ray.wait(list(pending), num_returns=1)
-        for ref in done:
-            pending.pop(ref)
-            results.append(ray.get(ref))
-            record_result(status, results[-1])
-            if progress:
-                progress(status)
-    return results
+    from onepiece_dist.service.ray_env import NAMESPACE
+
+    return ray.remote(cls).options(name=name, namespace=NAMESPACE, max_restarts=-1, max_task_retries=0,
+                                   **options)
+
+
+def _call(method, *args, attempts: int = MAX_ATTEMPTS):
+    """Call an actor method, again after the actor died and restarted (its state is rebuilt from the store)."""
+    import ray
+    from ray.exceptions import RayActorError
+
+    for attempt in range(attempts):
+        try:
+            return ray.get(method.remote(*args))
+        except RayActorError:
+            if attempt == attempts - 1:
+                raise
+            time.sleep(1.0)
+
+
+class ExtractionPool:
+    """Feeds objects to worker actors, at most IN_FLIGHT_PER_WORKER each, and checks for a cancel request.
+
+    When a worker dies, the objects it held are re-run one at a time on an otherwise idle worker (suspects), so a
+    later death is attributable: an object that kills its worker MAX_ATTEMPTS times while running alone is
+    quarantined; innocent objects that only shared a worker with it are never counted against.
+    """
+
+    def __init__(self, actors: list, dedup, reg, status: JobStatus, progress: ProgressFn | None):
+        self.actors, self.dedup, self.reg, self.status, self.progress = actors, dedup, reg, status, progress
+        self.pending: dict = {}  # ObjectRef -> (index, object ref, actor position, alone)
+        self.attempts: dict[int, int] = {}
+        self.suspects: set[int] = set()
+
+    def run(self, refs: list[ObjectRef]) -> list[ObjectResult]:
+        import ray
+
+        todo = deque(enumerate(refs))
+        results: list[ObjectResult] = []
+        while todo or self.pending:
+            if ray.get(self.reg.cancel_requested.remote(self.status.job_id)):
+                raise JobCancelled(f"cancelled after {len(results)} of {len(refs)} objects")
+            self._fill(todo)
+            ready, _ = ray.wait(list(self.pending), num_returns=1, timeout=POLL_SECONDS)
+            for ref in ready:
+                result = self._collect(ref, todo)
+                if result is not None:
+                    results.append(result)
+                    self._record(result)
+        return sorted(results, key=lambda r: r.index)
+
+    def _load(self) -> list[int]:
+        """Tasks in flight per actor; an actor running a suspect alone counts as full."""
+        load = [0] * len(self.actors)
+        for _, _, position, alone in self.pending.values():
+            load[position] += IN_FLIGHT_PER_WORKER if alone else 1
+        return load
+
+    def _fill(self, todo: deque) -> None:
+        deferred = deque()
+        while todo:
+            index, ref = todo.popleft()
+            load = self._load()
+            alone = index in self.suspects
+            free = [k for k, n in enumerate(load) if (n == 0 if alone else n < IN_FLIGHT_PER_WORKER)]
+            if not free:
+                deferred.append((index, ref))
+                if not alone:
+                    break
+                continue
+            position = min(free, key=lambda k: load[k])
+            self.pending[self.actors[position].extract.remote(ref, index)] = (index, ref, position, alone)
+        todo.extendleft(reversed(deferred))
+
+    def _collect(self, object_ref, todo: deque) -> ObjectResult | None:
+        import ray
+        from ray.exceptions import RayActorError, WorkerCrashedError
+
+        index, ref, _, alone = self.pending.pop(object_ref)
+        try:
+            return ray.get(object_ref)
+        except (RayActorError, WorkerCrashedError) as err:
+            self.status.retries += 1
+            self.suspects.add(index)
+            if alone:
+                self.attempts[index] = self.attempts.get(index, 0) + 1
+            if self.attempts.get(index, 0) >= MAX_ATTEMPTS:
+                return ObjectResult(index, ref.name, "rejected", reason=f"quarantined: its worker died "
+                                    f"{self.attempts[index]} times while running it alone ({type(err).__name__})")
+            todo.appendleft((index, ref))
+            return None
+
+    def _record(self, result: ObjectResult) -> None:
+        record_result(self.status, result)
+        if result.status == "ok":
+            self.status.progress.unique_codes = _call(self.dedup.add, result.index, result.part_key)
+        self.status.save(self.status.output)
+        self.reg.update.remote(self.status.job_id, self.status.model_dump(mode="json"))
+        if self.progress:
+            self.progress(self.status)

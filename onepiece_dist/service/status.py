@@ -45,6 +45,9 @@ class JobStatus(BaseModel):
     progress: Progress = Field(default_factory=Progress)
     timings: dict[str, float] = Field(default_factory=dict)
     rejections: list[Rejection] = Field(default_factory=list)
+    nodes: list[str] = Field(default_factory=list, description="Ray node ids that extracted objects.")
+    retries: int = Field(0, description="Object tasks re-run after a worker died.")
+    spec: dict = Field(default_factory=dict, description="The JobSpec (so a job can be resumed from its status).")
     error: str = ""
     created: float = Field(default_factory=time.time)
     updated: float = Field(default_factory=time.time)

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# A local multi-node Ray cluster on this machine, loopback only:
+#   cluster/local_cluster.sh start [WORKERS]   head (0 CPUs; dashboard and Jobs API on 127.0.0.1:8265) + WORKERS
+#                                              worker nodes with 1 CPU each (default 2); prints the Jobs API URL
+#   cluster/local_cluster.sh stop              stops every Ray process of this user on this machine
+# Every node advertises 127.0.0.1 (cluster/ray_start_loopback.py keeps Ray from replacing it with the machine's
+# address), so no Ray server listens beyond loopback. Token auth stays on; the token file is made 0600.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+venv=${ONEPIECE_VENV:-$here/.venv}
+ray_bin=$venv/bin/ray
+port=${ONEPIECE_RAY_PORT:-6390}
+dashboard_port=${ONEPIECE_DASHBOARD_PORT:-8265}
+agent_port=${ONEPIECE_AGENT_PORT:-52365}
+export RAY_USAGE_STATS_ENABLED=0 RAY_AUTH_MODE=token PATH="$venv/bin:$PATH"
+ray_start() { "$venv/bin/python" "$here/cluster/ray_start_loopback.py" "$@"; }
+
+start() {
+  local workers=${1:-2}
+  ray_start --head --node-ip-address=127.0.0.1 --port="$port" --num-cpus=0 \
+    --dashboard-host=127.0.0.1 --dashboard-port="$dashboard_port" --dashboard-agent-listen-port="$agent_port" \
+    --disable-usage-stats >&2
+  for i in $(seq "$workers"); do  # nodes share one address: each agent needs a port of its own
+    ray_start --address="127.0.0.1:$port" --node-ip-address=127.0.0.1 --num-cpus=1 \
+      --dashboard-agent-listen-port=$((agent_port + i)) --disable-usage-stats >&2
+  done
+  [ -f "$HOME/.ray/auth_token" ] && chmod 600 "$HOME/.ray/auth_token"
+  echo "http://127.0.0.1:$dashboard_port"
+}
+
+case "${1:-}" in
+  start) shift; start "$@" ;;
+  stop)  "$ray_bin" stop --force >&2 ;;
+  *)     echo "usage: $0 start [WORKERS] | stop" >&2; exit 2 ;;
+esac

@@ -1,0 +1,51 @@
+"""Starting and joining Ray with secure defaults.
+
+* Every Ray we start binds to loopback: with ``RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0`` Ray takes 127.0.0.1 as the
+  node address, and its GCS, raylet, agents and workers listen there only (Ray 2.60 otherwise resolves the
+  machine's address and binds some servers to all interfaces, even when told 127.0.0.1).
+* Auth: token authentication: Ray turns it on for an embedded Ray by itself; the cluster script and our cluster
+  clients set ``RAY_AUTH_MODE=token`` explicitly. The token file is made readable by its owner only.
+* The dashboard is off for the embedded Ray; a cluster head started by ``cluster/local_cluster.sh`` serves it on
+  127.0.0.1 for the Jobs API.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+NAMESPACE = "onepiece"
+LOOPBACK_ENV = {"RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_USAGE_STATS_ENABLED": "0"}
+CLUSTER_ENV = {"RAY_AUTH_MODE": "token"}  # clients of a cluster: its nodes run with token auth
+TOKEN_FILE = Path.home() / ".ray" / "auth_token"
+
+
+def loopback_environment(cluster_client: bool = False) -> None:
+    """Make Ray processes started from here (and their children) take 127.0.0.1 as the node address; as the
+    client of a cluster, also use token auth."""
+    for key, value in {**LOOPBACK_ENV, **(CLUSTER_ENV if cluster_client else {})}.items():
+        os.environ.setdefault(key, value)
+    import ray._private.ray_constants as constants
+
+    constants.ENABLE_RAY_CLUSTER = os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] not in ("0", "false", "False")
+
+
+def secure_token_file(path: Path = TOKEN_FILE) -> None:
+    """Owner-only permissions on Ray's auth token (Ray writes it world-readable)."""
+    if path.exists():
+        path.chmod(0o600)
+
+
+def connect(address: str | None = None, num_cpus: int | None = None) -> None:
+    """Join the cluster at ``address`` ('auto' inside a Ray job), or start an embedded loopback-only Ray."""
+    loopback_environment(cluster_client=bool(address))
+    import ray
+
+    if ray.is_initialized():
+        return
+    if address:
+        ray.init(address=address, namespace=NAMESPACE, log_to_driver=False, configure_logging=False)
+    else:
+        ray.init(num_cpus=num_cpus, include_dashboard=False, namespace=NAMESPACE, log_to_driver=False,
+                 configure_logging=False)
+    secure_token_file()

@@ -1,0 +1,56 @@
+"""Job registry: a named detached actor (namespace ``onepiece``, ``num_cpus=0``) holding job states.
+
+:class:`JobRegistry` is a plain class, usable and tested without Ray; :func:`registry` wraps it as the
+cluster-wide actor. Each job's status is also written beside its dataset, so it outlives the cluster.
+"""
+
+from __future__ import annotations
+
+ACTIVE = ("pending", "running")
+REGISTRY_NAME = "onepiece-registry"
+
+
+class JobRegistry:
+    """Job id -> latest status (a JSON-ready dict) and cancel requests."""
+
+    def __init__(self):
+        self._jobs: dict[str, dict] = {}
+        self._cancel: set[str] = set()
+
+    def claim(self, job_id: str, status: dict) -> bool:
+        """Register a job; False when a job with this id is already pending or running (it keeps running)."""
+        current = self._jobs.get(job_id)
+        if current is not None and current.get("state") in ACTIVE:
+            return False
+        self._jobs[job_id] = status
+        self._cancel.discard(job_id)
+        return True
+
+    def update(self, job_id: str, status: dict) -> None:
+        self._jobs[job_id] = status
+
+    def get(self, job_id: str) -> dict | None:
+        return self._jobs.get(job_id)
+
+    def jobs(self) -> list[dict]:
+        return list(self._jobs.values())
+
+    def request_cancel(self, job_id: str) -> bool:
+        if job_id not in self._jobs:
+            return False
+        self._cancel.add(job_id)
+        return True
+
+    def cancel_requested(self, job_id: str) -> bool:
+        return job_id in self._cancel
+
+
+def registry():
+    """The cluster's registry actor (created on first use; needs a connected Ray)."""
+    import ray
+
+    from onepiece_dist.service.ray_env import NAMESPACE
+
+    actor = ray.remote(num_cpus=0, max_restarts=-1)(JobRegistry)
+    return actor.options(name=REGISTRY_NAME, namespace=NAMESPACE, lifetime="detached",
+                         get_if_exists=True).remote()

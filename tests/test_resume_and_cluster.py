@@ -1,0 +1,103 @@
+"""Driver killed mid-job then `onepiece resume`; a job submitted to a local multi-node cluster."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import psutil
+import pytest
+
+from onepiece_dist.api import read_status
+from onepiece_dist.service.local import run_local
+from onepiece_dist.service.status import status_path
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import PartStore, open_dataset
+
+ROOT = Path(__file__).resolve().parents[1]
+ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
+SMALL = ["--objects", "primitives[0:8]", "--grasps", "64"]
+
+
+def wait_for(predicate, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.2)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def ray_daemons() -> set[int]:
+    return {p.pid for p in psutil.process_iter(["name"]) if p.info["name"] in ("raylet", "gcs_server")}
+
+
+def objects_done(output: Path) -> int:
+    try:
+        return json.loads(status_path(output).read_text())["progress"]["objects_done"]
+    except (OSError, ValueError, KeyError):
+        return 0
+
+
+@pytest.mark.ray
+@pytest.mark.slow
+def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path):
+    out = tmp_path / "ds.zarr"
+    before = ray_daemons()
+    driver = subprocess.Popen([*ONEPIECE, "run", *SMALL, "--out", str(out)], cwd=tmp_path, start_new_session=True,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wait_for(lambda: objects_done(out) >= 3, 180, "three committed objects")
+    os.killpg(driver.pid, signal.SIGKILL)
+    driver.wait()
+    parts = PartStore(f"{out}.parts")
+    committed = len(parts.committed_keys())
+    assert 3 <= committed < 8 and read_status(out).state == "running"
+    resumed = subprocess.run([*ONEPIECE, "resume", str(out)], cwd=tmp_path, capture_output=True, text=True,
+                             timeout=300)
+    assert resumed.returncode == 0, resumed.stderr[-2000:]
+    status = read_status(out)
+    assert status.state == "succeeded" and status.progress.objects_reused >= committed
+    assert not list(parts.folder.glob(".tmp-*"))  # no stray temporaries
+    reference = JobSpec(objects="primitives[0:8]", grasps_per_object=64, output=str(tmp_path / "ref.zarr"))
+    run_local(reference)
+    a, b = open_dataset(out), open_dataset(reference.output)
+    for name in ("grasps/code", "grasps/pose", "unique/code", "unique/count"):
+        assert np.array_equal(a[name], b[name]), name
+    assert ray_daemons() <= before  # the killed driver's embedded Ray left no orphan daemons
+
+
+@pytest.fixture
+def local_cluster():
+    script = ROOT / "cluster" / "local_cluster.sh"
+    started = subprocess.run([str(script), "start", "2"], capture_output=True, text=True, timeout=240)
+    assert started.returncode == 0, started.stderr[-3000:]
+    try:
+        yield started.stdout.strip().splitlines()[-1]
+    finally:
+        subprocess.run([str(script), "stop"], capture_output=True, timeout=120)
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+def test_job_submitted_to_a_local_multi_node_cluster_runs_on_two_nodes(local_cluster, tmp_path):
+    out = tmp_path / "cluster.zarr"
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}:{os.environ.get('PATH', '')}"}
+    submitted = subprocess.run([*ONEPIECE, "submit", "--address", local_cluster, "--objects", "primitives[0:6]",
+                                "--grasps", "32", "--out", str(out)], capture_output=True, text=True, timeout=120,
+                               env=env)
+    assert submitted.returncode == 0, submitted.stderr[-2000:]
+    job_id = submitted.stdout.strip()
+    waited = subprocess.run([*ONEPIECE, "wait", job_id, "--address", local_cluster, "--json", "--timeout", "300"],
+                            capture_output=True, text=True, timeout=360, env=env)
+    assert waited.returncode == 0, waited.stderr[-2000:]
+    status = json.loads(waited.stdout)
+    assert status["state"] == "succeeded" and len(status["nodes"]) >= 2
+    assert open_dataset(out).summary()["objects"] == 6
+    unreachable = subprocess.run([*ONEPIECE, "status", job_id, "--address", "http://127.0.0.1:9"],
+                                 capture_output=True, text=True, timeout=60, env=env)
+    assert unreachable.returncode == 3

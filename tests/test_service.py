@@ -1,0 +1,142 @@
+"""The Ray service: registry, central dedup, API and CLI on an embedded Ray, worker faults, quarantine."""
+
+import os
+import time
+
+import numpy as np
+import psutil
+import pytest
+from typer.testing import CliRunner
+
+from onepiece_dist.api import Client, read_status
+from onepiece_dist.cli import app
+from onepiece_dist.objects import resolve_source
+from onepiece_dist.service.dedup_actor import CentralDedup
+from onepiece_dist.service.local import run_local
+from onepiece_dist.service.registry import JobRegistry
+from onepiece_dist.service.status import JobStatus
+from onepiece_dist.spec import default_job_id
+from onepiece_dist.store import open_dataset
+
+ARRAYS = ("grasps/code", "grasps/pose", "grasps/object", "grasps/code_index", "unique/code", "unique/count")
+
+
+def assert_same_dataset(a: str, b: str) -> None:
+    da, db = open_dataset(a), open_dataset(b)
+    for name in ARRAYS:
+        assert np.array_equal(da[name], db[name]), name
+
+
+def job_spec(spec_factory, tmp_path, name, objects="primitives[0:8]", grasps=64):
+    return spec_factory(objects=objects, grasps_per_object=grasps, output=str(tmp_path / f"{name}.zarr"))
+
+
+def test_registry_claims_a_job_id_once_while_it_runs():
+    reg = JobRegistry()
+    assert reg.claim("j", {"state": "running"}) is True
+    assert reg.claim("j", {"state": "running"}) is False
+    reg.update("j", {"state": "succeeded"})
+    assert reg.claim("j", {"state": "running"}) is True
+    assert reg.request_cancel("j") and reg.cancel_requested("j") and not reg.request_cancel("other")
+
+
+def test_central_dedup_state_is_rebuilt_from_the_store(spec_factory, tmp_path):
+    spec = job_spec(spec_factory, tmp_path, "ref", grasps=16)
+    reference = run_local(spec)
+    from onepiece_dist.service.extract import extract_object, parts_for
+
+    results = [extract_object(spec, ref, i, parts_for(spec)) for i, ref in enumerate(resolve_source(spec.objects))]
+    fresh = spec.model_copy(update={"output": str(tmp_path / "rebuilt.zarr"), "cache_dir": str(parts_for(spec).folder)})
+    dedup = CentralDedup(fresh)
+    dedup.add(results[0].index, results[0].part_key)  # merged before a "restart"
+    summary = CentralDedup(fresh).commit(results)  # a restarted actor starts empty and folds in every part
+    assert summary["unique_codes"] == reference.progress.unique_codes
+    assert_same_dataset(spec.output, fresh.output)
+
+
+@pytest.mark.ray
+@pytest.mark.slow
+def test_api_and_cli_run_a_small_job_on_embedded_ray(ray_session, spec_factory, tmp_path):
+    spec = job_spec(spec_factory, tmp_path, "api")
+    handle = Client().submit(spec)
+    final = handle.wait(timeout=300)
+    assert final.state == "succeeded" and final.progress.objects_done == 8 and final.progress.grasps > 0
+    assert read_status(spec.output).state == "succeeded"
+    reference = job_spec(spec_factory, tmp_path, "local")
+    run_local(reference)
+    assert_same_dataset(spec.output, reference.output)
+    out = CliRunner().invoke(app, ["run", "--objects", "primitives[0:8]", "--grasps", "64",
+                                   "--out", str(tmp_path / "cli.zarr")])
+    assert out.exit_code == 0, out.output
+    summary = open_dataset(tmp_path / "cli.zarr").summary()
+    assert summary["objects"] == 8 and summary["grasps"] > 0
+
+
+@pytest.mark.ray
+@pytest.mark.slow
+def test_killing_a_worker_mid_job_gives_the_fault_free_dataset(ray_session, spec_factory, tmp_path):
+    ray = ray_session
+    spec = job_spec(spec_factory, tmp_path, "faulty")
+    job_id = default_job_id(spec)
+    client = Client()
+    handle = client.submit(spec)
+    deadline = time.monotonic() + 120
+    while client.status(job_id).progress.objects_done < 1 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    started = time.monotonic()
+    ray.kill(ray.get_actor(f"extract-{job_id}-0", namespace="onepiece"), no_restart=False)
+    final = handle.wait(timeout=300)
+    assert final.state == "succeeded" and final.retries >= 1
+    assert time.monotonic() - started < 120
+    reference = job_spec(spec_factory, tmp_path, "clean")
+    run_local(reference)
+    assert_same_dataset(spec.output, reference.output)
+    assert final.progress.grasps == open_dataset(spec.output).summary()["grasps"]  # no grasp stored twice
+
+
+class PoisonWorker:
+    """Dies (the whole worker process) on one object, like a mesh that crashes a parser."""
+
+    def __init__(self, spec, poison: str):
+        from onepiece_dist.service.ray_runner import ExtractionWorker
+
+        self.inner, self.poison = ExtractionWorker(spec), poison
+
+    def extract(self, ref, index):
+        if ref.name == self.poison:
+            os._exit(1)
+        return self.inner.extract(ref, index)
+
+
+@pytest.mark.ray
+@pytest.mark.slow
+def test_a_poison_object_is_quarantined_and_the_rest_proceeds(ray_session, spec_factory, tmp_path):
+    ray = ray_session
+    from onepiece_dist.service.ray_runner import MAX_ATTEMPTS, ExtractionPool
+    from onepiece_dist.service.registry import registry
+
+    spec = job_spec(spec_factory, tmp_path, "poison", objects="primitives[0:3]", grasps=8)
+    refs = resolve_source(spec.objects)
+    actor = ray.remote(PoisonWorker).options(max_restarts=-1, max_task_retries=0, num_cpus=1)
+    workers = [actor.remote(spec, refs[1].name) for _ in range(2)]
+    dedup = ray.remote(CentralDedup).options(num_cpus=0).remote(spec)
+    status = JobStatus(job_id="poison-test", output=spec.output)
+    reg = registry()
+    ray.get(reg.claim.remote("poison-test", status.model_dump(mode="json")))
+    results = ExtractionPool(workers, dedup, reg, status, None).run(refs)
+    assert [r.status for r in results] == ["ok", "rejected", "ok"]
+    assert "quarantined" in results[1].reason and status.retries >= MAX_ATTEMPTS
+
+
+@pytest.mark.ray
+def test_every_socket_of_our_ray_is_on_loopback(ray_session):
+    from onepiece_dist.service.ray_env import TOKEN_FILE
+
+    ours = {p.pid for p in psutil.Process().children(recursive=True)}
+    listening = [c for c in psutil.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN and c.pid in ours]
+    assert listening, "expected Ray's servers among this process's children"
+    exposed = [(c.laddr.ip, c.laddr.port) for c in listening if c.laddr.ip not in ("127.0.0.1", "::ffff:127.0.0.1",
+                                                                                  "::1")]
+    assert exposed == []
+    if TOKEN_FILE.exists():
+        assert TOKEN_FILE.stat().st_mode & 0o077 == 0
