@@ -41,6 +41,7 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
 
 def record_result(status: JobStatus, result: ObjectResult) -> None:
     status.progress.objects_done += 1
+    status.worker_seconds += result.seconds
     if result.node and result.node not in status.nodes:
         status.nodes.append(result.node)
     status.progress.objects_reused += int(result.reused)

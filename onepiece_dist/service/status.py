@@ -47,6 +47,7 @@ class JobStatus(BaseModel):
     rejections: list[Rejection] = Field(default_factory=list)
     nodes: list[str] = Field(default_factory=list, description="Ray node ids that extracted objects.")
     retries: int = Field(0, description="Object tasks re-run after a worker died.")
+    worker_seconds: float = Field(0.0, description="Time spent inside per-object extraction, summed over objects.")
     spec: dict = Field(default_factory=dict, description="The JobSpec (so a job can be resumed from its status).")
     error: str = ""
     created: float = Field(default_factory=time.time)

@@ -1,0 +1,65 @@
+"""Throughput of the Ray service with 1 and 2 extraction workers on this machine, and orchestration overhead.
+
+Run: .venv/bin/python benchmarks/bench_scaling.py  (writes benchmarks/results/scaling.json)
+Each configuration runs the same job on a fresh embedded Ray with a fresh parts folder (nothing reused).
+Parallel efficiency = (objects/s with 2 workers) / (2 x objects/s with 1 worker). Orchestration overhead per
+object = (extract-stage wall time x workers - sum of per-object worker time) / objects: time a worker slot spends
+outside extract_object (scheduling, result transfer, central dedup merge, status writes).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import sys
+import tempfile
+from datetime import date
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from onepiece_dist.service.ray_env import connect  # noqa: E402
+from onepiece_dist.spec import JobSpec  # noqa: E402
+
+OBJECTS = os.environ.get("BENCH_SCALING_OBJECTS", "pybullet:random_urdfs[0:16]")
+GRASPS = int(os.environ.get("BENCH_SCALING_GRASPS", 128))
+
+
+def measure(workers: int) -> dict:
+    import ray
+
+    from onepiece_dist.service.ray_runner import run_on_ray
+
+    with tempfile.TemporaryDirectory() as folder:
+        spec = JobSpec(objects=OBJECTS, grasps_per_object=GRASPS, output=f"{folder}/ds.zarr")
+        connect(None, num_cpus=2)
+        try:
+            status = run_on_ray(spec, f"bench-{workers}", workers=workers)
+        finally:
+            ray.shutdown()
+        worker_seconds = _worker_seconds(Path(f"{folder}/ds.zarr.status.json"))
+    wall = status.timings["extract"]
+    objects = status.progress.objects_done
+    return {"workers": workers, "objects": objects, "extract_seconds": round(wall, 2),
+            "objects_per_second": round(objects / wall, 3), "worker_seconds": round(worker_seconds, 2),
+            "orchestration_overhead_per_object_s": round((wall * workers - worker_seconds) / objects, 4)}
+
+
+def _worker_seconds(status_file: Path) -> float:
+    return float(json.loads(status_file.read_text())["worker_seconds"])
+
+
+def main() -> dict:
+    one, two = measure(1), measure(2)
+    efficiency = two["objects_per_second"] / (2 * one["objects_per_second"])
+    out = {"benchmark": "scaling", "date": date.today().isoformat(), "machine": f"{platform.machine()}, "
+           f"{os.cpu_count()} cores", "objects": OBJECTS, "grasps_per_object": GRASPS, "runs": [one, two],
+           "parallel_efficiency_2_workers": round(efficiency, 3), "target_efficiency": 0.85,
+           "command": "python benchmarks/bench_scaling.py"}
+    (Path(__file__).parent / "results" / "scaling.json").write_text(json.dumps(out, indent=2) + "\n")
+    print(json.dumps(out, indent=2))
+    return out
+
+
+if __name__ == "__main__":
+    main()
