@@ -88,6 +88,10 @@ def _run_and_report(spec, address, job_id, workers, in_process) -> None:
         _err(f"rejected {rejection.name}: {rejection.reason}")
     _err(f"job {status.job_id}: {status.progress.objects_done} objects ({status.progress.objects_reused} reused), "
          f"{status.progress.grasps} grasps, {status.progress.unique_codes} unique codes")
+    if status.assembly:
+        a = status.assembly
+        _err(f"one object: {a['unique_codes']} patches, {a['bounding_box_m']} m, fidelity {a['fidelity']:.1%}, "
+             f"label trials {a['label_trials_one_object']} instead of {a['label_trials_all_grasps']}")
     typer.echo(status.output)
 
 
@@ -265,6 +269,44 @@ def inspect(
         return
     for key, value in summary.items():
         typer.echo(f"{key:>16}: {value}")
+
+
+@app.command()
+def export(
+    dataset: Annotated[Path, typer.Argument(help="Dataset path.")],
+    out: Annotated[Path, typer.Option(help="File to write.")],
+    fmt: Annotated[str, typer.Option("--format", help="obj, ply or urdf (the URDF's OBJ is written beside it).")]
+    = "obj",
+) -> None:
+    """Export the assembled one object as OBJ, PLY or URDF."""
+    from onepiece_dist.service.assemble import export_assembly
+
+    if fmt not in ("obj", "ply", "urdf"):
+        _err(f"error: --format {fmt!r}: expected obj, ply or urdf")
+        raise typer.Exit(EXIT_USAGE)
+    try:
+        written = export_assembly(dataset, fmt, out)
+    except (StoreError, FileNotFoundError) as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_USAGE) from None
+    for path in written:
+        typer.echo(str(path))
+
+
+@app.command()
+def render(
+    dataset: Annotated[Path, typer.Argument(help="Dataset path.")],
+    out: Annotated[Path, typer.Option(help="PNG to write.")] = Path("assembly.png"),
+) -> None:
+    """Draw the assembled object (patches coloured by plane) and a gallery of codes with their projections."""
+    from onepiece_dist.service.render import render_assembly
+
+    try:
+        render_assembly(dataset, out)
+    except (StoreError, FileNotFoundError) as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_USAGE) from None
+    typer.echo(str(out))
 
 
 @app.command()

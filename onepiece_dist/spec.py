@@ -127,7 +127,8 @@ class JobSpec(_Frozen):
     output: str = Field("onepiece-out/dataset.zarr", description="Dataset path (Zarr v3 directory).")
     cache_dir: str | None = Field(None, description="Folder of per-object results shared across jobs; "
                                   "defaults to the dataset's own parts/ folder.")
-    stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup"))
+    stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup", "assemble"), description="Stages to run; "
+                                      "'assemble' builds the one object from the unique codes.")
     max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
     gripper: GripperSpec = GripperSpec()
     voxel: VoxelSpec = VoxelSpec()

@@ -4,6 +4,8 @@ buffers). OBJ is parsed here; STL, PLY and GLB through trimesh."""
 from __future__ import annotations
 
 import io
+import os
+from pathlib import Path
 
 import numpy as np
 
@@ -85,3 +87,25 @@ def _scene_to_arrays(scene) -> tuple[np.ndarray, np.ndarray]:
     if not vertices:
         raise ValueError("scene holds no triangle mesh")
     return np.vstack(vertices), np.vstack(faces)
+
+
+def write_obj(vertices: np.ndarray, faces: np.ndarray, path: Path) -> None:
+    """A plain OBJ (vertices and faces only), written atomically."""
+    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in vertices]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]
+    _write_atomic(path, "\n".join(lines) + "\n")
+
+
+def write_ply(vertices: np.ndarray, faces: np.ndarray, path: Path) -> None:
+    """An ASCII PLY of a triangle mesh, written atomically."""
+    header = (f"ply\nformat ascii 1.0\nelement vertex {len(vertices)}\nproperty float x\nproperty float y\n"
+              f"property float z\nelement face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    body = [f"{x:.9g} {y:.9g} {z:.9g}" for x, y, z in vertices] + [f"3 {a} {b} {c}" for a, b, c in faces]
+    _write_atomic(path, header + "\n".join(body) + "\n")
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)

@@ -68,7 +68,12 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
     unique = {"code": index.unique, "count": index.counts}
     write_dataset(out, dataset_attrs(spec, results), objects, {"grasps": grasps, "unique": unique})
-    return {"grasps": int(len(grasps["code"])), "unique_codes": int(len(index.unique))}
+    summary = {"grasps": int(len(grasps["code"])), "unique_codes": int(len(index.unique))}
+    if "assemble" in spec.stages and len(index.unique):
+        from onepiece_dist.service.assemble import assemble_dataset
+
+        summary["assembly"] = assemble_dataset(spec, out)
+    return summary
 
 
 def _concatenate(loaded: list[dict[str, np.ndarray]], code_bytes: int) -> dict[str, np.ndarray]:

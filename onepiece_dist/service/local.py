@@ -58,6 +58,8 @@ def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts:
     summary = commit(results) if commit else commit_dataset(spec, results, parts, spec.output)
     status.timings["dedup"] = time.perf_counter() - t0
     status.progress.unique_codes = summary["unique_codes"]
+    if "assembly" in summary:
+        status.assembly = summary["assembly"]
     status.state, status.stage = "succeeded", "done"
     status.save(spec.output)
     return status

@@ -15,22 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.mesh import TriangleMesh
-from onepiece_dist.objects.meshio import parse_obj
+from onepiece_dist.objects.meshio import parse_obj, write_obj
 
 _VHACD_SCRIPT = """
 import sys, pybullet as p
 p.connect(p.DIRECT)
 p.vhacd(sys.argv[1], sys.argv[2], sys.argv[3], resolution=int(sys.argv[4]), maxNumVerticesPerCH=32)
 """
-
-
-def write_obj(mesh: TriangleMesh, path: Path) -> None:
-    """A plain OBJ (vertices and faces only) of an already validated mesh."""
-    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in mesh.vertices]
-    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces]
-    tmp = path.with_suffix(f".{os.getpid()}.tmp")
-    tmp.write_text("\n".join(lines) + "\n")
-    os.replace(tmp, path)
 
 
 def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
@@ -52,7 +43,7 @@ def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
 
 def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) -> None:
     source = cache_dir / f"{mesh.content_id}.src.obj"
-    write_obj(mesh, source)
+    write_obj(mesh.vertices, mesh.faces, source)
     tmp_out = out.with_suffix(f".{os.getpid()}.part")
     try:
         subprocess.run([sys.executable, "-c", _VHACD_SCRIPT, str(source), str(tmp_out), os.devnull,

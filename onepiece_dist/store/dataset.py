@@ -73,6 +73,20 @@ def write_dataset(path: str | os.PathLike, attrs: dict, objects: ObjectTable,
     root.attrs["complete"] = True
 
 
+def write_group(path: str | os.PathLike, group_name: str, arrays: dict[str, np.ndarray], attrs: dict) -> None:
+    """Add a group of arrays to a complete dataset, then its root attributes ``attrs`` (written last: a reader
+    that finds them finds the arrays too). Only the committer calls this."""
+    root = zarr.open_group(str(path), mode="a")
+    group = root.require_group(group_name)
+    for name, data in arrays.items():
+        write_array(group, name, data)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Consolidated metadata", UserWarning)
+        zarr.consolidate_metadata(str(path))
+    root = zarr.open_group(str(path), mode="a")
+    root.attrs.update(attrs)
+
+
 class DatasetReader:
     """Read access to a complete dataset. Arrays load lazily through :meth:`array`."""
 
@@ -123,6 +137,8 @@ class DatasetReader:
             "grid_shape": self.attrs.get("grid_shape"),
             "bytes_on_disk": disk_bytes(self.path),
         }
+        if "assembly" in self.attrs:
+            out["assembly"] = self.attrs["assembly"]
         if self.has("grasps/success"):
             out["success_rate"] = float(np.mean(self["grasps/success"])) if grasps else 0.0
         return out

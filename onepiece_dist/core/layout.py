@@ -1,0 +1,208 @@
+"""Assembling unique codes into ONE object (docs/assembly.md).
+
+Each unique code becomes a patch: one small cube per occupied voxel (edge 0.8 r, centred in its voxel, so every
+point of it falls in that voxel). Patches are grouped by their projection-plane class onto the +X (uv), +Y (ut)
+and +Z (vt) faces of a core box; on a face they sit in a grid, floating a gap above the face, and the gripper for
+a patch approaches along the face's inward normal (u = -n). The grid pitch is the smallest that keeps every
+neighbour out of the gripper's corridor (closing region, open fingers and the path of the palm), so no patch
+masks or stacks on another and a gripper at a patch's placement sees exactly that patch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from onepiece_dist.core.frames import to_gripper_frame
+from onepiece_dist.core.voxel import unpack_codes, voxel_indices
+from onepiece_dist.spec import GripperSpec
+
+CUBE_FILL = 0.8  # cube edge as a fraction of the voxel edge
+# face k: outward normal, v axis, t axis (all world axes, so every cube is axis-aligned)
+FACES = (
+    (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])),
+    (np.array([0, 1.0, 0]), np.array([0, 0, 1.0]), np.array([1.0, 0, 0])),
+    (np.array([0, 0, 1.0]), np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),
+)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """placements (U, 4, 4) gripper poses in the object frame; face (U,) int8; cube_centres (M, 3);
+    cube_patch (M,) int64 owner patch; cube_edge (m); core_half (3,) half extents of the core box (m);
+    pitch (v, t) (m)."""
+
+    placements: np.ndarray
+    face: np.ndarray
+    cube_centres: np.ndarray
+    cube_patch: np.ndarray
+    cube_edge: float
+    core_half: np.ndarray
+    pitch: tuple[float, float]
+
+    @property
+    def bounding_box(self) -> np.ndarray:
+        """(2, 3) lower and upper corners of the whole object."""
+        half = self.cube_edge / 2
+        lo = np.minimum(self.cube_centres.min(axis=0) - half, -self.core_half)
+        hi = np.maximum(self.cube_centres.max(axis=0) + half, self.core_half)
+        return np.stack([lo, hi])
+
+
+def grid_pitch(gripper: GripperSpec, resolution: float) -> tuple[float, float]:
+    """Patch spacing along v and t: a neighbour's closing region must clear this patch's open fingers."""
+    gap = resolution / 2
+    pitch_v = gripper.max_opening / 2 + gripper.finger_thickness + gripper.closing_width / 2 + gap
+    pitch_t = max(gripper.finger_height, gripper.closing_height) / 2 + gripper.closing_height / 2 + gap
+    return pitch_v, pitch_t
+
+
+def layout_patches(codes: np.ndarray, plane: np.ndarray, grid_shape: tuple[int, int, int], resolution: float,
+                   gripper: GripperSpec) -> Layout:
+    """Lay out (U, B) codes with their plane classes (U,) into one object."""
+    pitch = grid_pitch(gripper, resolution)
+    cells = [_grid_cells(int(np.sum(plane == f)), pitch) for f in range(3)]
+    core_half = _core_half(cells, pitch, resolution)
+    gap = resolution / 2
+    placements = np.zeros((len(codes), 4, 4))
+    for f, (normal, axis_v, axis_t) in enumerate(FACES):
+        members = np.flatnonzero(plane == f)
+        origin = normal * (core_half @ normal + gripper.closing_depth + gap)
+        for k, cell in zip(members, cells[f], strict=True):
+            placements[k] = _pose(origin + cell[0] * axis_v + cell[1] * axis_t, -normal, axis_v, axis_t)
+    centres, owner = patch_cubes(codes, placements, grid_shape, resolution)
+    return Layout(placements, plane.astype(np.int8), centres, owner, CUBE_FILL * resolution, core_half, pitch)
+
+
+def _core_half(cells: list[np.ndarray], pitch: tuple[float, float], resolution: float) -> np.ndarray:
+    """(3,) half extents of the core box: each face's grid (with half a pitch around it) must fit on it."""
+    half = np.full(3, resolution)
+    for (_, axis_v, axis_t), grid in zip(FACES, cells, strict=True):
+        if len(grid):
+            half = np.maximum(half, axis_v * (np.abs(grid[:, 0]).max() + pitch[0] / 2))
+            half = np.maximum(half, axis_t * (np.abs(grid[:, 1]).max() + pitch[1] / 2))
+    return half + resolution
+
+
+def _grid_cells(count: int, pitch: tuple[float, float]) -> np.ndarray:
+    """(count, 2) offsets (v, t) of a near-square grid of patches centred on the face."""
+    if count == 0:
+        return np.zeros((0, 2))
+    cols = int(np.ceil(np.sqrt(count * pitch[1] / pitch[0])))
+    rows = int(np.ceil(count / cols))
+    j, i = np.divmod(np.arange(count), cols)
+    return np.stack([(i - (cols - 1) / 2) * pitch[0], (j - (rows - 1) / 2) * pitch[1]], axis=1)
+
+
+def _pose(origin: np.ndarray, u: np.ndarray, v: np.ndarray, t: np.ndarray) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = u, v, np.cross(u, v), origin
+    if not np.allclose(pose[:3, 2], t) and not np.allclose(pose[:3, 2], -t):
+        raise ValueError("face axes are not orthogonal")
+    return pose
+
+
+def patch_cubes(codes: np.ndarray, placements: np.ndarray, grid_shape: tuple[int, int, int],
+                resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (M, 3) in the object frame of every occupied voxel of every patch, and their patch (M,)."""
+    a, b, c = grid_shape
+    occ = unpack_codes(codes, grid_shape)
+    patch, i, j, k = np.nonzero(occ)
+    local = np.stack([(i + 0.5) * resolution, -b * resolution / 2 + (j + 0.5) * resolution,
+                      -c * resolution / 2 + (k + 0.5) * resolution], axis=1)
+    rot, origin = placements[patch, :3, :3], placements[patch, :3, 3]
+    return np.einsum("mij,mj->mi", rot, local) + origin, patch.astype(np.int64)
+
+
+def cube_points(centres: np.ndarray, edge: float | np.ndarray, per_side: int = 3) -> np.ndarray:
+    """(M * 6 * per_side^2, 3) points on the faces of axis-aligned boxes of edge (scalar or (3,)), a grid on
+    each face."""
+    g = (np.arange(per_side) + 0.5) / per_side - 0.5
+    uu, vv = [x.ravel() for x in np.meshgrid(g, g)]
+    faces = []
+    for axis in range(3):
+        for sign in (-0.5, 0.5):
+            f = np.zeros((len(uu), 3))
+            f[:, axis] = sign
+            f[:, (axis + 1) % 3], f[:, (axis + 2) % 3] = uu, vv
+            faces.append(f)
+    offsets = np.vstack(faces) * edge
+    return (centres[:, None, :] + offsets[None, :, :]).reshape(-1, 3)
+
+
+def region_codes(points: np.ndarray, placements: np.ndarray, grid_shape: tuple[int, int, int],
+                 resolution: float, reach: float) -> np.ndarray:
+    """Codes seen at each placement, looking only at points within ``reach`` of its origin (fast for many
+    patches). -> (U, B) uint8"""
+    nvox = int(np.prod(grid_shape))
+    order = np.argsort(points[:, 0])
+    xs = points[order, 0]
+    out = np.zeros((len(placements), nvox), dtype=bool)
+    for k, pose in enumerate(placements):
+        lo, hi = np.searchsorted(xs, [pose[0, 3] - reach, pose[0, 3] + reach])
+        near = points[order[lo:hi]]
+        near = near[np.all(np.abs(near - pose[:3, 3]) <= reach, axis=1)]
+        flat = voxel_indices(to_gripper_frame(near, pose[None])[0], grid_shape, resolution)
+        out[k, flat[flat >= 0]] = True
+    return np.packbits(out, axis=1, bitorder="big")
+
+
+def corridor_boxes(gripper: GripperSpec, reach: float) -> np.ndarray:
+    """(2, 2, 3) gripper-frame boxes (lower, upper) swept by the open gripper on its way in along +u: the palm
+    path (u < 0, palm height) and the fingers with the closing region (0 <= u < finger_length)."""
+    half_v = gripper.max_opening / 2 + gripper.finger_thickness
+    palm_t = max(gripper.palm_height, gripper.finger_height) / 2
+    finger_t = max(gripper.finger_height, gripper.closing_height) / 2
+    return np.array([[[-reach, -half_v, -palm_t], [0.0, half_v, palm_t]],
+                     [[0.0, -half_v, -finger_t], [gripper.finger_length, half_v, finger_t]]])
+
+
+def corridor_intrusions(points: np.ndarray, owner: np.ndarray, placements: np.ndarray, gripper: GripperSpec,
+                        reach: float) -> np.ndarray:
+    """(U,) int64: points not of patch k (other patches, or the core with owner -1) inside the corridor of each
+    placement k (:func:`corridor_boxes`)."""
+    boxes = corridor_boxes(gripper, reach)
+    order = np.argsort(points[:, 0])
+    xs = points[order, 0]
+    counts = np.zeros(len(placements), dtype=np.int64)
+    for k, pose in enumerate(placements):
+        for lower, upper in boxes:
+            corners = np.array([[x, y, z] for x in (lower[0], upper[0]) for y in (lower[1], upper[1])
+                                for z in (lower[2], upper[2])]) @ pose[:3, :3].T + pose[:3, 3]
+            lo, hi = corners.min(axis=0), corners.max(axis=0)
+            span = order[np.searchsorted(xs, lo[0]):np.searchsorted(xs, hi[0], side="right")]
+            near = span[np.all((points[span] >= lo) & (points[span] <= hi), axis=1)]
+            local = to_gripper_frame(points[near], pose[None])[0]
+            inside = np.all((local > lower) & (local < upper), axis=1)
+            counts[k] += int(np.sum(inside & (owner[near] != k)))
+    return counts
+
+
+def box_arrays(centres: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Triangle meshes of axis-aligned boxes with edges (M, 3): vertices (8M, 3), faces (12M, 3) int64."""
+    corners = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+    tris = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                     [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    vertices = (centres[:, None, :] + corners[None] * np.asarray(edges, dtype=float)[:, None, :]).reshape(-1, 3)
+    faces = (tris[None] + 8 * np.arange(len(centres))[:, None, None]).reshape(-1, 3)
+    return vertices, faces
+
+
+def assembly_geometry(layout: Layout, resolution: float) -> dict[str, np.ndarray]:
+    """Mesh, dense points and owners of the whole object.
+
+    returns : vertices (V, 3), faces (F, 3) int64, face_group (F,) int8 (plane class of the patch, 3 = core),
+              points (P, 3), point_patch (P,) int64 (-1 = core)
+    """
+    centres = np.vstack([layout.cube_centres, np.zeros((1, 3))])
+    edges = np.vstack([np.full((len(layout.cube_centres), 3), layout.cube_edge), 2 * layout.core_half[None]])
+    vertices, faces = box_arrays(centres, edges)
+    face_group = np.concatenate([np.repeat(layout.face[layout.cube_patch], 12), np.full(12, 3)]).astype(np.int8)
+    per_side = max(2, int(np.ceil(2 * layout.core_half.max() / resolution)))
+    core = cube_points(np.zeros((1, 3)), 2 * layout.core_half, per_side)
+    patch_points = cube_points(layout.cube_centres, layout.cube_edge)
+    owner = np.concatenate([np.repeat(layout.cube_patch, len(patch_points) // max(len(layout.cube_patch), 1)),
+                            np.full(len(core), -1)])
+    return {"vertices": vertices, "faces": faces, "face_group": face_group,
+            "points": np.vstack([patch_points, core]), "point_patch": owner.astype(np.int64)}

@@ -1,0 +1,131 @@
+"""ONE PIECE assembly: classifier, layout, round trip, export, render."""
+
+import zlib
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from onepiece_dist.cli import app
+from onepiece_dist.core.classifier import PLANES, classify_occupancy, l_feature_count
+from onepiece_dist.core.layout import assembly_geometry, corridor_intrusions, layout_patches, region_codes
+from onepiece_dist.core.voxel import pack_codes
+from onepiece_dist.service.local import run_local
+from onepiece_dist.spec import GripperSpec
+from onepiece_dist.store import open_dataset
+
+GRID = (4, 8, 2)
+
+
+def occupancy(*cells):
+    occ = np.zeros((1, *GRID), dtype=bool)
+    for cell in cells:
+        occ[(0, *cell)] = True
+    return occ
+
+
+def test_l_features_count_windows_with_exactly_three_cells():
+    checker = np.array([[[1, 0, 1], [0, 1, 0], [1, 0, 1]]], dtype=bool)  # every window has two cells
+    corners = np.array([[[1, 1, 1], [1, 0, 1], [1, 1, 1]]], dtype=bool)  # every window is an L
+    full = np.ones((1, 3, 3), dtype=bool)
+    assert l_feature_count(checker)[0] == 0 and l_feature_count(corners)[0] == 4 and l_feature_count(full)[0] == 0
+
+
+def test_a_plane_of_l_corners_wins_over_flat_projections():
+    # an L in (v, t) repeated at every u: the vt projection has one L window; uv and ut are filled rectangles
+    cells = [(u, v, t) for u in range(4) for v, t in ((3, 0), (4, 0), (3, 1))]
+    result = classify_occupancy(occupancy(*cells))
+    assert result.features[0].tolist() == [0, 0, 1]
+    assert PLANES[result.plane[0]] == "vt"
+    assert result.areas[0].tolist() == [8, 8, 3]
+    assert result.scores[0, 2] == pytest.approx(3 / 19)
+
+
+def test_a_flat_patch_has_no_features_and_ties_go_to_the_largest_area():
+    flat = occupancy(*[(u, 5, t) for u in range(4) for t in range(2)])  # the plane v = 5
+    result = classify_occupancy(flat)
+    assert result.features[0].tolist() == [0, 0, 0] and result.areas[0].tolist() == [4, 8, 2]
+    assert PLANES[result.plane[0]] == "ut"
+
+
+def test_equal_scores_and_areas_fall_back_to_plane_order():
+    result = classify_occupancy(np.zeros((1, *GRID), dtype=bool))
+    assert PLANES[result.plane[0]] == "uv"
+
+
+@pytest.fixture(scope="module")
+def small_dataset(tmp_path_factory):
+    from onepiece_dist.spec import JobSpec
+
+    out = tmp_path_factory.mktemp("asm") / "ds.zarr"
+    spec = JobSpec(objects="primitives[0:6]", grasps_per_object=24, output=str(out),
+                   sampler={"surface_points": 3000})
+    status = run_local(spec)
+    return spec, out, status
+
+
+def test_assembled_object_reproduces_every_unique_code(small_dataset):
+    spec, out, status = small_dataset
+    ds = open_dataset(out)
+    report = ds.attrs["assembly"]
+    assert report["fidelity"] == 1.0 and report["fidelity_failures"] == [] and report["corridor_intrusions"] == 0
+    assert status.assembly["unique_codes"] == len(ds["unique/code"])
+    # recomputed here from the stored points and placements, independently of the stage's own check
+    codes = region_codes(ds["assembled/points"].astype(np.float64), ds["assembled/placement"].astype(np.float64),
+                         spec.grid_shape(), spec.voxel.resolution, reach=0.1)
+    assert np.array_equal(codes, ds["unique/code"])
+    assert report["label_trials_one_object"] < report["label_trials_all_grasps"]
+
+
+def test_no_patch_enters_another_patch_gripper_corridor():
+    rng = np.random.default_rng(0)
+    codes = pack_codes(rng.random((60, *GRID)) < 0.4)
+    plane = classify_occupancy(rng.random((60, *GRID)) < 0.4).plane
+    gripper = GripperSpec()
+    layout = layout_patches(codes, plane, GRID, 0.01, gripper)
+    geometry = assembly_geometry(layout, 0.01)
+    assert corridor_intrusions(geometry["points"], geometry["point_patch"], layout.placements, gripper, 2.0).sum() == 0
+    assert np.array_equal(region_codes(geometry["points"], layout.placements, GRID, 0.01, 0.1), codes)
+    # a pitch one voxel tighter lets neighbours in: the check can fail
+    tight = layout_patches(codes, np.zeros(60, dtype=np.int8), GRID, 0.01,
+                           GripperSpec(max_opening=0.06, closing_width=0.06))
+    crowded = assembly_geometry(tight, 0.01)
+    squeezed = tight.placements.copy()
+    squeezed[:, :3, 3] *= 0.7
+    assert corridor_intrusions(crowded["points"], crowded["point_patch"], squeezed, gripper, 2.0).sum() > 0
+
+
+def test_export_obj_ply_urdf_and_a_single_pybullet_body(small_dataset, tmp_path):
+    import pybullet as pb
+    import trimesh
+
+    _, out, _ = small_dataset
+    runner = CliRunner()
+    for fmt in ("obj", "ply", "urdf"):
+        result = runner.invoke(app, ["export", str(out), "--format", fmt, "--out", str(tmp_path / f"one.{fmt}")])
+        assert result.exit_code == 0, result.output
+    mesh = trimesh.load(tmp_path / "one.obj", force="mesh")
+    assert isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) == len(open_dataset(out)["assembled/faces"])
+    assert len(trimesh.load(tmp_path / "one.ply").faces) == len(mesh.faces)
+    client = pb.connect(pb.DIRECT)
+    try:
+        body = pb.loadURDF(str(tmp_path / "one.urdf"), useFixedBase=True, physicsClientId=client)
+        assert pb.getNumBodies(physicsClientId=client) == 1 and pb.getNumJoints(body, physicsClientId=client) == 0
+    finally:
+        pb.disconnect(client)
+
+
+def test_render_writes_a_png_that_is_not_blank(small_dataset, tmp_path):
+    _, out, _ = small_dataset
+    png = tmp_path / "one.png"
+    result = CliRunner().invoke(app, ["render", str(out), "--out", str(png)])
+    assert result.exit_code == 0, result.output
+    data = png.read_bytes()
+    assert data.startswith(b"\x89PNG")
+    width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    idat = data.index(b"IDAT")
+    raw = zlib.decompress(data[idat + 4: idat + 4 + int.from_bytes(data[idat - 4:idat], "big")])
+    pixels = np.frombuffer(raw, np.uint8).reshape(height, width * 3 + 1)[:, 1:].reshape(height, width, 3)
+    views = pixels[:320]
+    coloured = np.sum(np.ptp(views.astype(int), axis=2) > 60)  # patch colours, not greys or white
+    assert coloured > 500
