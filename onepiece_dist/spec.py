@@ -113,6 +113,8 @@ class SimSpec(_Frozen):
     pose_noise: float = Field(0.003, ge=0, le=0.05, description="Translation noise of perturbed trials (m).")
     rotation_noise: float = Field(0.05, ge=0, le=1, description="Rotation noise of perturbed trials (rad).")
     friction_noise: float = Field(0.2, ge=0, le=1, description="Relative friction noise of perturbed trials.")
+    perturbations_per_patch: int = Field(4, ge=0, le=64, description="Label stage on the one object: perturbed "
+                                         "poses labelled around each patch's placement, besides the placement.")
     points_per_grasp: int = Field(750, ge=0, le=4096, description="Gripper-frame points stored per grasp "
                                   "(resampled with replacement; 0 stores none).")
 

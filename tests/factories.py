@@ -12,7 +12,7 @@ from onepiece_dist.spec import JobSpec
 
 def small_spec(tmp_path: Path, **overrides) -> JobSpec:
     fields = {"objects": "primitives[0:3]", "grasps_per_object": 16, "output": str(tmp_path / "ds.zarr"),
-              "sampler": {"surface_points": 3000}}
+              "sampler": {"surface_points": 3000}, "stages": ["ingest", "extract", "dedup"]}
     fields.update(overrides)
     return JobSpec.model_validate(fields)
 

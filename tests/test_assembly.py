@@ -129,3 +129,27 @@ def test_render_writes_a_png_that_is_not_blank(small_dataset, tmp_path):
     views = pixels[:320]
     coloured = np.sum(np.ptp(views.astype(int), axis=2) > 60)  # patch colours, not greys or white
     assert coloured > 500
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_label_stage_runs_the_protocol_around_each_patch_of_the_one_object(tmp_path):
+    from onepiece_dist.spec import JobSpec
+
+    spec = JobSpec(objects="primitives[0:2]", grasps_per_object=8, output=str(tmp_path / "ds.zarr"),
+                   sampler={"surface_points": 2000}, stages=("ingest", "extract", "dedup", "assemble", "label"),
+                   sim={"perturbations_per_patch": 2, "points_per_grasp": 64})
+    status = run_local(spec)
+    ds = open_dataset(spec.output)
+    unique, placement = ds["unique/code"], ds["assembled/placement"]
+    labels = status.assembly["labels"]
+    assert labels["label_trials"] == len(unique) * 3 and labels["labelled_grasps"] > 0
+    patch, candidate = ds["assembled/grasps/patch"], ds["assembled/grasps/candidate_pose"]
+    at_placement = np.all(np.isclose(candidate, placement[patch], atol=1e-6), axis=(1, 2))
+    assert at_placement.any()
+    # at its placement, the gripper sees exactly the unique code the patch stands for
+    assert np.array_equal(ds["assembled/grasps/candidate_code"][at_placement], unique[patch[at_placement]])
+    assert ds["assembled/grasps/points"].shape == (len(patch), 64, 3)
+    assert set(np.unique(ds["assembled/grasps/success"])) <= {0, 1}
+    quality = ds["assembled/grasps/quality"]
+    assert np.all((quality >= 0) & (quality <= 1))

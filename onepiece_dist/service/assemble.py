@@ -44,7 +44,8 @@ def assemble_dataset(spec: JobSpec, path: str | os.PathLike) -> dict:
               "areas": classes.areas, "features": classes.features, "scores": classes.scores.astype(np.float32),
               "vertices": geometry["vertices"].astype(np.float32), "faces": geometry["faces"].astype(np.int32),
               "face_group": geometry["face_group"], "points": geometry["points"].astype(np.float32),
-              "point_patch": geometry["point_patch"].astype(np.int32)}
+              "point_patch": geometry["point_patch"].astype(np.int32),
+              "cube_centre": layout.cube_centres.astype(np.float32), "cube_patch": layout.cube_patch.astype(np.int32)}
     write_group(path, "assembled", arrays, {"assembly": report})
     return report
 

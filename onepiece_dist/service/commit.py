@@ -73,6 +73,10 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
         from onepiece_dist.service.assemble import assemble_dataset
 
         summary["assembly"] = assemble_dataset(spec, out)
+        if "label" in spec.stages:
+            from onepiece_dist.service.label_one import label_assembly
+
+            summary["assembly"]["labels"] = label_assembly(spec, out, spec.sim.perturbations_per_patch)
     return summary
 
 

@@ -24,6 +24,19 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("grasps/code_index", "int64", "(N,)", "row in unique/ of each grasp's code"),
     ("unique/code", "uint8", "(U, B)", "distinct codes in ascending byte order"),
     ("unique/count", "int64", "(U,)", "grasps per distinct code"),
+    ("assembled/placement", "float32", "(U, 4, 4)", "gripper pose on the one object that sees unique code k"),
+    ("assembled/plane", "int8", "(U,)", "chosen projection plane: 0 uv, 1 ut, 2 vt"),
+    ("assembled/areas", "int64", "(U, 3)", "projected areas on uv, ut, vt"),
+    ("assembled/features", "int64", "(U, 3)", "L-shaped 2x2 edge features on uv, ut, vt"),
+    ("assembled/scores", "float32", "(U, 3)", "area ratio x feature count per plane"),
+    ("assembled/vertices", "float32", "(V, 3)", "mesh of the one object"),
+    ("assembled/faces", "int32", "(F, 3)", "mesh triangles"),
+    ("assembled/face_group", "int8", "(F,)", "plane class of the patch a triangle belongs to, 3 = core"),
+    ("assembled/points", "float32", "(P, 3)", "dense point cloud of the one object"),
+    ("assembled/point_patch", "int32", "(P,)", "patch of each point, -1 = core"),
+    ("assembled/cube_centre", "float32", "(M, 3)", "centre of each voxel cube of the patches"),
+    ("assembled/cube_patch", "int32", "(M,)", "patch of each cube"),
+    ("assembled/grasps/*", "", "(L, ...)", "label stage on the one object: same arrays as grasps/, plus patch"),
 )
 
 
