@@ -61,30 +61,26 @@ def write_dataset(path: str | os.PathLike, attrs: dict, objects: ObjectTable,
     """
     root = zarr.open_group(str(path), mode="a")
     root.attrs.update({**attrs, "onepiece_format": FORMAT_VERSION, "complete": False})
-    all_groups = {"objects": objects.arrays(), **groups}
-    for group_name, arrays in all_groups.items():
+    _write_groups(path, {"objects": objects.arrays(), **groups}, {"complete": True})
+
+
+def write_group(path: str | os.PathLike, group_name: str, arrays: dict[str, np.ndarray], attrs: dict) -> None:
+    """Add a group of arrays to a complete dataset, then its root attributes ``attrs`` (written last: a reader
+    that finds them finds the arrays too). Only the committer calls this."""
+    _write_groups(path, {group_name: arrays}, attrs)
+
+
+def _write_groups(path: str | os.PathLike, groups: dict[str, dict[str, np.ndarray]], last_attrs: dict) -> None:
+    """Arrays first, then consolidated metadata, then ``last_attrs`` (the commit)."""
+    root = zarr.open_group(str(path), mode="a")
+    for group_name, arrays in groups.items():
         group = root.require_group(group_name)
         for name, data in arrays.items():
             write_array(group, name, data)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", "Consolidated metadata", UserWarning)
         zarr.consolidate_metadata(str(path))
-    root = zarr.open_group(str(path), mode="a")
-    root.attrs["complete"] = True
-
-
-def write_group(path: str | os.PathLike, group_name: str, arrays: dict[str, np.ndarray], attrs: dict) -> None:
-    """Add a group of arrays to a complete dataset, then its root attributes ``attrs`` (written last: a reader
-    that finds them finds the arrays too). Only the committer calls this."""
-    root = zarr.open_group(str(path), mode="a")
-    group = root.require_group(group_name)
-    for name, data in arrays.items():
-        write_array(group, name, data)
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", "Consolidated metadata", UserWarning)
-        zarr.consolidate_metadata(str(path))
-    root = zarr.open_group(str(path), mode="a")
-    root.attrs.update(attrs)
+    zarr.open_group(str(path), mode="a").attrs.update(last_attrs)
 
 
 class DatasetReader:
