@@ -45,6 +45,7 @@ def run(
     out: Annotated[str | None, typer.Option(help="Dataset path (Zarr directory).")] = None,
     grasps: Annotated[int | None, typer.Option(help="Grasp candidates per object.")] = None,
     seed: Annotated[int | None, typer.Option(help="Random seed.")] = None,
+    stages: Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup.")] = None,
     address: Address = None,
     job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
     workers: Annotated[int | None, typer.Option(help="Extraction workers (default: the cluster's CPUs).")] = None,
@@ -52,7 +53,8 @@ def run(
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
 ) -> None:
     """Run a job end to end (embedded Ray on 127.0.0.1 unless --address) and print the dataset path."""
-    overrides = {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed}
+    overrides = {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed,
+                 "stages": stages.split(",") if stages else None}
     spec = _spec_or_exit(spec_file, overrides, spec_json)
     _run_and_report(spec, address, job_id, workers, in_process)
 
@@ -90,8 +92,13 @@ def _run_and_report(spec, address, job_id, workers, in_process) -> None:
          f"{status.progress.grasps} grasps, {status.progress.unique_codes} unique codes")
     if status.assembly:
         a = status.assembly
+        trials = a.get("labels", {}).get("label_trials", a["label_trials_one_object"])
         _err(f"one object: {a['unique_codes']} patches, {a['bounding_box_m']} m, fidelity {a['fidelity']:.1%}, "
-             f"label trials {a['label_trials_one_object']} instead of {a['label_trials_all_grasps']}")
+             f"{trials} label trials on it (labelling every grasp of every object: {a['label_trials_all_grasps']})")
+    if status.training:
+        final = status.training["final"]
+        _err(f"trained {status.training['model']} for {status.training['epochs']} epochs: validation accuracy "
+             f"{final.get('val_accuracy', 0):.2f}, AP {final.get('val_ap', 0):.2f}")
     typer.echo(status.output)
 
 
@@ -307,6 +314,31 @@ def render(
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
     typer.echo(str(out))
+
+
+@app.command()
+def evaluate(
+    model: Annotated[Path, typer.Argument(help="Checkpoint (best.pt in <dataset>.train/).")],
+    objects: Annotated[str, typer.Option(help="Unseen objects: built-in set, folder or glob.")],
+    out: Annotated[str, typer.Option(help="Where to write the labelled evaluation dataset.")] = "onepiece-eval.zarr",
+    grasps: Annotated[int, typer.Option(help="Candidates per object.")] = 64,
+    seed: Annotated[int, typer.Option(help="Random seed.")] = 1,
+    as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
+) -> None:
+    """Accuracy and AP on unseen objects, and simulated success of the top-ranked grasp versus a random one."""
+    from onepiece_dist.service.evaluate import evaluate_model
+
+    spec = _spec_or_exit(None, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
+    try:
+        report = evaluate_model(model, spec)
+    except (SourceError, FileNotFoundError, ValueError) as err:
+        _err(f"error: {err}")
+        raise typer.Exit(EXIT_USAGE) from None
+    if as_json:
+        typer.echo(json.dumps(report))
+        return
+    for key, value in report.items():
+        typer.echo(f"{key:>22}: {value}")
 
 
 @app.command()

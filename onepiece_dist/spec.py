@@ -119,6 +119,19 @@ class SimSpec(_Frozen):
                                   "(resampled with replacement; 0 stores none).")
 
 
+class TrainSpec(_Frozen):
+    """The train stage: which network on which labelled grasps."""
+
+    model: Literal["pointnet", "voxel"] = "pointnet"
+    data: Literal["assembled", "all"] = Field("assembled", description="Labelled grasps of the one object "
+                                              "(assembled/grasps) or of every object (grasps, needs sim.label).")
+    epochs: int = Field(10, ge=1, le=1000)
+    batch_size: int = Field(64, ge=2, le=4096)
+    learning_rate: float = Field(1e-3, gt=0, le=1)
+    validation: float = Field(0.2, gt=0, lt=1, description="Share of objects (or patches) held out.")
+    patience: int = Field(5, ge=1, description="Epochs without a better validation loss before stopping.")
+
+
 class JobSpec(_Frozen):
     """Everything a job needs. Workers receive exactly this object."""
 
@@ -129,13 +142,15 @@ class JobSpec(_Frozen):
     output: str = Field("onepiece-out/dataset.zarr", description="Dataset path (Zarr v3 directory).")
     cache_dir: str | None = Field(None, description="Folder of per-object results shared across jobs; "
                                   "defaults to the dataset's own parts/ folder.")
-    stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup", "assemble"), description="Stages to run; "
-                                      "'assemble' builds the one object from the unique codes.")
+    stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup", "assemble", "label", "train"),
+                                      description="Stages to run: 'assemble' builds the one object from the unique "
+                                      "codes, 'label' labels grasps on it, 'train' fits the grasp network.")
     max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
     gripper: GripperSpec = GripperSpec()
     voxel: VoxelSpec = VoxelSpec()
     sampler: SamplerSpec = SamplerSpec()
     sim: SimSpec = SimSpec()
+    train: TrainSpec = TrainSpec()
 
     @model_validator(mode="after")
     def _grid_is_whole(self) -> JobSpec:

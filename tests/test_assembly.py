@@ -59,7 +59,7 @@ def small_dataset(tmp_path_factory):
 
     out = tmp_path_factory.mktemp("asm") / "ds.zarr"
     spec = JobSpec(objects="primitives[0:6]", grasps_per_object=24, output=str(out),
-                   sampler={"surface_points": 3000})
+                   sampler={"surface_points": 3000}, stages=("ingest", "extract", "dedup", "assemble"))
     status = run_local(spec)
     return spec, out, status
 

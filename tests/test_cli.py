@@ -16,7 +16,7 @@ def test_help_lists_commands():
 
 def test_run_writes_a_dataset_and_prints_its_path(tmp_path):
     spec = tmp_path / "job.yaml"
-    spec.write_text("grasps_per_object: 12\nsampler:\n  surface_points: 2000\n")
+    spec.write_text("grasps_per_object: 12\nsampler:\n  surface_points: 2000\nstages: [ingest, extract, dedup]\n")
     out_path = tmp_path / "d.zarr"
     result = runner.invoke(app, ["run", str(spec), "--objects", "primitives[0:2]", "--out", str(out_path)])
     assert result.exit_code == 0, result.output

@@ -20,7 +20,7 @@ from onepiece_dist.store import PartStore, open_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
-SMALL = ["--objects", "primitives[0:8]", "--grasps", "64"]
+SMALL = ["--objects", "primitives[0:8]", "--grasps", "64", "--stages", "ingest,extract,dedup"]
 
 
 def wait_for(predicate, timeout: float, what: str):
@@ -63,7 +63,8 @@ def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path):
     status = read_status(out)
     assert status.state == "succeeded" and status.progress.objects_reused >= committed
     assert not list(parts.folder.glob(".tmp-*"))  # no stray temporaries
-    reference = JobSpec(objects="primitives[0:8]", grasps_per_object=64, output=str(tmp_path / "ref.zarr"))
+    reference = JobSpec(objects="primitives[0:8]", grasps_per_object=64, output=str(tmp_path / "ref.zarr"),
+                        stages=("ingest", "extract", "dedup"))
     run_local(reference)
     a, b = open_dataset(out), open_dataset(reference.output)
     for name in ("grasps/code", "grasps/pose", "unique/code", "unique/count"):

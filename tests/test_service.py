@@ -66,7 +66,7 @@ def test_api_and_cli_run_a_small_job_on_embedded_ray(ray_session, spec_factory, 
     run_local(reference)
     assert_same_dataset(spec.output, reference.output)
     out = CliRunner().invoke(app, ["run", "--objects", "primitives[0:8]", "--grasps", "64",
-                                   "--out", str(tmp_path / "cli.zarr")])
+                                   "--stages", "ingest,extract,dedup,assemble", "--out", str(tmp_path / "cli.zarr")])
     assert out.exit_code == 0, out.output
     summary = open_dataset(tmp_path / "cli.zarr").summary()
     assert summary["objects"] == 8 and summary["grasps"] > 0

@@ -12,6 +12,7 @@ from onepiece_dist.objects import resolve_source
 from onepiece_dist.service.commit import commit_dataset
 from onepiece_dist.service.extract import ObjectResult, extract_object, parts_for
 from onepiece_dist.service.status import JobStatus, Rejection
+from onepiece_dist.service.trainer import Trainer
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 
@@ -51,8 +52,10 @@ def record_result(status: JobStatus, result: ObjectResult) -> None:
 
 
 def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts: PartStore,
-           commit=None) -> JobStatus:
-    """Commit the dataset (by ``commit(results)`` when given, e.g. the central dedup actor) and close the status."""
+           commit=None, train=None) -> JobStatus:
+    """Commit the dataset (by ``commit(results)`` when given, e.g. the central dedup actor), run the train stage
+    (by ``train(spec)`` when given, e.g. the trainer actor) and close the status."""
+    train = train or Trainer().fit
     status.stage = "dedup"
     t0 = time.perf_counter()
     summary = commit(results) if commit else commit_dataset(spec, results, parts, spec.output)
@@ -60,6 +63,12 @@ def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts:
     status.progress.unique_codes = summary["unique_codes"]
     if "assembly" in summary:
         status.assembly = summary["assembly"]
+    if "train" in spec.stages:
+        status.stage = "train"
+        status.save(spec.output)
+        t0 = time.perf_counter()
+        status.training = train(spec)
+        status.timings["train"] = time.perf_counter() - t0
     status.state, status.stage = "succeeded", "done"
     status.save(spec.output)
     return status

@@ -82,7 +82,10 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
         t0 = time.perf_counter()
         results = ExtractionPool(actors[1:], dedup, reg, status, progress).run(refs)
         status.timings["extract"] = time.perf_counter() - t0
-        done = finish(spec, status, results, parts, commit=lambda rs: _call(dedup.commit, rs))
+        for worker in actors[1:]:
+            ray.kill(worker)  # free their CPUs for the trainer
+        done = finish(spec, status, results, parts, commit=lambda rs: _call(dedup.commit, rs),
+                      train=lambda s: _train_remote(s, actors))
         ray.get(reg.update.remote(job_id, done.model_dump(mode="json")))
         return done
     except BaseException as err:
@@ -94,6 +97,16 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
     finally:
         for actor in actors:
             ray.kill(actor)
+
+
+def _train_remote(spec: JobSpec, actors: list) -> dict:
+    import ray
+
+    from onepiece_dist.service.trainer import remote_trainer
+
+    trainer = remote_trainer()
+    actors.append(trainer)
+    return ray.get(trainer.fit.remote(spec))
 
 
 class JobCancelled(Exception):

@@ -50,6 +50,7 @@ class JobStatus(BaseModel):
     worker_seconds: float = Field(0.0, description="Time spent inside per-object extraction, summed over objects.")
     spec: dict = Field(default_factory=dict, description="The JobSpec (so a job can be resumed from its status).")
     assembly: dict = Field(default_factory=dict, description="Report of the assemble stage (size, fidelity...).")
+    training: dict = Field(default_factory=dict, description="Report of the train stage (epochs, final metrics).")
     error: str = ""
     created: float = Field(default_factory=time.time)
     updated: float = Field(default_factory=time.time)

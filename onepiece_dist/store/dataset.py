@@ -133,8 +133,9 @@ class DatasetReader:
             "grid_shape": self.attrs.get("grid_shape"),
             "bytes_on_disk": disk_bytes(self.path),
         }
-        if "assembly" in self.attrs:
-            out["assembly"] = self.attrs["assembly"]
+        for key in ("assembly", "assembly_labels", "training"):
+            if key in self.attrs:
+                out[key] = self.attrs[key]
         if self.has("grasps/success"):
             out["success_rate"] = float(np.mean(self["grasps/success"])) if grasps else 0.0
         return out
