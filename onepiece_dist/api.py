@@ -77,6 +77,7 @@ class JobHandle:
 
     def __init__(self, client: Client, job_id: str, output: str, thread: threading.Thread | None = None):
         self.client, self.job_id, self.output, self._thread = client, job_id, output, thread
+        self.error: JobError | None = None  # why a job driven from this process did not run or failed
 
     def status(self) -> JobStatus:
         return self.client.status(self.job_id, self.output)
@@ -141,18 +142,17 @@ class Client:
         from onepiece_dist.service.ray_runner import run_on_ray
 
         connect(None)
-        errors: list[BaseException] = []
+        handle = JobHandle(self, job_id, spec.output)
 
         def drive() -> None:
             try:
                 run_on_ray(spec, job_id)
             except JobError as err:
-                errors.append(err)
+                handle.error = err
 
-        thread = threading.Thread(target=drive, name=f"onepiece-{job_id}", daemon=True)
-        thread.start()
-        handle = JobHandle(self, job_id, spec.output, thread)
-        self._local[job_id] = handle
+        handle._thread = threading.Thread(target=drive, name=f"onepiece-{job_id}", daemon=True)
+        handle._thread.start()
+        self._local.setdefault(job_id, handle)
         return handle
 
     def status(self, job_id: str, output: str | None = None) -> JobStatus:

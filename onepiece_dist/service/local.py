@@ -8,6 +8,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from onepiece_dist.errors import JobError, OnePieceError
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.service.commit import commit_dataset
 from onepiece_dist.service.extract import ObjectResult, extract_object, parts_for
@@ -29,15 +30,22 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
     status.timings["ingest"] = time.perf_counter() - t0
     status.stage = "extract"
     parts = parts_for(spec)
+    parts.remove_stale_temporaries()
     results: list[ObjectResult] = []
     t0 = time.perf_counter()
-    for index, ref in enumerate(refs):
-        results.append(extract_object(spec, ref, index, parts))
-        record_result(status, results[-1])
-        if progress:
-            progress(status)
-    status.timings["extract"] = time.perf_counter() - t0
-    return finish(spec, status, results, parts)
+    try:
+        for index, ref in enumerate(refs):
+            results.append(extract_object(spec, ref, index, parts))
+            record_result(status, results[-1])
+            status.save(spec.output)
+            if progress:
+                progress(status)
+        status.timings["extract"] = time.perf_counter() - t0
+        return finish(spec, status, results, parts)
+    except OnePieceError as err:
+        status.state, status.error = "failed", f"{type(err).__name__}: {err}"
+        status.save(spec.output)
+        raise JobError(f"job {job_id} failed: {err}") from err
 
 
 def record_result(status: JobStatus, result: ObjectResult) -> None:

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import zarr
 
+from onepiece_dist.errors import StoreError
 from onepiece_dist.store.codecs import write_array
 
 _TMP = ".tmp-"
@@ -46,6 +47,9 @@ class PartStore:
                 write_array(group, name, data)
             group.attrs.update({"key": key, **meta})
             return self._publish(tmp, key)
+        except OSError as err:
+            raise StoreError(f"cannot write part {key} in {self.folder}: {err.strerror or err}; "
+                             "nothing of it was committed") from err
         finally:
             if tmp.exists():
                 shutil.rmtree(tmp, ignore_errors=True)

@@ -1,0 +1,159 @@
+"""The ONE PIECE paper's experiment, in simulation, as one command.
+
+    .venv/bin/python benchmarks/paper_experiment.py [--objects N] [--grasps G] [--heldout H] [--epochs E]
+
+Two arms with the same objects, candidates, seed and network:
+  A: label every grasp of every object (the label protocol on all candidates) and train on it;
+  B: extract, dedup, assemble the unique codes into one object, label on it only, and train on that.
+Both models are evaluated on the same unseen objects (accuracy and AP against physics labels; success of the
+top-ranked grasp in simulation, next to a random choice). Also the dedup curve: unique fraction versus voxel
+resolution, with and without the symmetry canonical form. Writes benchmarks/results/paper_experiment.json and
+docs/paper_experiment_dedup.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import sys
+import tempfile
+import time
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from onepiece_dist.core.dedup import unique_codes  # noqa: E402
+from onepiece_dist.core.mesh import sample_surface  # noqa: E402
+from onepiece_dist.core.sampling import object_rng  # noqa: E402
+from onepiece_dist.core.voxel import canonical_codes, crop_codes  # noqa: E402
+from onepiece_dist.objects import load_object, resolve_source  # noqa: E402
+from onepiece_dist.service.evaluate import evaluate_model  # noqa: E402
+from onepiece_dist.service.local import run_local  # noqa: E402
+from onepiece_dist.spec import JobSpec, TrainSpec  # noqa: E402
+from onepiece_dist.store import open_dataset  # noqa: E402
+from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
+
+RESOLUTIONS_MM = (20.0, 10.0, 5.0, 2.5)
+HERE = Path(__file__).resolve().parent
+
+
+def objects_source(count: int) -> str:
+    """pybullet's named objects first, then random_urdfs: `count` objects in all."""
+    named = len(resolve_source("pybullet:named"))
+    return f"pybullet:named+pybullet:random_urdfs[0:{max(count - named, 0)}]"
+
+
+def run_arm(name: str, base: JobSpec, folder: Path) -> dict:
+    """Run one arm to a trained model; time and storage of generating its labelled data."""
+    if name == "A":
+        spec = base.model_copy(update={"output": str(folder / "A.zarr"), "stages": ("ingest", "extract", "dedup",
+                                       "train"), "sim": base.sim.model_copy(update={"label": True}),
+                                       "train": base.train.model_copy(update={"data": "all"})})
+    else:
+        spec = base.model_copy(update={"output": str(folder / "B.zarr"), "stages": ("ingest", "extract", "dedup",
+                                       "assemble", "label", "train")})
+    start = time.perf_counter()
+    status = run_local(spec, job_id=f"arm-{name}")
+    total = time.perf_counter() - start
+    generation = total - status.timings.get("train", 0.0)
+    labelled_group = "grasps" if name == "A" else "assembled/grasps"
+    ds = open_dataset(spec.output)
+    return {"arm": name, "generation_seconds": round(generation, 1), "train_seconds": round(status.timings.get(
+            "train", 0.0), 1), "label_trials": _label_trials(status, name), "labelled_grasps": int(
+            ds.array(f"{labelled_group}/success").shape[0]), "labelled_data_bytes": _group_bytes(spec.output,
+            labelled_group), "dataset_bytes": disk_bytes(Path(spec.output)), "checkpoint": status.training[
+            "checkpoint"], "training": status.training["final"], "unique_codes": status.progress.unique_codes,
+            "grasps": status.progress.grasps}
+
+
+def _label_trials(status, arm: str) -> int:
+    if arm == "A":
+        return int(status.progress.grasps)  # every held candidate was lifted and shaken
+    return int(status.assembly.get("labels", {}).get("label_trials", 0))
+
+
+def _group_bytes(dataset: str, group: str) -> int:
+    return disk_bytes(Path(dataset) / group)
+
+
+def dedup_curve(dataset: str, base: JobSpec) -> list[dict]:
+    """Unique fraction of the dataset's grasps re-cropped at each resolution, with and without canonical form."""
+    ds = open_dataset(dataset)
+    poses, owner = ds["grasps/pose"].astype(np.float64), ds["grasps/object"]
+    names = ds.object_names
+    refs = {r.name: r for r in resolve_source(base.objects)}
+    clouds = []
+    for name in names:
+        mesh = load_object(refs[name], base).mesh
+        clouds.append(sample_surface(mesh, base.sampler.surface_points, object_rng(mesh.content_id, base.seed))[0])
+    rows = []
+    for mm in RESOLUTIONS_MM:
+        voxel = base.voxel.model_copy(update={"resolution": mm / 1000})
+        grid = voxel.grid_shape(base.gripper)
+        codes = np.vstack([crop_codes(clouds[k], poses[owner == k], grid, voxel.resolution)[0]
+                           for k in range(len(names))])
+        for canonical in (False, True):
+            use = canonical_codes(codes, grid) if canonical else codes
+            rows.append({"resolution_mm": mm, "canonical": canonical, "grasps": int(len(use)),
+                         "unique": int(len(unique_codes(use).unique)),
+                         "unique_fraction": round(len(unique_codes(use).unique) / max(len(use), 1), 4)})
+    return rows
+
+
+def plot_curve(rows: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5, 3.4), dpi=120)
+    for canonical, style in ((False, "o-"), (True, "s--")):
+        pts = [(r["resolution_mm"], r["unique_fraction"]) for r in rows if r["canonical"] == canonical]
+        ax.plot(*zip(*pts, strict=True), style, label="canonical (180 deg)" if canonical else "plain")
+    ax.set_xscale("log", base=2)
+    ax.set_xticks(RESOLUTIONS_MM, [str(r) for r in RESOLUTIONS_MM])
+    ax.set_xlabel("voxel resolution (mm)")
+    ax.set_ylabel("unique codes / grasps")
+    ax.set_ylim(0, 1.05)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def main() -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--objects", type=int, default=64)
+    parser.add_argument("--grasps", type=int, default=32)
+    parser.add_argument("--heldout", type=int, default=16)
+    parser.add_argument("--epochs", type=int, default=10)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    base = JobSpec(objects=objects_source(args.objects), grasps_per_object=args.grasps, seed=args.seed,
+                   sim={"perturbations_per_patch": 0}, train=TrainSpec(epochs=args.epochs))
+    folder = Path(tempfile.mkdtemp(prefix="onepiece-experiment-"))
+    try:
+        arms = [run_arm(name, base, folder) for name in ("A", "B")]
+        heldout = JobSpec(objects=f"pybullet:random_urdfs[500:{500 + args.heldout}]", grasps_per_object=args.grasps,
+                          seed=args.seed + 1, output=str(folder / "heldout.zarr"))
+        for arm in arms:
+            arm["heldout"] = {k: v for k, v in evaluate_model(arm.pop("checkpoint"), heldout).items() if k != "dataset"}
+        curve = dedup_curve(str(folder / "A.zarr"), base.model_copy(update={"output": str(folder / "A.zarr")}))
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    plot_curve(curve, HERE.parent / "docs" / "paper_experiment_dedup.png")
+    out = {"benchmark": "paper_experiment", "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {os.cpu_count()} cores", "args": vars(args), "arms": arms,
+           "dedup_curve": curve, "command": "python benchmarks/paper_experiment.py " + " ".join(sys.argv[1:])}
+    (HERE / "results" / "paper_experiment.json").write_text(json.dumps(out, indent=2) + "\n")
+    print(json.dumps(out, indent=2))
+    return out
+
+
+if __name__ == "__main__":
+    main()

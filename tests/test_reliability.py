@@ -1,0 +1,94 @@
+"""Reliability battery: faults in the middle of jobs, concurrency, a full disk (docs/reliability.md)."""
+
+import errno
+import time
+
+import numpy as np
+import pytest
+
+import onepiece_dist.store.parts as parts_module
+from onepiece_dist.api import Client, read_status
+from onepiece_dist.errors import JobError
+from onepiece_dist.service.local import run_local
+from onepiece_dist.spec import default_job_id
+from onepiece_dist.store import PartStore, open_dataset
+
+ARRAYS = ("grasps/code", "grasps/pose", "grasps/object", "grasps/code_index", "unique/code", "unique/count")
+pytestmark = pytest.mark.slow
+
+
+def same(a: str, b: str) -> bool:
+    da, db = open_dataset(a), open_dataset(b)
+    return all(np.array_equal(da[n], db[n]) for n in ARRAYS)
+
+
+def spec_at(spec_factory, tmp_path, name, objects="primitives[0:6]"):
+    return spec_factory(objects=objects, grasps_per_object=48, output=str(tmp_path / f"{name}.zarr"))
+
+
+def test_disk_full_fails_clearly_commits_nothing_partial_and_resume_gives_the_same_dataset(
+        spec_factory, tmp_path, monkeypatch):
+    spec = spec_at(spec_factory, tmp_path, "full")
+    original, writes = parts_module.write_array, {"n": 0}
+
+    def no_space_after_two_parts(group, name, data, rows=8192):
+        writes["n"] += name == "code"
+        if writes["n"] > 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return original(group, name, data)
+
+    monkeypatch.setattr(parts_module, "write_array", no_space_after_two_parts)
+    with pytest.raises(JobError, match="No space left on device"):
+        run_local(spec)
+    parts = PartStore(f"{spec.output}.parts")
+    assert len(parts.committed_keys()) == 2 and not list(parts.folder.glob(".tmp-*"))
+    assert read_status(spec.output).state == "failed"
+    monkeypatch.setattr(parts_module, "write_array", original)  # space freed
+    resumed = run_local(spec)
+    assert resumed.progress.objects_reused == 2
+    clean = spec_at(spec_factory, tmp_path, "clean")
+    run_local(clean)
+    assert same(spec.output, clean.output)
+
+
+@pytest.mark.ray
+def test_killing_the_central_dedup_actor_mid_job_rebuilds_it_from_the_store(ray_session, spec_factory, tmp_path):
+    ray = ray_session
+    spec = spec_at(spec_factory, tmp_path, "dedupkill", objects="primitives[0:8]")
+    job_id = default_job_id(spec)
+    client = Client()
+    handle = client.submit(spec)
+    deadline = time.monotonic() + 120
+    while client.status(job_id).progress.objects_done < 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    ray.kill(ray.get_actor(f"dedup-{job_id}", namespace="onepiece"), no_restart=False)
+    final = handle.wait(timeout=300)
+    assert final.state == "succeeded", handle.error
+    clean = spec_at(spec_factory, tmp_path, "dedupclean", objects="primitives[0:8]")
+    run_local(clean)
+    assert same(spec.output, clean.output)
+
+
+@pytest.mark.ray
+def test_the_same_job_submitted_twice_at_once_runs_once(ray_session, spec_factory, tmp_path):
+    spec = spec_at(spec_factory, tmp_path, "twice")
+    client = Client()
+    first, second = client.submit(spec), client.submit(spec)
+    first._thread.join(300)
+    second._thread.join(300)
+    errors = [h.error for h in (first, second) if h.error is not None]
+    assert len(errors) == 1 and "already running" in str(errors[0])
+    assert read_status(spec.output).state == "succeeded"
+
+
+@pytest.mark.ray
+def test_two_different_jobs_at_once_equal_their_serial_runs(ray_session, spec_factory, tmp_path):
+    a = spec_at(spec_factory, tmp_path, "a", objects="primitives[0:4]")
+    b = spec_at(spec_factory, tmp_path, "b", objects="primitives[4:8]")
+    client = Client()
+    handles = [client.submit(a), client.submit(b)]
+    assert all(h.wait(timeout=300).state == "succeeded" for h in handles)
+    for spec, name in ((a, "a_serial"), (b, "b_serial")):
+        serial = spec.model_copy(update={"output": str(tmp_path / f"{name}.zarr")})
+        run_local(serial)
+        assert same(spec.output, serial.output)
