@@ -37,9 +37,6 @@ class ExtractionWorker:
         result = extract_object(self.spec, ref, index, self.parts)
         return dataclasses.replace(result, node=_node_id())
 
-    def ping(self) -> bool:
-        return True
-
 
 def _node_id() -> str:
     try:
