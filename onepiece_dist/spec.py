@@ -145,6 +145,8 @@ class JobSpec(_Frozen):
     stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup", "assemble", "label", "train"),
                                       description="Stages to run: 'assemble' builds the one object from the unique "
                                       "codes, 'label' labels grasps on it, 'train' fits the grasp network.")
+    similar_radius: int = Field(0, ge=0, le=64, description="Merge codes that differ in at most this many voxels "
+                                "(0 = exact dedup only); unique/ then holds one representative per cluster.")
     max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
     gripper: GripperSpec = GripperSpec()
     voxel: VoxelSpec = VoxelSpec()

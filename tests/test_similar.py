@@ -51,3 +51,18 @@ def test_radius_zero_is_exact_dedup_and_members_stay_near_their_links():
         if len(members) > 1:
             nearest = [np.sort(hamming(members, np.repeat(m[None], len(members), 0)))[1] for m in members]
             assert max(nearest) <= 2
+
+
+def test_a_job_with_a_radius_maps_every_grasp_to_its_cluster_representative(spec_factory):
+    from onepiece_dist.service.local import run_local
+    from onepiece_dist.store import open_dataset
+
+    exact = run_local(spec_factory())
+    spec = spec_factory(similar_radius=2, output=exact.output.replace(".zarr", "_r2.zarr"))
+    merged = run_local(spec)
+    ds = open_dataset(spec.output)
+    assert merged.progress.unique_codes < exact.progress.unique_codes
+    codes = ds["grasps/code"]
+    assert np.array_equal(ds["exact/code"][ds["grasps/exact_index"]], codes)
+    assert np.array_equal(ds["exact/cluster"][ds["grasps/exact_index"]], ds["grasps/code_index"])
+    assert ds["unique/count"].sum() == len(codes)

@@ -66,9 +66,12 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     grasps["object"] = np.repeat(np.arange(len(ok), dtype=np.int32), [len(a["code"]) for a in loaded])
     grasps["code_index"] = index.lookup(grasps["code"]) if len(grasps["code"]) else np.zeros(0, np.int64)
     objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
-    unique = {"code": index.unique, "count": index.counts}
-    write_dataset(out, dataset_attrs(spec, results), objects, {"grasps": grasps, "unique": unique})
-    summary = {"grasps": int(len(grasps["code"])), "unique_codes": int(len(index.unique))}
+    groups = {"grasps": grasps, "unique": {"code": index.unique, "count": index.counts}}
+    if spec.similar_radius:
+        groups = _merge_similar(spec, groups, index)
+    write_dataset(out, dataset_attrs(spec, results), objects, groups)
+    summary = {"grasps": int(len(grasps["code"])), "unique_codes": int(len(groups["unique"]["code"])),
+               "exact_unique_codes": int(len(index.unique))}
     if "assemble" in spec.stages and len(index.unique):
         from onepiece_dist.service.assemble import assemble_dataset
 
@@ -78,6 +81,18 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
 
             summary["assembly"]["labels"] = label_assembly(spec, out, spec.sim.perturbations_per_patch)
     return summary
+
+
+def _merge_similar(spec: JobSpec, groups: dict, index: DedupIndex) -> dict:
+    """unique/ becomes one representative per Hamming-radius cluster; the exact set moves to exact/."""
+    from onepiece_dist.core.similar import similar_clusters
+
+    a, b, c = spec.grid_shape()
+    clusters = similar_clusters(index.unique, index.counts, a * b * c, spec.similar_radius)
+    grasps = {**groups["grasps"], "code_index": clusters.cluster[groups["grasps"]["code_index"]],
+              "exact_index": groups["grasps"]["code_index"]}
+    return {"grasps": grasps, "unique": {"code": index.unique[clusters.representative], "count": clusters.counts},
+            "exact": {"code": index.unique, "count": index.counts, "cluster": clusters.cluster}}
 
 
 def _concatenate(loaded: list[dict[str, np.ndarray]], code_bytes: int) -> dict[str, np.ndarray]:
