@@ -7,8 +7,8 @@ Two arms with the same objects, candidates, seed and network:
   B: extract, dedup, assemble the unique codes into one object, label on it only, and train on that.
 Both models are evaluated on the same unseen objects (accuracy and AP against physics labels; success of the
 top-ranked grasp in simulation, next to a random choice). Also the dedup curve: unique fraction versus voxel
-resolution, with and without the symmetry canonical form. Writes benchmarks/results/paper_experiment.json and
-docs/paper_experiment_dedup.png.
+resolution, with and without the symmetry canonical form, and after the similar-shape filter at radii 0, 1, 2, 4.
+Writes benchmarks/results/paper_experiment.json and docs/paper_experiment_dedup.png.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.mesh import sample_surface  # noqa: E402
 from onepiece_dist.core.sampling import object_rng  # noqa: E402
+from onepiece_dist.core.similar import similar_clusters  # noqa: E402
 from onepiece_dist.core.voxel import canonical_codes, crop_codes  # noqa: E402
 from onepiece_dist.objects import load_object, resolve_source  # noqa: E402
 from onepiece_dist.service.evaluate import evaluate_model  # noqa: E402
@@ -39,6 +40,7 @@ from onepiece_dist.store import open_dataset  # noqa: E402
 from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
 
 RESOLUTIONS_MM = (20.0, 10.0, 5.0, 2.5)
+RADII = (0, 1, 2, 4)
 HERE = Path(__file__).resolve().parent
 
 
@@ -99,9 +101,11 @@ def dedup_curve(dataset: str, base: JobSpec) -> list[dict]:
                            for k in range(len(names))])
         for canonical in (False, True):
             use = canonical_codes(codes, grid) if canonical else codes
-            rows.append({"resolution_mm": mm, "canonical": canonical, "grasps": int(len(use)),
-                         "unique": int(len(unique_codes(use).unique)),
-                         "unique_fraction": round(len(unique_codes(use).unique) / max(len(use), 1), 4)})
+            exact = unique_codes(use)
+            for radius in RADII:
+                kept = len(similar_clusters(exact.unique, exact.counts, int(np.prod(grid)), radius).representative)
+                rows.append({"resolution_mm": mm, "canonical": canonical, "radius": radius, "grasps": int(len(use)),
+                             "unique": kept, "unique_fraction": round(kept / max(len(use), 1), 4)})
     return rows
 
 
@@ -113,7 +117,8 @@ def plot_curve(rows: list[dict], path: Path) -> None:
 
     fig, ax = plt.subplots(figsize=(5, 3.4), dpi=120)
     for canonical, style in ((False, "o-"), (True, "s--")):
-        pts = [(r["resolution_mm"], r["unique_fraction"]) for r in rows if r["canonical"] == canonical]
+        pts = [(r["resolution_mm"], r["unique_fraction"]) for r in rows
+               if r["canonical"] == canonical and r.get("radius", 0) == 0]
         ax.plot(*zip(*pts, strict=True), style, label="canonical (180 deg)" if canonical else "plain")
     ax.set_xscale("log", base=2)
     ax.set_xticks(RESOLUTIONS_MM, [str(r) for r in RESOLUTIONS_MM])
