@@ -72,6 +72,15 @@ def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path):
     assert ray_daemons() <= before  # the killed driver's embedded Ray left no orphan daemons
 
 
+def cluster_exposed_sockets() -> list:
+    """Listening sockets of Ray processes (raylet, GCS, agents, workers) that are not on loopback."""
+    ray_pids = {p.pid for p in psutil.process_iter(["name", "cmdline"])
+                if p.info["name"] in ("raylet", "gcs_server") or "ray" in " ".join(p.info["cmdline"] or []).lower()}
+    return [(c.laddr.ip, c.laddr.port) for c in psutil.net_connections(kind="inet")
+            if c.status == psutil.CONN_LISTEN and c.pid in ray_pids
+            and c.laddr.ip not in ("127.0.0.1", "::ffff:127.0.0.1", "::1")]
+
+
 @pytest.fixture
 def local_cluster():
     script = ROOT / "cluster" / "local_cluster.sh"
@@ -99,6 +108,7 @@ def test_job_submitted_to_a_local_multi_node_cluster_runs_on_two_nodes(local_clu
     status = json.loads(waited.stdout)
     assert status["state"] == "succeeded" and len(status["nodes"]) >= 2
     assert open_dataset(out).summary()["objects"] == 6
+    assert cluster_exposed_sockets() == []
     unreachable = subprocess.run([*ONEPIECE, "status", job_id, "--address", "http://127.0.0.1:9"],
                                  capture_output=True, text=True, timeout=60, env=env)
     assert unreachable.returncode == 3

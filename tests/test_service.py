@@ -140,3 +140,18 @@ def test_every_socket_of_our_ray_is_on_loopback(ray_session):
     assert exposed == []
     if TOKEN_FILE.exists():
         assert TOKEN_FILE.stat().st_mode & 0o077 == 0
+
+
+def test_each_later_stage_runs_on_its_own_on_a_committed_dataset(spec_factory, tmp_path):
+    spec = job_spec(spec_factory, tmp_path, "stages", objects="primitives[0:2]", grasps=8)
+    run_local(spec)  # ingest, extract, dedup
+    with pytest.raises(Exception, match="assembled object"):
+        run_local(spec.model_copy(update={"stages": ("label",)}))
+    assembled = run_local(spec.model_copy(update={"stages": ("assemble", "label"),
+                                                  "sim": spec.sim.model_copy(update={"points_per_grasp": 32})}))
+    assert assembled.assembly["fidelity"] == 1.0 and assembled.assembly["labels"]["label_trials"] > 0
+    assert assembled.progress.objects_done == 0  # nothing was extracted again
+    trained = run_local(spec.model_copy(update={"stages": ("train",), "train": spec.train.model_copy(
+        update={"epochs": 1, "model": "voxel"})}))
+    assert trained.training["epochs"] == 1
+    assert open_dataset(spec.output).attrs["training"]["epochs"] == 1

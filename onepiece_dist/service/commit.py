@@ -10,6 +10,7 @@ from importlib.metadata import PackageNotFoundError, version
 import numpy as np
 
 from onepiece_dist.core.dedup import DedupIndex
+from onepiece_dist.errors import JobError
 from onepiece_dist.service.extract import ObjectResult
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore, write_dataset
@@ -72,15 +73,35 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     write_dataset(out, dataset_attrs(spec, results), objects, groups)
     summary = {"grasps": int(len(grasps["code"])), "unique_codes": int(len(groups["unique"]["code"])),
                "exact_unique_codes": int(len(index.unique))}
-    if "assemble" in spec.stages and len(index.unique):
-        from onepiece_dist.service.assemble import assemble_dataset
+    return {**summary, **assembly_stages(spec, out)} if len(index.unique) else summary
 
-        summary["assembly"] = assemble_dataset(spec, out)
-        if "label" in spec.stages:
-            from onepiece_dist.service.label_one import label_assembly
 
-            summary["assembly"]["labels"] = label_assembly(spec, out, spec.sim.perturbations_per_patch)
-    return summary
+def assembly_stages(spec: JobSpec, out: str) -> dict:
+    """The assemble and label stages (as requested) on the committed dataset at ``out``."""
+    from onepiece_dist.service.assemble import assemble_dataset
+    from onepiece_dist.service.label_one import label_assembly
+    from onepiece_dist.store.dataset import DatasetReader
+
+    if "assemble" in spec.stages:
+        assembly = assemble_dataset(spec, out)
+    elif "label" in spec.stages:
+        assembly = dict(DatasetReader(out).attrs.get("assembly", {}))
+        if not assembly:
+            raise JobError(f"{out}: the label stage needs an assembled object (run the assemble stage first)")
+    else:
+        return {}
+    if "label" in spec.stages:
+        assembly["labels"] = label_assembly(spec, out, spec.sim.perturbations_per_patch)
+    return {"assembly": assembly}
+
+
+def existing_summary(spec: JobSpec, out: str) -> dict:
+    """Counts of a committed dataset, for a job that runs only later stages on it."""
+    from onepiece_dist.store.dataset import DatasetReader
+
+    reader = DatasetReader(out)
+    return {"grasps": int(reader.array("grasps/code").shape[0]),
+            "unique_codes": int(reader.array("unique/code").shape[0]), **assembly_stages(spec, out)}
 
 
 def _merge_similar(spec: JobSpec, groups: dict, index: DedupIndex) -> dict:

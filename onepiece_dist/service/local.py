@@ -10,7 +10,7 @@ from collections.abc import Callable
 
 from onepiece_dist.errors import JobError, OnePieceError
 from onepiece_dist.objects import resolve_source
-from onepiece_dist.service.commit import commit_dataset
+from onepiece_dist.service.commit import commit_dataset, existing_summary
 from onepiece_dist.service.extract import ObjectResult, extract_object, parts_for
 from onepiece_dist.service.status import JobStatus, Rejection
 from onepiece_dist.service.trainer import Trainer
@@ -21,7 +21,7 @@ ProgressFn = Callable[[JobStatus], None]
 
 
 def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None = None) -> JobStatus:
-    """Run ingest, extract and dedup in this process and commit the dataset."""
+    """Run the spec's stages in this process. Without 'extract', the later stages run on the committed dataset."""
     status = JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output,
                        spec=spec.model_dump(mode="json"))
     t0 = time.perf_counter()
@@ -34,7 +34,7 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
     results: list[ObjectResult] = []
     t0 = time.perf_counter()
     try:
-        for index, ref in enumerate(refs):
+        for index, ref in enumerate(refs if "extract" in spec.stages else []):
             results.append(extract_object(spec, ref, index, parts))
             record_result(status, results[-1])
             status.save(spec.output)
@@ -64,9 +64,12 @@ def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts:
     """Commit the dataset (by ``commit(results)`` when given, e.g. the central dedup actor), run the train stage
     (by ``train(spec)`` when given, e.g. the trainer actor) and close the status."""
     train = train or Trainer().fit
-    status.stage = "dedup"
+    status.stage = "dedup" if "extract" in spec.stages else "assemble"
     t0 = time.perf_counter()
-    summary = commit(results) if commit else commit_dataset(spec, results, parts, spec.output)
+    if "extract" not in spec.stages:  # later stages only, on the committed dataset
+        summary = existing_summary(spec, spec.output)
+    else:
+        summary = commit(results) if commit else commit_dataset(spec, results, parts, spec.output)
     status.timings["dedup"] = time.perf_counter() - t0
     status.progress.unique_codes = summary["unique_codes"]
     if "assembly" in summary:

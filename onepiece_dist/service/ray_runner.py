@@ -77,7 +77,8 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
                             for k in range(worker_count(workers, len(refs)))]
         status.stage = "extract"
         t0 = time.perf_counter()
-        results = ExtractionPool(actors[1:], dedup, reg, status, progress).run(refs)
+        pool = ExtractionPool(actors[1:], dedup, reg, status, progress)
+        results = pool.run(refs if "extract" in spec.stages else [])
         status.timings["extract"] = time.perf_counter() - t0
         for worker in actors[1:]:
             ray.kill(worker)  # free their CPUs for the trainer
