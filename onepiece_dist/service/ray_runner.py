@@ -148,6 +148,9 @@ class ExtractionPool:
         self.pending: dict = {}  # ObjectRef -> (index, object ref, actor position, alone)
         self.attempts: dict[int, int] = {}
         self.suspects: set[int] = set()
+        # work goes only to actors that have started: on a busy cluster some may wait for CPUs for a long time
+        self.starting = {actor.__ray_ready__.remote(): k for k, actor in enumerate(actors)}
+        self.ready: set[int] = set()
 
     def run(self, refs: list[ObjectRef]) -> list[ObjectResult]:
         import ray
@@ -157,8 +160,10 @@ class ExtractionPool:
         while todo or self.pending:
             if ray.get(self.reg.cancel_requested.remote(self.status.job_id)):
                 raise JobCancelled(f"cancelled after {len(results)} of {len(refs)} objects")
+            self._note_started()
             self._fill(todo)
-            ready, _ = ray.wait(list(self.pending), num_returns=1, timeout=POLL_SECONDS)
+            ready, _ = ray.wait(list(self.pending) or list(self.starting), num_returns=1, timeout=POLL_SECONDS)
+            ready = [ref for ref in ready if ref in self.pending]
             for ref in ready:
                 result = self._collect(ref, todo)
                 if result is not None:
@@ -166,9 +171,17 @@ class ExtractionPool:
                     self._record(result)
         return sorted(results, key=lambda r: r.index)
 
+    def _note_started(self) -> None:
+        import ray
+
+        if self.starting:
+            started, _ = ray.wait(list(self.starting), num_returns=len(self.starting), timeout=0)
+            for ref in started:
+                self.ready.add(self.starting.pop(ref))
+
     def _load(self) -> list[int]:
-        """Tasks in flight per actor; an actor running a suspect alone counts as full."""
-        load = [0] * len(self.actors)
+        """Tasks in flight per actor; an actor running a suspect alone, or not started yet, counts as full."""
+        load = [0 if k in self.ready else 2 * IN_FLIGHT_PER_WORKER for k in range(len(self.actors))]
         for _, _, position, alone in self.pending.values():
             load[position] += IN_FLIGHT_PER_WORKER if alone else 1
         return load
