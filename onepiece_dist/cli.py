@@ -129,13 +129,15 @@ def submit(
     out: Annotated[str | None, typer.Option(help="Dataset path, as seen by the cluster.")] = None,
     grasps: Annotated[int | None, typer.Option(help="Grasp candidates per object.")] = None,
     seed: Annotated[int | None, typer.Option(help="Random seed.")] = None,
+    stages: Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup.")] = None,
     job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
 ) -> None:
     """Submit a job to a cluster through the Ray Jobs API and print its id (it outlives this command)."""
     if not address:
         _err("error: submit needs --address (the cluster's Jobs API, e.g. http://127.0.0.1:8265)")
         raise typer.Exit(EXIT_USAGE)
-    spec = _spec_or_exit(spec_file, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
+    spec = _spec_or_exit(spec_file, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed,
+                                     "stages": stages.split(",") if stages else None})
     handle = _cluster_call(lambda c: c.submit(spec, job_id=job_id, runtime_env=_worker_runtime_env()), address)
     typer.echo(handle.job_id)
 

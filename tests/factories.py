@@ -38,6 +38,7 @@ def broken_inputs_folder(root: Path, outside: Path) -> dict[str, str]:
     root.mkdir(parents=True, exist_ok=True)
     outside.mkdir(parents=True, exist_ok=True)
     (outside / "secret.obj").write_text(box_obj_text())
+    (outside / "secret.mtl").write_text("newmtl x\n")
     good = box_obj_text()
     lines = good.splitlines()
     files = {
@@ -57,13 +58,18 @@ def broken_inputs_folder(root: Path, outside: Path) -> dict[str, str]:
         "bad_xml/obj.urdf": ("<robot><link", "malformed URDF XML"),
         "degenerate.obj": ("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "degenerate"),
         "huge_units.obj": (box_obj_text(40.0), "wrong units"),
+        "truncated.stl": (None, "cannot parse"),
+        "too_big.obj": (good + "# padding\n" * 4000, "over the cap"),
+        "mtllib_escape.obj": ("mtllib ../../outside/secret.mtl\nusemtl x\n" + good, "ok"),
     }
     expected = {}
     rng = np.random.default_rng(0)
     for name, (text, outcome) in files.items():
         path = root / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        if text is None:
+        if name == "truncated.stl":  # a binary STL header announcing 1000 triangles, then 3 of them
+            path.write_bytes(b"\0" * 80 + (1000).to_bytes(4, "little") + b"\1" * 150)
+        elif text is None:
             path.write_bytes(rng.integers(0, 256, 300, dtype=np.uint8).tobytes())
         else:
             path.write_text(text)

@@ -41,7 +41,8 @@ class OpenAudit:
 
 def test_each_bad_file_is_rejected_with_its_reason_and_good_files_proceed(broken, tmp_path):
     root, outside, expected = broken
-    spec = JobSpec(objects=str(root), grasps_per_object=8, sampler={"surface_points": 1000})
+    spec = JobSpec(objects=str(root), grasps_per_object=8, sampler={"surface_points": 1000}, max_file_bytes=20_000,
+                   sim={"physics": False})
     refs = resolve_source(spec.objects)
     assert sorted(r.name for r in refs) == sorted(expected)
     parts = PartStore(tmp_path / "parts")

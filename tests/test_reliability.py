@@ -92,3 +92,44 @@ def test_two_different_jobs_at_once_equal_their_serial_runs(ray_session, spec_fa
         serial = spec.model_copy(update={"output": str(tmp_path / f"{name}.zarr")})
         run_local(serial)
         assert same(spec.output, serial.output)
+
+
+@pytest.mark.ray
+def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_session, spec_factory, tmp_path):
+    ray = ray_session
+    spec = spec_at(spec_factory, tmp_path, "killed3", objects="primitives[0:8]")
+    job_id = default_job_id(spec)
+    client = Client()
+    handle = client.submit(spec)
+    recoveries = []
+    for kill in range(3):
+        deadline = time.monotonic() + 120
+        while client.status(job_id).progress.objects_done < 2 * kill + 1 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        done = client.status(job_id).progress.objects_done
+        if done >= 8:
+            break
+        killed_at = time.monotonic()
+        ray.kill(ray.get_actor(f"extract-{job_id}-{kill % 2}", namespace="onepiece"), no_restart=False)
+        while client.status(job_id).progress.objects_done <= done and time.monotonic() < killed_at + 120:
+            time.sleep(0.05)
+        recoveries.append(time.monotonic() - killed_at)
+    final = handle.wait(timeout=300)
+    assert final.state == "succeeded" and len(recoveries) >= 2 and final.retries >= len(recoveries)
+    assert max(recoveries) < 60  # bounded recovery: the next object lands within a minute of each kill
+    clean = spec_at(spec_factory, tmp_path, "clean3", objects="primitives[0:8]")
+    run_local(clean)
+    assert same(spec.output, clean.output)
+    print(f"kills={len(recoveries)} re-executions={final.retries} recovery_s={[round(r, 2) for r in recoveries]}")
+
+
+def test_the_store_holds_no_pickled_data(spec_factory, tmp_path):
+    import json
+
+    spec = spec_at(spec_factory, tmp_path, "nopickle", objects="primitives[0:2]")
+    run_local(spec)
+    for meta in (tmp_path / "nopickle.zarr").rglob("zarr.json"):
+        node = json.loads(meta.read_text())
+        if node.get("node_type") == "array":
+            assert node["data_type"] in ("uint8", "int8", "int32", "int64", "float16", "float32", "float64"), meta
+            assert all(c["name"] in ("bytes", "blosc", "zstd", "transpose") for c in node["codecs"]), meta

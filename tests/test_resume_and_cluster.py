@@ -112,3 +112,34 @@ def test_job_submitted_to_a_local_multi_node_cluster_runs_on_two_nodes(local_clu
     unreachable = subprocess.run([*ONEPIECE, "status", job_id, "--address", "http://127.0.0.1:9"],
                                  capture_output=True, text=True, timeout=60, env=env)
     assert unreachable.returncode == 3
+
+
+def worker_node_raylet(agent_port: int) -> psutil.Process:
+    """The raylet of the local cluster's worker node whose agent listens on ``agent_port``."""
+    for proc in psutil.process_iter(["name", "cmdline"]):
+        if proc.info["name"] == "raylet" and f"--listen-port={agent_port}" in " ".join(proc.info["cmdline"] or []):
+            return proc
+    raise AssertionError(f"no raylet with agent port {agent_port}")
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path):
+    out = tmp_path / "lost_node.zarr"
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}:{os.environ.get('PATH', '')}"}
+    submitted = subprocess.run([*ONEPIECE, "submit", "--address", local_cluster, *SMALL, "--out", str(out)],
+                               capture_output=True, text=True, timeout=120, env=env)
+    assert submitted.returncode == 0, submitted.stderr[-2000:]
+    wait_for(lambda: objects_done(out) >= 1, 180, "a first object")
+    done_at_kill = objects_done(out)
+    worker_node_raylet(52367).kill()  # the node is gone, with the worker actor on it
+    waited = subprocess.run([*ONEPIECE, "wait", submitted.stdout.strip(), "--address", local_cluster, "--json",
+                             "--timeout", "300"], capture_output=True, text=True, timeout=360, env=env)
+    assert waited.returncode == 0, waited.stderr[-2000:]
+    status = json.loads(waited.stdout)
+    assert status["state"] == "succeeded" and status["progress"]["objects_done"] == 8 and done_at_kill < 8
+    reference = JobSpec(objects="primitives[0:8]", grasps_per_object=64, output=str(tmp_path / "ref.zarr"),
+                        stages=("ingest", "extract", "dedup"))
+    run_local(reference)
+    for name in ("grasps/code", "unique/code", "unique/count"):
+        assert np.array_equal(open_dataset(out)[name], open_dataset(reference.output)[name]), name

@@ -17,13 +17,14 @@ from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.service.dedup_actor import CentralDedup
 from onepiece_dist.service.extract import ObjectResult, extract_object, parts_for
 from onepiece_dist.service.local import ProgressFn, finish, record_result
-from onepiece_dist.service.registry import registry
+from onepiece_dist.service.registry import on_this_node, registry
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 
 IN_FLIGHT_PER_WORKER = 2
 MAX_ATTEMPTS = 3  # an object whose worker dies this many times is quarantined
 POLL_SECONDS = 0.5
+ACTOR_PATIENCE_S = 120.0  # how long a central actor may take to come back
 
 
 class ExtractionWorker:
@@ -71,7 +72,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
         status.progress.objects_total = len(refs)
         parts = parts_for(spec)
         parts.remove_stale_temporaries()
-        dedup = _actor(CentralDedup, f"dedup-{job_id}", num_cpus=0).remote(spec)
+        dedup = _actor(CentralDedup, f"dedup-{job_id}", num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
         actors = [dedup] + [_actor(ExtractionWorker, f"extract-{job_id}-{k}", num_cpus=1,
                                    scheduling_strategy="SPREAD").remote(spec)
                             for k in range(worker_count(workers, len(refs)))]
@@ -121,18 +122,20 @@ def _actor(cls, name: str, **options):
                                    **options)
 
 
-def _call(method, *args, attempts: int = MAX_ATTEMPTS):
-    """Call an actor method, again after the actor died and restarted (its state is rebuilt from the store)."""
+def _call(method, *args, patience_s: float = ACTOR_PATIENCE_S):
+    """Call an actor method; while the actor is unavailable or restarting (its state is rebuilt from the store),
+    try again for up to ``patience_s`` seconds."""
     import ray
     from ray.exceptions import RayActorError
 
-    for attempt in range(attempts):
+    deadline = time.monotonic() + patience_s
+    while True:
         try:
             return ray.get(method.remote(*args))
         except RayActorError:
-            if attempt == attempts - 1:
+            if time.monotonic() > deadline:
                 raise
-            time.sleep(1.0)
+            time.sleep(0.5)
 
 
 class ExtractionPool:
@@ -158,7 +161,7 @@ class ExtractionPool:
         todo = deque(enumerate(refs))
         results: list[ObjectResult] = []
         while todo or self.pending:
-            if ray.get(self.reg.cancel_requested.remote(self.status.job_id)):
+            if _call(self.reg.cancel_requested, self.status.job_id):
                 raise JobCancelled(f"cancelled after {len(results)} of {len(refs)} objects")
             self._note_started()
             self._fill(todo)
@@ -178,6 +181,12 @@ class ExtractionPool:
             started, _ = ray.wait(list(self.starting), num_returns=len(self.starting), timeout=0)
             for ref in started:
                 self.ready.add(self.starting.pop(ref))
+
+    def _restarting(self, position: int) -> None:
+        """A dead actor gets no work until it has restarted (possibly on another node, possibly much later)."""
+        if position in self.ready:
+            self.ready.discard(position)
+            self.starting[self.actors[position].__ray_ready__.remote()] = position
 
     def _load(self) -> list[int]:
         """Tasks in flight per actor; an actor running a suspect alone, or not started yet, counts as full."""
@@ -206,10 +215,11 @@ class ExtractionPool:
         import ray
         from ray.exceptions import RayActorError, WorkerCrashedError
 
-        index, ref, _, alone = self.pending.pop(object_ref)
+        index, ref, position, alone = self.pending.pop(object_ref)
         try:
             return ray.get(object_ref)
         except (RayActorError, WorkerCrashedError) as err:
+            self._restarting(position)
             self.status.retries += 1
             self.suspects.add(index)
             if alone:

@@ -52,5 +52,14 @@ def registry():
     from onepiece_dist.service.ray_env import NAMESPACE
 
     actor = ray.remote(num_cpus=0, max_restarts=-1)(JobRegistry)
-    return actor.options(name=REGISTRY_NAME, namespace=NAMESPACE, lifetime="detached",
-                         get_if_exists=True).remote()
+    return actor.options(name=REGISTRY_NAME, namespace=NAMESPACE, lifetime="detached", get_if_exists=True,
+                         scheduling_strategy=on_this_node()).remote()
+
+
+def on_this_node():
+    """Prefer the caller's node (the driver's, usually the head) for the 0-CPU central actors, so losing a
+    worker node does not take them down; soft, so they can still go elsewhere."""
+    import ray
+    from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+    return NodeAffinitySchedulingStrategy(ray.get_runtime_context().get_node_id(), soft=True)
