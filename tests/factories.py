@@ -83,3 +83,13 @@ def broken_inputs_folder(root: Path, outside: Path) -> dict[str, str]:
     (link_dir / "obj.urdf").write_text(urdf_text("box.obj"))
     expected["link_urdf/obj.urdf"] = "outside its root"
     return expected
+
+
+def objects_done_at_least(client, job_id: str, count: int, timeout: float = 120.0) -> int:
+    """Poll a job until ``count`` objects are done (or ``timeout`` s pass); returns how many are done."""
+    import time
+
+    deadline = time.monotonic() + timeout
+    while (done := client.status(job_id).progress.objects_done) < count and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return done

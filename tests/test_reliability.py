@@ -12,6 +12,7 @@ from onepiece_dist.errors import JobError
 from onepiece_dist.service.local import run_local
 from onepiece_dist.spec import default_job_id
 from onepiece_dist.store import PartStore, open_dataset
+from tests.factories import objects_done_at_least
 
 ARRAYS = ("grasps/code", "grasps/pose", "grasps/object", "grasps/code_index", "unique/code", "unique/count")
 pytestmark = pytest.mark.slow
@@ -58,9 +59,7 @@ def test_killing_the_central_dedup_actor_mid_job_rebuilds_it_from_the_store(ray_
     job_id = default_job_id(spec)
     client = Client()
     handle = client.submit(spec)
-    deadline = time.monotonic() + 120
-    while client.status(job_id).progress.objects_done < 2 and time.monotonic() < deadline:
-        time.sleep(0.1)
+    objects_done_at_least(client, job_id, 2)
     ray.kill(ray.get_actor(f"dedup-{job_id}", namespace="onepiece"), no_restart=False)
     final = handle.wait(timeout=300)
     assert final.state == "succeeded", handle.error
@@ -103,10 +102,7 @@ def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_sessio
     handle = client.submit(spec)
     recoveries = []
     for kill in range(3):
-        deadline = time.monotonic() + 120
-        while client.status(job_id).progress.objects_done < 2 * kill + 1 and time.monotonic() < deadline:
-            time.sleep(0.05)
-        done = client.status(job_id).progress.objects_done
+        done = objects_done_at_least(client, job_id, 2 * kill + 1)
         if done >= 8:
             break
         killed_at = time.monotonic()

@@ -17,6 +17,7 @@ from onepiece_dist.service.registry import JobRegistry
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import default_job_id
 from onepiece_dist.store import open_dataset
+from tests.factories import objects_done_at_least
 
 ARRAYS = ("grasps/code", "grasps/pose", "grasps/object", "grasps/code_index", "unique/code", "unique/count")
 
@@ -80,9 +81,7 @@ def test_killing_a_worker_mid_job_gives_the_fault_free_dataset(ray_session, spec
     job_id = default_job_id(spec)
     client = Client()
     handle = client.submit(spec)
-    deadline = time.monotonic() + 120
-    while client.status(job_id).progress.objects_done < 1 and time.monotonic() < deadline:
-        time.sleep(0.1)
+    objects_done_at_least(client, job_id, 1)
     started = time.monotonic()
     ray.kill(ray.get_actor(f"extract-{job_id}-0", namespace="onepiece"), no_restart=False)
     final = handle.wait(timeout=300)
