@@ -241,6 +241,16 @@ def list_jobs(
         typer.echo(f"{row['job_id']}\t{row['state']}\t{row['output']}")
 
 
+def _print_mapping(mapping: dict, as_json: bool) -> None:
+    """JSON alone on stdout, or one aligned ``key: value`` line per entry."""
+    if as_json:
+        typer.echo(json.dumps(mapping))
+        return
+    width = max((len(k) for k in mapping), default=0)
+    for key, value in mapping.items():
+        typer.echo(f"{key:>{width}}: {value}")
+
+
 def _progress_printer():
     if not sys.stderr.isatty():
         return None
@@ -273,11 +283,7 @@ def inspect(
     except StoreError as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
-    if as_json:
-        typer.echo(json.dumps(summary))
-        return
-    for key, value in summary.items():
-        typer.echo(f"{key:>16}: {value}")
+    _print_mapping(summary, as_json)
 
 
 @app.command()
@@ -336,11 +342,7 @@ def evaluate(
     except (SourceError, FileNotFoundError, ValueError) as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
-    if as_json:
-        typer.echo(json.dumps(report))
-        return
-    for key, value in report.items():
-        typer.echo(f"{key:>22}: {value}")
+    _print_mapping(report, as_json)
 
 
 @app.command()
