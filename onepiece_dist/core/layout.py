@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.frames import to_gripper_frame
+from onepiece_dist.core.frames import pose_from_axes, to_gripper_frame
 from onepiece_dist.core.voxel import unpack_codes, voxel_indices
 from onepiece_dist.spec import GripperSpec
 
@@ -70,7 +70,8 @@ def layout_patches(codes: np.ndarray, plane: np.ndarray, grid_shape: tuple[int, 
         members = np.flatnonzero(plane == f)
         origin = normal * (core_half @ normal + gripper.closing_depth + gap)
         for k, cell in zip(members, cells[f], strict=True):
-            placements[k] = _pose(origin + cell[0] * axis_v + cell[1] * axis_t, -normal, axis_v, axis_t)
+            centre = origin + cell[0] * axis_v + cell[1] * axis_t
+            placements[k] = pose_from_axes(centre[None], -normal[None], axis_v[None])[0]
     centres, owner = patch_cubes(codes, placements, grid_shape, resolution)
     return Layout(placements, plane.astype(np.int8), centres, owner, CUBE_FILL * resolution, core_half, pitch)
 
@@ -93,14 +94,6 @@ def _grid_cells(count: int, pitch: tuple[float, float]) -> np.ndarray:
     rows = int(np.ceil(count / cols))
     j, i = np.divmod(np.arange(count), cols)
     return np.stack([(i - (cols - 1) / 2) * pitch[0], (j - (rows - 1) / 2) * pitch[1]], axis=1)
-
-
-def _pose(origin: np.ndarray, u: np.ndarray, v: np.ndarray, t: np.ndarray) -> np.ndarray:
-    pose = np.eye(4)
-    pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = u, v, np.cross(u, v), origin
-    if not np.allclose(pose[:3, 2], t) and not np.allclose(pose[:3, 2], -t):
-        raise ValueError("face axes are not orthogonal")
-    return pose
 
 
 def patch_cubes(codes: np.ndarray, placements: np.ndarray, grid_shape: tuple[int, int, int],

@@ -59,14 +59,11 @@ def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) 
 
 def _split_pieces(data: bytes, name: str) -> list[np.ndarray]:
     """VHACD writes one 'o' group per convex piece; vertex indices are global across the file."""
-    vertices, faces = parse_obj(data, name)
-    pieces, group = [], []
-    text_groups = data.decode().split("\no ")
-    offset = 0
-    for chunk in text_groups:
+    vertices, _ = parse_obj(data, name)
+    pieces, offset = [], 0
+    for chunk in data.decode().split("\no "):
         count = sum(1 for line in chunk.splitlines() if line.startswith("v "))
         if count >= 4:
-            group = vertices[offset:offset + count]
-            pieces.append(group)
+            pieces.append(vertices[offset:offset + count])
         offset += count
     return pieces or [vertices]
