@@ -119,6 +119,24 @@ class SimSpec(_Frozen):
                                   "(resampled with replacement; 0 stores none).")
 
 
+class ViewSpec(_Frozen):
+    """Depth views rendered in pybullet and partial-view crops (docs/views.md)."""
+
+    count: int = Field(0, ge=0, le=256, description="Depth views per object from cameras spread on a sphere "
+                       "around it, back-projected and stored under views/ (0 = none).")
+    image_size: int = Field(256, ge=16, le=2048, description="Square depth image size (pixels).")
+    fov_deg: float = Field(45.0, gt=1, lt=150, description="Vertical field of view (degrees).")
+    crop: Literal["full", "partial"] = Field("full", description="Crop each grasp's points and code from the "
+                                             "full surface, or from the depth view of the camera whose viewing "
+                                             "direction is nearest the grasp's approach (what a robot sees).")
+
+    @model_validator(mode="after")
+    def _partial_needs_views(self) -> ViewSpec:
+        if self.crop == "partial" and self.count < 1:
+            raise ValueError(f"crop='partial' needs depth views: count={self.count} must be at least 1")
+        return self
+
+
 class TrainSpec(_Frozen):
     """The train stage: which network on which labelled grasps."""
 
@@ -152,6 +170,7 @@ class JobSpec(_Frozen):
     voxel: VoxelSpec = VoxelSpec()
     sampler: SamplerSpec = SamplerSpec()
     sim: SimSpec = SimSpec()
+    views: ViewSpec = ViewSpec()
     train: TrainSpec = TrainSpec()
 
     @model_validator(mode="after")
@@ -172,7 +191,7 @@ class JobSpec(_Frozen):
     def result_key(self) -> str:
         """Hash of every field that changes an object's extraction result (not output paths)."""
         relevant = self.model_dump(mode="json", include={"grasps_per_object", "seed", "gripper", "voxel",
-                                                         "sampler", "sim"})
+                                                         "sampler", "sim", "views"})
         return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
 
 

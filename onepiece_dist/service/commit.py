@@ -16,6 +16,8 @@ from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore, write_dataset
 from onepiece_dist.store.dataset import ObjectTable
 
+VIEW_PREFIX = "view_"  # per-object depth-view arrays in a part (not per grasp)
+
 
 def package_version() -> str:
     try:
@@ -57,9 +59,10 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     ok = sorted((r for r in results if r.status == "ok"), key=lambda r: r.index)
     fold = index is None
     index = DedupIndex(spec.code_bytes()) if fold else index
-    loaded = []
+    loaded, views = [], []
     for result in ok:
         arrays = parts.read(result.part_key)
+        views.append({k: arrays.pop(k) for k in list(arrays) if k.startswith(VIEW_PREFIX)})
         if fold:
             index.add(arrays["code"])
         loaded.append(arrays)
@@ -70,6 +73,8 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     groups = {"grasps": grasps, "unique": {"code": index.unique, "count": index.counts}}
     if spec.similar_radius:
         groups = _merge_similar(spec, groups, index)
+    if spec.views.count:
+        groups["views"] = _views_group(views)
     write_dataset(out, dataset_attrs(spec, results), objects, groups)
     summary = {"grasps": int(len(grasps["code"])), "unique_codes": int(len(groups["unique"]["code"])),
                "exact_unique_codes": int(len(index.unique))}
@@ -114,6 +119,20 @@ def _merge_similar(spec: JobSpec, groups: dict, index: DedupIndex) -> dict:
               "exact_index": groups["grasps"]["code_index"]}
     return {"grasps": grasps, "unique": {"code": index.unique[clusters.representative], "count": clusters.counts},
             "exact": {"code": index.unique, "count": index.counts, "cluster": clusters.cluster}}
+
+
+def _views_group(views: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """views/: every object's cameras and back-projected points, cameras numbered across objects."""
+    if not views:
+        return {"camera": np.zeros((0, 4, 4), np.float32), "camera_object": np.zeros(0, np.int32),
+                "points": np.zeros((0, 3), np.float32), "point_camera": np.zeros(0, np.int32)}
+    sizes = [len(v["view_camera"]) for v in views]
+    first = np.cumsum([0, *sizes])[:-1]
+    return {"camera": np.concatenate([v["view_camera"] for v in views]),
+            "camera_object": np.repeat(np.arange(len(views), dtype=np.int32), sizes),
+            "points": np.concatenate([v["view_points"] for v in views]),
+            "point_camera": np.concatenate([v["view_of_point"] + f
+                                            for v, f in zip(views, first, strict=True)]).astype(np.int32)}
 
 
 def _concatenate(loaded: list[dict[str, np.ndarray]], code_bytes: int) -> dict[str, np.ndarray]:

@@ -6,6 +6,7 @@ part, and returns a small :class:`ObjectResult` (no large arrays travel back).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -81,18 +82,22 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
                                       f"{spec.gripper.max_opening} m among {cands.tried} tried: "
                                       "the object cannot fit the gripper")
     grasps, meta = _simulate(spec, mesh, cands, collision_dir)
+    views = _render_views(spec, mesh)
+    clouds = crop_clouds(spec, points, views, grasps["pose"])
     grid, res = spec.grid_shape(), spec.voxel.resolution
-    codes, counts = crop_codes(points, grasps["pose"], grid, res)
-    static, _ = crop_codes(points, grasps["candidate_pose"], grid, res)
+    codes, counts = crop_codes_from(clouds, grasps["pose"], grid, res)
+    static, _ = crop_codes_from(clouds, grasps["candidate_pose"], grid, res)
     keep = counts > 0
     grasps = {name: value[keep] for name, value in grasps.items()}
-    codes, static = codes[keep], static[keep]
+    codes, static, clouds = codes[keep], static[keep], [clouds[i] for i in np.flatnonzero(keep)]
     if spec.voxel.canonical:
         codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
     arrays = {**{k: v.astype(np.float32) if v.dtype.kind == "f" else v for k, v in grasps.items()},
               "code": codes, "candidate_code": static}
     if spec.sim.points_per_grasp:
-        arrays["points"] = _grasp_points(points, grasps["pose"], spec, rng)
+        arrays["points"] = _grasp_points(clouds, grasps["pose"], spec, rng)
+    if views is not None:
+        arrays.update({"view_camera": views.cameras, "view_points": views.points, "view_of_point": views.point_view})
     meta.update({"grasps": int(keep.sum()), "empty_crops": int((~keep).sum()), "candidates_tried": cands.tried,
                  "collisions": cands.rejected_collision,
                  "settled_code_differs": int(np.any(codes != static, axis=1).sum())})
@@ -125,12 +130,46 @@ def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
     return grasps, {"trials": len(cands.poses), **dropped}
 
 
-def _grasp_points(points: np.ndarray, poses: np.ndarray, spec: JobSpec, rng: np.random.Generator) -> np.ndarray:
+def _render_views(spec: JobSpec, mesh: TriangleMesh):
+    """The object's depth views (sim.views.ObjectViews), or None when the spec asks for none."""
+    if not spec.views.count:
+        return None
+    from onepiece_dist.sim.views import object_views
+
+    return object_views(mesh.vertices, mesh.faces, spec.views.count, spec.views.image_size, spec.views.fov_deg)
+
+
+def crop_clouds(spec: JobSpec, points: np.ndarray, views, poses: np.ndarray) -> list[np.ndarray]:
+    """The cloud each grasp is cropped from: the full surface (n, 3), or with ``views.crop='partial'`` the
+    depth view of the camera nearest the grasp's approach direction. One entry per pose (shared arrays)."""
+    if views is None or spec.views.crop == "full":
+        return [points] * len(poses)
+    from onepiece_dist.sim.views import camera_for_grasps
+
+    per_view = [views.cloud(k) for k in range(len(views.cameras))]
+    return [per_view[k] for k in camera_for_grasps(views.cameras, poses)]
+
+
+def crop_codes_from(clouds: list[np.ndarray], poses: np.ndarray, grid: tuple[int, int, int],
+                    resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """crop_codes with one cloud per pose; grasps sharing a cloud are cropped together. (N, B), (N,)"""
+    groups: dict[int, list[int]] = {}
+    for i, cloud in enumerate(clouds):
+        groups.setdefault(id(cloud), []).append(i)
+    codes = np.zeros((len(poses), math.ceil(int(np.prod(grid)) / 8)), dtype=np.uint8)
+    counts = np.zeros(len(poses), dtype=np.int64)
+    for rows in groups.values():
+        codes[rows], counts[rows] = crop_codes(clouds[rows[0]], poses[rows], grid, resolution)
+    return codes, counts
+
+
+def _grasp_points(clouds: list[np.ndarray], poses: np.ndarray, spec: JobSpec,
+                  rng: np.random.Generator) -> np.ndarray:
     """(n, P, 3) float16 gripper-frame points inside the closing region at each pose, resampled to P."""
     count = spec.sim.points_per_grasp
     out = np.zeros((len(poses), count, 3), dtype=np.float16)
-    for i, pose in enumerate(poses):
-        inside = crop_points(points, pose, spec.grid_shape(), spec.voxel.resolution)
+    for i, (cloud, pose) in enumerate(zip(clouds, poses, strict=True)):
+        inside = crop_points(cloud, pose, spec.grid_shape(), spec.voxel.resolution)
         out[i] = resample_points(inside, count, rng)
     return out
 

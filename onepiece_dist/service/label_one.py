@@ -37,6 +37,22 @@ def patch_body(cube_centres: np.ndarray, edge: float, pitch: tuple[float, float]
     return list(vertices.reshape(-1, 8, 3)), volume
 
 
+def patch_cloud(local: np.ndarray, edge: float, spec: JobSpec) -> np.ndarray:
+    """(m, 3) points of a patch's cubes in its placement frame: all faces, or with ``views.crop='partial'`` what
+    a depth camera behind the palm, looking along the approach axis, sees of them."""
+    if spec.views.crop == "full":
+        return cube_points(local, edge)
+    from onepiece_dist.sim.views import camera_at, framing_distance, views_from
+
+    g = spec.gripper
+    radius = 0.5 * float(np.linalg.norm([g.closing_depth, g.closing_width, g.closing_height]))
+    target = np.array([g.closing_depth / 2, 0.0, 0.0])
+    eye = target - [framing_distance(radius, spec.views.fov_deg), 0.0, 0.0]
+    camera = camera_at(eye, target, spec.views.image_size, spec.views.fov_deg)
+    vertices, faces = box_arrays(local, np.full((len(local), 3), edge))
+    return views_from(vertices, faces, [camera]).points.astype(np.float64)
+
+
 def perturbed_poses(count: int, rng: np.random.Generator, shift: float = 0.004, angle: float = 0.1) -> np.ndarray:
     """The placement (identity) and ``count`` poses around it: Gaussian shifts and small turns. (1+count, 4, 4)"""
     approach = np.array([[1.0, 0, 0]]) + rng.normal(0, angle, (count, 3))
@@ -79,7 +95,7 @@ def _collect(rows, k, placement, local, edge, poses, batch, spec, rng) -> None:
     ok = batch.outcome == 0
     if not ok.any():
         return
-    points = cube_points(local, edge)
+    points = patch_cloud(local, edge, spec)
     settled = batch.settled_pose[ok]
     grid, res = spec.grid_shape(), spec.voxel.resolution
     rows["patch"].append(np.full(int(ok.sum()), k, dtype=np.int32))

@@ -1,0 +1,146 @@
+"""Depth views of an object rendered headless by pybullet (TinyRenderer), back-projected to partial point clouds
+in the object frame: what a depth camera sees, for partial-view crops (docs/views.md).
+
+Camera convention: a camera pose is camera-to-object (4, 4) with OpenGL axes: x right, y up, the camera looks
+along -z. Depth buffers are pybullet's non-linear [0, 1] values; :func:`back_project` inverts them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+NEAR_FRACTION = 0.05  # near plane as a fraction of the camera distance
+FAR_FACTOR = 3.0  # far plane as a multiple of the camera distance
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera: pose (4, 4) camera-to-object, square image ``size`` px, vertical ``fov_deg``,
+    clip planes ``near`` < ``far`` (m)."""
+
+    pose: np.ndarray
+    size: int
+    fov_deg: float
+    near: float
+    far: float
+
+
+def sphere_directions(count: int) -> np.ndarray:
+    """(count, 3) float64 unit vectors spread evenly on the sphere (Fibonacci lattice), deterministic."""
+    k = np.arange(count) + 0.5
+    z = 1 - 2 * k / count
+    azimuth = np.pi * (1 + 5**0.5) * k
+    r = np.sqrt(1 - z**2)
+    return np.stack([r * np.cos(azimuth), r * np.sin(azimuth), z], axis=1)
+
+
+def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """(4, 4) camera-to-object pose of a camera at ``eye`` looking at ``target`` (OpenGL axes)."""
+    back = (eye - target) / np.linalg.norm(eye - target)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(back[2]) < 0.95 else np.array([0.0, 1.0, 0.0])
+    right = np.cross(helper, back)
+    right /= np.linalg.norm(right)
+    pose = np.eye(4)
+    pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = right, np.cross(back, right), back, eye
+    return pose
+
+
+def orbit_cameras(vertices: np.ndarray, count: int, size: int, fov_deg: float, margin: float = 1.2) -> list[Camera]:
+    """``count`` cameras on a sphere around the mesh's bounding-box centre, far enough that the whole object
+    fits the field of view with ``margin``. vertices (V, 3) float."""
+    lower, upper = vertices.min(axis=0), vertices.max(axis=0)
+    centre, radius = (lower + upper) / 2, float(np.linalg.norm(upper - lower)) / 2
+    distance = framing_distance(radius, fov_deg, margin)
+    return [camera_at(centre + distance * d, centre, size, fov_deg) for d in sphere_directions(count)]
+
+
+def framing_distance(radius: float, fov_deg: float, margin: float = 1.2) -> float:
+    """Camera distance at which a sphere of ``radius`` fills the field of view, with ``margin``."""
+    return margin * radius / np.sin(np.radians(fov_deg) / 2)
+
+
+def camera_at(eye: np.ndarray, target: np.ndarray, size: int, fov_deg: float) -> Camera:
+    """A camera at ``eye`` looking at ``target``, clip planes scaled to their distance."""
+    distance = float(np.linalg.norm(np.asarray(eye) - target))
+    return Camera(look_at(np.asarray(eye, float), np.asarray(target, float)), size, fov_deg,
+                  NEAR_FRACTION * distance, FAR_FACTOR * distance)
+
+
+def render_depth(vertices: np.ndarray, faces: np.ndarray, cameras: list[Camera]) -> np.ndarray:
+    """(len(cameras), size, size) float32 pybullet depth buffers of the mesh (1.0 = background).
+
+    vertices (V, 3) float, faces (F, 3) int; all cameras share one image size.
+    """
+    import pybullet as pb
+
+    client = pb.connect(pb.DIRECT)
+    try:
+        shape = pb.createVisualShape(pb.GEOM_MESH, vertices=np.asarray(vertices, float).tolist(),
+                                     indices=np.asarray(faces, int).ravel().tolist(), physicsClientId=client)
+        pb.createMultiBody(baseVisualShapeIndex=shape, physicsClientId=client)
+        return np.stack([_depth_image(pb, client, camera) for camera in cameras]).astype(np.float32)
+    finally:
+        pb.disconnect(client)
+
+
+def _depth_image(pb, client: int, camera: Camera) -> np.ndarray:
+    eye, target = camera.pose[:3, 3], camera.pose[:3, 3] - camera.pose[:3, 2]
+    view = pb.computeViewMatrix(eye.tolist(), target.tolist(), camera.pose[:3, 1].tolist())
+    proj = pb.computeProjectionMatrixFOV(camera.fov_deg, 1.0, camera.near, camera.far)
+    _, _, _, depth, _ = pb.getCameraImage(camera.size, camera.size, view, proj, renderer=pb.ER_TINY_RENDERER,
+                                          flags=pb.ER_NO_SEGMENTATION_MASK, physicsClientId=client)
+    return np.reshape(depth, (camera.size, camera.size))
+
+
+def back_project(depth: np.ndarray, camera: Camera) -> np.ndarray:
+    """(M, 3) float64 object-frame points of the pixels that hit the object. depth (size, size) buffer."""
+    size, near, far = camera.size, camera.near, camera.far
+    rows, cols = np.nonzero(depth < 1.0 - 1e-6)
+    z_ndc = 2.0 * depth[rows, cols].astype(np.float64) - 1.0
+    distance = 2.0 * near * far / (far + near - z_ndc * (far - near))
+    half = np.tan(np.radians(camera.fov_deg) / 2)
+    # TinyRenderer samples pixel (row, col) at the lower-left corner of the pixel with rows flipped:
+    # x = col, y = size - 1 - row in window coordinates (measured: exact to 1e-6 m on a box).
+    x = (2.0 * cols / size - 1.0) * half * distance
+    y = (1.0 - 2.0 * (rows + 1.0) / size) * half * distance
+    local = np.stack([x, y, -distance], axis=1)
+    return local @ camera.pose[:3, :3].T + camera.pose[:3, 3]
+
+
+@dataclass(frozen=True)
+class ObjectViews:
+    """Partial point clouds of one object. cameras (K, 4, 4) float32 camera-to-object poses; points (M, 3)
+    float32 object-frame points; point_view (M,) int32 camera row of each point."""
+
+    cameras: np.ndarray
+    points: np.ndarray
+    point_view: np.ndarray
+
+    def cloud(self, view: int) -> np.ndarray:
+        """(m, 3) points seen by camera ``view``."""
+        return self.points[self.point_view == view]
+
+
+def object_views(vertices: np.ndarray, faces: np.ndarray, count: int, size: int, fov_deg: float) -> ObjectViews:
+    """Render ``count`` orbit views of a mesh and back-project them. vertices (V, 3), faces (F, 3)."""
+    cameras = orbit_cameras(vertices, count, size, fov_deg)
+    return views_from(vertices, faces, cameras)
+
+
+def views_from(vertices: np.ndarray, faces: np.ndarray, cameras: list[Camera]) -> ObjectViews:
+    """Render the mesh from ``cameras`` and back-project each depth image."""
+    depths = render_depth(vertices, faces, cameras)
+    clouds = [back_project(depth, camera) for depth, camera in zip(depths, cameras, strict=True)]
+    return ObjectViews(np.array([c.pose for c in cameras], dtype=np.float32).reshape(-1, 4, 4),
+                       np.concatenate(clouds).astype(np.float32) if clouds else np.zeros((0, 3), np.float32),
+                       np.repeat(np.arange(len(clouds), dtype=np.int32), [len(c) for c in clouds]))
+
+
+def camera_for_grasps(cameras: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """(N,) int: for each gripper pose (N, 4, 4), the camera (K, 4, 4) whose viewing direction is closest to the
+    grasp's approach axis, i.e. the camera a robot approaching that way would look through."""
+    viewing = -cameras[:, :3, 2]  # cameras look along their -z
+    approach = poses[:, :3, 0]
+    return np.argmax(approach @ viewing.T, axis=1)
