@@ -346,6 +346,39 @@ def evaluate(
 
 
 @app.command()
+def supplement(
+    scan: Annotated[Path, typer.Argument(help="Point cloud (PLY, PCD, XYZ, XYZN, PTS) or raw mesh (OBJ, STL, "
+                                              "PLY, GLB) of a scanned object.")],
+    out: Annotated[Path, typer.Option(help="Folder for <name>.obj and <name>.supplement.json; use it as a "
+                                           "job's object source.")],
+    method: Annotated[str, typer.Option(help="poisson or ball_pivoting.")] = "poisson",
+    units: Annotated[str, typer.Option(help="auto, m, cm or mm.")] = "auto",
+    max_opening: Annotated[float, typer.Option(help="Gripper opening for the scale check (m).")] = 0.08,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON.")] = False,
+) -> None:
+    """Turn a scan into a clean, watertight, metre-scaled object mesh, with a report. Exit 1 if refused."""
+    from pydantic import ValidationError
+
+    from onepiece_dist.errors import MeshRejected
+    from onepiece_dist.objects.supplement import SupplementSpec, supplement_scan
+    from onepiece_dist.spec import describe_validation_error
+
+    try:
+        options = SupplementSpec(method=method, units=units)
+    except ValidationError as err:
+        _err(f"error: {describe_validation_error(err, 'command line')}")
+        raise typer.Exit(EXIT_USAGE) from None
+    try:
+        report = supplement_scan(scan, out, options, max_opening)
+    except MeshRejected as err:
+        _err(f"refused: {err}")
+        raise typer.Exit(EXIT_FAILED) from None
+    for warning in report.warnings:
+        _err(f"warning: {warning}")
+    _print_mapping(report.model_dump(), as_json)
+
+
+@app.command()
 def schema(
     out: Annotated[Path, typer.Option(help="Folder for the JSON Schemas.")] = Path("schemas"),
 ) -> None:

@@ -5,11 +5,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from onepiece_dist.objects.supplement import SupplementReport, SupplementSpec
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.layout import DatasetAttributes
 
-MODELS = {"job_spec": JobSpec, "job_status": JobStatus, "dataset_layout": DatasetAttributes}
+MODELS = {"job_spec": JobSpec, "job_status": JobStatus, "dataset_layout": DatasetAttributes,
+          "supplement_spec": SupplementSpec, "supplement_report": SupplementReport}
 
 
 def render_schemas() -> dict[str, str]:

@@ -93,3 +93,23 @@ def objects_done_at_least(client, job_id: str, count: int, timeout: float = 120.
     while (done := client.status(job_id).progress.objects_done) < count and time.monotonic() < deadline:
         time.sleep(0.05)
     return done
+
+
+def noisy_scan(mesh, rng, count: int = 20000, noise: float = 0.0005, outlier_fraction: float = 0.02):
+    """(n, 3) points of a simulated scan of ``mesh``: surface samples with Gaussian noise (m) plus uniform
+    outliers in a box 2 cm around it."""
+    from onepiece_dist.core.mesh import sample_surface
+
+    points, _ = sample_surface(mesh, count, rng)
+    points = points + rng.normal(0, noise, points.shape)
+    outliers = rng.uniform(points.min(axis=0) - 0.02, points.max(axis=0) + 0.02, (int(count * outlier_fraction), 3))
+    return np.vstack([points, outliers])
+
+
+def torus_mesh(major: float = 0.04, minor: float = 0.015):
+    import trimesh
+
+    from onepiece_dist.core.mesh import make_mesh
+
+    torus = trimesh.creation.torus(major, minor)
+    return make_mesh(torus.vertices, torus.faces, "torus")
