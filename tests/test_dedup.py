@@ -1,11 +1,12 @@
 import itertools
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from onepiece_dist.core.dedup import DedupIndex, merge_unique, unique_codes
+from onepiece_dist.core.dedup import DedupIndex, PartitionedDedup, merge_partitions, merge_unique, unique_codes
 
 
 def brute_force(codes):
@@ -67,3 +68,51 @@ def test_running_index_matches_one_shot_and_looks_up_codes():
     whole = unique_codes(codes)
     assert np.array_equal(index.unique, whole.unique) and np.array_equal(index.counts, whole.counts)
     assert np.array_equal(index.lookup(codes), whole.inverse)
+
+
+@settings(max_examples=80, deadline=None)
+@given(code_sets, st.integers(1, 12), st.integers(1, 40))
+def test_log_structured_index_equals_one_shot_whatever_the_flush_size(codes, batches, flush_rows):
+    index = DedupIndex(codes.shape[1], flush_rows=flush_rows)
+    for chunk in np.array_split(codes, batches):
+        index.add(chunk)
+    whole = unique_codes(codes)
+    assert np.array_equal(index.unique, whole.unique) and np.array_equal(index.counts, whole.counts)
+    if len(codes):
+        assert np.array_equal(index.lookup(codes), whole.inverse)
+
+
+@pytest.mark.parametrize("nbytes", [8, 9])
+def test_lookup_of_a_code_never_added_raises(nbytes):
+    index = DedupIndex(nbytes)
+    index.add(np.zeros((3, nbytes), np.uint8))
+    with pytest.raises(KeyError, match="never added"):
+        index.lookup(np.ones((1, nbytes), np.uint8))
+
+
+@settings(max_examples=60, deadline=None)
+@given(code_sets, st.integers(1, 5))
+def test_partitioned_dedup_gives_exactly_the_single_index_result(codes, partitions):
+    single, split = DedupIndex(codes.shape[1]), PartitionedDedup(codes.shape[1], partitions)
+    for chunk in np.array_split(codes, 3):
+        single.add(chunk)
+        split.add(chunk)
+    merged = split.merged()
+    assert np.array_equal(merged.unique, single.unique) and np.array_equal(merged.counts, single.counts)
+    owners = [set(map(bytes, shard.unique)) for shard in split.shards]
+    assert sum(map(len, owners)) == len(single)  # disjoint: every code lives in exactly one partition
+
+
+@pytest.mark.ray
+def test_dedup_shard_actors_on_ray_match_one_index(ray_session):
+    from onepiece_dist.service.dedup_actor import DedupShard, route_codes
+
+    codes = np.random.default_rng(4).integers(0, 4, (20000, 8)).astype(np.uint8)
+    shards = [ray_session.remote(num_cpus=0)(DedupShard).remote(8, k, 3) for k in range(3)]
+    for chunk in np.array_split(codes, 10):
+        ray_session.get([s.add.remote(part) for s, part in zip(shards, route_codes(chunk, 3), strict=True)])
+    merged = merge_partitions(ray_session.get([s.state.remote() for s in shards]), 8)
+    whole = unique_codes(codes)
+    assert np.array_equal(merged.unique, whole.unique) and np.array_equal(merged.counts, whole.counts)
+    with pytest.raises(ray_session.exceptions.RayTaskError, match="another partition"):
+        ray_session.get(shards[0].add.remote(route_codes(codes, 3)[1]))

@@ -130,22 +130,143 @@ def merge_unique(parts: Sequence[tuple[np.ndarray, np.ndarray]],
 class DedupIndex:
     """Running global dedup: add shard results in any order, read the same answer.
 
-    Holds only the unique codes and counts (not every grasp), so memory follows U, not N.
+    Holds only the unique codes and counts (not every grasp), so memory follows U, not N. Log-structured:
+    each ``add`` sorts only its own batch into a pending run; pending runs are folded into the main sorted table
+    when they hold a quarter of its rows (at least ``flush_rows``), so each code is moved O(log N) times.
+    Single-word codes (up to 64 voxels) merge linearly by binary search; wider codes by a sort.
     """
 
-    def __init__(self, code_bytes: int):
-        self.unique = np.zeros((0, code_bytes), dtype=np.uint8)
-        self.counts = np.zeros(0, dtype=np.int64)
+    def __init__(self, code_bytes: int, flush_rows: int = 1 << 16):
+        self.code_bytes = code_bytes
+        self.flush_rows = flush_rows
+        self._words = np.zeros((0, -(-code_bytes // 8)), dtype=np.uint64)
+        self._counts = np.zeros(0, dtype=np.int64)
+        self._pending: list[tuple[np.ndarray, np.ndarray]] = []
+        self._pending_rows = 0
 
     def add(self, codes: np.ndarray, counts: np.ndarray | None = None) -> None:
         """Fold in (n, B) uint8 codes (with optional (n,) int64 counts)."""
+        codes = np.asarray(codes, dtype=np.uint8).reshape(-1, self.code_bytes)
         part = unique_codes(codes, weights=counts)
-        merged, _ = merge_unique([(self.unique, self.counts), (part.unique, part.counts)])
-        self.unique, self.counts = merged.unique, merged.counts
+        self._pending.append((code_words(part.unique), part.counts))
+        self._pending_rows += len(part.unique)
+        if self._pending_rows >= max(self.flush_rows, len(self._words) // 4):
+            self._compact()
+
+    @property
+    def unique(self) -> np.ndarray:
+        """(U, B) uint8 distinct codes in byte order."""
+        self._compact()
+        return words_to_codes(self._words, self.code_bytes)
+
+    @property
+    def counts(self) -> np.ndarray:
+        """(U,) int64 rows added per distinct code."""
+        self._compact()
+        return self._counts
+
+    def __len__(self) -> int:
+        self._compact()
+        return len(self._words)
+
+    def size_bound(self) -> int:
+        """An upper bound of ``len(self)`` without compacting (exact right after a compaction): cheap progress."""
+        return len(self._words) + self._pending_rows
+
+    def nbytes(self) -> int:
+        """Bytes held by the index (main table and pending runs)."""
+        return int(self._words.nbytes + self._counts.nbytes + sum(w.nbytes + c.nbytes for w, c in self._pending))
+
+    def _compact(self) -> None:
+        if not self._pending:
+            return
+        words = np.concatenate([w for w, _ in self._pending])
+        counts = np.concatenate([c for _, c in self._pending])
+        self._pending, self._pending_rows = [], 0
+        if words.shape[1] == 1:
+            run = unique_codes(words_to_codes(words, 8), weights=counts)
+            self._words, self._counts = _merge_sorted_keys(self._words[:, 0], self._counts,
+                                                           code_words(run.unique)[:, 0], run.counts)
+        else:
+            merged = unique_codes(words_to_codes(np.concatenate([self._words, words]), 8 * words.shape[1]),
+                                  weights=np.concatenate([self._counts, counts]))
+            self._words, self._counts = code_words(merged.unique), merged.counts
 
     def lookup(self, codes: np.ndarray) -> np.ndarray:
         """Index into ``unique`` of each (n, B) uint8 code; raises KeyError for a code never added."""
-        both = unique_codes(np.concatenate([self.unique, np.asarray(codes, dtype=np.uint8)]))
-        if len(both.unique) != len(self.unique):
-            raise KeyError(f"{len(both.unique) - len(self.unique)} code(s) were never added to this index")
-        return both.inverse[len(self.unique):]
+        self._compact()
+        codes = np.asarray(codes, dtype=np.uint8).reshape(-1, self.code_bytes)
+        if self._words.shape[1] == 1:
+            keys, table = code_words(codes)[:, 0], self._words[:, 0]
+            found = np.minimum(np.searchsorted(table, keys), max(len(table) - 1, 0))
+            missing = int(np.sum(table[found] != keys)) if len(table) else len(keys)
+            if missing:
+                raise KeyError(f"{missing} code(s) were never added to this index")
+            return found.astype(np.int64)
+        unique = self.unique
+        both = unique_codes(np.concatenate([unique, codes]))
+        if len(both.unique) != len(unique):
+            raise KeyError(f"{len(both.unique) - len(unique)} code(s) were never added to this index")
+        return both.inverse[len(unique):]
+
+
+def words_to_codes(words: np.ndarray, code_bytes: int) -> np.ndarray:
+    """(N, W) uint64 words -> (N, code_bytes) uint8 (the inverse of :func:`code_words`)."""
+    raw = np.ascontiguousarray(words.astype(">u8")).view(np.uint8).reshape(len(words), 8 * words.shape[1])
+    return np.ascontiguousarray(raw[:, :code_bytes])
+
+
+def _merge_sorted_keys(keys: np.ndarray, counts: np.ndarray, new_keys: np.ndarray,
+                       new_counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge sorted distinct (n,) uint64 keys with counts and sorted distinct new keys in O(n + m)."""
+    at = np.searchsorted(keys, new_keys)
+    present = at < len(keys)
+    present[present] = keys[at[present]] == new_keys[present]
+    counts = counts.copy()
+    counts[at[present]] += new_counts[present]
+    fresh = ~present
+    merged_keys = np.insert(keys, at[fresh], new_keys[fresh])
+    merged_counts = np.insert(counts, at[fresh], new_counts[fresh])
+    return merged_keys[:, None], merged_counts
+
+
+def partition_of(codes: np.ndarray, partitions: int) -> np.ndarray:
+    """(N,) int64 partition of each (N, B) uint8 code: the top bits of its mixed hash (a hash prefix), so each
+    partition owns a fixed, disjoint set of codes whatever the order they arrive in."""
+    if partitions < 1:
+        raise ValueError(f"partitions={partitions} must be at least 1")
+    hashes = mix_hash(code_words(codes))
+    return ((hashes >> np.uint64(32)) * np.uint64(partitions) >> np.uint64(32)).astype(np.int64)
+
+
+class PartitionedDedup:
+    """Exact dedup split by hash prefix over ``partitions`` independent indexes (one per actor in a cluster).
+
+    The partitions own disjoint codes, so the union of their unique sets, put in byte order, is exactly what one
+    :class:`DedupIndex` gives.
+    """
+
+    def __init__(self, code_bytes: int, partitions: int):
+        self.code_bytes = code_bytes
+        self.shards = [DedupIndex(code_bytes) for _ in range(partitions)]
+
+    def add(self, codes: np.ndarray, counts: np.ndarray | None = None) -> None:
+        codes = np.asarray(codes, dtype=np.uint8).reshape(-1, self.code_bytes)
+        owner = partition_of(codes, len(self.shards))
+        for k, shard in enumerate(self.shards):
+            mine = owner == k
+            if mine.any():
+                shard.add(codes[mine], None if counts is None else np.asarray(counts)[mine])
+
+    def merged(self) -> DedupIndex:
+        """One DedupIndex holding every partition's codes and counts."""
+        return merge_partitions([(s.unique, s.counts) for s in self.shards], self.code_bytes)
+
+
+def merge_partitions(states: Sequence[tuple[np.ndarray, np.ndarray]], code_bytes: int) -> DedupIndex:
+    """Union of disjoint partitions' (unique (U_k, B), counts (U_k,)) as one DedupIndex in byte order."""
+    index = DedupIndex(code_bytes)
+    codes = [u for u, _ in states if len(u)]
+    if codes:
+        index.add(np.concatenate(codes), np.concatenate([c for u, c in states if len(u)]))
+    return index

@@ -30,12 +30,17 @@ ACTOR_PATIENCE_S = 120.0  # how long a central actor may take to come back
 class ExtractionWorker:
     """One pybullet client per actor. A plain class, testable without Ray."""
 
-    def __init__(self, spec: JobSpec):
+    def __init__(self, spec: JobSpec, dedup=None):
         self.spec = spec
         self.parts = parts_for(spec)
+        self.dedup = dedup
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
+        """Extract one object; its codes go straight to the central dedup actor (``dedup``), so the central
+        path never reads parts (it still can: a lost message is made good at the commit)."""
         result = extract_object(self.spec, ref, index, self.parts)
+        if self.dedup is not None and result.status == "ok":
+            self.dedup.add.remote(index, result.part_key, self.parts.read_array(result.part_key, "code"))
         return dataclasses.replace(result, node=_node_id())
 
 
@@ -74,7 +79,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
         parts.remove_stale_temporaries()
         dedup = _actor(CentralDedup, f"dedup-{job_id}", num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
         actors = [dedup] + [_actor(ExtractionWorker, f"extract-{job_id}-{k}", num_cpus=1,
-                                   scheduling_strategy="SPREAD").remote(spec)
+                                   scheduling_strategy="SPREAD").remote(spec, dedup)
                             for k in range(worker_count(workers, len(refs)))]
         status.stage = "extract"
         t0 = time.perf_counter()

@@ -73,6 +73,12 @@ class PartStore:
         group = zarr.open_group(str(self.path(key)), mode="r")
         return {name: array[...] for name, array in group.arrays()}
 
+    def read_array(self, key: str, name: str) -> np.ndarray:
+        """One array of a committed part, without opening the others (KeyError if not committed)."""
+        if not self.is_committed(key):
+            raise KeyError(f"part {key} is not committed in {self.folder}")
+        return zarr.open_array(str(self.path(key) / name), mode="r")[...]
+
     def committed_keys(self) -> list[str]:
         if not self.folder.is_dir():
             return []
