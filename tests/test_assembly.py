@@ -4,11 +4,14 @@ import zlib
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from onepiece_dist.cli import app
 from onepiece_dist.core.classifier import PLANES, classify_occupancy, l_feature_count
 from onepiece_dist.core.layout import assembly_geometry, corridor_intrusions, layout_patches, region_codes
+from onepiece_dist.core.spatial import PointGrid
 from onepiece_dist.core.voxel import pack_codes
 from onepiece_dist.service.local import run_local
 from onepiece_dist.spec import GripperSpec
@@ -72,7 +75,7 @@ def test_assembled_object_reproduces_every_unique_code(small_dataset):
     assert status.assembly["unique_codes"] == len(ds["unique/code"])
     # recomputed here from the stored points and placements, independently of the stage's own check
     codes = region_codes(ds["assembled/points"].astype(np.float64), ds["assembled/placement"].astype(np.float64),
-                         spec.grid_shape(), spec.voxel.resolution, reach=0.1)
+                         spec.grid_shape(), spec.voxel.resolution)
     assert np.array_equal(codes, ds["unique/code"])
     assert report["label_trials_one_object"] < report["label_trials_all_grasps"]
 
@@ -85,7 +88,7 @@ def test_no_patch_enters_another_patch_gripper_corridor():
     layout = layout_patches(codes, plane, GRID, 0.01, gripper)
     geometry = assembly_geometry(layout, 0.01)
     assert corridor_intrusions(geometry["points"], geometry["point_patch"], layout.placements, gripper, 2.0).sum() == 0
-    assert np.array_equal(region_codes(geometry["points"], layout.placements, GRID, 0.01, 0.1), codes)
+    assert np.array_equal(region_codes(geometry["points"], layout.placements, GRID, 0.01), codes)
     # a pitch one voxel tighter lets neighbours in: the check can fail
     tight = layout_patches(codes, np.zeros(60, dtype=np.int8), GRID, 0.01,
                            GripperSpec(max_opening=0.06, closing_width=0.06))
@@ -153,3 +156,16 @@ def test_label_stage_runs_the_protocol_around_each_patch_of_the_one_object(tmp_p
     assert set(np.unique(ds["assembled/grasps/success"])) <= {0, 1}
     quality = ds["assembled/grasps/quality"]
     assert np.all((quality >= 0) & (quality <= 1))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 300), st.floats(0.005, 0.2), st.integers(0, 2**31))
+def test_point_grid_box_queries_equal_brute_force(count, cell, seed):
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-0.3, 0.3, (count, 3))
+    grid = PointGrid(points, cell)
+    for _ in range(5):
+        lower = rng.uniform(-0.5, 0.3, 3)
+        upper = lower + rng.uniform(0, 0.4, 3)
+        expected = np.flatnonzero(np.all((points >= lower) & (points <= upper), axis=1))
+        assert np.array_equal(np.sort(grid.in_box(lower, upper)), expected)

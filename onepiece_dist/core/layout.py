@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from onepiece_dist.core.frames import pose_from_axes, to_gripper_frame
+from onepiece_dist.core.spatial import PointGrid, posed_box_bounds
 from onepiece_dist.core.voxel import unpack_codes, voxel_indices
 from onepiece_dist.spec import GripperSpec
 
@@ -125,17 +126,16 @@ def cube_points(centres: np.ndarray, edge: float | np.ndarray, per_side: int = 3
 
 
 def region_codes(points: np.ndarray, placements: np.ndarray, grid_shape: tuple[int, int, int],
-                 resolution: float, reach: float) -> np.ndarray:
-    """Codes seen at each placement, looking only at points within ``reach`` of its origin (fast for many
-    patches). -> (U, B) uint8"""
-    nvox = int(np.prod(grid_shape))
-    order = np.argsort(points[:, 0])
-    xs = points[order, 0]
-    out = np.zeros((len(placements), nvox), dtype=bool)
+                 resolution: float) -> np.ndarray:
+    """Codes seen at each placement (U, 4, 4) in the points (n, 3), looking only at points near its closing
+    region (a grid index: cost follows the patches near each one, not the whole object). -> (U, B) uint8"""
+    a, b, c = grid_shape
+    lower = np.array([0.0, -b * resolution / 2, -c * resolution / 2])
+    upper = np.array([a * resolution, b * resolution / 2, c * resolution / 2])
+    index = PointGrid(points, max(a, b, c) * resolution)
+    out = np.zeros((len(placements), a * b * c), dtype=bool)
     for k, pose in enumerate(placements):
-        lo, hi = np.searchsorted(xs, [pose[0, 3] - reach, pose[0, 3] + reach])
-        near = points[order[lo:hi]]
-        near = near[np.all(np.abs(near - pose[:3, 3]) <= reach, axis=1)]
+        near = points[index.in_box(*posed_box_bounds(lower, upper, pose))]
         flat = voxel_indices(to_gripper_frame(near, pose[None])[0], grid_shape, resolution)
         out[k, flat[flat >= 0]] = True
     return np.packbits(out, axis=1, bitorder="big")
@@ -156,16 +156,11 @@ def corridor_intrusions(points: np.ndarray, owner: np.ndarray, placements: np.nd
     """(U,) int64: points not of patch k (other patches, or the core with owner -1) inside the corridor of each
     placement k (:func:`corridor_boxes`)."""
     boxes = corridor_boxes(gripper, reach)
-    order = np.argsort(points[:, 0])
-    xs = points[order, 0]
+    index = PointGrid(points, gripper.max_opening)
     counts = np.zeros(len(placements), dtype=np.int64)
     for k, pose in enumerate(placements):
         for lower, upper in boxes:
-            corners = np.array([[x, y, z] for x in (lower[0], upper[0]) for y in (lower[1], upper[1])
-                                for z in (lower[2], upper[2])]) @ pose[:3, :3].T + pose[:3, 3]
-            lo, hi = corners.min(axis=0), corners.max(axis=0)
-            span = order[np.searchsorted(xs, lo[0]):np.searchsorted(xs, hi[0], side="right")]
-            near = span[np.all((points[span] >= lo) & (points[span] <= hi), axis=1)]
+            near = index.in_box(*posed_box_bounds(lower, upper, pose))
             local = to_gripper_frame(points[near], pose[None])[0]
             inside = np.all((local > lower) & (local < upper), axis=1)
             counts[k] += int(np.sum(inside & (owner[near] != k)))

@@ -34,8 +34,7 @@ def assemble_dataset(spec: JobSpec, path: str | os.PathLike) -> dict:
     classes = classify_codes(codes, grid)
     layout = layout_patches(codes, classes.plane, grid, res, gripper)
     geometry = assembly_geometry(layout, res)
-    reach = gripper.closing_depth + gripper.closing_width / 2 + gripper.closing_height / 2 + res
-    seen = region_codes(geometry["points"], layout.placements, grid, res, reach)
+    seen = region_codes(geometry["points"], layout.placements, grid, res)
     matches = np.all(seen == codes, axis=1)
     intrusions = corridor_intrusions(geometry["points"], geometry["point_patch"], layout.placements, gripper,
                                      reach=float(np.ptp(layout.bounding_box, axis=0).max()) + 1.0)

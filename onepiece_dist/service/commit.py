@@ -5,6 +5,7 @@ Only this code writes the global arrays (``unique/``, ``grasps/*``), so there is
 
 from __future__ import annotations
 
+import time
 from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
@@ -56,6 +57,7 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
 
     ``index`` : a DedupIndex that already holds every ok part's codes (the central actor's running state)
     """
+    start = time.perf_counter()
     ok = sorted((r for r in results if r.status == "ok"), key=lambda r: r.index)
     fold = index is None
     index = DedupIndex(spec.code_bytes()) if fold else index
@@ -77,18 +79,22 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
         groups["views"] = _views_group(views)
     write_dataset(out, dataset_attrs(spec, results), objects, groups)
     summary = {"grasps": int(len(grasps["code"])), "unique_codes": int(len(groups["unique"]["code"])),
-               "exact_unique_codes": int(len(index.unique))}
-    return {**summary, **assembly_stages(spec, out)} if len(index.unique) else summary
+               "exact_unique_codes": int(len(index.unique)), "seconds": {"dedup": time.perf_counter() - start}}
+    return {**summary, **assembly_stages(spec, out, summary["seconds"])} if len(index.unique) else summary
 
 
-def assembly_stages(spec: JobSpec, out: str) -> dict:
-    """The assemble and label stages (as requested) on the committed dataset at ``out``."""
+def assembly_stages(spec: JobSpec, out: str, seconds: dict | None = None) -> dict:
+    """The assemble and label stages (as requested) on the committed dataset at ``out``; their wall times are
+    added to ``seconds``."""
     from onepiece_dist.service.assemble import assemble_dataset
     from onepiece_dist.service.label_one import label_assembly
     from onepiece_dist.store.dataset import DatasetReader
 
+    seconds = {} if seconds is None else seconds
+    start = time.perf_counter()
     if "assemble" in spec.stages:
         assembly = assemble_dataset(spec, out)
+        seconds["assemble"] = time.perf_counter() - start
     elif "label" in spec.stages:
         assembly = dict(DatasetReader(out).attrs.get("assembly", {}))
         if not assembly:
@@ -96,7 +102,9 @@ def assembly_stages(spec: JobSpec, out: str) -> dict:
     else:
         return {}
     if "label" in spec.stages:
+        start = time.perf_counter()
         assembly["labels"] = label_assembly(spec, out, spec.sim.perturbations_per_patch)
+        seconds["label"] = time.perf_counter() - start
     return {"assembly": assembly}
 
 
@@ -104,9 +112,10 @@ def existing_summary(spec: JobSpec, out: str) -> dict:
     """Counts of a committed dataset, for a job that runs only later stages on it."""
     from onepiece_dist.store.dataset import DatasetReader
 
-    reader = DatasetReader(out)
+    reader, seconds = DatasetReader(out), {}
     return {"grasps": int(reader.array("grasps/code").shape[0]),
-            "unique_codes": int(reader.array("unique/code").shape[0]), **assembly_stages(spec, out)}
+            "unique_codes": int(reader.array("unique/code").shape[0]), **assembly_stages(spec, out, seconds),
+            "seconds": seconds}
 
 
 def _merge_similar(spec: JobSpec, groups: dict, index: DedupIndex) -> dict:

@@ -71,6 +71,7 @@ def finish(spec: JobSpec, status: JobStatus, results: list[ObjectResult], parts:
     else:
         summary = commit(results) if commit else commit_dataset(spec, results, parts, spec.output)
     status.timings["dedup"] = time.perf_counter() - t0
+    status.timings.update(summary.get("seconds", {}))  # dedup alone, assemble, label when measured apart
     status.progress.unique_codes = summary["unique_codes"]
     if "assembly" in summary:
         status.assembly = summary["assembly"]

@@ -1,0 +1,57 @@
+"""A uniform-grid index of points for box queries, so per-patch checks on the one object cost what is near the
+patch, not the whole object (pure numpy)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class PointGrid:
+    """Points (n, 3) float binned into cubic cells of edge ``cell`` (m), sorted by cell."""
+
+    def __init__(self, points: np.ndarray, cell: float):
+        self.points = np.asarray(points, dtype=np.float64)
+        self.cell = float(cell)
+        keys = np.floor(self.points / self.cell).astype(np.int64) if len(self.points) else np.zeros((0, 3), np.int64)
+        self.origin = keys.min(axis=0) if len(keys) else np.zeros(3, np.int64)
+        self.dims = (keys.max(axis=0) - self.origin + 1) if len(keys) else np.ones(3, np.int64)
+        flat = np.ravel_multi_index((keys - self.origin).T, self.dims) if len(keys) else np.zeros(0, np.int64)
+        self.order = np.argsort(flat, kind="stable")
+        self.sorted_cells = flat[self.order]
+
+    def in_box(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """(m,) int64 indices of the points with lower <= p <= upper (every coordinate)."""
+        lo = np.floor(np.asarray(lower) / self.cell).astype(np.int64) - self.origin
+        hi = np.floor(np.asarray(upper) / self.cell).astype(np.int64) - self.origin
+        if len(self.points) == 0 or np.any(hi < 0) or np.any(lo >= self.dims):
+            return np.zeros(0, dtype=np.int64)
+        lo, hi = np.maximum(lo, 0), np.minimum(hi, self.dims - 1)
+        ix, iy = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1), indexing="ij")
+        first = (ix.ravel() * self.dims[1] + iy.ravel()) * self.dims[2]
+        starts = np.searchsorted(self.sorted_cells, first + lo[2], side="left")
+        ends = np.searchsorted(self.sorted_cells, first + hi[2], side="right")
+        candidates = self.order[_ranges(starts, ends)]
+        inside = np.all((self.points[candidates] >= lower) & (self.points[candidates] <= upper), axis=1)
+        return candidates[inside]
+
+
+def _ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Concatenation of arange(s, e) for each pair, vectorized."""
+    lengths = np.maximum(ends - starts, 0)
+    total = int(lengths.sum())
+    if total == 0:
+        return np.zeros(0, dtype=np.int64)
+    offsets = np.repeat(starts - np.cumsum(lengths) + lengths, lengths)
+    return offsets + np.arange(total)
+
+
+def box_corners(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(8, 3) corners of an axis-aligned box."""
+    return np.array([[x, y, z] for x in (lower[0], upper[0]) for y in (lower[1], upper[1])
+                     for z in (lower[2], upper[2])])
+
+
+def posed_box_bounds(lower: np.ndarray, upper: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds in the object frame of a box given in a frame posed by ``pose`` (4, 4)."""
+    corners = box_corners(lower, upper) @ pose[:3, :3].T + pose[:3, 3]
+    return corners.min(axis=0), corners.max(axis=0)
