@@ -5,6 +5,8 @@ Content: the labelled grasps of a job on pybullet:named (codes, poses, labels, 7
 Ways: our Zarr layout (blosc zstd, shuffled, 8192-row chunks; points float16); one .npy file of float32 points
 per grasp plus one .npy per other array (the way PointNetGPD-style pipelines keep their clouds); one uncompressed
 numpy archive (np.savez) of float32 arrays.
+Then the compressor and chunk choice by measurement: the same arrays under each blosc setting and chunk height,
+bytes per grasp and write/read time (the setting in store/codecs.py is marked).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import os
 import platform
 import sys
 import tempfile
+import time
 from datetime import date
 from pathlib import Path
 
@@ -41,6 +44,7 @@ def main() -> dict:
         archive = Path(folder) / "all.npz"
         np.savez(archive, **{k: v.astype(np.float32) if v.dtype.kind == "f" else v for k, v in content.items()})
         archive_bytes = archive.stat().st_size
+        sweep = compressor_sweep(content, Path(folder) / "sweep")
     total_zarr = sum(zarr_bytes.values())
     out = {"benchmark": "storage", "date": date.today().isoformat(), "machine": f"{platform.machine()}, "
            f"{os.cpu_count()} cores", "grasps": n,
@@ -49,10 +53,47 @@ def main() -> dict:
                                "uncompressed_npz": round(archive_bytes / n, 1)},
            "ratio_npy_over_zarr": round(npy_bytes / total_zarr, 2),
            "ratio_npz_over_zarr": round(archive_bytes / total_zarr, 2),
+           "compressor_sweep": sweep,
            "command": "python benchmarks/bench_storage.py"}
     (Path(__file__).parent / "results" / "storage.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out
+
+
+SETTINGS = [("zstd", 5, "auto"), ("zstd", 1, "auto"), ("zstd", 9, "auto"), ("zstd", 5, "shuffle"),
+            ("zstd", 5, "bitshuffle"), ("zstd", 5, "noshuffle"), ("lz4", 5, "auto"), ("lz4hc", 9, "auto")]
+CHUNK_ROWS = (256, 8192)
+
+
+def compressor_sweep(content: dict[str, np.ndarray], folder: Path) -> list[dict]:
+    """Bytes per grasp and seconds to write and read all arrays under each (codec, level, shuffle, chunk rows);
+    'auto' shuffle = bit-shuffle for 1-byte types, byte-shuffle otherwise (what store/codecs.py does)."""
+    import zarr
+    from zarr.codecs import BloscCodec
+
+    from onepiece_dist.store.codecs import GRASP_CHUNK_ROWS
+
+    rows, n = [], len(content["code"])
+    for cname, level, shuffle in SETTINGS:
+        for chunk in CHUNK_ROWS:
+            path = folder / f"{cname}-{level}-{shuffle}-{chunk}.zarr"
+            group = zarr.open_group(str(path), mode="w")
+            start = time.perf_counter()
+            for name, data in content.items():
+                mode = shuffle if shuffle != "auto" else ("bitshuffle" if data.dtype.itemsize == 1 else "shuffle")
+                codec = BloscCodec(cname=cname, clevel=level, shuffle=mode, typesize=data.dtype.itemsize)
+                array = group.create_array(name, shape=data.shape, dtype=data.dtype,
+                                           chunks=(min(chunk, len(data)), *data.shape[1:]), compressors=[codec])
+                array[...] = data
+            written = time.perf_counter() - start
+            start = time.perf_counter()
+            for name in content:
+                zarr.open_array(str(path / name), mode="r")[...]
+            rows.append({"codec": cname, "level": level, "shuffle": shuffle, "chunk_rows": chunk,
+                         "bytes_per_grasp": round(disk_bytes(path) / n, 1), "write_s": round(written, 3),
+                         "read_s": round(time.perf_counter() - start, 3),
+                         "ours": (cname, level, shuffle) == ("zstd", 5, "auto") and chunk == GRASP_CHUNK_ROWS})
+    return rows
 
 
 def _per_grasp_npy(content: dict[str, np.ndarray], folder: Path) -> int:

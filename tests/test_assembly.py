@@ -73,6 +73,7 @@ def test_assembled_object_reproduces_every_unique_code(small_dataset):
     report = ds.attrs["assembly"]
     assert report["fidelity"] == 1.0 and report["fidelity_failures"] == [] and report["corridor_intrusions"] == 0
     assert status.assembly["unique_codes"] == len(ds["unique/code"])
+    assert {"extract", "dedup", "assemble"} <= set(status.timings) and "label" not in status.timings
     # recomputed here from the stored points and placements, independently of the stage's own check
     codes = region_codes(ds["assembled/points"].astype(np.float64), ds["assembled/placement"].astype(np.float64),
                          spec.grid_shape(), spec.voxel.resolution)

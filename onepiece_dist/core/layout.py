@@ -20,6 +20,7 @@ from onepiece_dist.core.voxel import unpack_codes, voxel_indices
 from onepiece_dist.spec import GripperSpec
 
 CUBE_FILL = 0.8  # cube edge as a fraction of the voxel edge
+POINTS_PER_CUBE_SIDE = 2  # dense points of the one object: a 2 x 2 grid on each cube face (24 per voxel)
 # face k: outward normal, v axis, t axis (all world axes, so every cube is axis-aligned)
 FACES = (
     (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])),
@@ -189,8 +190,8 @@ def assembly_geometry(layout: Layout, resolution: float) -> dict[str, np.ndarray
     face_group = np.concatenate([np.repeat(layout.face[layout.cube_patch], 12), np.full(12, 3)]).astype(np.int8)
     per_side = max(2, int(np.ceil(2 * layout.core_half.max() / resolution)))
     core = cube_points(np.zeros((1, 3)), 2 * layout.core_half, per_side)
-    patch_points = cube_points(layout.cube_centres, layout.cube_edge)
+    patch_points = cube_points(layout.cube_centres, layout.cube_edge, per_side=POINTS_PER_CUBE_SIDE)
     owner = np.concatenate([np.repeat(layout.cube_patch, len(patch_points) // max(len(layout.cube_patch), 1)),
                             np.full(len(core), -1)])
     return {"vertices": vertices, "faces": faces, "face_group": face_group,
-            "points": np.vstack([patch_points, core]), "point_patch": owner.astype(np.int64)}
+            "points": np.vstack([patch_points, core]).astype(np.float32), "point_patch": owner.astype(np.int32)}

@@ -10,12 +10,13 @@ class PointGrid:
     """Points (n, 3) float binned into cubic cells of edge ``cell`` (m), sorted by cell."""
 
     def __init__(self, points: np.ndarray, cell: float):
-        self.points = np.asarray(points, dtype=np.float64)
+        self.points = np.asarray(points)
         self.cell = float(cell)
-        keys = np.floor(self.points / self.cell).astype(np.int64) if len(self.points) else np.zeros((0, 3), np.int64)
-        self.origin = keys.min(axis=0) if len(keys) else np.zeros(3, np.int64)
-        self.dims = (keys.max(axis=0) - self.origin + 1) if len(keys) else np.ones(3, np.int64)
+        keys = np.floor(self.points / self.cell).astype(np.int32) if len(self.points) else np.zeros((0, 3), np.int32)
+        self.origin = keys.min(axis=0).astype(np.int64) if len(keys) else np.zeros(3, np.int64)
+        self.dims = (keys.max(axis=0) - self.origin + 1).astype(np.int64) if len(keys) else np.ones(3, np.int64)
         flat = np.ravel_multi_index((keys - self.origin).T, self.dims) if len(keys) else np.zeros(0, np.int64)
+        del keys
         self.order = np.argsort(flat, kind="stable")
         self.sorted_cells = flat[self.order]
 

@@ -11,8 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from onepiece_dist.core.frames import closing_region_bounds, to_gripper_frame
-
-_MAX_POINTS_PER_BATCH = 2_000_000
+from onepiece_dist.core.spatial import PointGrid, posed_box_bounds
 
 
 def pack_codes(occupancy: np.ndarray) -> np.ndarray:
@@ -67,14 +66,24 @@ def crop_codes(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int
     nvox = int(np.prod(grid_shape))
     occupancy = np.zeros((len(poses), nvox), dtype=bool)
     counts = np.zeros(len(poses), dtype=np.int64)
-    step = max(1, _MAX_POINTS_PER_BATCH // max(len(points), 1))
-    for start in range(0, len(poses), step):
-        batch = poses[start:start + step]
-        flat = voxel_indices(to_gripper_frame(points, batch), grid_shape, resolution)
-        rows, cols = np.nonzero(flat >= 0)
-        occupancy[start + rows, flat[rows, cols]] = True
-        counts[start:start + len(batch)] = np.bincount(rows, minlength=len(batch))
+    for k, inside in enumerate(_points_near_regions(points, poses, grid_shape, resolution)):
+        flat = voxel_indices(inside, grid_shape, resolution)
+        flat = flat[flat >= 0]
+        occupancy[k, flat] = True
+        counts[k] = len(flat)
     return np.packbits(occupancy, axis=1, bitorder="big"), counts
+
+
+def _points_near_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int],
+                         resolution: float):
+    """For each pose, the gripper-frame points that lie in the posed closing region's bounding box (a grid
+    index, so each pose costs what is near it): (k, 3) float64 per pose, in pose order."""
+    a, b, c = grid_shape
+    lower, upper = closing_region_bounds(a * resolution, b * resolution, c * resolution)
+    index = PointGrid(points, float(np.max(upper - lower)))
+    for pose in poses:
+        near = points[index.in_box(*posed_box_bounds(lower, upper, pose))]
+        yield to_gripper_frame(near, pose[None])[0]
 
 
 def crop_points(points: np.ndarray, pose: np.ndarray, grid_shape: tuple[int, int, int],

@@ -14,8 +14,8 @@ from onepiece_dist.core.dedup import DedupIndex
 from onepiece_dist.errors import JobError
 from onepiece_dist.service.extract import ObjectResult
 from onepiece_dist.spec import JobSpec
-from onepiece_dist.store import PartStore, write_dataset
-from onepiece_dist.store.dataset import ObjectTable
+from onepiece_dist.store import PartStore
+from onepiece_dist.store.dataset import GroupAppender, ObjectTable, begin_dataset, finish_dataset
 
 VIEW_PREFIX = "view_"  # per-object depth-view arrays in a part (not per grasp)
 
@@ -53,34 +53,98 @@ def _stats(results: list[ObjectResult]) -> dict:
 
 def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore, out: str,
                    index: DedupIndex | None = None) -> dict:
-    """Merge the parts of the ok results (in object order) and write the dataset at ``out``.
+    """Merge the parts of the ok results (in object order) and write the dataset at ``out``, streaming: one part
+    and one chunk per array in memory at a time.
 
     ``index`` : a DedupIndex that already holds every ok part's codes (the central actor's running state)
     """
     start = time.perf_counter()
     ok = sorted((r for r in results if r.status == "ok"), key=lambda r: r.index)
-    fold = index is None
-    index = DedupIndex(spec.code_bytes()) if fold else index
-    loaded, views = [], []
-    for result in ok:
+    if index is None:
+        index = DedupIndex(spec.code_bytes())
+        for result in ok:
+            index.add(parts.read_array(result.part_key, "code"))
+    clusters = _similar_clusters(spec, index)
+    begin_dataset(out, dataset_attrs(spec, results))
+    shapes = [parts.array_shapes(r.part_key) for r in ok]
+    grasps = GroupAppender(out, "grasps", _grasp_layout(shapes, spec.code_bytes(), clusters is not None))
+    views = GroupAppender(out, "views", _view_layout(shapes)) if spec.views.count else None
+    cameras_before = 0
+    for k, result in enumerate(ok):
         arrays = parts.read(result.part_key)
-        views.append({k: arrays.pop(k) for k in list(arrays) if k.startswith(VIEW_PREFIX)})
-        if fold:
-            index.add(arrays["code"])
-        loaded.append(arrays)
-    grasps = _concatenate(loaded, spec.code_bytes())
-    grasps["object"] = np.repeat(np.arange(len(ok), dtype=np.int32), [len(a["code"]) for a in loaded])
-    grasps["code_index"] = index.lookup(grasps["code"]) if len(grasps["code"]) else np.zeros(0, np.int64)
+        view_arrays = {name: arrays.pop(name) for name in list(arrays) if name.startswith(VIEW_PREFIX)}
+        grasps.append(_grasp_rows(arrays, k, index, clusters))
+        if views is not None:
+            views.append(_view_rows(view_arrays, k, cameras_before))
+            cameras_before += len(view_arrays["view_camera"])
+    grasps.close()
+    if views is not None:
+        views.close()
     objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
-    groups = {"grasps": grasps, "unique": {"code": index.unique, "count": index.counts}}
-    if spec.similar_radius:
-        groups = _merge_similar(spec, groups, index)
-    if spec.views.count:
-        groups["views"] = _views_group(views)
-    write_dataset(out, dataset_attrs(spec, results), objects, groups)
-    summary = {"grasps": int(len(grasps["code"])), "unique_codes": int(len(groups["unique"]["code"])),
-               "exact_unique_codes": int(len(index.unique)), "seconds": {"dedup": time.perf_counter() - start}}
-    return {**summary, **assembly_stages(spec, out, summary["seconds"])} if len(index.unique) else summary
+    finish_dataset(out, objects, _unique_groups(index, clusters))
+    unique = len(index) if clusters is None else len(clusters.representative)
+    summary = {"grasps": sum(int(shape["code"][0][0]) for shape in shapes), "unique_codes": int(unique),
+               "exact_unique_codes": int(len(index)), "seconds": {"dedup": time.perf_counter() - start}}
+    return {**summary, **assembly_stages(spec, out, summary["seconds"])} if len(index) else summary
+
+
+def _similar_clusters(spec: JobSpec, index: DedupIndex):
+    """Hamming-radius clusters of the exact unique codes (core.similar.Clusters), or None for exact dedup."""
+    if not spec.similar_radius:
+        return None
+    from onepiece_dist.core.similar import similar_clusters
+
+    a, b, c = spec.grid_shape()
+    return similar_clusters(index.unique, index.counts, a * b * c, spec.similar_radius)
+
+
+def _grasp_rows(arrays: dict[str, np.ndarray], k: int, index: DedupIndex, clusters) -> dict[str, np.ndarray]:
+    """One object's rows of grasps/: its part's arrays plus object and code_index (and exact_index)."""
+    exact = index.lookup(arrays["code"]) if len(arrays["code"]) else np.zeros(0, np.int64)
+    rows = {**arrays, "object": np.full(len(exact), k, dtype=np.int32)}
+    rows["code_index"] = exact if clusters is None else clusters.cluster[exact]
+    if clusters is not None:
+        rows["exact_index"] = exact
+    return rows
+
+
+def _unique_groups(index: DedupIndex, clusters) -> dict[str, dict[str, np.ndarray]]:
+    """unique/ (the exact set, or one representative per cluster with exact/ beside it)."""
+    if clusters is None:
+        return {"unique": {"code": index.unique, "count": index.counts}}
+    return {"unique": {"code": index.unique[clusters.representative], "count": clusters.counts},
+            "exact": {"code": index.unique, "count": index.counts, "cluster": clusters.cluster}}
+
+
+def _grasp_layout(shapes: list[dict], code_bytes: int, similar: bool) -> dict[str, tuple[int, tuple, np.dtype]]:
+    """Final length, row shape and dtype of every grasps/ array, from the parts' metadata."""
+    if not shapes:
+        first = {"pose": ((0, 4, 4), np.dtype(np.float32)), "candidate_pose": ((0, 4, 4), np.dtype(np.float32)),
+                 "width": ((0,), np.dtype(np.float32)), "code": ((0, code_bytes), np.dtype(np.uint8)),
+                 "candidate_code": ((0, code_bytes), np.dtype(np.uint8))}
+    else:
+        first = {name: spec for name, spec in shapes[0].items() if not name.startswith(VIEW_PREFIX)}
+    total = sum(shape["code"][0][0] for shape in shapes)
+    layout = {name: (total, shape[1:], dtype) for name, (shape, dtype) in first.items()}
+    layout["object"] = (total, (), np.dtype(np.int32))
+    layout["code_index"] = (total, (), np.dtype(np.int64))
+    if similar:
+        layout["exact_index"] = (total, (), np.dtype(np.int64))
+    return layout
+
+
+def _view_layout(shapes: list[dict]) -> dict[str, tuple[int, tuple, np.dtype]]:
+    cameras = sum(shape["view_camera"][0][0] for shape in shapes)
+    points = sum(shape["view_points"][0][0] for shape in shapes)
+    return {"camera": (cameras, (4, 4), np.dtype(np.float32)), "camera_object": (cameras, (), np.dtype(np.int32)),
+            "points": (points, (3,), np.dtype(np.float32)), "point_camera": (points, (), np.dtype(np.int32))}
+
+
+def _view_rows(view_arrays: dict[str, np.ndarray], k: int, cameras_before: int) -> dict[str, np.ndarray]:
+    """views/ rows of object ``k``: its cameras and points, cameras numbered across objects."""
+    cameras = view_arrays["view_camera"]
+    return {"camera": cameras, "camera_object": np.full(len(cameras), k, dtype=np.int32),
+            "points": view_arrays["view_points"], "point_camera": view_arrays["view_of_point"] + cameras_before}
 
 
 def assembly_stages(spec: JobSpec, out: str, seconds: dict | None = None) -> dict:
@@ -118,35 +182,3 @@ def existing_summary(spec: JobSpec, out: str) -> dict:
             "seconds": seconds}
 
 
-def _merge_similar(spec: JobSpec, groups: dict, index: DedupIndex) -> dict:
-    """unique/ becomes one representative per Hamming-radius cluster; the exact set moves to exact/."""
-    from onepiece_dist.core.similar import similar_clusters
-
-    a, b, c = spec.grid_shape()
-    clusters = similar_clusters(index.unique, index.counts, a * b * c, spec.similar_radius)
-    grasps = {**groups["grasps"], "code_index": clusters.cluster[groups["grasps"]["code_index"]],
-              "exact_index": groups["grasps"]["code_index"]}
-    return {"grasps": grasps, "unique": {"code": index.unique[clusters.representative], "count": clusters.counts},
-            "exact": {"code": index.unique, "count": index.counts, "cluster": clusters.cluster}}
-
-
-def _views_group(views: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
-    """views/: every object's cameras and back-projected points, cameras numbered across objects."""
-    if not views:
-        return {"camera": np.zeros((0, 4, 4), np.float32), "camera_object": np.zeros(0, np.int32),
-                "points": np.zeros((0, 3), np.float32), "point_camera": np.zeros(0, np.int32)}
-    sizes = [len(v["view_camera"]) for v in views]
-    first = np.cumsum([0, *sizes])[:-1]
-    return {"camera": np.concatenate([v["view_camera"] for v in views]),
-            "camera_object": np.repeat(np.arange(len(views), dtype=np.int32), sizes),
-            "points": np.concatenate([v["view_points"] for v in views]),
-            "point_camera": np.concatenate([v["view_of_point"] + f
-                                            for v, f in zip(views, first, strict=True)]).astype(np.int32)}
-
-
-def _concatenate(loaded: list[dict[str, np.ndarray]], code_bytes: int) -> dict[str, np.ndarray]:
-    if not loaded:
-        return {"pose": np.zeros((0, 4, 4), np.float32), "candidate_pose": np.zeros((0, 4, 4), np.float32),
-                "width": np.zeros(0, np.float32), "code": np.zeros((0, code_bytes), np.uint8),
-                "candidate_code": np.zeros((0, code_bytes), np.uint8)}
-    return {name: np.concatenate([arrays[name] for arrays in loaded]) for name in sorted(loaded[0])}

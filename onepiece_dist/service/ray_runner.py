@@ -30,18 +30,29 @@ ACTOR_PATIENCE_S = 120.0  # how long a central actor may take to come back
 class ExtractionWorker:
     """One pybullet client per actor. A plain class, testable without Ray."""
 
-    def __init__(self, spec: JobSpec, dedup=None):
+    def __init__(self, spec: JobSpec, dedup_name: str | None = None):
         self.spec = spec
         self.parts = parts_for(spec)
-        self.dedup = dedup
+        self.dedup_name = dedup_name
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
-        """Extract one object; its codes go straight to the central dedup actor (``dedup``), so the central
-        path never reads parts (it still can: a lost message is made good at the commit)."""
+        """Extract one object; its codes go straight to the central dedup actor (named ``dedup_name``), so the
+        central path need not read parts (it still does when a message is lost: the driver's own call)."""
         result = extract_object(self.spec, ref, index, self.parts)
-        if self.dedup is not None and result.status == "ok":
-            self.dedup.add.remote(index, result.part_key, self.parts.read_array(result.part_key, "code"))
+        if self.dedup_name and result.status == "ok":
+            self._send_codes(index, result.part_key)
         return dataclasses.replace(result, node=_node_id())
+
+    def _send_codes(self, index: int, part_key: str) -> None:
+        import ray
+
+        from onepiece_dist.service.ray_env import NAMESPACE
+
+        try:
+            dedup = ray.get_actor(self.dedup_name, namespace=NAMESPACE)
+        except ValueError:  # restarting or gone: the driver's add() reads the part instead
+            return
+        dedup.add.remote(index, part_key, self.parts.read_array(part_key, "code"))
 
 
 def _node_id() -> str:
@@ -79,7 +90,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
         parts.remove_stale_temporaries()
         dedup = _actor(CentralDedup, f"dedup-{job_id}", num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
         actors = [dedup] + [_actor(ExtractionWorker, f"extract-{job_id}-{k}", num_cpus=1,
-                                   scheduling_strategy="SPREAD").remote(spec, dedup)
+                                   scheduling_strategy="SPREAD").remote(spec, f"dedup-{job_id}")
                             for k in range(worker_count(workers, len(refs)))]
         status.stage = "extract"
         t0 = time.perf_counter()

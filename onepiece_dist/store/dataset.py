@@ -15,7 +15,7 @@ import numpy as np
 import zarr
 
 from onepiece_dist.errors import StoreError
-from onepiece_dist.store.codecs import write_array
+from onepiece_dist.store.codecs import GRASP_CHUNK_ROWS, chunks_for, compressor_for, write_array
 
 FORMAT_VERSION = 1
 NAME_BYTES = 64
@@ -59,9 +59,62 @@ def write_dataset(path: str | os.PathLike, attrs: dict, objects: ObjectTable,
 
     groups : {"grasps": {...}, "unique": {...}, ...} arrays by group; written under the root
     """
+    begin_dataset(path, attrs)
+    finish_dataset(path, objects, groups)
+
+
+def begin_dataset(path: str | os.PathLike, attrs: dict) -> None:
+    """Root attributes with ``complete = false``: what a commit writes first."""
     root = zarr.open_group(str(path), mode="a")
     root.attrs.update({**attrs, "onepiece_format": FORMAT_VERSION, "complete": False})
+
+
+def finish_dataset(path: str | os.PathLike, objects: ObjectTable, groups: dict[str, dict[str, np.ndarray]]) -> None:
+    """The remaining groups, consolidated metadata, then ``complete = true`` last."""
     _write_groups(path, {"objects": objects.arrays(), **groups}, {"complete": True})
+
+
+class GroupAppender:
+    """Rows appended to the arrays of one group whose final lengths are known, written in whole chunks, so a
+    commit holds one chunk per array in memory, not the whole corpus. One writer.
+
+    layout : {name: (total_rows, row_shape, dtype)}
+    """
+
+    def __init__(self, path: str | os.PathLike, group_name: str, layout: dict[str, tuple[int, tuple, np.dtype]],
+                 chunk_rows: int = GRASP_CHUNK_ROWS):
+        group = zarr.open_group(str(path), mode="a").require_group(group_name)
+        self.arrays, self.buffers, self.written = {}, {}, {}
+        for name, (total, row_shape, dtype) in layout.items():
+            shape = (total, *row_shape)
+            self.arrays[name] = group.create_array(name, shape=shape, dtype=dtype,
+                                                   chunks=chunks_for(shape, chunk_rows),
+                                                   compressors=[compressor_for(dtype)], overwrite=True)
+            self.buffers[name], self.written[name] = [], 0
+
+    def append(self, rows: dict[str, np.ndarray]) -> None:
+        for name, data in rows.items():
+            self.buffers[name].append(np.asarray(data, dtype=self.arrays[name].dtype))
+            if sum(len(b) for b in self.buffers[name]) >= self.arrays[name].chunks[0]:
+                self._flush(name, whole_chunks_only=True)
+
+    def close(self) -> None:
+        for name, array in self.arrays.items():
+            self._flush(name, whole_chunks_only=False)
+            if self.written[name] != array.shape[0]:
+                raise StoreError(f"{array.path}: {self.written[name]} rows appended, {array.shape[0]} expected")
+
+    def _flush(self, name: str, whole_chunks_only: bool) -> None:
+        if not self.buffers[name]:
+            return
+        block = np.concatenate(self.buffers[name])
+        step = self.arrays[name].chunks[0]
+        count = len(block) - len(block) % step if whole_chunks_only else len(block)
+        if count:
+            start = self.written[name]
+            self.arrays[name][start:start + count] = block[:count]
+            self.written[name] += count
+        self.buffers[name] = [block[count:]] if count < len(block) else []
 
 
 def write_group(path: str | os.PathLike, group_name: str, arrays: dict[str, np.ndarray], attrs: dict) -> None:

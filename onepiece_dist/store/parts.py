@@ -79,6 +79,13 @@ class PartStore:
             raise KeyError(f"part {key} is not committed in {self.folder}")
         return zarr.open_array(str(self.path(key) / name), mode="r")[...]
 
+    def array_shapes(self, key: str) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
+        """Shape and dtype of every array of a committed part, from metadata only."""
+        if not self.is_committed(key):
+            raise KeyError(f"part {key} is not committed in {self.folder}")
+        group = zarr.open_group(str(self.path(key)), mode="r")
+        return {name: (tuple(array.shape), np.dtype(array.dtype)) for name, array in group.arrays()}
+
     def committed_keys(self) -> list[str]:
         if not self.folder.is_dir():
             return []

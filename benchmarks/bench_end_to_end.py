@@ -1,0 +1,144 @@
+"""The end-to-end budget: the 64-object job with 2000 candidates per object, wall time per stage and peak memory.
+
+    .venv/bin/python benchmarks/bench_end_to_end.py [--objects 64] [--grasps 2000]
+        [--stages ingest,extract,dedup,assemble]
+
+Runs the job as a user does (`onepiece.api.run_job` on an embedded Ray, one extraction worker per core, physics
+on) with a fresh cache, so every object is simulated and decomposed. Memory: resident set of the whole process
+tree (this driver and every Ray process it started), sampled every 0.2 s; reported in all, and above the tree's
+level just before the job (Ray's own idle daemons). RSS counts shared pages once per process, so it is an upper
+bound. Target (issue 7): extract + dedup + assemble under 15 minutes and peak memory under 4 GB on 2 cores.
+Writes benchmarks/results/bench_end_to_end.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import sys
+import tempfile
+import threading
+import time
+from datetime import date
+from pathlib import Path
+
+import psutil
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from onepiece_dist.api import run_job  # noqa: E402
+from onepiece_dist.objects import resolve_source  # noqa: E402
+from onepiece_dist.spec import JobSpec  # noqa: E402
+from onepiece_dist.store import open_dataset  # noqa: E402
+from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+GIB = 2**30
+
+
+class TreeMemory:
+    """Samples the summed RSS of this process and its descendants every ``period`` seconds."""
+
+    def __init__(self, period: float = 0.2):
+        self.period, self.samples = period, []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def __enter__(self) -> TreeMemory:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def _run(self) -> None:
+        me = psutil.Process()
+        while not self._stop.is_set():
+            total = 0
+            for proc in [me, *me.children(recursive=True)]:
+                try:
+                    total += proc.memory_info().rss
+                except psutil.Error:
+                    pass
+            self.samples.append((time.perf_counter(), total))
+            self._stop.wait(self.period)
+
+    def peak(self, since: float = 0.0, until: float = float("inf")) -> int:
+        return max((rss for t, rss in self.samples if since <= t <= until), default=0)
+
+
+def stage_windows(start: float, timings: dict[str, float]) -> dict[str, tuple[float, float]]:
+    """(begin, end) of each stage; the stages run one after another in this order."""
+    windows, clock = {}, start
+    for stage in ("ingest", "extract", "dedup", "assemble", "label", "train"):
+        if stage in timings:
+            windows[stage] = (clock, clock + timings[stage])
+            clock += timings[stage]
+    return windows
+
+
+def objects_source(count: int) -> str:
+    named = len(resolve_source("pybullet:named"))
+    return f"pybullet:named+pybullet:random_urdfs[0:{max(count - named, 0)}]"
+
+
+def main() -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--objects", type=int, default=64)
+    parser.add_argument("--grasps", type=int, default=2000)
+    parser.add_argument("--stages", default="ingest,extract,dedup,assemble")
+    args = parser.parse_args()
+    folder = Path(tempfile.mkdtemp(prefix="onepiece-e2e-"))
+    spec = JobSpec(objects=objects_source(args.objects), grasps_per_object=args.grasps,
+                   output=str(folder / "e2e.zarr"), stages=tuple(args.stages.split(",")))
+    import ray
+
+    from onepiece_dist.service.ray_env import connect
+
+    connect(None)
+    try:
+        with TreeMemory() as memory:
+            time.sleep(1.0)
+            idle = memory.peak()
+            start = time.perf_counter()
+            status = run_job(spec)
+            wall = time.perf_counter() - start
+        windows = stage_windows(start, status.timings)
+        by_stage = {stage: memory.peak(*window) for stage, window in windows.items()}
+        summary = open_dataset(spec.output).summary()
+        result = _result(args, spec, status, wall, memory.peak(), idle, by_stage, summary)
+    finally:
+        ray.shutdown()
+        shutil.rmtree(folder, ignore_errors=True)
+    (HERE / "results" / "bench_end_to_end.json").write_text(json.dumps(result, indent=2) + "\n")
+    print(json.dumps(result, indent=2))
+    return result
+
+
+def _result(args, spec: JobSpec, status, wall: float, peak: int, idle: int, by_stage: dict[str, int],
+            summary: dict) -> dict:
+    stages = list(by_stage)
+    budget = sum(status.timings.get(s, 0.0) for s in ("ingest", "extract", "dedup", "assemble"))
+    return {
+        "benchmark": "bench_end_to_end", "date": date.today().isoformat(),
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores, {psutil.virtual_memory().total / GIB:.0f} GiB",
+        "objects": args.objects, "candidates_per_object": args.grasps, "state": status.state,
+        "objects_ok": status.progress.objects_done - len(status.rejections), "rejected": len(status.rejections),
+        "grasps": summary["grasps"], "unique_codes": summary["unique_codes"],
+        "patches": summary.get("assembly", {}).get("unique_codes"),
+        "stage_seconds": {s: round(status.timings[s], 1) for s in stages},
+        "extract_dedup_assemble_seconds": round(budget, 1), "wall_seconds": round(wall, 1),
+        "peak_memory_bytes": peak, "peak_memory_gib": round(peak / GIB, 2),
+        "ray_idle_memory_gib": round(idle / GIB, 2), "peak_above_idle_gib": round((peak - idle) / GIB, 2),
+        "peak_memory_gib_by_stage": {s: round(by_stage[s] / GIB, 2) for s in stages},
+        "dataset_bytes": summary["bytes_on_disk"], "parts_bytes": disk_bytes(Path(f"{spec.output}.parts")),
+        "targets": {"extract_dedup_assemble_seconds": 900, "peak_memory_gib": 4},
+        "command": "python benchmarks/bench_end_to_end.py " + " ".join(sys.argv[1:]),
+    }
+
+
+if __name__ == "__main__":
+    main()
