@@ -67,11 +67,12 @@ CHUNK_ROWS = (256, 8192)
 
 def compressor_sweep(content: dict[str, np.ndarray], folder: Path) -> list[dict]:
     """Bytes per grasp and seconds to write and read all arrays under each (codec, level, shuffle, chunk rows);
-    'auto' shuffle = bit-shuffle for 1-byte types, byte-shuffle otherwise (what store/codecs.py does)."""
+    'auto' shuffle = per dtype as store/codecs.py chooses (bit-shuffle bytes, none for float16, byte-shuffle
+    wider numbers)."""
     import zarr
     from zarr.codecs import BloscCodec
 
-    from onepiece_dist.store.codecs import GRASP_CHUNK_ROWS
+    from onepiece_dist.store.codecs import GRASP_CHUNK_ROWS, shuffle_for
 
     rows, n = [], len(content["code"])
     for cname, level, shuffle in SETTINGS:
@@ -80,7 +81,7 @@ def compressor_sweep(content: dict[str, np.ndarray], folder: Path) -> list[dict]
             group = zarr.open_group(str(path), mode="w")
             start = time.perf_counter()
             for name, data in content.items():
-                mode = shuffle if shuffle != "auto" else ("bitshuffle" if data.dtype.itemsize == 1 else "shuffle")
+                mode = shuffle if shuffle != "auto" else shuffle_for(data.dtype)
                 codec = BloscCodec(cname=cname, clevel=level, shuffle=mode, typesize=data.dtype.itemsize)
                 array = group.create_array(name, shape=data.shape, dtype=data.dtype,
                                            chunks=(min(chunk, len(data)), *data.shape[1:]), compressors=[codec])

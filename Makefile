@@ -1,0 +1,7 @@
+bench:
+	scripts/dev bench
+
+test:
+	scripts/dev test
+
+.PHONY: bench test
