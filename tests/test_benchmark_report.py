@@ -1,0 +1,26 @@
+"""docs/performance.md is rendered from the committed benchmark results."""
+
+import importlib.util
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_report():
+    spec = importlib.util.spec_from_file_location("report", ROOT / "benchmarks" / "report.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_committed_result_renders_with_its_command_and_date():
+    page = load_report().render()
+    for title in ("End to end", "Exact dedup", "Global merge", "Grasp trials", "Service scaling",
+                  "Similar-shape filter", "Storage per grasp"):
+        assert f"## {title}: `python benchmarks/" in page
+    assert "Not run yet" not in page
+
+
+def test_the_committed_page_is_the_rendered_one():
+    assert (ROOT / "docs" / "performance.md").read_text() == load_report().render(), \
+        "docs/performance.md is stale: run `python benchmarks/report.py`"
