@@ -143,7 +143,8 @@ def end_to_end_section(r: dict) -> list[str]:
     met_mem = r["peak_memory_gib"] <= r["targets"]["peak_memory_gib"]
     return [f"## End to end: {provenance(r)}", "", f"{r['objects']} objects x {r['candidates_per_object']} "
             f"candidates, embedded Ray, physics on, fresh cache: {r['objects_ok']} objects accepted, "
-            f"{r['grasps']:,} grasps, {r['unique_codes']:,} unique codes, {r['patches']:,} patches on the one object.", "",
+            f"{r['grasps']:,} grasps, {r['unique_codes']:,} unique codes, {r['patches']:,} patches on the one "
+            "object.", "",
             *table(["stage", "wall seconds", "peak memory of the process tree (GiB)"], rows), "",
             f"Extract + dedup + assemble: {r['extract_dedup_assemble_seconds']} s (target 900 s: "
             f"{'met' if met_time else 'NOT met'}); peak memory {r['peak_memory_gib']} GiB in all, "

@@ -81,12 +81,13 @@ def grasp_points_in_chosen_view(dataset) -> list[float]:
 def test_a_job_with_partial_view_crops_runs_end_to_end_on_embedded_ray(ray_session, spec_factory, tmp_path):
     views = {"count": 12, "image_size": 192}
     spec = spec_factory(objects="primitives[0:4]", grasps_per_object=24, views={**views, "crop": "partial"},
-                        stages=["ingest", "extract", "dedup", "assemble", "label"],
-                        sim={"perturbations_per_patch": 1}, output=str(tmp_path / "partial.zarr"))
+                        stages=["ingest", "extract", "dedup", "assemble", "label", "train"],
+                        sim={"perturbations_per_patch": 1}, train={"epochs": 2}, output=str(tmp_path / "partial.zarr"))
     final = Client().submit(spec).wait(timeout=300)
     assert final.state == "succeeded", final.error
     partial = open_dataset(spec.output)
     assert partial["views/camera"].shape == (4 * 12, 4, 4) and partial.has("assembled/grasps/points")
+    assert final.training["epochs"] >= 1 and partial.has("train/train_loss")
     assert min(grasp_points_in_chosen_view(partial)) > 0.99  # the crop is what the chosen camera saw
     full_spec = spec.model_copy(update={"views": spec.views.model_copy(update={"crop": "full"}),
                                         "stages": ("ingest", "extract", "dedup"),
