@@ -16,7 +16,7 @@ import numpy as np
 
 from onepiece_dist.core.frames import pose_from_axes, to_gripper_frame
 from onepiece_dist.core.spatial import PointGrid, posed_box_bounds
-from onepiece_dist.core.voxel import unpack_codes, voxel_indices
+from onepiece_dist.core.voxel import crop_codes, unpack_codes
 from onepiece_dist.spec import GripperSpec
 
 CUBE_FILL = 0.8  # cube edge as a fraction of the voxel edge
@@ -128,18 +128,9 @@ def cube_points(centres: np.ndarray, edge: float | np.ndarray, per_side: int = 3
 
 def region_codes(points: np.ndarray, placements: np.ndarray, grid_shape: tuple[int, int, int],
                  resolution: float) -> np.ndarray:
-    """Codes seen at each placement (U, 4, 4) in the points (n, 3), looking only at points near its closing
-    region (a grid index: cost follows the patches near each one, not the whole object). -> (U, B) uint8"""
-    a, b, c = grid_shape
-    lower = np.array([0.0, -b * resolution / 2, -c * resolution / 2])
-    upper = np.array([a * resolution, b * resolution / 2, c * resolution / 2])
-    index = PointGrid(points, max(a, b, c) * resolution)
-    out = np.zeros((len(placements), a * b * c), dtype=bool)
-    for k, pose in enumerate(placements):
-        near = points[index.in_box(*posed_box_bounds(lower, upper, pose))]
-        flat = voxel_indices(to_gripper_frame(near, pose[None])[0], grid_shape, resolution)
-        out[k, flat[flat >= 0]] = True
-    return np.packbits(out, axis=1, bitorder="big")
+    """Codes a gripper sees at each placement (U, 4, 4) in the one object's points (n, 3): the crop of
+    :func:`core.voxel.crop_codes`, which looks only at points near each closing region. -> (U, B) uint8"""
+    return crop_codes(points, placements, grid_shape, resolution)[0]
 
 
 def corridor_boxes(gripper: GripperSpec, reach: float) -> np.ndarray:

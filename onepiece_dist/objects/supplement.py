@@ -313,15 +313,12 @@ def _walk_loops(following: dict[int, list[int]]) -> list[list[int]]:
     return loops
 
 
-def _edges(mesh) -> np.ndarray:
+def _boundary_edges(mesh) -> int:
+    """Edges not shared by exactly two triangles (open or non-manifold)."""
     faces = np.asarray(mesh.triangles)
     edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
     _, counts = np.unique(edges, axis=0, return_counts=True)
-    return counts
-
-
-def _boundary_edges(mesh) -> int:
-    return int(np.sum(_edges(mesh) != 2))
+    return int(np.sum(counts != 2))
 
 
 def _watertight(mesh) -> bool:

@@ -67,7 +67,8 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     clusters = _similar_clusters(spec, index)
     begin_dataset(out, dataset_attrs(spec, results))
     shapes = [parts.array_shapes(r.part_key) for r in ok]
-    grasps = GroupAppender(out, "grasps", _grasp_layout(shapes, spec.code_bytes(), clusters is not None))
+    layout = _grasp_layout(shapes, spec.code_bytes(), clusters is not None)
+    grasps = GroupAppender(out, "grasps", layout)
     views = GroupAppender(out, "views", _view_layout(shapes)) if spec.views.count else None
     cameras_before = 0
     for k, result in enumerate(ok):
@@ -83,7 +84,7 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
     finish_dataset(out, objects, _unique_groups(index, clusters))
     unique = len(index) if clusters is None else len(clusters.representative)
-    summary = {"grasps": sum(int(shape["code"][0][0]) for shape in shapes), "unique_codes": int(unique),
+    summary = {"grasps": int(layout["code"][0]), "unique_codes": int(unique),
                "exact_unique_codes": int(len(index)), "seconds": {"dedup": time.perf_counter() - start}}
     return {**summary, **assembly_stages(spec, out, summary["seconds"])} if len(index) else summary
 

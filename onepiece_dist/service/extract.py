@@ -6,7 +6,6 @@ part, and returns a small :class:`ObjectResult` (no large arrays travel back).
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -83,19 +82,19 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
                                       "the object cannot fit the gripper")
     grasps, meta = _simulate(spec, mesh, cands, collision_dir)
     views = _render_views(spec, mesh)
-    clouds = crop_clouds(spec, points, views, grasps["pose"])
+    clouds, source = crop_sources(spec, points, views, grasps["pose"])
     grid, res = spec.grid_shape(), spec.voxel.resolution
-    codes, counts = crop_codes_from(clouds, grasps["pose"], grid, res)
-    static, _ = crop_codes_from(clouds, grasps["candidate_pose"], grid, res)
+    codes, counts = crop_codes_from(clouds, source, grasps["pose"], grid, res)
+    static, _ = crop_codes_from(clouds, source, grasps["candidate_pose"], grid, res)
     keep = counts > 0
     grasps = {name: value[keep] for name, value in grasps.items()}
-    codes, static, clouds = codes[keep], static[keep], [clouds[i] for i in np.flatnonzero(keep)]
+    codes, static, source = codes[keep], static[keep], source[keep]
     if spec.voxel.canonical:
         codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
     arrays = {**{k: v.astype(np.float32) if v.dtype.kind == "f" else v for k, v in grasps.items()},
               "code": codes, "candidate_code": static}
     if spec.sim.points_per_grasp:
-        arrays["points"] = _grasp_points(clouds, grasps["pose"], spec, rng)
+        arrays["points"] = _grasp_points(clouds, source, grasps["pose"], spec, rng)
     if views is not None:
         arrays.update({"view_camera": views.cameras, "view_points": views.points, "view_of_point": views.point_view})
     meta.update({"grasps": int(keep.sum()), "empty_crops": int((~keep).sum()), "candidates_tried": cands.tried,
@@ -139,37 +138,34 @@ def _render_views(spec: JobSpec, mesh: TriangleMesh):
     return object_views(mesh.vertices, mesh.faces, spec.views.count, spec.views.image_size, spec.views.fov_deg)
 
 
-def crop_clouds(spec: JobSpec, points: np.ndarray, views, poses: np.ndarray) -> list[np.ndarray]:
-    """The cloud each grasp is cropped from: the full surface (n, 3), or with ``views.crop='partial'`` the
-    depth view of the camera nearest the grasp's approach direction. One entry per pose (shared arrays)."""
+def crop_sources(spec: JobSpec, points: np.ndarray, views, poses: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """The clouds grasps are cropped from, and (N,) int64 which one per pose: the full surface (n, 3) for all, or
+    with ``views.crop='partial'`` the depth view of the camera nearest each grasp's approach direction."""
     if views is None or spec.views.crop == "full":
-        return [points] * len(poses)
+        return [points], np.zeros(len(poses), dtype=np.int64)
     from onepiece_dist.sim.views import camera_for_grasps
 
-    per_view = [views.cloud(k) for k in range(len(views.cameras))]
-    return [per_view[k] for k in camera_for_grasps(views.cameras, poses)]
+    return [views.cloud(k) for k in range(len(views.cameras))], camera_for_grasps(views.cameras, poses)
 
 
-def crop_codes_from(clouds: list[np.ndarray], poses: np.ndarray, grid: tuple[int, int, int],
+def crop_codes_from(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndarray, grid: tuple[int, int, int],
                     resolution: float) -> tuple[np.ndarray, np.ndarray]:
-    """crop_codes with one cloud per pose; grasps sharing a cloud are cropped together. (N, B), (N,)"""
-    groups: dict[int, list[int]] = {}
-    for i, cloud in enumerate(clouds):
-        groups.setdefault(id(cloud), []).append(i)
-    codes = np.zeros((len(poses), math.ceil(int(np.prod(grid)) / 8)), dtype=np.uint8)
+    """crop_codes with pose i cropped from ``clouds[source[i]]``; poses of one cloud are cropped together."""
+    codes = np.zeros((len(poses), (int(np.prod(grid)) + 7) // 8), dtype=np.uint8)
     counts = np.zeros(len(poses), dtype=np.int64)
-    for rows in groups.values():
-        codes[rows], counts[rows] = crop_codes(clouds[rows[0]], poses[rows], grid, resolution)
+    for k in np.unique(source):
+        rows = np.flatnonzero(source == k)
+        codes[rows], counts[rows] = crop_codes(clouds[k], poses[rows], grid, resolution)
     return codes, counts
 
 
-def _grasp_points(clouds: list[np.ndarray], poses: np.ndarray, spec: JobSpec,
+def _grasp_points(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndarray, spec: JobSpec,
                   rng: np.random.Generator) -> np.ndarray:
     """(n, P, 3) float16 gripper-frame points inside the closing region at each pose, resampled to P."""
     count = spec.sim.points_per_grasp
     out = np.zeros((len(poses), count, 3), dtype=np.float16)
-    for i, (cloud, pose) in enumerate(zip(clouds, poses, strict=True)):
-        inside = crop_points(cloud, pose, spec.grid_shape(), spec.voxel.resolution)
+    for i, (k, pose) in enumerate(zip(source, poses, strict=True)):
+        inside = crop_points(clouds[k], pose, spec.grid_shape(), spec.voxel.resolution)
         out[i] = resample_points(inside, count, rng)
     return out
 

@@ -68,23 +68,23 @@ class PartStore:
 
     def read(self, key: str) -> dict[str, np.ndarray]:
         """All arrays of a committed part (KeyError if it is not committed)."""
-        if not self.is_committed(key):
-            raise KeyError(f"part {key} is not committed in {self.folder}")
-        group = zarr.open_group(str(self.path(key)), mode="r")
+        group = zarr.open_group(str(self._committed(key)), mode="r")
         return {name: array[...] for name, array in group.arrays()}
 
     def read_array(self, key: str, name: str) -> np.ndarray:
         """One array of a committed part, without opening the others (KeyError if not committed)."""
-        if not self.is_committed(key):
-            raise KeyError(f"part {key} is not committed in {self.folder}")
-        return zarr.open_array(str(self.path(key) / name), mode="r")[...]
+        return zarr.open_array(str(self._committed(key) / name), mode="r")[...]
 
     def array_shapes(self, key: str) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
         """Shape and dtype of every array of a committed part, from metadata only."""
+        group = zarr.open_group(str(self._committed(key)), mode="r")
+        return {name: (tuple(array.shape), np.dtype(array.dtype)) for name, array in group.arrays()}
+
+    def _committed(self, key: str) -> Path:
+        """The folder of a committed part (KeyError if it is not committed)."""
         if not self.is_committed(key):
             raise KeyError(f"part {key} is not committed in {self.folder}")
-        group = zarr.open_group(str(self.path(key)), mode="r")
-        return {name: (tuple(array.shape), np.dtype(array.dtype)) for name, array in group.arrays()}
+        return self.path(key)
 
     def committed_keys(self) -> list[str]:
         if not self.folder.is_dir():
