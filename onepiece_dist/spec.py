@@ -16,6 +16,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from onepiece_dist.errors import SpecError
 
+RESULTS_REVISION = 2  # bump when code changes what an extraction produces (2: one rigid body, coupled fingers)
+
 STAGES = ("ingest", "extract", "dedup", "assemble", "label", "train", "evaluate")
 Stage = Literal["ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"]
 
@@ -189,9 +191,11 @@ class JobSpec(_Frozen):
         return math.ceil(a * b * c / 8)
 
     def result_key(self) -> str:
-        """Hash of every field that changes an object's extraction result (not output paths)."""
+        """Hash of every field that changes an object's extraction result (not output paths), and of
+        :data:`RESULTS_REVISION`, so parts cached by older code are not reused."""
         relevant = self.model_dump(mode="json", include={"grasps_per_object", "seed", "gripper", "voxel",
                                                          "sampler", "sim", "views"})
+        relevant["results_revision"] = RESULTS_REVISION
         return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
 
 

@@ -113,3 +113,17 @@ def torus_mesh(major: float = 0.04, minor: float = 0.015):
 
     torus = trimesh.creation.torus(major, minor)
     return make_mesh(torus.vertices, torus.faces, "torus")
+
+
+def box_slabs(extents: tuple[float, float, float], count: int) -> list[np.ndarray]:
+    """The corners (8, 3) of ``count`` boxes that stack along z into one box of ``extents`` centred at the
+    origin: convex pieces of a box, as a convex decomposition would give them."""
+    half = np.asarray(extents, dtype=np.float64) / 2
+    corners = np.array([(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64) * half
+    cuts = np.linspace(-half[2], half[2], count + 1)
+    slabs = []
+    for low, high in zip(cuts[:-1], cuts[1:], strict=True):
+        slab = corners.copy()
+        slab[:, 2] = np.where(corners[:, 2] < 0, low, high)
+        slabs.append(slab)
+    return slabs

@@ -16,7 +16,7 @@ import numpy as np
 import pybullet as pb
 
 from onepiece_dist.core.frames import invert_poses
-from onepiece_dist.sim.world import TIME_STEP, SimWorld, quat_from_matrix
+from onepiece_dist.sim.world import SimWorld, quat_from_matrix
 
 CLOSE_SPEED = 0.25  # m/s per finger
 SETTLE_TIME = 0.05  # s after the fingers stall
@@ -76,7 +76,7 @@ def close_fingers(world: SimWorld) -> int:
     for link in (0, 1):  # position control to "fully closed": the target doubles as the joint limit
         pb.setJointMotorControl2(g, link, pb.POSITION_CONTROL, targetPosition=spec.max_opening / 2,
                                  force=spec.closing_force, maxVelocity=CLOSE_SPEED, physicsClientId=c)
-    max_steps = int((spec.max_opening / 2 / CLOSE_SPEED + 0.1) / TIME_STEP)
+    max_steps = int((spec.max_opening / 2 / CLOSE_SPEED + 0.1) / world.time_step)
     steps = 0
     while steps < max_steps:
         for _ in range(CHECK_EVERY):
@@ -84,7 +84,7 @@ def close_fingers(world: SimWorld) -> int:
         steps += CHECK_EVERY
         if steps > 2 * CHECK_EVERY and _stalled(world):
             break
-    settle = int(SETTLE_TIME / TIME_STEP)
+    settle = int(SETTLE_TIME / world.time_step)
     for _ in range(settle):
         pb.stepSimulation(physicsClientId=c)
     return steps + settle
@@ -134,32 +134,53 @@ def lift_and_shake(world: SimWorld, start: np.ndarray) -> tuple[bool, float]:
     """
     c = world.client
     pb.setGravity(0, 0, -9.81, physicsClientId=c)
-    held = invert_poses(start) @ world.object_pose()
+    held = _object_in_gripper(world)
+    pivots, orientations = gripper_path(start, world.time_step)
     slip = 0.0
-    for step, (offset, rotation) in enumerate(zip(*_trajectory(), strict=True)):
-        orientation = quat_from_matrix(rotation @ start[:3, :3])
-        pb.changeConstraint(world.constraint, jointChildPivot=(start[:3, 3] + offset).tolist(),
-                            jointChildFrameOrientation=orientation, maxForce=2000, physicsClientId=c)
+    for step, (pivot, orientation) in enumerate(zip(pivots, orientations, strict=True)):
+        pb.changeConstraint(world.constraint, jointChildPivot=pivot, jointChildFrameOrientation=orientation,
+                            maxForce=2000, physicsClientId=c)
         pb.stepSimulation(physicsClientId=c)
         if step % DROP_CHECK_EVERY == DROP_CHECK_EVERY - 1:
-            slip = max(slip, _slip(world, held))
+            slip = max(slip, _distance(_object_in_gripper(world), held))
             if not any(finger_contacts(world)):
                 return False, slip
-    slip = max(slip, _slip(world, held))
+    slip = max(slip, _distance(_object_in_gripper(world), held))
     return bool(np.isfinite(slip) and all(finger_contacts(world))), slip
 
 
-def _slip(world: SimWorld, held: np.ndarray) -> float:
-    """Distance between the object's current position in the gripper frame and ``held`` (the start)."""
-    now = invert_poses(world.gripper_pose()) @ world.object_pose()
-    return float(np.linalg.norm(now[:3, 3] - held[:3, 3]))
+def gripper_path(start: np.ndarray, time_step: float) -> tuple[list, list]:
+    """The lift-and-shake path from the gripper pose ``start`` (4, 4): per step of ``time_step`` seconds the
+    constraint pivot [x, y, z] and orientation [x, y, z, w], as lists ready for pybullet (built once per trial,
+    not per step).
+
+    Every step turns ``start`` about world z by an angle with half-angle cosine c and sine s, so its quaternion
+    is (0, 0, s, c) * q_start, written out below.
+    """
+    offsets, half_cos, half_sin = _trajectory(time_step)
+    x, y, z, w = quat_from_matrix(start[:3, :3])
+    turned = np.stack([half_cos * x - half_sin * y, half_cos * y + half_sin * x, half_cos * z + half_sin * w,
+                       half_cos * w - half_sin * z], axis=1)
+    return (start[:3, 3] + offsets).tolist(), turned.tolist()
+
+
+def _object_in_gripper(world: SimWorld) -> tuple[float, float, float]:
+    """Position of the object's mesh-frame origin in the gripper frame (pybullet transform calls, no arrays)."""
+    c = world.client
+    position, orientation = pb.getBasePositionAndOrientation(world.obj, physicsClientId=c)
+    origin = pb.multiplyTransforms(position, orientation, (-world.com).tolist(), (0, 0, 0, 1))[0]
+    inverse = pb.invertTransform(*pb.getBasePositionAndOrientation(world.gripper, physicsClientId=c))
+    return pb.multiplyTransforms(*inverse, origin, (0, 0, 0, 1))[0]
+
+
+def _distance(a, b) -> float:
+    return float(np.sqrt(sum((x - y) ** 2 for x, y in zip(a, b, strict=True))))
 
 
 @functools.cache
-def _trajectory() -> tuple[np.ndarray, np.ndarray]:
-    """World offsets (steps, 3) and rotations (steps, 3, 3) of the gripper: lift; linear shakes along x and y;
-    a rotational shake about z."""
-    dt = TIME_STEP
+def _trajectory(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """World offsets (steps, 3) of the gripper, and the cosine and sine (steps,) of half its turn about world z:
+    lift; linear shakes along x and y; a rotational shake about z."""
     lift_steps = int(round(LIFT_TIME / dt))
     lift = np.zeros((lift_steps, 3))
     lift[:, 2] = np.linspace(0, LIFT_HEIGHT, lift_steps)
@@ -170,11 +191,7 @@ def _trajectory() -> tuple[np.ndarray, np.ndarray]:
     offsets = np.vstack([lift, np.c_[SHAKE_AMPLITUDE * wave, zeros, up], np.c_[zeros, SHAKE_AMPLITUDE * wave, up],
                          np.c_[zeros, zeros, up]])
     angles = np.concatenate([np.zeros(lift_steps + 2 * len(t)), ROTATION_AMPLITUDE * wave])
-    cos, sin = np.cos(angles), np.sin(angles)
-    rotations = np.zeros((len(angles), 3, 3))
-    rotations[:, 0, 0], rotations[:, 0, 1], rotations[:, 1, 0], rotations[:, 1, 1] = cos, -sin, sin, cos
-    rotations[:, 2, 2] = 1.0
-    return offsets, rotations
+    return offsets, np.cos(angles / 2), np.sin(angles / 2)
 
 
 @dataclass(frozen=True)

@@ -2,14 +2,22 @@
 :class:`GripperSpec` and one object at a time.
 
 The gripper base frame is the gripper frame (origin at the palm centre, on the palm face; its inertial frame
-coincides). The base is a box (the palm) held by a fixed constraint that trials move; two prismatic fingers close
-along v with a force limit. The object's frame is its mesh frame; it starts at the world origin, so candidate
-poses (gripper in the object frame) are also world poses at the start of a trial.
+coincides). The base is a box (the palm) held by a fixed constraint that trials move; two prismatic fingers, coupled
+by a gear so they keep the same opening (as the Panda hand's mimic joint), close along v with a force limit. The
+object is one rigid body; its frame is its mesh frame; it starts at the world origin, so candidate poses (gripper
+in the object frame) are also world poses at the start of a trial.
 """
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import os
+import shutil
+import tempfile
+import weakref
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pybullet as pb
@@ -18,6 +26,8 @@ from onepiece_dist.spec import GripperSpec
 
 TIME_STEP = 1.0 / 240.0
 SOLVER_ITERATIONS = 50
+CONE_FRICTION = False  # pyramid friction (two directions, each limited by mu N), as MuJoCo's default cone
+FINGER_COUPLING_FORCE = 1000.0  # N: the gear that keeps both fingers at the same opening
 DENSITY = 150.0  # kg/m^3, as ACRONYM
 MIN_MASS, MAX_MASS = 0.05, 2.0  # kg
 
@@ -53,18 +63,32 @@ def matrix_from_pose(position, quaternion) -> np.ndarray:
     return pose
 
 
+@dataclass(frozen=True)
+class PhysicsSettings:
+    """Integrator settings of a :class:`SimWorld` (docs/trials.md says why these values)."""
+
+    time_step: float = TIME_STEP
+    solver_iterations: int = SOLVER_ITERATIONS
+    cone_friction: bool = CONE_FRICTION
+
+
 class SimWorld:
     """A pybullet client with one gripper and at most one object loaded."""
 
-    def __init__(self, gripper: GripperSpec):
+    def __init__(self, gripper: GripperSpec, physics: PhysicsSettings = PhysicsSettings()):
         self.spec = gripper
+        self.physics = physics
+        self.time_step = physics.time_step
         self.client = pb.connect(pb.DIRECT)
-        pb.setTimeStep(TIME_STEP, physicsClientId=self.client)
-        pb.setPhysicsEngineParameter(numSolverIterations=SOLVER_ITERATIONS, deterministicOverlappingPairs=1,
+        pb.setTimeStep(physics.time_step, physicsClientId=self.client)
+        pb.setPhysicsEngineParameter(numSolverIterations=physics.solver_iterations, deterministicOverlappingPairs=1,
+                                     enableConeFriction=int(physics.cone_friction), enableFileCaching=0,
                                      physicsClientId=self.client)
         self.gripper, self.constraint = self._build_gripper()
         self.obj: int | None = None
         self.com = np.zeros(3)
+        self._scratch = Path(tempfile.mkdtemp(prefix="onepiece-sim-"))
+        weakref.finalize(self, shutil.rmtree, self._scratch, True)
 
     def close(self) -> None:
         pb.disconnect(physicsClientId=self.client)
@@ -89,6 +113,9 @@ class SimWorld:
             pb.changeDynamics(body, link, lateralFriction=g.friction, jointLowerLimit=0.0,
                               jointUpperLimit=g.max_opening / 2, physicsClientId=c)
             pb.setJointMotorControl2(body, link, pb.VELOCITY_CONTROL, force=0, physicsClientId=c)
+        coupling = pb.createConstraint(body, 0, body, 1, pb.JOINT_GEAR, [0, 1, 0], [0, 0, 0], [0, 0, 0],
+                                       physicsClientId=c)  # the fingers move as one, like the Panda's mimic joint
+        pb.changeConstraint(coupling, gearRatio=-1, maxForce=FINGER_COUPLING_FORCE, erp=0.8, physicsClientId=c)
         constraint = pb.createConstraint(body, -1, -1, -1, pb.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 0],
                                          physicsClientId=c)
         pb.changeConstraint(constraint, maxForce=2000, physicsClientId=c)
@@ -99,25 +126,23 @@ class SimWorld:
             pb.changeDynamics(self.gripper, link, lateralFriction=friction, physicsClientId=self.client)
 
     def load_object(self, pieces: list[np.ndarray], volume: float, friction: float) -> None:
-        """Replace the object by a compound of convex ``pieces`` ((k, 3) vertex arrays in the mesh frame)."""
+        """Replace the object by one rigid body whose collision shape is the compound of convex ``pieces``
+        ((k, 3) vertex arrays in the mesh frame; each piece is the hull of its points).
+
+        One body, not a body per piece joined by fixed joints: pybullet's fixed-joint chain lets the pieces give
+        way under the fingers (a box cut into three slabs dropped a quarter of its centred grasps;
+        tests/test_sim.py holds the cut box to the whole one).
+        """
         if self.obj is not None:
             pb.removeBody(self.obj, physicsClientId=self.client)
         c = self.client
-        allpts = np.vstack(pieces)
-        self.com = allpts.mean(axis=0)
-        shapes = [pb.createCollisionShape(pb.GEOM_MESH, vertices=(p - self.com).tolist(), physicsClientId=c)
-                  for p in pieces]
-        mass = float(np.clip(DENSITY * volume, MIN_MASS, MAX_MASS)) / len(shapes)
-        extra = len(shapes) - 1  # a compound: one convex piece per link, welded by fixed joints
-        self.obj = pb.createMultiBody(
-            baseMass=mass, baseCollisionShapeIndex=shapes[0], basePosition=self.com.tolist(),
-            linkMasses=[mass] * extra, linkCollisionShapeIndices=shapes[1:], linkVisualShapeIndices=[-1] * extra,
-            linkPositions=[[0, 0, 0]] * extra, linkOrientations=[[0, 0, 0, 1]] * extra,
-            linkInertialFramePositions=[[0, 0, 0]] * extra, linkInertialFrameOrientations=[[0, 0, 0, 1]] * extra,
-            linkParentIndices=[0] * extra, linkJointTypes=[pb.JOINT_FIXED] * extra,
-            linkJointAxis=[[0, 0, 1]] * extra, physicsClientId=c)
-        for link in range(-1, extra):
-            pb.changeDynamics(self.obj, link, lateralFriction=friction, physicsClientId=c)
+        self.com = np.vstack(pieces).mean(axis=0)
+        mass = float(np.clip(DENSITY * volume, MIN_MASS, MAX_MASS))
+        with _hulls_file([p - self.com for p in pieces], self._scratch) as path:
+            shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=path, physicsClientId=c)
+            self.obj = pb.createMultiBody(baseMass=mass, baseCollisionShapeIndex=shape, basePosition=self.com.tolist(),
+                                          useMaximalCoordinates=True, physicsClientId=c)
+        pb.changeDynamics(self.obj, -1, lateralFriction=friction, physicsClientId=c)
 
     def object_pose(self) -> np.ndarray:
         """(4, 4) world pose of the object's mesh frame."""
@@ -129,6 +154,27 @@ class SimWorld:
     def gripper_pose(self) -> np.ndarray:
         pos, quat = pb.getBasePositionAndOrientation(self.gripper, physicsClientId=self.client)
         return matrix_from_pose(pos, quat)
+
+
+@contextlib.contextmanager
+def _hulls_file(pieces: list[np.ndarray], scratch: Path):
+    """An OBJ of convex pieces ((k, 3) vertices, k >= 4) for pybullet, which builds compounds only from files:
+    one ``o`` group per hull, fan faces (a hull needs only its points). This process writes it itself in a
+    private scratch folder, named by content, and deletes it after use: no file from a dataset or a user
+    reaches pybullet this way."""
+    lines, first = [], 1
+    for k, piece in enumerate(pieces):
+        lines.append(f"o piece{k}")
+        lines += [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in piece]
+        lines += [f"f {first} {first + j} {first + j + 1}" for j in range(1, len(piece) - 1)]
+        first += len(piece)
+    text = "\n".join(lines) + "\n"
+    path = scratch / f"{hashlib.sha1(text.encode()).hexdigest()}-{os.getpid()}.obj"
+    path.write_text(text)
+    try:
+        yield str(path)
+    finally:
+        path.unlink(missing_ok=True)
 
 
 _WORLDS: dict[GripperSpec, SimWorld] = {}
