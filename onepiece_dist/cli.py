@@ -312,13 +312,17 @@ def export(
 def render(
     dataset: Annotated[Path, typer.Argument(help="Dataset path.")],
     out: Annotated[Path, typer.Option(help="PNG to write.")] = Path("assembly.png"),
+    grasps: Annotated[int, typer.Option(min=0, help="Also draw this many labelled grasps on the one object.")] = 0,
+    hand: Annotated[str, typer.Option(help="Gripper drawn in those: 'panda' (the Franka hand's meshes from "
+                                           "pybullet_data) or 'model' (the simulated boxes).")] = "panda",
 ) -> None:
-    """Draw the assembled object (patches coloured by plane) and a gallery of codes with their projections."""
+    """Draw the assembled object (patches coloured by plane), optionally labelled grasps with the gripper (green
+    held, red dropped), and a gallery of codes with their projections."""
     from onepiece_dist.service.render import render_assembly
 
     try:
-        render_assembly(dataset, out)
-    except (StoreError, FileNotFoundError) as err:
+        render_assembly(dataset, out, grasps, hand)
+    except (StoreError, FileNotFoundError, ValueError) as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
     typer.echo(str(out))

@@ -124,25 +124,77 @@ def test_render_writes_a_png_that_is_not_blank(small_dataset, tmp_path):
     png = tmp_path / "one.png"
     result = CliRunner().invoke(app, ["render", str(out), "--out", str(png)])
     assert result.exit_code == 0, result.output
-    data = png.read_bytes()
+    views = read_png(png)[:320]
+    coloured = np.sum(np.ptp(views.astype(int), axis=2) > 60)  # patch colours, not greys or white
+    assert coloured > 500
+
+
+def read_png(path) -> np.ndarray:
+    """(H, W, 3) uint8 of a PNG as write_png writes it (one IDAT, filter 0)."""
+    data = path.read_bytes()
     assert data.startswith(b"\x89PNG")
     width, height = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
     idat = data.index(b"IDAT")
     raw = zlib.decompress(data[idat + 4: idat + 4 + int.from_bytes(data[idat - 4:idat], "big")])
-    pixels = np.frombuffer(raw, np.uint8).reshape(height, width * 3 + 1)[:, 1:].reshape(height, width, 3)
-    views = pixels[:320]
-    coloured = np.sum(np.ptp(views.astype(int), axis=2) > 60)  # patch colours, not greys or white
-    assert coloured > 500
+    return np.frombuffer(raw, np.uint8).reshape(height, width * 3 + 1)[:, 1:].reshape(height, width, 3)
+
+
+def labelled_spec(tmp_path, perturbations: int, points: int):
+    """Two primitives through assembly and the label stage on the one object."""
+    from onepiece_dist.spec import JobSpec
+
+    return JobSpec(objects="primitives[0:2]", grasps_per_object=8, output=str(tmp_path / "ds.zarr"),
+                   sampler={"surface_points": 2000}, stages=("ingest", "extract", "dedup", "assemble", "label"),
+                   sim={"perturbations_per_patch": perturbations, "points_per_grasp": points})
+
+
+def test_the_panda_hand_is_drawn_on_the_gripper_frame():
+    from onepiece_dist.core.frames import pose_from_axes
+    from onepiece_dist.sim.hand import PANDA_GRASP_TARGET, model_parts, panda_parts
+
+    gripper = GripperSpec()
+    rng = np.random.default_rng(4)
+    pose = pose_from_axes(rng.normal(size=(1, 3)), rng.normal(size=(1, 3)), rng.normal(size=(1, 3)))[0]
+    (_, hand), (_, left), (_, right) = panda_parts(pose, 0.05, gripper)
+    centre = pose @ [gripper.closing_depth / 2, 0, 0, 1]
+    assert np.allclose(hand @ [0, 0, PANDA_GRASP_TARGET, 1], centre)  # the point between the pads
+    assert np.allclose(hand[:3, 2], pose[:3, 0]) and np.allclose(hand[:3, 1], pose[:3, 1])  # z = u, y = v
+    assert np.allclose(left[:3, 3] - right[:3, 3], 0.05 * pose[:3, 1])  # fingers 5 cm apart along v
+    boxes = model_parts(pose, 0.05, gripper)
+    gap = np.linalg.norm(boxes[1][1][:3, 3] - boxes[2][1][:3, 3]) - gripper.finger_thickness
+    assert np.isclose(gap, 0.05)
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_render_draws_labelled_grasps_with_the_panda_hand_or_the_model(tmp_path):
+    spec = labelled_spec(tmp_path, perturbations=1, points=32)
+    run_local(spec)
+    images = {}
+    for hand in ("panda", "model", None):
+        png = tmp_path / f"{hand}.png"
+        extra = ["--grasps", "3", "--hand", hand] if hand else []
+        result = CliRunner().invoke(app, ["render", spec.output, "--out", str(png), *extra])
+        assert result.exit_code == 0, result.output
+        images[hand] = read_png(png)
+    assert images["panda"].shape[0] == images[None].shape[0] + 320  # one row of grasps more
+    success = open_dataset(spec.output)["assembled/grasps/success"][:3]
+    for hand in ("panda", "model"):
+        row = images[hand][320:640].astype(int)
+        for k, held in enumerate(success):
+            cell = row[:, 320 * k:320 * (k + 1)]
+            green = (cell[..., 1] > cell[..., 0] + 40) & (cell[..., 1] > cell[..., 2] + 40)
+            red = (cell[..., 0] > cell[..., 1] + 60) & (cell[..., 0] > cell[..., 2] + 60)
+            assert (green if held else red).sum() > 300, (hand, k)  # the gripper, in the colour of its label
+    assert np.abs(images["panda"][320:640].astype(int) - images["model"][320:640]).sum() > 0
+    result = CliRunner().invoke(app, ["render", spec.output, "--grasps", "1", "--hand", "robotiq"])
+    assert result.exit_code == 2 and "robotiq" in result.output
 
 
 @pytest.mark.sim
 @pytest.mark.slow
 def test_label_stage_runs_the_protocol_around_each_patch_of_the_one_object(tmp_path):
-    from onepiece_dist.spec import JobSpec
-
-    spec = JobSpec(objects="primitives[0:2]", grasps_per_object=8, output=str(tmp_path / "ds.zarr"),
-                   sampler={"surface_points": 2000}, stages=("ingest", "extract", "dedup", "assemble", "label"),
-                   sim={"perturbations_per_patch": 2, "points_per_grasp": 64})
+    spec = labelled_spec(tmp_path, perturbations=2, points=64)
     status = run_local(spec)
     ds = open_dataset(spec.output)
     unique, placement = ds["unique/code"], ds["assembled/placement"]
