@@ -136,3 +136,18 @@ def test_lift_and_shake_path_turns_the_start_pose_about_world_z():
     assert np.isclose(max(angles), ROTATION_AMPLITUDE, atol=0.01)
     assert np.isclose(min(angles), -ROTATION_AMPLITUDE, atol=0.01)
     assert np.isclose(pivots[-1][2] - start[2, 3], 0.1)  # lifted 10 cm
+
+
+def test_a_cylinder_is_held_across_its_diameter_and_missed_beside_it():
+    from onepiece_dist.core.mesh import cylinder_mesh
+
+    mesh = cylinder_mesh(0.02, 0.1)  # axis z, centred at the origin
+    world = SimWorld(SPEC.gripper)
+    world.load_object([mesh.vertices], enclosed_volume(mesh), SPEC.gripper.friction)
+    palm = 0.02 + SPEC.gripper.closing_depth - 0.025  # fingertips 2.5 cm past the near side
+    side = pose_from_axes(np.array([[palm, 0, 0], [palm, 0, 0.08]]), np.array([[-1.0, 0, 0]] * 2),
+                          np.array([[0, 1.0, 0]] * 2))  # approach along -x, close along y
+    batch = run_trials(world, side, label=True)
+    world.close()
+    assert OUTCOMES[batch.outcome[0]] == "ok" and batch.success[0] and abs(batch.width[0] - 0.04) < 0.004
+    assert OUTCOMES[batch.outcome[1]] == "no_contact" and not batch.success[1]  # 3 cm above the top
