@@ -56,18 +56,21 @@ def render_grasps(reader: DatasetReader, mesh: tuple, count: int, hand: str) -> 
     gripper = GripperSpec.model_validate(reader.attrs["job_spec"]["gripper"])
     poses = reader["assembled/grasps/pose"][:count].astype(np.float64)
     widths, success = reader["assembled/grasps/width"][:count], reader["assembled/grasps/success"][:count]
+    vertices, faces, _ = mesh
     images = []
-    for pose, width, held in zip(poses, widths, success, strict=True):
-        client = pb.connect(pb.DIRECT)
-        try:
-            vertices, faces, _ = mesh
-            _add_mesh(pb, client, vertices, faces, np.zeros(len(faces), int), {0: GREY})
-            add_hand(pb, client, pose, float(width), gripper, hand, (0.3, 0.8, 0.3, 1) if held else (0.9, 0.3, 0.3, 1))
+    client = pb.connect(pb.DIRECT)
+    try:
+        _add_mesh(pb, client, vertices, faces, np.zeros(len(faces), int), {0: GREY})  # once; hands come and go
+        for pose, width, held in zip(poses, widths, success, strict=True):
+            colour = (0.3, 0.8, 0.3, 1) if held else (0.9, 0.3, 0.3, 1)
+            bodies = add_hand(pb, client, pose, float(width), gripper, hand, colour)
             centre = pose[:3, :3] @ [gripper.closing_depth / 2, 0, 0] + pose[:3, 3]
             look = pose[:3, :3] @ [-0.35, 0.2, 1.0]
             images.append(_snapshot(pb, client, centre, 0.2, look, up=pose[:3, 0]))
-        finally:
-            pb.disconnect(client)
+            for body in bodies:
+                pb.removeBody(body, physicsClientId=client)
+    finally:
+        pb.disconnect(client)
     return np.hstack(images) if images else np.full((VIEW, VIEW, 3), 255, dtype=np.uint8)
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.sim.world import quat_from_matrix
 from onepiece_dist.spec import GripperSpec
 
 PANDA_FINGER_JOINTS = 0.0584  # m along the hand's z
@@ -54,10 +55,9 @@ def model_parts(pose: np.ndarray, width: float, gripper: GripperSpec) -> list[tu
 
 
 def add_hand(pb, client: int, pose: np.ndarray, width: float, gripper: GripperSpec, hand: str,
-             rgba: tuple[float, float, float, float]) -> None:
-    """Add visual-only bodies that draw the gripper at ``pose`` to a pybullet ``client`` (``pb`` the module)."""
-    from onepiece_dist.sim.world import quat_from_matrix
-
+             rgba: tuple[float, float, float, float]) -> list[int]:
+    """Add visual-only bodies that draw the gripper at ``pose`` to a pybullet ``client`` (``pb`` the module);
+    returns their body ids."""
     if hand not in HANDS:
         raise ValueError(f"hand={hand!r}: expected one of {HANDS}")
     if hand == "panda":
@@ -67,9 +67,9 @@ def add_hand(pb, client: int, pose: np.ndarray, width: float, gripper: GripperSp
     else:
         shapes = [(pb.createVisualShape(pb.GEOM_BOX, halfExtents=half.tolist(), rgbaColor=rgba,
                                         physicsClientId=client), at) for half, at in model_parts(pose, width, gripper)]
-    for shape, at in shapes:
-        pb.createMultiBody(baseVisualShapeIndex=shape, basePosition=at[:3, 3].tolist(),
-                           baseOrientation=quat_from_matrix(at[:3, :3]), physicsClientId=client)
+    return [pb.createMultiBody(baseVisualShapeIndex=shape, basePosition=at[:3, 3].tolist(),
+                               baseOrientation=quat_from_matrix(at[:3, :3]), physicsClientId=client)
+            for shape, at in shapes]
 
 
 def panda_meshes() -> Path:

@@ -76,7 +76,7 @@ def close_fingers(world: SimWorld) -> int:
     for link in (0, 1):  # position control to "fully closed": the target doubles as the joint limit
         pb.setJointMotorControl2(g, link, pb.POSITION_CONTROL, targetPosition=spec.max_opening / 2,
                                  force=spec.closing_force, maxVelocity=CLOSE_SPEED, physicsClientId=c)
-    max_steps = int((spec.max_opening / 2 / CLOSE_SPEED + 0.1) / world.time_step)
+    max_steps = int((spec.max_opening / 2 / CLOSE_SPEED + 0.1) / world.physics.time_step)
     steps = 0
     while steps < max_steps:
         for _ in range(CHECK_EVERY):
@@ -84,7 +84,7 @@ def close_fingers(world: SimWorld) -> int:
         steps += CHECK_EVERY
         if steps > 2 * CHECK_EVERY and _stalled(world):
             break
-    settle = int(SETTLE_TIME / world.time_step)
+    settle = int(SETTLE_TIME / world.physics.time_step)
     for _ in range(settle):
         pb.stepSimulation(physicsClientId=c)
     return steps + settle
@@ -135,7 +135,7 @@ def lift_and_shake(world: SimWorld, start: np.ndarray) -> tuple[bool, float]:
     c = world.client
     pb.setGravity(0, 0, -9.81, physicsClientId=c)
     held = _object_in_gripper(world)
-    pivots, orientations = gripper_path(start, world.time_step)
+    pivots, orientations = gripper_path(start, world.physics.time_step)
     slip = 0.0
     for step, (pivot, orientation) in enumerate(zip(pivots, orientations, strict=True)):
         pb.changeConstraint(world.constraint, jointChildPivot=pivot, jointChildFrameOrientation=orientation,

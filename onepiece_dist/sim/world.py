@@ -78,7 +78,6 @@ class SimWorld:
     def __init__(self, gripper: GripperSpec, physics: PhysicsSettings = PhysicsSettings()):
         self.spec = gripper
         self.physics = physics
-        self.time_step = physics.time_step
         self.client = pb.connect(pb.DIRECT)
         pb.setTimeStep(physics.time_step, physicsClientId=self.client)
         pb.setPhysicsEngineParameter(numSolverIterations=physics.solver_iterations, deterministicOverlappingPairs=1,
