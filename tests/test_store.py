@@ -82,3 +82,23 @@ def test_example_reader_uses_only_zarr_and_numpy(spec_factory):
     assert "import onepiece_dist" not in script.read_text() and "from onepiece_dist" not in script.read_text()
     out = subprocess.run([sys.executable, str(script), spec.output], capture_output=True, text=True, check=True)
     assert "unique codes" in out.stdout
+
+
+def test_content_digest_sees_every_array_and_content_attribute_but_not_where_or_when(tmp_path):
+    from onepiece_dist.store.dataset import ObjectTable, content_digest, write_dataset
+
+    def dataset(name: str, width: float, seconds: float, label: str = "a") -> str:
+        path = str(tmp_path / name)
+        write_dataset(path, {"job_spec": {"output": path, "seed": 1}, "stats": {"seconds": seconds}, "tag": label},
+                      ObjectTable(["o"], ["00" * 16], np.array([1])),
+                      {"grasps": {"width": np.array([width], np.float32)}, "train": {"loss": np.ones(2)}})
+        return path
+
+    base = content_digest(dataset("a.zarr", 0.1, 1.0))
+    assert content_digest(dataset("b.zarr", 0.1, 9.0)) == base  # other path, other timing: same content
+    assert content_digest(dataset("c.zarr", 0.2, 1.0)) != base  # one float changed
+    assert content_digest(dataset("d.zarr", 0.1, 1.0, "b")) != base  # one content attribute changed
+    zarr.open_group(str(tmp_path / "a.zarr"), mode="a")["train/loss"][0] = 2.0
+    assert content_digest(str(tmp_path / "a.zarr")) != base
+    assert content_digest(str(tmp_path / "a.zarr"), training=False) == content_digest(
+        str(tmp_path / "b.zarr"), training=False)

@@ -202,3 +202,43 @@ def open_dataset(path: str | os.PathLike) -> DatasetReader:
 def disk_bytes(path: Path) -> int:
     """Bytes of the files under ``path``."""
     return sum(os.path.getsize(os.path.join(top, f)) for top, _, files in os.walk(path) for f in files)
+
+
+PLACE_KEYS = ("seconds", "output", "cache_dir", "checkpoint", "package_version")
+
+
+def content_digest(path: str | os.PathLike, training: bool = True) -> str:
+    """blake2b-128 hex of every array (path, dtype, shape, bytes, in path order) and of the root attributes that
+    describe content, so two datasets with the same digest hold the same data. Left out: timings, the package
+    version and where things were written (output, cache and checkpoint paths), so a job and its rerun elsewhere
+    compare equal. ``training=False`` also leaves out ``train/`` and the ``training`` attribute: float sums in
+    training depend on the thread count, so a trainer on one core and one on two differ in the last bits."""
+    import hashlib
+    import json
+
+    root = zarr.open_group(str(path), mode="r")
+    digest = hashlib.blake2b(digest_size=16)
+    _digest_group(digest, "", root, skip=() if training else ("train",))
+    attrs = {k: v for k, v in root.attrs.asdict().items() if training or k != "training"}
+    digest.update(json.dumps(_content_only(attrs), sort_keys=True).encode())
+    return digest.hexdigest()
+
+
+def _digest_group(digest, prefix: str, group, skip: tuple[str, ...] = ()) -> None:
+    for name, array in sorted(group.arrays(), key=lambda item: item[0]):
+        digest.update(f"{prefix}{name}:{array.dtype}:{array.shape}".encode())
+        digest.update(np.ascontiguousarray(array[...]).tobytes())
+    for name, sub in sorted(group.groups(), key=lambda item: item[0]):
+        if f"{prefix}{name}" not in skip:
+            _digest_group(digest, f"{prefix}{name}/", sub)
+
+
+def _content_only(value):
+    """``value`` without the mapping entries that say when or where, not what: durations (``seconds``,
+    ``*_seconds``, ``*_s``) and paths (``output``, ``cache_dir``, ``checkpoint``)."""
+    if isinstance(value, dict):
+        return {k: _content_only(v) for k, v in value.items()
+                if not (k in PLACE_KEYS or k.endswith("_seconds") or k.endswith("_s"))}
+    if isinstance(value, list):
+        return [_content_only(v) for v in value]
+    return value
