@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/bench_merge.py [--sizes 1,5,20] [--batch 2000] [--partitions 2]
 
 Synthetic 64-bit codes (the default 10 mm grid, 4 x 8 x 2 voxels) arrive in batches of one object's grasps and
-go through the merge path of the central actor: `DedupIndex.add` in process, and the `CentralDedup` Ray actor
+go through the merge path of the central actor: `DedupIndex.add` in process, and the `CentralActor` Ray actor
 fed as the extraction workers feed it (one `add.remote` per object with its codes); about 57 % are distinct.
 Beside it, in the same run:
   - the baseline: the previous index, which re-sorted the whole table on every batch (measured on 1 M codes);
@@ -29,7 +29,8 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from onepiece_dist.core.dedup import DedupIndex, merge_partitions, merge_unique, unique_codes  # noqa: E402
-from onepiece_dist.service.dedup_actor import CentralDedup, DedupShard, route_codes  # noqa: E402
+from onepiece_dist.service.central import CentralActor  # noqa: E402
+from onepiece_dist.service.dedup_shards import DedupShard, route_codes  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
 from onepiece_dist.store import PartStore  # noqa: E402
 
@@ -97,12 +98,12 @@ def partitioned_merge(total: int, batch: int, partitions: int) -> dict:
 
 
 def central_actor_merge(total: int, batch: int) -> dict:
-    """The job's path: each worker sends its object's codes to the CentralDedup Ray actor (``add.remote``)."""
+    """The job's path: each worker sends its object's codes to the CentralActor Ray actor (``add.remote``)."""
     import ray
 
     with tempfile.TemporaryDirectory() as folder:
         spec = JobSpec(output=str(Path(folder) / "ds.zarr"))
-        actor = ray.remote(num_cpus=0)(CentralDedup).remote(spec)
+        actor = ray.remote(num_cpus=0)(CentralActor).remote(spec)
         ray.get(actor.add.remote(-1, "", np.zeros((0, CODE_BYTES), np.uint8)))
         start, inflight = time.perf_counter(), []
         for k, codes in enumerate(synthetic_batches(total, batch)):
@@ -116,13 +117,13 @@ def central_actor_merge(total: int, batch: int) -> dict:
 
 
 def part_read_overhead(parts: int, batch: int) -> dict:
-    """CentralDedup.add on committed parts (read from the Zarr store, then merged)."""
+    """CentralActor.add on committed parts (read from the Zarr store, then merged)."""
     with tempfile.TemporaryDirectory() as folder:
         spec = JobSpec(output=str(Path(folder) / "ds.zarr"))
         store = PartStore(f"{spec.output}.parts")
         for k, codes in enumerate(synthetic_batches(parts * batch, batch, seed=1)):
             store.write(f"part{k:05d}", {"code": codes}, {})
-        central = CentralDedup(spec)
+        central = CentralActor(spec)
         start = time.perf_counter()
         for k in range(parts):
             central.add(k, f"part{k:05d}")

@@ -65,8 +65,8 @@ def run_arm(name: str, spec: JobSpec) -> dict:
             "generation_seconds": round(generation, 1), "train_seconds": round(status.timings.get("train", 0.0), 1),
             "label_trials": _label_trials(status, name), "labelled_grasps": int(
             ds.array(f"{labelled_group}/success").shape[0]), "labelled_data_bytes": _group_bytes(spec.output,
-            labelled_group), "dataset_bytes": disk_bytes(Path(spec.output)), "checkpoint": status.training[
-            "checkpoint"], "training": status.training["final"], "unique_codes": status.progress.unique_codes,
+            labelled_group), "dataset_bytes": disk_bytes(Path(spec.output)), "checkpoint": status.training.checkpoint,
+            "training": status.training.final, "unique_codes": status.progress.unique_codes,
             "grasps": status.progress.grasps}
 
 
@@ -88,7 +88,7 @@ def arm_specs(base: JobSpec, folder: Path, resolutions_mm: list[float], radii: l
 def _label_trials(status, arm: str) -> int:
     if arm == "A":
         return int(status.progress.grasps)  # every held candidate was lifted and shaken
-    return int(status.assembly.get("labels", {}).get("label_trials", 0))
+    return status.labels.label_trials if status.labels else 0
 
 
 def _group_bytes(dataset: str, group: str) -> int:

@@ -50,7 +50,7 @@ def merge_section(r: dict) -> list[str]:
              f"{parted[c['codes']]['largest_shard_state_bytes'] / 2**20:.0f} MiB"] for c in r["central"]]
     base, part = r["baseline_resort_each_batch"], r["part_read"]
     return [f"## Global merge: {provenance(r)}", "", *table(
-        ["codes", "unique", "merge, in process", "through the CentralDedup Ray actor", "dedup state",
+        ["codes", "unique", "merge, in process", "through the CentralActor Ray actor", "dedup state",
          "partitioned by hash prefix", "largest partition state"], rows), "",
         f"Batches of {r['batch']} codes (one object's grasps), 64-bit codes. Baseline in the same run (re-sort the "
         f"whole table per batch, the previous index): {base['codes_per_s'] / 1e6:.2f} M codes/s on "

@@ -1,12 +1,23 @@
 """OnePiece-Dist: cheap grasp datasets by the ONE PIECE method, on Ray.
 
-Layers (imports go downward only): ``core`` <- ``objects`` <- ``sim`` <- ``store`` <- ``learn`` <- ``service``
-<- ``api``, ``cli``. See docs/architecture.md.
+Layers (imports go downward only; docs/architecture.md, checked by tests/test_layers.py): ``core`` <- ``objects``
+<- ``sim``; ``store`` <- ``learn``; all of them <- ``service`` <- ``api`` <- ``cli``. ``spec`` and ``errors`` are
+under every layer (``store`` uses ``errors`` only).
 """
 
-from onepiece_dist.errors import JobError, MeshRejected, OnePieceError, SpecError, StoreError
+from onepiece_dist.errors import (
+    ActorLost,
+    ClusterUnreachable,
+    JobCancelled,
+    JobError,
+    MeshRejected,
+    MissingAssembly,
+    OnePieceError,
+    SpecError,
+    StoreError,
+)
 from onepiece_dist.spec import GripperSpec, JobSpec, SamplerSpec, VoxelSpec, load_job_spec
 
 __version__ = "0.1.0"
-__all__ = ["GripperSpec", "JobError", "JobSpec", "MeshRejected", "OnePieceError", "SamplerSpec", "SpecError",
-           "StoreError", "VoxelSpec", "load_job_spec"]
+__all__ = ["ActorLost", "ClusterUnreachable", "GripperSpec", "JobCancelled", "JobError", "JobSpec", "MeshRejected",
+           "MissingAssembly", "OnePieceError", "SamplerSpec", "SpecError", "StoreError", "VoxelSpec", "load_job_spec"]

@@ -16,9 +16,10 @@ import threading
 import time
 from pathlib import Path
 
-from onepiece_dist.errors import JobError, OnePieceError
+from onepiece_dist.errors import ClusterUnreachable, JobError
 from onepiece_dist.objects import resolve_source
-from onepiece_dist.service.local import ProgressFn, run_local
+from onepiece_dist.service.local import run_local
+from onepiece_dist.service.pipeline import ProgressFn
 from onepiece_dist.service.status import JobStatus, status_path
 from onepiece_dist.spec import JobSpec, default_job_id
 from onepiece_dist.store import DatasetReader, open_dataset
@@ -31,18 +32,14 @@ _RAY_JOB_STATES = {"PENDING": "pending", "RUNNING": "running", "SUCCEEDED": "suc
                    "STOPPED": "cancelled"}
 
 
-class ClusterUnreachable(OnePieceError, ConnectionError):
-    """No Ray cluster answers at the given address."""
-
-
 def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False, job_id: str | None = None,
             workers: int | None = None, progress: ProgressFn | None = None) -> JobStatus:
     """Run ``spec`` to completion here and return its final status: on an embedded Ray (default), on the
     cluster at ``address`` (this process is the driver), or without Ray (``in_process``)."""
     job_id = job_id or default_job_id(spec)
-    resolve_source(spec.objects)  # a bad source is a usage error, found before any Ray starts
+    refs = resolve_source(spec.objects)  # a bad source is a usage error, found before any Ray starts
     if in_process:
-        return run_local(spec, job_id=job_id, progress=progress)
+        return run_local(spec, job_id=job_id, progress=progress, refs=refs)
     import ray
 
     from onepiece_dist.service.ray_env import connect
@@ -51,7 +48,7 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
     started_here = not ray.is_initialized()
     _connect_or_raise(connect, address)
     try:
-        return run_on_ray(spec, job_id, workers=workers, progress=progress)
+        return run_on_ray(spec, job_id, workers=workers, progress=progress, refs=refs)
     finally:
         if started_here:
             ray.shutdown()
@@ -170,32 +167,22 @@ class Client:
         return status
 
     def _registry_status(self, job_id: str) -> JobStatus | None:
-        import ray
-
-        from onepiece_dist.service.registry import registry
-
-        if not ray.is_initialized():
-            return None
-        found = ray.get(registry().get.remote(job_id))
+        registry = _registry()
+        found = registry.get(job_id) if registry else None
         return JobStatus.model_validate(found) if found else None
 
     def cancel(self, job_id: str) -> None:
         if self.address is None:
-            import ray
-
-            from onepiece_dist.service.registry import registry
-
-            ray.get(registry().request_cancel.remote(job_id))
+            registry = _registry()
+            if registry:
+                registry.request_cancel(job_id)
         else:
             self.jobs_api().stop_job(job_id)
 
     def jobs(self) -> list[dict]:
         if self.address is None:
-            import ray
-
-            from onepiece_dist.service.registry import registry
-
-            return ray.get(registry().jobs.remote()) if ray.is_initialized() else []
+            registry = _registry()
+            return registry.jobs() if registry else []
         return [{"job_id": j.submission_id, "state": _RAY_JOB_STATES.get(str(j.status).split(".")[-1], "pending"),
                  "output": (j.metadata or {}).get("output", "")} for j in self.jobs_api().list_jobs()
                 if j.submission_id]
@@ -203,3 +190,11 @@ class Client:
     def logs(self, job_id: str) -> str:
         return self.jobs_api().get_job_logs(job_id)
 
+
+def _registry():
+    """The embedded Ray's job registry, or None when this process has no Ray."""
+    import ray
+
+    from onepiece_dist.service.registry import RegistryClient
+
+    return RegistryClient() if ray.is_initialized() else None

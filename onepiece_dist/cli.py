@@ -13,7 +13,7 @@ from typing import Annotated, Any
 
 import typer
 
-from onepiece_dist.errors import JobError, SourceError, SpecError, StoreError
+from onepiece_dist.errors import ClusterUnreachable, JobError, SourceError, SpecError, StoreError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE grasp-dataset generation.")
 
@@ -72,7 +72,7 @@ def _spec_or_exit(spec_file: Path | None, overrides: dict, spec_json: str | None
 
 
 def _run_and_report(spec, address, job_id, workers, in_process) -> None:
-    from onepiece_dist.api import ClusterUnreachable, run_job
+    from onepiece_dist.api import run_job
 
     try:
         status = run_job(spec, address=address, in_process=in_process, job_id=job_id, workers=workers,
@@ -92,13 +92,13 @@ def _run_and_report(spec, address, job_id, workers, in_process) -> None:
          f"{status.progress.grasps} grasps, {status.progress.unique_codes} unique codes")
     if status.assembly:
         a = status.assembly
-        trials = a.get("labels", {}).get("label_trials", a["label_trials_one_object"])
-        _err(f"one object: {a['unique_codes']} patches, {a['bounding_box_m']} m, fidelity {a['fidelity']:.1%}, "
-             f"{trials} label trials on it (labelling every grasp of every object: {a['label_trials_all_grasps']})")
+        trials = status.labels.label_trials if status.labels else a.label_trials_one_object
+        _err(f"one object: {a.unique_codes} patches, {a.bounding_box_m} m, fidelity {a.fidelity:.1%}, "
+             f"{trials} label trials on it (labelling every grasp of every object: {a.label_trials_all_grasps})")
     if status.training:
-        final = status.training["final"]
-        _err(f"trained {status.training['model']} for {status.training['epochs']} epochs: validation accuracy "
-             f"{final.get('val_accuracy', 0):.2f}, AP {final.get('val_ap', 0):.2f}")
+        t = status.training
+        _err(f"trained {t.model} for {t.epochs} epochs: validation accuracy "
+             f"{t.final.get('val_accuracy', 0):.2f}, AP {t.final.get('val_ap', 0):.2f}")
     typer.echo(status.output)
 
 
@@ -151,7 +151,7 @@ def _worker_runtime_env() -> dict | None:
 
 
 def _cluster_call(action, address: str | None):
-    from onepiece_dist.api import Client, ClusterUnreachable
+    from onepiece_dist.api import Client
 
     try:
         return action(Client(address))
@@ -301,7 +301,7 @@ def export(
         raise typer.Exit(EXIT_USAGE)
     try:
         written = export_assembly(dataset, fmt, out)
-    except (StoreError, FileNotFoundError) as err:
+    except StoreError as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
     for path in written:
@@ -343,7 +343,7 @@ def evaluate(
     spec = _spec_or_exit(None, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
     try:
         report = evaluate_model(model, spec)
-    except (SourceError, FileNotFoundError, ValueError) as err:
+    except (SourceError, StoreError, FileNotFoundError, ValueError) as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
     _print_mapping(report, as_json)

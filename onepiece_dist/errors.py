@@ -35,3 +35,19 @@ class StoreError(OnePieceError, OSError):
 
 class JobError(OnePieceError, RuntimeError):
     """A job failed or was cancelled."""
+
+
+class MissingAssembly(StoreError, FileNotFoundError):
+    """A stage or command needs the one object, and the dataset has none: run the assemble stage first."""
+
+
+class JobCancelled(JobError):
+    """A job was cancelled on request."""
+
+
+class ActorLost(JobError):
+    """A central actor (dedup/assembly, trainer, registry) stayed unreachable past its patience."""
+
+
+class ClusterUnreachable(OnePieceError, ConnectionError):
+    """No Ray cluster answers at the given address."""

@@ -186,6 +186,15 @@ class JobSpec(_Frozen):
     def grid_shape(self) -> tuple[int, int, int]:
         return self.voxel.grid_shape(self.gripper)
 
+    def runs(self, stage: Stage) -> bool:
+        """Whether this job runs ``stage``."""
+        return stage in self.stages
+
+    def parts_folder(self) -> str:
+        """Where per-object parts live: ``cache_dir`` (shared across jobs) or ``<output>.parts`` beside the
+        dataset."""
+        return self.cache_dir or f"{Path(self.output)}.parts"
+
     def code_bytes(self) -> int:
         a, b, c = self.grid_shape()
         return math.ceil(a * b * c / 8)

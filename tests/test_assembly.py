@@ -72,7 +72,7 @@ def test_assembled_object_reproduces_every_unique_code(small_dataset):
     ds = open_dataset(out)
     report = ds.attrs["assembly"]
     assert report["fidelity"] == 1.0 and report["fidelity_failures"] == [] and report["corridor_intrusions"] == 0
-    assert status.assembly["unique_codes"] == len(ds["unique/code"])
+    assert status.assembly.unique_codes == len(ds["unique/code"])
     assert {"extract", "dedup", "assemble"} <= set(status.timings) and "label" not in status.timings
     # recomputed here from the stored points and placements, independently of the stage's own check
     codes = region_codes(ds["assembled/points"].astype(np.float64), ds["assembled/placement"].astype(np.float64),
@@ -198,8 +198,8 @@ def test_label_stage_runs_the_protocol_around_each_patch_of_the_one_object(tmp_p
     status = run_local(spec)
     ds = open_dataset(spec.output)
     unique, placement = ds["unique/code"], ds["assembled/placement"]
-    labels = status.assembly["labels"]
-    assert labels["label_trials"] == len(unique) * 3 and labels["labelled_grasps"] > 0
+    labels = status.labels
+    assert labels.label_trials == len(unique) * 3 and labels.labelled_grasps > 0
     patch, candidate = ds["assembled/grasps/patch"], ds["assembled/grasps/candidate_pose"]
     at_placement = np.all(np.isclose(candidate, placement[patch], atol=1e-6), axis=(1, 2))
     assert at_placement.any()

@@ -1,3 +1,4 @@
+import ast
 import subprocess
 import sys
 from pathlib import Path
@@ -15,6 +16,69 @@ def test_core_imports_no_simulator_store_ray_or_torch():
             "print(sorted(m for m in ('pybullet', 'zarr', 'ray', 'torch') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+PACKAGE = ROOT / "onepiece_dist"
+# Each layer and what it may import: package layers below it, and the third-party libraries it is allowed to use.
+# The base modules (errors, spec) sit under every layer.
+BASE = {"errors", "spec"}
+LAYERS: dict[str, tuple[set[str], set[str]]] = {
+    "errors": (set(), set()),
+    "spec": ({"errors"}, {"pydantic", "yaml"}),
+    "core": (BASE, {"numpy", "open3d"}),  # open3d: raycasting in core.sampling, imported where used
+    "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic"}),
+    "sim": (BASE | {"core", "objects"}, {"numpy", "pybullet", "pybullet_data"}),
+    "store": ({"errors"}, {"numpy", "zarr", "pydantic"}),
+    "learn": ({"errors", "spec", "store"}, {"numpy", "torch", "zarr"}),
+    "service": (BASE | {"core", "objects", "sim", "store", "learn"},
+                {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil"}),
+    "api": (BASE | {"objects", "service", "store"}, {"ray"}),
+    "schemas": (BASE | {"objects", "service", "store"}, {"pydantic"}),
+    "cli": (BASE | {"api", "objects", "service", "store", "schemas"}, {"typer", "rich", "yaml", "pydantic"}),
+}
+STDLIB = set(sys.stdlib_module_names)
+
+
+def imports_of(path: Path) -> set[str]:
+    """Top-level names (``onepiece_dist.X`` as ``onepiece_dist.X``) of every import in a module, lazy ones too."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            modules = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            modules = [node.module]
+        else:
+            continue
+        for module in modules:
+            parts = module.split(".")
+            names.add(".".join(parts[:2]) if parts[0] == "onepiece_dist" else parts[0])
+    return names
+
+
+def layer_of(path: Path) -> str:
+    relative = path.relative_to(PACKAGE).parts
+    return relative[0] if len(relative) > 1 else path.stem
+
+
+MODULES = sorted(p for p in PACKAGE.rglob("*.py") if p.name != "__init__.py" or p.parent != PACKAGE)
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_every_module_imports_only_its_layer_and_those_below(path):
+    layer = layer_of(path)
+    below, libraries = LAYERS[layer]
+    for name in imports_of(path) - STDLIB - {"__future__"}:
+        if name.startswith("onepiece_dist."):
+            target = name.split(".")[1]
+            assert target in below | {layer}, f"{path.relative_to(ROOT)}: layer {layer} imports {name}"
+        else:
+            assert name in libraries, f"{path.relative_to(ROOT)}: layer {layer} imports {name}"
+
+
+def test_the_layer_guard_sees_a_forbidden_import(tmp_path):
+    module = tmp_path / "bad.py"
+    module.write_text("def f():\n    import ray\n    from onepiece_dist.service import pipeline\n")
+    assert imports_of(module) == {"ray", "onepiece_dist.service"}
 
 
 @pytest.mark.parametrize("name", sorted(render_schemas()))

@@ -13,6 +13,7 @@ import zarr
 from typer.testing import CliRunner
 
 from onepiece_dist.cli import app
+from onepiece_dist.errors import StoreError
 from onepiece_dist.learn import GraspDataset
 from onepiece_dist.learn.train import average_precision, load_checkpoint, load_model, predict, train_model
 from onepiece_dist.service.evaluate import top_ranked_success
@@ -56,7 +57,7 @@ def test_validation_split_never_splits_an_object(labelled):
 
 
 def test_missing_labels_give_a_clear_error(labelled):
-    with pytest.raises(ValueError, match="grasps/success is missing"):
+    with pytest.raises(StoreError, match="grasps/success is missing"):
         GraspDataset(labelled, "grasps")
 
 

@@ -76,12 +76,13 @@ def test_settled_codes_differ_from_static_on_a_concave_object_and_are_stored(tmp
 
 def test_robust_quality_is_the_success_fraction_over_perturbed_trials(box_world):
     from onepiece_dist.sim.trials import LabelNoise
+    from onepiece_dist.spec import SimSpec
 
-    noise = LabelNoise(trials=4)
+    noise = LabelNoise.from_spec(SimSpec(label_trials=4))
     good = run_trials(box_world, top_grasp(), label=True, noise=noise, rng=np.random.default_rng(0))
     assert good.quality[0] in (0.0, 0.25, 0.5, 0.75, 1.0) and good.quality[0] >= 0.75
     assert 0 <= good.slip[0] < 0.01  # the object barely moves in the hand while shaken
-    shaky = LabelNoise(trials=4, translation=0.03, friction=0.9)
+    shaky = LabelNoise.from_spec(SimSpec(label_trials=4, pose_noise=0.03, friction_noise=0.9))
     edge = run_trials(box_world, top_grasp(x_offset=0.012), label=True, noise=shaky, rng=np.random.default_rng(0))
     assert edge.quality[0] <= good.quality[0]
 

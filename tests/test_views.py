@@ -87,7 +87,7 @@ def test_a_job_with_partial_view_crops_runs_end_to_end_on_embedded_ray(ray_sessi
     assert final.state == "succeeded", final.error
     partial = open_dataset(spec.output)
     assert partial["views/camera"].shape == (4 * 12, 4, 4) and partial.has("assembled/grasps/points")
-    assert final.training["epochs"] >= 1 and partial.has("train/train_loss")
+    assert final.training.epochs >= 1 and partial.has("train/train_loss")
     assert min(grasp_points_in_chosen_view(partial)) > 0.99  # the crop is what the chosen camera saw
     full_spec = spec.model_copy(update={"views": spec.views.model_copy(update={"crop": "full"}),
                                         "stages": ("ingest", "extract", "dedup"),

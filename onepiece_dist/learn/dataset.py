@@ -14,6 +14,9 @@ import torch
 import zarr
 from torch.utils.data import Dataset, Sampler
 
+from onepiece_dist.errors import StoreError
+from onepiece_dist.store.format import format_problem
+
 
 class GraspDataset(Dataset):
     """Items: ``points`` (P, 3) float32 gripper-frame points, ``label`` () float32 success, ``quality`` ()
@@ -27,10 +30,11 @@ class GraspDataset(Dataset):
         self.path, self.group = str(path), group
         root = zarr.open_group(self.path, mode="r")
         attrs = root.attrs.asdict()
-        if attrs.get("onepiece_format") != 1 or not attrs.get("complete"):
-            raise ValueError(f"{self.path}: not a complete OnePiece dataset (format 1)")
+        problem = format_problem(attrs)
+        if problem:
+            raise StoreError(f"{self.path}: not a readable OnePiece dataset: {problem}")
         if f"{group}/success" not in root:
-            raise ValueError(f"{self.path}: {group}/success is missing: the dataset has no labels there "
+            raise StoreError(f"{self.path}: {group}/success is missing: the dataset has no labels there "
                              "(run the 'label' stage, or extract with sim.label: true)")
         self.grid_shape = tuple(attrs["grid_shape"])
         self.length = int(root[f"{group}/success"].shape[0])

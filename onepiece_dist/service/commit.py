@@ -5,17 +5,16 @@ Only this code writes the global arrays (``unique/``, ``grasps/*``), so there is
 
 from __future__ import annotations
 
-import time
 from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
 from onepiece_dist.core.dedup import DedupIndex
-from onepiece_dist.errors import JobError
-from onepiece_dist.service.extract import ObjectResult
+from onepiece_dist.service.results import CommitSummary, ObjectResult
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import GroupAppender, ObjectTable, begin_dataset, finish_dataset
+from onepiece_dist.store.format import CORE_GRASP_ARRAYS, GRASP_DTYPES, grasp_row_shape
 
 VIEW_PREFIX = "view_"  # per-object depth-view arrays in a part (not per grasp)
 
@@ -51,19 +50,16 @@ def _stats(results: list[ObjectResult]) -> dict:
             "settled_code_differs": sum(r.settled_code_differs for r in ok)}
 
 
-def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore, out: str,
-                   index: DedupIndex | None = None) -> dict:
-    """Merge the parts of the ok results (in object order) and write the dataset at ``out``, streaming: one part
-    and one chunk per array in memory at a time.
+def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
+                   index: DedupIndex) -> tuple[CommitSummary, np.ndarray]:
+    """Merge the parts of the ok results (in object order) and write the dataset at ``spec.output``, streaming:
+    one part and one chunk per array in memory at a time.
 
-    ``index`` : a DedupIndex that already holds every ok part's codes (the central actor's running state)
+    index : a DedupIndex that already holds every ok part's codes (the central actor's running state)
+    returns : the summary, and the (U, B) uint8 codes written to ``unique/code``
     """
-    start = time.perf_counter()
+    out = spec.output
     ok = sorted((r for r in results if r.status == "ok"), key=lambda r: r.index)
-    if index is None:
-        index = DedupIndex(spec.code_bytes())
-        for result in ok:
-            index.add(parts.read_array(result.part_key, "code"))
     clusters = _similar_clusters(spec, index)
     begin_dataset(out, dataset_attrs(spec, results))
     shapes = [parts.array_shapes(r.part_key) for r in ok]
@@ -82,11 +78,11 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     if views is not None:
         views.close()
     objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
-    finish_dataset(out, objects, _unique_groups(index, clusters))
-    unique = len(index) if clusters is None else len(clusters.representative)
-    summary = {"grasps": int(layout["code"][0]), "unique_codes": int(unique),
-               "exact_unique_codes": int(len(index)), "seconds": {"dedup": time.perf_counter() - start}}
-    return {**summary, **assembly_stages(spec, out, summary["seconds"])} if len(index) else summary
+    groups = _unique_groups(index, clusters)
+    finish_dataset(out, objects, groups)
+    summary = CommitSummary(grasps=int(layout["code"][0]), unique_codes=len(groups["unique"]["code"]),
+                            exact_unique_codes=len(index))
+    return summary, groups["unique"]["code"]
 
 
 def _similar_clusters(spec: JobSpec, index: DedupIndex):
@@ -118,20 +114,15 @@ def _unique_groups(index: DedupIndex, clusters) -> dict[str, dict[str, np.ndarra
 
 
 def _grasp_layout(shapes: list[dict], code_bytes: int, similar: bool) -> dict[str, tuple[int, tuple, np.dtype]]:
-    """Final length, row shape and dtype of every grasps/ array, from the parts' metadata."""
-    if not shapes:
-        first = {"pose": ((0, 4, 4), np.dtype(np.float32)), "candidate_pose": ((0, 4, 4), np.dtype(np.float32)),
-                 "width": ((0,), np.dtype(np.float32)), "code": ((0, code_bytes), np.dtype(np.uint8)),
-                 "candidate_code": ((0, code_bytes), np.dtype(np.uint8))}
+    """Final length, row shape and dtype of every grasps/ array, from the parts' metadata (the schema's core
+    arrays when no object was accepted)."""
+    if shapes:
+        rows = {name: shape[1:] for name, (shape, _) in shapes[0].items() if not name.startswith(VIEW_PREFIX)}
     else:
-        first = {name: spec for name, spec in shapes[0].items() if not name.startswith(VIEW_PREFIX)}
+        rows = {name: grasp_row_shape(name, code_bytes, 0) for name in CORE_GRASP_ARRAYS}
+    names = [*rows, "object", "code_index", *(["exact_index"] if similar else [])]
     total = sum(shape["code"][0][0] for shape in shapes)
-    layout = {name: (total, shape[1:], dtype) for name, (shape, dtype) in first.items()}
-    layout["object"] = (total, (), np.dtype(np.int32))
-    layout["code_index"] = (total, (), np.dtype(np.int64))
-    if similar:
-        layout["exact_index"] = (total, (), np.dtype(np.int64))
-    return layout
+    return {name: (total, rows.get(name, ()), GRASP_DTYPES[name]) for name in names}
 
 
 def _view_layout(shapes: list[dict]) -> dict[str, tuple[int, tuple, np.dtype]]:
@@ -146,40 +137,3 @@ def _view_rows(view_arrays: dict[str, np.ndarray], k: int, cameras_before: int) 
     cameras = view_arrays["view_camera"]
     return {"camera": cameras, "camera_object": np.full(len(cameras), k, dtype=np.int32),
             "points": view_arrays["view_points"], "point_camera": view_arrays["view_of_point"] + cameras_before}
-
-
-def assembly_stages(spec: JobSpec, out: str, seconds: dict | None = None) -> dict:
-    """The assemble and label stages (as requested) on the committed dataset at ``out``; their wall times are
-    added to ``seconds``."""
-    from onepiece_dist.service.assemble import assemble_dataset
-    from onepiece_dist.service.label_one import label_assembly
-    from onepiece_dist.store.dataset import DatasetReader
-
-    seconds = {} if seconds is None else seconds
-    start = time.perf_counter()
-    if "assemble" in spec.stages:
-        assembly = assemble_dataset(spec, out)
-        seconds["assemble"] = time.perf_counter() - start
-    elif "label" in spec.stages:
-        assembly = dict(DatasetReader(out).attrs.get("assembly", {}))
-        if not assembly:
-            raise JobError(f"{out}: the label stage needs an assembled object (run the assemble stage first)")
-    else:
-        return {}
-    if "label" in spec.stages:
-        start = time.perf_counter()
-        assembly["labels"] = label_assembly(spec, out, spec.sim.perturbations_per_patch)
-        seconds["label"] = time.perf_counter() - start
-    return {"assembly": assembly}
-
-
-def existing_summary(spec: JobSpec, out: str) -> dict:
-    """Counts of a committed dataset, for a job that runs only later stages on it."""
-    from onepiece_dist.store.dataset import DatasetReader
-
-    reader, seconds = DatasetReader(out), {}
-    return {"grasps": int(reader.array("grasps/code").shape[0]),
-            "unique_codes": int(reader.array("unique/code").shape[0]), **assembly_stages(spec, out, seconds),
-            "seconds": seconds}
-
-

@@ -7,7 +7,6 @@ part, and returns a small :class:`ObjectResult` (no large arrays travel back).
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -17,36 +16,10 @@ from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_cand
 from onepiece_dist.core.voxel import canonical_codes, crop_codes, crop_points
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
+from onepiece_dist.service.results import ObjectResult
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
-
-
-@dataclass(frozen=True)
-class ObjectResult:
-    """Summary of one object's extraction; ``status`` is 'ok' or 'rejected' (with ``reason``)."""
-
-    index: int
-    name: str
-    status: str
-    reason: str = ""
-    content_id: str = ""
-    part_key: str = ""
-    grasps: int = 0
-    empty_crops: int = 0
-    candidates_tried: int = 0
-    collisions: int = 0
-    settled_code_differs: int = 0
-    reused: bool = False
-    seconds: float = 0.0
-    node: str = ""
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-
-def parts_for(spec: JobSpec) -> PartStore:
-    """Parts live in ``spec.cache_dir`` (shared across jobs) or beside the dataset in ``<output>.parts``."""
-    return PartStore(spec.cache_dir or f"{Path(spec.output)}.parts")
+from onepiece_dist.store.format import grasp_arrays
 
 
 def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) -> ObjectResult:
@@ -91,8 +64,7 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
     codes, static, source = codes[keep], static[keep], source[keep]
     if spec.voxel.canonical:
         codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
-    arrays = {**{k: v.astype(np.float32) if v.dtype.kind == "f" else v for k, v in grasps.items()},
-              "code": codes, "candidate_code": static}
+    arrays = grasp_arrays({**grasps, "code": codes, "candidate_code": static})
     if spec.sim.points_per_grasp:
         arrays["points"] = _grasp_points(clouds, source, grasps["pose"], spec, rng)
     if views is not None:
@@ -115,7 +87,7 @@ def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
     world = process_world(spec.gripper)
     world.load_object(convex_pieces(mesh, collision_dir, spec.sim.collision), enclosed_volume(mesh),
                       spec.gripper.friction)
-    noise = LabelNoise(spec.sim.label_trials, spec.sim.pose_noise, spec.sim.rotation_noise, spec.sim.friction_noise)
+    noise = LabelNoise.from_spec(spec.sim)
     batch = run_trials(world, cands.poses, label=spec.sim.label, noise=noise,
                        rng=object_rng(mesh.content_id, spec.seed, stream=1))
     ok = batch.outcome == 0

@@ -18,8 +18,10 @@ from onepiece_dist.core.layout import box_arrays, cube_points
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_points
+from onepiece_dist.service.status import LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.dataset import DatasetReader, write_group
+from onepiece_dist.store.format import grasp_arrays
 
 SUPPORT_THICKNESS = 0.01  # m
 
@@ -61,33 +63,33 @@ def perturbed_poses(count: int, rng: np.random.Generator, shift: float = 0.004, 
     return np.concatenate([np.eye(4)[None], poses])
 
 
-def label_assembly(spec: JobSpec, path: str | os.PathLike, perturbations: int = 4) -> dict:
-    """Run the label protocol around every patch; store ``assembled/grasps/`` and return counts."""
+def label_assembly(spec: JobSpec, path: str | os.PathLike, pitch: list[float]) -> LabelReport:
+    """Run the label protocol around every patch (``spec.sim.perturbations_per_patch`` perturbed poses besides
+    the placement); store ``assembled/grasps/`` and return counts. ``pitch`` is the assembly's patch cell (m)."""
     from onepiece_dist.sim.trials import LabelNoise, run_trials
     from onepiece_dist.sim.world import process_world
 
     reader = DatasetReader(path)
     placements = reader["assembled/placement"].astype(np.float64)
     centres, owner = reader["assembled/cube_centre"].astype(np.float64), reader["assembled/cube_patch"]
-    report = reader.attrs["assembly"]
-    edge, pitch = 0.8 * spec.voxel.resolution, tuple(report["grid_pitch_m"])
+    edge, perturbations = 0.8 * spec.voxel.resolution, spec.sim.perturbations_per_patch
     world = process_world(spec.gripper)
-    noise = LabelNoise(spec.sim.label_trials, spec.sim.pose_noise, spec.sim.rotation_noise, spec.sim.friction_noise)
+    noise = LabelNoise.from_spec(spec.sim)
     rows: dict[str, list] = {k: [] for k in ("patch", "pose", "candidate_pose", "width", "shift", "success",
                                              "quality", "slip", "code", "candidate_code", "points")}
     for k, placement in enumerate(placements):
         local = (centres[owner == k] - placement[:3, 3]) @ placement[:3, :3]  # cube centres in the patch frame
-        pieces, volume = patch_body(local, edge, pitch, spec)
+        pieces, volume = patch_body(local, edge, tuple(pitch), spec)
         world.load_object(pieces, volume, spec.gripper.friction)
         rng = object_rng(f"{k:032x}", spec.seed, stream=2)
         poses = perturbed_poses(perturbations, rng)
         batch = run_trials(world, poses, label=True, noise=noise, rng=rng)
         _collect(rows, k, placement, local, edge, poses, batch, spec, rng)
     arrays = {name: np.concatenate(values) if values else np.zeros(0) for name, values in rows.items()}
-    summary = {"label_trials": int(len(placements) * (1 + perturbations) * spec.sim.label_trials),
-               "labelled_grasps": int(len(arrays["patch"])),
-               "success_rate": float(np.mean(arrays["success"])) if len(arrays["patch"]) else 0.0}
-    write_group(path, "assembled/grasps", arrays, {"assembly_labels": summary})
+    summary = LabelReport(label_trials=int(len(placements) * (1 + perturbations) * spec.sim.label_trials),
+                          labelled_grasps=int(len(arrays["patch"])),
+                          success_rate=float(np.mean(arrays["success"])) if len(arrays["patch"]) else 0.0)
+    write_group(path, "assembled/grasps", grasp_arrays(arrays), {"assembly_labels": summary.model_dump(mode="json")})
     return summary
 
 
@@ -98,14 +100,13 @@ def _collect(rows, k, placement, local, edge, poses, batch, spec, rng) -> None:
     points = patch_cloud(local, edge, spec)
     settled = batch.settled_pose[ok]
     grid, res = spec.grid_shape(), spec.voxel.resolution
-    rows["patch"].append(np.full(int(ok.sum()), k, dtype=np.int32))
-    rows["pose"].append((placement @ settled).astype(np.float32))
-    rows["candidate_pose"].append((placement @ poses[ok]).astype(np.float32))
-    for name in ("width", "shift", "quality", "slip"):
-        rows[name].append(getattr(batch, name)[ok].astype(np.float32))
-    rows["success"].append(batch.success[ok].astype(np.uint8))
+    rows["patch"].append(np.full(int(ok.sum()), k))
+    rows["pose"].append(placement @ settled)
+    rows["candidate_pose"].append(placement @ poses[ok])
+    for name in ("width", "shift", "quality", "slip", "success"):
+        rows[name].append(getattr(batch, name)[ok])
     rows["code"].append(crop_codes(points, settled, grid, res)[0])
     rows["candidate_code"].append(crop_codes(points, poses[ok], grid, res)[0])
     count = max(spec.sim.points_per_grasp, 1)
     rows["points"].append(np.stack([resample_points(crop_points(points, p, grid, res), count, rng)
-                                    for p in settled]).astype(np.float16))
+                                    for p in settled]))

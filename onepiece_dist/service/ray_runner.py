@@ -1,58 +1,52 @@
-"""The Ray driver of a job: extraction worker actors fed with bounded in-flight work (``ray.wait``), a central
-dedup actor, the registry, retries of objects whose worker died, quarantine of poison objects, cancellation.
+"""The Ray runtime of a job's pipeline: extraction worker actors fed with bounded in-flight work (``ray.wait``),
+the central actor and the trainer behind their clients, the registry, retries of objects whose worker died,
+quarantine of poison objects, cancellation.
 
-Workers write their objects' parts themselves and return small :class:`ObjectResult` summaries; no large array
-travels through Ray's object store. The same per-object function and commit as the in-process runner, so both
-give the same dataset, with or without faults.
+Workers write their objects' parts themselves, send their codes to the central actor and return small
+:class:`ObjectResult` summaries; no large array travels back to the driver. The same pipeline, per-object
+function and central actor as the in-process runner, so both give the same dataset, with or without faults.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import time
 from collections import deque
+from collections.abc import Callable
 
-from onepiece_dist.errors import JobError
-from onepiece_dist.objects import ObjectRef, resolve_source
-from onepiece_dist.service.dedup_actor import CentralDedup
-from onepiece_dist.service.extract import ObjectResult, extract_object, parts_for
-from onepiece_dist.service.local import ProgressFn, finish, record_result
-from onepiece_dist.service.registry import on_this_node, registry
+from onepiece_dist.errors import JobCancelled, JobError
+from onepiece_dist.objects import ObjectRef
+from onepiece_dist.service.actors import restartable_actor
+from onepiece_dist.service.central import CentralClient, central_name
+from onepiece_dist.service.extract import extract_object
+from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
+from onepiece_dist.service.registry import RegistryClient
+from onepiece_dist.service.results import ObjectResult
 from onepiece_dist.service.status import JobStatus
+from onepiece_dist.service.trainer import TrainerClient
 from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import PartStore
 
 IN_FLIGHT_PER_WORKER = 2
 MAX_ATTEMPTS = 3  # an object whose worker dies this many times is quarantined
 POLL_SECONDS = 0.5
-ACTOR_PATIENCE_S = 120.0  # how long a central actor may take to come back
 
 
 class ExtractionWorker:
     """One pybullet client per actor. A plain class, testable without Ray."""
 
-    def __init__(self, spec: JobSpec, dedup_name: str | None = None):
+    def __init__(self, spec: JobSpec, central: str | None = None):
         self.spec = spec
-        self.parts = parts_for(spec)
-        self.dedup_name = dedup_name
+        self.parts = PartStore(spec.parts_folder())
+        self.central = central
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
-        """Extract one object; its codes go straight to the central dedup actor (named ``dedup_name``), so the
-        central path need not read parts (it still does when a message is lost: the driver's own call)."""
+        """Extract one object; its codes go to the central actor (named ``central``), once. When that message
+        is lost (the actor restarting), the central actor's commit reads them from the part instead."""
         result = extract_object(self.spec, ref, index, self.parts)
-        if self.dedup_name and result.status == "ok":
-            self._send_codes(index, result.part_key)
+        central = CentralClient.find(self.central) if self.central and result.status == "ok" else None
+        if central is not None:
+            central.send_codes(index, result.part_key, self.parts.read_array(result.part_key, "code"))
         return dataclasses.replace(result, node=_node_id())
-
-    def _send_codes(self, index: int, part_key: str) -> None:
-        import ray
-
-        from onepiece_dist.service.ray_env import NAMESPACE
-
-        try:
-            dedup = ray.get_actor(self.dedup_name, namespace=NAMESPACE)
-        except ValueError:  # restarting or gone: the driver's add() reads the part instead
-            return
-        dedup.add.remote(index, part_key, self.parts.read_array(part_key, "code"))
 
 
 def _node_id() -> str:
@@ -71,87 +65,45 @@ def worker_count(spec_workers: int | None, objects: int) -> int:
     return max(1, min(spec_workers or cpus, objects or 1))
 
 
-def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None,
-               progress: ProgressFn | None = None) -> JobStatus:
-    """Run the job on the connected Ray. Raises :class:`JobError` if it fails, is cancelled, or a job with the
-    same id is already running."""
-    import ray
-
-    reg = registry()
-    status = JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output,
-                       spec=spec.model_dump(mode="json"))
-    if not ray.get(reg.claim.remote(job_id, status.model_dump(mode="json"))):
+def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress: ProgressFn | None = None,
+               refs: list[ObjectRef] | None = None) -> JobStatus:
+    """Run the job's pipeline on the connected Ray, on ``refs`` (default: resolved from ``spec.objects``).
+    Raises :class:`JobError` if it fails, is cancelled, or a job with the same id is already running."""
+    registry = RegistryClient()
+    status = new_status(spec, job_id)
+    if not registry.claim(job_id, status.model_dump(mode="json")):
         raise JobError(f"job {job_id} is already running")
-    actors: list = []
-    try:
-        refs = resolve_source(spec.objects)
-        status.progress.objects_total = len(refs)
-        parts = parts_for(spec)
-        parts.remove_stale_temporaries()
-        dedup = _actor(CentralDedup, f"dedup-{job_id}", num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
-        actors = [dedup] + [_actor(ExtractionWorker, f"extract-{job_id}-{k}", num_cpus=1,
-                                   scheduling_strategy="SPREAD").remote(spec, f"dedup-{job_id}")
-                            for k in range(worker_count(workers, len(refs)))]
-        status.stage = "extract"
-        t0 = time.perf_counter()
-        pool = ExtractionPool(actors[1:], dedup, reg, status, progress)
-        results = pool.run(refs if "extract" in spec.stages else [])
-        status.timings["extract"] = time.perf_counter() - t0
-        for worker in actors[1:]:
-            ray.kill(worker)  # free their CPUs for the trainer
-        done = finish(spec, status, results, parts, commit=lambda rs: _call(dedup.commit, rs),
-                      train=lambda s: _train_remote(s, actors))
-        ray.get(reg.update.remote(job_id, done.model_dump(mode="json")))
-        return done
-    except BaseException as err:
-        status.state = "cancelled" if isinstance(err, JobCancelled) else "failed"
-        status.error = f"{type(err).__name__}: {err}"
-        status.save(spec.output)
-        ray.get(reg.update.remote(job_id, status.model_dump(mode="json")))
-        raise JobError(f"job {job_id} {status.state}: {err}") from err
-    finally:
-        for actor in actors:
-            ray.kill(actor)
+    PartStore(spec.parts_folder()).remove_stale_temporaries()
+    central = CentralClient.start(spec, job_id)
+    clients = [central]
 
+    def report(current: JobStatus) -> None:
+        current.save(spec.output)
+        registry.update(job_id, current.model_dump(mode="json"), wait=current.state != "running")
+        if progress:
+            progress(current)
 
-def _train_remote(spec: JobSpec, actors: list) -> dict:
-    import ray
+    def extract(refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
+        import ray
 
-    from onepiece_dist.service.trainer import remote_trainer
-
-    trainer = remote_trainer()
-    actors.append(trainer)
-    return ray.get(trainer.fit.remote(spec))
-
-
-class JobCancelled(Exception):
-    pass
-
-
-def _actor(cls, name: str, **options):
-    """Restartable named actor; methods are not retried by Ray (the pool decides what to re-run)."""
-    import ray
-
-    from onepiece_dist.service.ray_env import NAMESPACE
-
-    return ray.remote(cls).options(name=name, namespace=NAMESPACE, max_restarts=-1, max_task_retries=0,
-                                   **options)
-
-
-def _call(method, *args, patience_s: float = ACTOR_PATIENCE_S):
-    """Call an actor method; while the actor is unavailable or restarting (its state is rebuilt from the store),
-    try again for up to ``patience_s`` seconds."""
-    import ray
-    from ray.exceptions import RayActorError
-
-    deadline = time.monotonic() + patience_s
-    while True:
+        actors = [restartable_actor(ExtractionWorker, f"extract-{job_id}-{k}", num_cpus=1,
+                                    scheduling_strategy="SPREAD").remote(spec, central_name(job_id))
+                  for k in range(worker_count(workers, len(refs)))]
         try:
-            return ray.get(method.remote(*args))
-        except RayActorError:
-            if time.monotonic() > deadline:
-                raise
-            time.sleep(0.5)
+            return ExtractionPool(actors, registry, status, on_result).run(refs)
+        finally:
+            for actor in actors:
+                ray.kill(actor)  # free their CPUs for the trainer
+
+    def train(train_spec: JobSpec):
+        clients.append(TrainerClient.start())
+        return clients[-1].fit(train_spec)
+
+    try:
+        return run_pipeline(spec, status, Runtime(extract=extract, central=central, train=train), report, refs)
+    finally:
+        for client in clients:
+            client.kill()
 
 
 class ExtractionPool:
@@ -162,8 +114,9 @@ class ExtractionPool:
     quarantined; innocent objects that only shared a worker with it are never counted against.
     """
 
-    def __init__(self, actors: list, dedup, reg, status: JobStatus, progress: ProgressFn | None):
-        self.actors, self.dedup, self.reg, self.status, self.progress = actors, dedup, reg, status, progress
+    def __init__(self, actors: list, registry: RegistryClient, status: JobStatus,
+                 on_result: Callable[[ObjectResult], None]):
+        self.actors, self.registry, self.status, self.on_result = actors, registry, status, on_result
         self.pending: dict = {}  # ObjectRef -> (index, object ref, actor position, alone)
         self.attempts: dict[int, int] = {}
         self.suspects: set[int] = set()
@@ -177,7 +130,7 @@ class ExtractionPool:
         todo = deque(enumerate(refs))
         results: list[ObjectResult] = []
         while todo or self.pending:
-            if _call(self.reg.cancel_requested, self.status.job_id):
+            if self.registry.cancel_requested(self.status.job_id):
                 raise JobCancelled(f"cancelled after {len(results)} of {len(refs)} objects")
             self._note_started()
             self._fill(todo)
@@ -187,7 +140,7 @@ class ExtractionPool:
                 result = self._collect(ref, todo)
                 if result is not None:
                     results.append(result)
-                    self._record(result)
+                    self.on_result(result)
         return sorted(results, key=lambda r: r.index)
 
     def _note_started(self) -> None:
@@ -245,12 +198,3 @@ class ExtractionPool:
                                     f"{self.attempts[index]} times while running it alone ({type(err).__name__})")
             todo.appendleft((index, ref))
             return None
-
-    def _record(self, result: ObjectResult) -> None:
-        record_result(self.status, result)
-        if result.status == "ok":
-            self.status.progress.unique_codes = _call(self.dedup.add, result.index, result.part_key)
-        self.status.save(self.status.output)
-        self.reg.update.remote(self.status.job_id, self.status.model_dump(mode="json"))
-        if self.progress:
-            self.progress(self.status)

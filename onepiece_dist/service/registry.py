@@ -1,10 +1,12 @@
 """Job registry: a named detached actor (namespace ``onepiece``, ``num_cpus=0``) holding job states.
 
-:class:`JobRegistry` is a plain class, usable and tested without Ray; :func:`registry` wraps it as the
+:class:`JobRegistry` is a plain class, usable and tested without Ray; :class:`RegistryClient` reaches the
 cluster-wide actor. Each job's status is also written beside its dataset, so it outlives the cluster.
 """
 
 from __future__ import annotations
+
+from onepiece_dist.service.actors import ActorClient
 
 ACTIVE = ("pending", "running")
 REGISTRY_NAME = "onepiece-registry"
@@ -45,15 +47,36 @@ class JobRegistry:
         return job_id in self._cancel
 
 
-def registry():
+class RegistryClient(ActorClient):
     """The cluster's registry actor (created on first use; needs a connected Ray)."""
-    import ray
 
-    from onepiece_dist.service.ray_env import NAMESPACE
+    def __init__(self):
+        import ray
 
-    actor = ray.remote(num_cpus=0, max_restarts=-1)(JobRegistry)
-    return actor.options(name=REGISTRY_NAME, namespace=NAMESPACE, lifetime="detached", get_if_exists=True,
-                         scheduling_strategy=on_this_node()).remote()
+        from onepiece_dist.service.ray_env import NAMESPACE
+
+        actor = ray.remote(num_cpus=0, max_restarts=-1)(JobRegistry)
+        handle = actor.options(name=REGISTRY_NAME, namespace=NAMESPACE, lifetime="detached", get_if_exists=True,
+                               scheduling_strategy=on_this_node()).remote()
+        super().__init__(handle, "job registry")
+
+    def claim(self, job_id: str, status: dict) -> bool:
+        return self.call("claim", job_id, status)
+
+    def update(self, job_id: str, status: dict, wait: bool = True) -> None:
+        (self.call if wait else self.send)("update", job_id, status)
+
+    def get(self, job_id: str) -> dict | None:
+        return self.call("get", job_id)
+
+    def jobs(self) -> list[dict]:
+        return self.call("jobs")
+
+    def request_cancel(self, job_id: str) -> bool:
+        return self.call("request_cancel", job_id)
+
+    def cancel_requested(self, job_id: str) -> bool:
+        return self.call("cancel_requested", job_id)
 
 
 def on_this_node():

@@ -13,6 +13,7 @@ import numpy as np
 
 from onepiece_dist.core.classifier import projections
 from onepiece_dist.core.voxel import unpack_codes
+from onepiece_dist.errors import MissingAssembly
 from onepiece_dist.store.dataset import DatasetReader
 
 VIEW = 320
@@ -27,7 +28,7 @@ def render_assembly(path: str | os.PathLike, out: str | os.PathLike, grasps: int
     of its first codes; returns the PNG path."""
     reader = DatasetReader(path)
     if not reader.has("assembled/vertices"):
-        raise FileNotFoundError(f"{path}: no assembled object (run the assemble stage)")
+        raise MissingAssembly(f"{path}: no assembled object (run the assemble stage)")
     mesh = reader["assembled/vertices"], reader["assembled/faces"], reader["assembled/face_group"]
     rows = [render_views(*mesh)]
     if grasps > 0:
@@ -52,7 +53,7 @@ def render_grasps(reader: DatasetReader, mesh: tuple, count: int, hand: str) -> 
     from onepiece_dist.spec import GripperSpec
 
     if not reader.has("assembled/grasps/pose"):
-        raise FileNotFoundError(f"{reader.path}: no labelled grasps on the one object (run the label stage)")
+        raise MissingAssembly(f"{reader.path}: no labelled grasps on the one object (run the label stage)")
     gripper = GripperSpec.model_validate(reader.attrs["job_spec"]["gripper"])
     poses = reader["assembled/grasps/pose"][:count].astype(np.float64)
     widths, success = reader["assembled/grasps/width"][:count], reader["assembled/grasps/success"][:count]

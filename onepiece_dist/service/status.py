@@ -34,6 +34,46 @@ class Progress(BaseModel):
     unique_codes: int = 0
 
 
+class _Report(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class AssemblyReport(_Report):
+    """What the assemble stage built (also the dataset's ``assembly`` attribute)."""
+
+    unique_codes: int = Field(description="Patches on the one object (one per unique code or cluster).")
+    grasps_represented: int = Field(description="Extracted grasps whose codes the patches stand for.")
+    plane_counts: dict[str, int] = Field(description="Patches per projection plane (uv, ut, vt).")
+    bounding_box_m: list[float]
+    patch_density_per_m2: float
+    grid_pitch_m: list[float] = Field(description="Cell size of the patch grid on the core's faces (m).")
+    fidelity: float = Field(description="Share of placements whose crop reproduces the unique code.")
+    fidelity_failures: list[int] = Field(description="First 100 patches whose crop does not.")
+    corridor_intrusions: int = Field(description="Points of other patches inside a patch's approach corridor.")
+    label_trials_one_object: int
+    label_trials_all_grasps: int
+
+
+class LabelReport(_Report):
+    """What the label stage on the one object did (also the dataset's ``assembly_labels`` attribute)."""
+
+    label_trials: int
+    labelled_grasps: int
+    success_rate: float
+
+
+class TrainingReport(_Report):
+    """What the train stage fitted (also the dataset's ``training`` attribute)."""
+
+    model: str
+    data: str
+    epochs: int
+    stopped_early: bool
+    checkpoint: str
+    device: str
+    final: dict[str, float | int] = Field(description="Metrics of the last epoch.")
+
+
 class JobStatus(BaseModel):
     """State of one job. ``timings`` holds seconds per stage."""
 
@@ -49,8 +89,9 @@ class JobStatus(BaseModel):
     retries: int = Field(0, description="Object tasks re-run after a worker died.")
     worker_seconds: float = Field(0.0, description="Time spent inside per-object extraction, summed over objects.")
     spec: dict = Field(default_factory=dict, description="The JobSpec (so a job can be resumed from its status).")
-    assembly: dict = Field(default_factory=dict, description="Report of the assemble stage (size, fidelity...).")
-    training: dict = Field(default_factory=dict, description="Report of the train stage (epochs, final metrics).")
+    assembly: AssemblyReport | None = Field(None, description="Report of the assemble stage.")
+    labels: LabelReport | None = Field(None, description="Report of the label stage on the one object.")
+    training: TrainingReport | None = Field(None, description="Report of the train stage.")
     error: str = ""
     created: float = Field(default_factory=time.time)
     updated: float = Field(default_factory=time.time)

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.service.actors import ActorClient
+from onepiece_dist.service.status import TrainingReport
 from onepiece_dist.spec import JobSpec
 
 
@@ -15,9 +17,9 @@ def checkpoint_dir(spec: JobSpec) -> Path:
 
 
 class Trainer:
-    """Plain class; :func:`remote_trainer` wraps it as an actor."""
+    """Plain class; :class:`TrainerClient` runs it as an actor."""
 
-    def fit(self, spec: JobSpec) -> dict:
+    def fit(self, spec: JobSpec) -> TrainingReport:
         import torch
 
         from onepiece_dist.learn.train import train_model
@@ -26,17 +28,23 @@ class Trainer:
         result = train_model(spec.output, spec.train, checkpoint_dir(spec), seed=spec.seed)
         keys = [k for k in result.metrics[0] if k != "epoch"] if result.metrics else []
         arrays = {k: np.array([m[k] for m in result.metrics], dtype=np.float32) for k in keys}
-        summary = {"model": spec.train.model, "data": spec.train.data, "epochs": len(result.metrics),
-                   "stopped_early": result.stopped_early, "checkpoint": str(result.best_checkpoint),
-                   "device": "cuda" if torch.cuda.is_available() else "cpu",
-                   "final": result.metrics[-1] if result.metrics else {}}
-        write_group(spec.output, "train", arrays, {"training": summary})
-        return summary
+        report = TrainingReport(model=spec.train.model, data=spec.train.data, epochs=len(result.metrics),
+                                stopped_early=result.stopped_early, checkpoint=str(result.best_checkpoint),
+                                device="cuda" if torch.cuda.is_available() else "cpu",
+                                final=result.metrics[-1] if result.metrics else {})
+        write_group(spec.output, "train", arrays, {"training": report.model_dump(mode="json")})
+        return report
 
 
-def remote_trainer():
+class TrainerClient(ActorClient):
     """The trainer as a Ray actor: one GPU when the cluster has one, else one CPU."""
-    import ray
 
-    gpus = 1 if ray.cluster_resources().get("GPU", 0) >= 1 else 0
-    return ray.remote(Trainer).options(num_gpus=gpus, num_cpus=0 if gpus else 1).remote()
+    @classmethod
+    def start(cls) -> TrainerClient:
+        import ray
+
+        gpus = 1 if ray.cluster_resources().get("GPU", 0) >= 1 else 0
+        return cls(ray.remote(Trainer).options(num_gpus=gpus, num_cpus=0 if gpus else 1).remote(), "trainer actor")
+
+    def fit(self, spec: JobSpec) -> TrainingReport:
+        return self.call("fit", spec)

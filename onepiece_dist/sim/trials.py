@@ -17,6 +17,7 @@ import pybullet as pb
 
 from onepiece_dist.core.frames import invert_poses
 from onepiece_dist.sim.world import SimWorld, quat_from_matrix
+from onepiece_dist.spec import SimSpec
 
 CLOSE_SPEED = 0.25  # m/s per finger
 SETTLE_TIME = 0.05  # s after the fingers stall
@@ -196,12 +197,17 @@ def _trajectory(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True)
 class LabelNoise:
-    """Perturbations of the robust-quality trials: translation (m), rotation (rad), relative friction."""
+    """Perturbations of the robust-quality trials: translation (m), rotation (rad), relative friction. Built from
+    the job's :class:`SimSpec` by :meth:`from_spec`, the one place its defaults live."""
 
-    trials: int = 1
-    translation: float = 0.003
-    rotation: float = 0.05
-    friction: float = 0.2
+    trials: int
+    translation: float
+    rotation: float
+    friction: float
+
+    @classmethod
+    def from_spec(cls, sim: SimSpec) -> LabelNoise:
+        return cls(sim.label_trials, sim.pose_noise, sim.rotation_noise, sim.friction_noise)
 
 
 def perturbed(pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> np.ndarray:
@@ -240,7 +246,7 @@ def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False, noise: L
     ``noise.trials - 1`` perturbed repetitions; ``quality`` = success fraction over all of them.
     """
     n = len(poses)
-    noise = noise or LabelNoise()
+    noise = noise or LabelNoise.from_spec(SimSpec())
     rng = rng or np.random.default_rng(0)
     outcome, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
     settled, width, shift = poses.copy(), np.full(n, np.nan), np.zeros(n)

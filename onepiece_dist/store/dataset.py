@@ -16,8 +16,8 @@ import zarr
 
 from onepiece_dist.errors import StoreError
 from onepiece_dist.store.codecs import GRASP_CHUNK_ROWS, chunks_for, compressor_for, write_array
+from onepiece_dist.store.format import FORMAT_VERSION, format_problem
 
-FORMAT_VERSION = 1
 NAME_BYTES = 64
 
 
@@ -145,11 +145,9 @@ class DatasetReader:
             raise StoreError(f"{self.path}: not a Zarr dataset (no zarr.json)")
         self.root = zarr.open_group(str(self.path), mode="r")
         attrs = dict(self.root.attrs)
-        if attrs.get("onepiece_format") != FORMAT_VERSION:
-            raise StoreError(f"{self.path}: onepiece_format={attrs.get('onepiece_format')!r}, "
-                             f"this reader knows {FORMAT_VERSION}")
-        if not attrs.get("complete") and not allow_incomplete:
-            raise StoreError(f"{self.path}: dataset is incomplete (its job has not committed it)")
+        problem = format_problem({**attrs, "complete": True} if allow_incomplete else attrs)
+        if problem:
+            raise StoreError(f"{self.path}: {problem}")
         self.attrs = attrs
 
     def array(self, name: str) -> zarr.Array:

@@ -4,30 +4,34 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from onepiece_dist.store.format import GRASP_ARRAYS
+
+LABELLED_ONLY = ("object", "code_index", "exact_index")  # per-object bookkeeping, not on the one object's grasps
+
+
+def _grasp_entries(group: str, rows: str) -> tuple[tuple[str, str, str, str], ...]:
+    """The per-grasp arrays of ``group`` (``rows`` of them) from the one grasp-array schema (store/format.py)."""
+    entries = []
+    for name, dtype, row_shape, meaning in GRASP_ARRAYS:
+        if name in (("patch",) if group == "grasps" else LABELLED_ONLY):
+            continue
+        inner = [part for part in row_shape.strip("()").replace(" ", "").split(",") if part]
+        entries.append((f"{group}/{name}", dtype, f"({', '.join([rows, *inner])}{',' if not inner else ''})", meaning))
+    return tuple(entries)
+
+
 # (path, dtype, shape, meaning). N grasps, U unique codes, n objects, B code bytes.
 ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("objects/id", "uint8", "(n, 16)", "content id of each accepted object (blake2b-128 of scaled geometry)"),
     ("objects/name", "uint8", "(n, 64)", "object name, UTF-8, zero-padded"),
     ("objects/grasp_start", "int64", "(n,)", "first row of the object's grasps"),
     ("objects/grasp_count", "int64", "(n,)", "number of the object's grasps"),
-    ("grasps/object", "int32", "(N,)", "row in objects/ of each grasp"),
-    ("grasps/pose", "float32", "(N, 4, 4)", "gripper pose in the object frame whose crop gives grasps/code"),
-    ("grasps/candidate_pose", "float32", "(N, 4, 4)", "nominal (static) candidate pose"),
-    ("grasps/width", "float32", "(N,)", "finger opening after closing (m)"),
-    ("grasps/shift", "float32", "(N,)", "object displacement during closing (m)"),
-    ("grasps/candidate_code", "uint8", "(N, B)", "code at the nominal candidate pose"),
-    ("grasps/points", "float16", "(N, P, 3)", "gripper-frame points in the closing region, resampled to P"),
-    ("grasps/success", "uint8", "(N,)", "label protocol outcome (only when sim.label is true)"),
-    ("grasps/quality", "float32", "(N,)", "success fraction over label trials (only when sim.label is true)"),
-    ("grasps/slip", "float32", "(N,)", "object motion in the gripper frame while lifting and shaking (m)"),
-    ("grasps/code", "uint8", "(N, B)", "packed voxel code of the crop, C order over (u, v, t), bitorder big"),
-    ("grasps/code_index", "int64", "(N,)", "row in unique/ of each grasp's code (or its cluster)"),
+    *_grasp_entries("grasps", "N"),
     ("unique/code", "uint8", "(U, B)", "distinct codes in byte order (cluster representatives if radius > 0)"),
     ("unique/count", "int64", "(U,)", "grasps per distinct code (per cluster when similar_radius > 0)"),
     ("exact/code", "uint8", "(E, B)", "with similar_radius > 0: the exact distinct codes"),
     ("exact/count", "int64", "(E,)", "with similar_radius > 0: grasps per exact code"),
     ("exact/cluster", "int64", "(E,)", "with similar_radius > 0: row in unique/ of each exact code's cluster"),
-    ("grasps/exact_index", "int64", "(N,)", "with similar_radius > 0: row in exact/ of each grasp's code"),
     ("views/camera", "float32", "(K, 4, 4)", "depth camera poses, camera-to-object, OpenGL axes (looks along -z)"),
     ("views/camera_object", "int32", "(K,)", "row in objects/ of each camera"),
     ("views/points", "float32", "(Q, 3)", "back-projected depth pixels in their object's frame"),
@@ -44,7 +48,7 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/point_patch", "int32", "(P,)", "patch of each point, -1 = core"),
     ("assembled/cube_centre", "float32", "(M, 3)", "centre of each voxel cube of the patches"),
     ("assembled/cube_patch", "int32", "(M,)", "patch of each cube"),
-    ("assembled/grasps/*", "", "(L, ...)", "label stage on the one object: same arrays as grasps/, plus patch"),
+    *_grasp_entries("assembled/grasps", "L"),
 )
 
 

@@ -1,0 +1,122 @@
+"""The central actor: the one writer of the global arrays. It merges each object's codes as its part is
+committed, commits the dataset, assembles the one object and labels it. A plain class (tested without Ray);
+:class:`CentralClient` is its thin client on Ray.
+
+After a restart its state is rebuilt from the store: :meth:`CentralActor.commit` folds in every part it has not
+merged yet, and the later stages read what the commit wrote when they do not hold it in memory.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from onepiece_dist.core.dedup import DedupIndex
+from onepiece_dist.errors import MissingAssembly
+from onepiece_dist.service.actors import ActorClient, restartable_actor
+from onepiece_dist.service.commit import commit_dataset
+from onepiece_dist.service.results import CommitSummary, ObjectResult
+from onepiece_dist.service.status import AssemblyReport, LabelReport
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import DatasetReader, PartStore
+
+
+class CentralActor:
+    def __init__(self, spec: JobSpec):
+        self.spec = spec
+        self.parts = PartStore(spec.parts_folder())
+        self.index = DedupIndex(spec.code_bytes())
+        self.merged: set[int] = set()
+        self.unique_codes: np.ndarray | None = None  # (U, B) uint8 as committed, while this process holds them
+        self.grasps: int | None = None
+        self.assembly: AssemblyReport | None = None
+
+    def add(self, object_index: int, part_key: str, codes: np.ndarray | None = None) -> int:
+        """Merge the codes of object ``object_index``, once (a repeated call changes nothing): ``codes`` as sent
+        by the worker that committed the part, or else read from the part. Returns the unique-code count so
+        far: an upper bound until the pending runs are compacted, so that a call costs O(part), not O(all)."""
+        if object_index not in self.merged:
+            self.index.add(self.parts.read_array(part_key, "code") if codes is None else codes)
+            self.merged.add(object_index)
+        return self.index.size_bound()
+
+    def commit(self, results: list[ObjectResult]) -> CommitSummary:
+        """Fold in anything not merged yet, then write the dataset."""
+        for result in results:
+            if result.status == "ok":
+                self.add(result.index, result.part_key)
+        summary, self.unique_codes = commit_dataset(self.spec, results, self.parts, self.index)
+        self.grasps = summary.grasps
+        return summary
+
+    def committed(self) -> CommitSummary:
+        """The counts of the dataset committed at the spec's output (by this actor or an earlier job)."""
+        reader = DatasetReader(self.spec.output)
+        exact = "exact/code" if reader.has("exact/code") else "unique/code"
+        return CommitSummary(grasps=int(reader.array("grasps/code").shape[0]),
+                             unique_codes=int(reader.array("unique/code").shape[0]),
+                             exact_unique_codes=int(reader.array(exact).shape[0]))
+
+    def assemble(self) -> AssemblyReport:
+        """Build the one object from the committed unique codes and store it under ``assembled/``."""
+        from onepiece_dist.service.assemble import assemble_dataset
+
+        if self.unique_codes is None or self.grasps is None:
+            reader = DatasetReader(self.spec.output)
+            self.unique_codes, self.grasps = reader["unique/code"], int(reader.array("grasps/code").shape[0])
+        self.assembly = assemble_dataset(self.spec, self.spec.output, self.unique_codes, self.grasps)
+        return self.assembly
+
+    def label(self) -> LabelReport:
+        """The label stage on the one object (``assembled/grasps/``)."""
+        from onepiece_dist.service.label_one import label_assembly
+
+        if self.assembly is None:
+            found = DatasetReader(self.spec.output).attrs.get("assembly")
+            if not found:
+                raise MissingAssembly(f"{self.spec.output}: the label stage needs an assembled object "
+                                      "(run the assemble stage first)")
+            self.assembly = AssemblyReport.model_validate(found)
+        return label_assembly(self.spec, self.spec.output, self.assembly.grid_pitch_m)
+
+
+class CentralClient(ActorClient):
+    """The central actor of one job on Ray, on the driver's node (losing a worker node does not take it down)."""
+
+    @classmethod
+    def start(cls, spec: JobSpec, job_id: str) -> CentralClient:
+        from onepiece_dist.service.registry import on_this_node
+
+        name = central_name(job_id)
+        handle = restartable_actor(CentralActor, name, num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
+        return cls(handle, f"central actor {name}")
+
+    @classmethod
+    def find(cls, name: str) -> CentralClient | None:
+        """The running central actor ``name``, or None while it is restarting or gone."""
+        import ray
+
+        from onepiece_dist.service.ray_env import NAMESPACE
+
+        try:
+            return cls(ray.get_actor(name, namespace=NAMESPACE), f"central actor {name}")
+        except ValueError:
+            return None
+
+    def send_codes(self, object_index: int, part_key: str, codes: np.ndarray) -> None:
+        self.send("add", object_index, part_key, codes)
+
+    def commit(self, results: list[ObjectResult]) -> CommitSummary:
+        return self.call("commit", results)
+
+    def committed(self) -> CommitSummary:
+        return self.call("committed")
+
+    def assemble(self) -> AssemblyReport:
+        return self.call("assemble")
+
+    def label(self) -> LabelReport:
+        return self.call("label")
+
+
+def central_name(job_id: str) -> str:
+    return f"central-{job_id}"

@@ -1,0 +1,113 @@
+"""One spine for every job: its stages in order, each inside one :func:`stage` block that names the stage in the
+status, times it, saves the status and reports progress.
+
+The in-process and Ray runners differ only in the :class:`Runtime` they pass in: how extraction is spread, where
+the central actor lives and who trains. Stages: ingest, extract, dedup (the commit), assemble, label, train.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Protocol
+
+from onepiece_dist.errors import JobCancelled, JobError, SourceError
+from onepiece_dist.objects import ObjectRef, resolve_source
+from onepiece_dist.service.results import CommitSummary, ObjectResult
+from onepiece_dist.service.status import AssemblyReport, JobStatus, LabelReport, Rejection, TrainingReport
+from onepiece_dist.spec import JobSpec
+
+Report = Callable[[JobStatus], None]  # called whenever the status changes: save it, publish it, draw progress
+ProgressFn = Callable[[JobStatus], None]  # a caller's progress display, called after each report
+
+
+class Central(Protocol):
+    """The central actor's job-facing methods: :class:`~onepiece_dist.service.central.CentralActor` in process,
+    its client on Ray."""
+
+    def commit(self, results: list[ObjectResult]) -> CommitSummary: ...
+    def committed(self) -> CommitSummary: ...
+    def assemble(self) -> AssemblyReport: ...
+    def label(self) -> LabelReport: ...
+
+
+@dataclass(frozen=True)
+class Runtime:
+    """extract(refs, on_result) -> results in object order; the central actor; train(spec) -> report."""
+
+    extract: Callable[[list[ObjectRef], Callable[[ObjectResult], None]], list[ObjectResult]]
+    central: Central
+    train: Callable[[JobSpec], TrainingReport]
+
+
+def new_status(spec: JobSpec, job_id: str) -> JobStatus:
+    return JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output,
+                     spec=spec.model_dump(mode="json"))
+
+
+@contextmanager
+def stage(status: JobStatus, name: str, report: Report) -> Iterator[None]:
+    """Run the block as stage ``name``: shown in the status while it runs, its wall time in ``timings``."""
+    status.stage = name
+    report(status)
+    start = time.perf_counter()
+    yield
+    status.timings[name] = time.perf_counter() - start
+    report(status)
+
+
+def run_pipeline(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Report,
+                 refs: list[ObjectRef] | None = None) -> JobStatus:
+    """Run the spec's stages on ``refs`` (resolved from ``spec.objects`` when not given); the status ends
+    'succeeded', or 'failed'/'cancelled' with a :class:`JobError` raised (a :class:`SourceError`, a usage error,
+    as it is). Without 'extract', the later stages run on the dataset already committed at the output."""
+    try:
+        _run_stages(spec, status, runtime, report, refs)
+    except BaseException as err:
+        status.state = "cancelled" if isinstance(err, JobCancelled) else "failed"
+        status.error = f"{type(err).__name__}: {err}"
+        report(status)
+        if isinstance(err, JobError | SourceError) or not isinstance(err, Exception):
+            raise
+        raise JobError(f"job {status.job_id} {status.state}: {err}") from err
+    status.state, status.stage = "succeeded", "done"
+    report(status)
+    return status
+
+
+def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Report,
+                refs: list[ObjectRef] | None) -> None:
+    with stage(status, "ingest", report):
+        refs = resolve_source(spec.objects) if refs is None else refs
+        status.progress.objects_total = len(refs)
+    if spec.runs("extract"):
+        with stage(status, "extract", report):
+            results = runtime.extract(refs, lambda result: (record_result(status, result), report(status)))
+        with stage(status, "dedup", report):
+            summary = runtime.central.commit(results)
+    else:
+        summary = runtime.central.committed()
+    status.progress.unique_codes = summary.unique_codes
+    if spec.runs("assemble") and summary.exact_unique_codes:
+        with stage(status, "assemble", report):
+            status.assembly = runtime.central.assemble()
+    if spec.runs("label") and summary.exact_unique_codes:
+        with stage(status, "label", report):
+            status.labels = runtime.central.label()
+    if spec.runs("train"):
+        with stage(status, "train", report):
+            status.training = runtime.train(spec)
+
+
+def record_result(status: JobStatus, result: ObjectResult) -> None:
+    """Fold one object's result into the job's progress."""
+    status.progress.objects_done += 1
+    status.worker_seconds += result.seconds
+    if result.node and result.node not in status.nodes:
+        status.nodes.append(result.node)
+    status.progress.objects_reused += int(result.reused)
+    status.progress.grasps += result.grasps
+    if result.status == "rejected":
+        status.rejections.append(Rejection(name=result.name, reason=result.reason))

@@ -1,0 +1,38 @@
+"""What stages hand each other: a worker's per-object result and the commit's summary. Small, frozen, and cheap
+to send through Ray (no arrays: those stay in the store)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+
+@dataclass(frozen=True)
+class ObjectResult:
+    """Summary of one object's extraction; ``status`` is 'ok' or 'rejected' (with ``reason``)."""
+
+    index: int
+    name: str
+    status: str
+    reason: str = ""
+    content_id: str = ""
+    part_key: str = ""
+    grasps: int = 0
+    empty_crops: int = 0
+    candidates_tried: int = 0
+    collisions: int = 0
+    settled_code_differs: int = 0
+    reused: bool = False
+    seconds: float = 0.0
+    node: str = ""
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class CommitSummary:
+    """The committed dataset's counts: grasps, unique codes (clusters with a similar radius) and exact codes."""
+
+    grasps: int
+    unique_codes: int
+    exact_unique_codes: int

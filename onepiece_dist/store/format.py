@@ -1,0 +1,57 @@
+"""The dataset format (v1) in one place: its version, the check every reader makes, and the grasp-array schema
+that every writer (extraction parts, the commit, the label stage) and every reader uses.
+
+Imports numpy only, so outside readers can use it without the rest of the package.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+FORMAT_VERSION = 1
+
+# Per-grasp arrays of ``grasps/`` and ``assembled/grasps/``: (name, dtype, row shape, meaning). N rows; row shape
+# symbols: B code bytes, P points per grasp. Optional arrays are present only when the job produces them.
+GRASP_ARRAYS: tuple[tuple[str, str, str, str], ...] = (
+    ("object", "int32", "()", "row in objects/ of each grasp"),
+    ("pose", "float32", "(4, 4)", "gripper pose in the object frame whose crop gives the code"),
+    ("candidate_pose", "float32", "(4, 4)", "nominal (static) candidate pose"),
+    ("width", "float32", "()", "finger opening after closing (m)"),
+    ("shift", "float32", "()", "object displacement during closing (m)"),
+    ("candidate_code", "uint8", "(B,)", "code at the nominal candidate pose"),
+    ("points", "float16", "(P, 3)", "gripper-frame points in the closing region, resampled to P"),
+    ("success", "uint8", "()", "label protocol outcome (only when labelled)"),
+    ("quality", "float32", "()", "success fraction over label trials (only when labelled)"),
+    ("slip", "float32", "()", "object motion in the gripper frame while lifting and shaking (m)"),
+    ("code", "uint8", "(B,)", "packed voxel code of the crop, C order over (u, v, t), bitorder big"),
+    ("code_index", "int64", "()", "row in unique/ of each grasp's code (or its cluster)"),
+    ("exact_index", "int64", "()", "with similar_radius > 0: row in exact/ of each grasp's code"),
+    ("patch", "int32", "()", "assembled/grasps only: the patch (row in unique/) a labelled grasp belongs to"),
+)
+GRASP_DTYPES: dict[str, np.dtype] = {name: np.dtype(dtype) for name, dtype, _, _ in GRASP_ARRAYS}
+# What every extraction part holds, with or without physics and labels.
+CORE_GRASP_ARRAYS = ("pose", "candidate_pose", "width", "code", "candidate_code")
+
+
+def grasp_arrays(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``arrays`` cast to the schema's dtype of each name. Unknown names are a bug and raise KeyError."""
+    unknown = sorted(set(arrays) - set(GRASP_DTYPES))
+    if unknown:
+        raise KeyError(f"not grasp arrays of format {FORMAT_VERSION}: {unknown}")
+    return {name: np.asarray(value, dtype=GRASP_DTYPES[name]) for name, value in arrays.items()}
+
+
+def grasp_row_shape(name: str, code_bytes: int, points: int) -> tuple[int, ...]:
+    """The row shape of grasp array ``name`` for B = ``code_bytes`` and P = ``points``."""
+    text = next(shape for n, _, shape, _ in GRASP_ARRAYS if n == name)
+    symbols = {"B": code_bytes, "P": points}
+    return tuple(symbols[s] if s in symbols else int(s) for s in text.strip("()").replace(" ", "").split(",") if s)
+
+
+def format_problem(attrs: dict) -> str | None:
+    """Why root attributes ``attrs`` are not those of a complete format-v1 dataset, or None when they are."""
+    if attrs.get("onepiece_format") != FORMAT_VERSION:
+        return f"onepiece_format={attrs.get('onepiece_format')!r}, this reader knows {FORMAT_VERSION}"
+    if not attrs.get("complete"):
+        return "dataset is incomplete (its job has not committed it)"
+    return None
