@@ -65,6 +65,21 @@ def closing_region_bounds(depth: float, width: float, height: float) -> tuple[np
     return np.array([0.0, -width / 2, -height / 2]), np.array([depth, width / 2, height / 2])
 
 
+def perturb_pose(pose: np.ndarray, rng: np.random.Generator, translation: float, rotation: float) -> np.ndarray:
+    """(4, 4) ``pose`` turned about a random axis (gripper frame) by a Gaussian angle of std ``rotation`` (rad)
+    and moved by Gaussian noise of std ``translation`` (m) per axis: the one perturbation of label trials and of
+    the label stage's poses around a placement."""
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    angle = rng.normal(0, rotation)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    turn = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+    out = pose.copy()
+    out[:3, :3] = pose[:3, :3] @ turn
+    out[:3, 3] += rng.normal(0, translation, 3)
+    return out
+
+
 def perpendicular(vectors: np.ndarray) -> np.ndarray:
     """A unit vector perpendicular to each of (n, 3) vectors."""
     vectors = _unit(vectors)

@@ -13,7 +13,7 @@ import os
 
 import numpy as np
 
-from onepiece_dist.core.frames import pose_from_axes
+from onepiece_dist.core.frames import perturb_pose
 from onepiece_dist.core.layout import box_arrays, cube_points
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
@@ -56,11 +56,9 @@ def patch_cloud(local: np.ndarray, edge: float, spec: JobSpec) -> np.ndarray:
 
 
 def perturbed_poses(count: int, rng: np.random.Generator, shift: float = 0.004, angle: float = 0.1) -> np.ndarray:
-    """The placement (identity) and ``count`` poses around it: Gaussian shifts and small turns. (1+count, 4, 4)"""
-    approach = np.array([[1.0, 0, 0]]) + rng.normal(0, angle, (count, 3))
-    closing = np.array([[0, 1.0, 0]]) + rng.normal(0, angle, (count, 3))
-    poses = pose_from_axes(rng.normal(0, shift, (count, 3)), approach, closing)
-    return np.concatenate([np.eye(4)[None], poses])
+    """The placement (identity) and ``count`` poses around it, by the label trials' perturbation
+    (``core.frames.perturb_pose``) with wider noise. (1+count, 4, 4)"""
+    return np.stack([np.eye(4)] + [perturb_pose(np.eye(4), rng, shift, angle) for _ in range(count)])
 
 
 def label_assembly(spec: JobSpec, path: str | os.PathLike, pitch: list[float]) -> LabelReport:

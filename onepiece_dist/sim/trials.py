@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as pb
 
-from onepiece_dist.core.frames import invert_poses
+from onepiece_dist.core.frames import invert_poses, perturb_pose
 from onepiece_dist.sim.world import SimWorld, quat_from_matrix
 from onepiece_dist.spec import SimSpec
 
@@ -210,19 +210,6 @@ class LabelNoise:
         return cls(sim.label_trials, sim.pose_noise, sim.rotation_noise, sim.friction_noise)
 
 
-def perturbed(pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> np.ndarray:
-    """``pose`` moved by Gaussian translation noise and turned by a small random rotation (gripper frame)."""
-    axis = rng.normal(size=3)
-    axis /= np.linalg.norm(axis)
-    angle = rng.normal(0, noise.rotation)
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    turn = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
-    out = pose.copy()
-    out[:3, :3] = pose[:3, :3] @ turn
-    out[:3, 3] += rng.normal(0, noise.translation, 3)
-    return out
-
-
 def label_quality(world: SimWorld, pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> float:
     """Success fraction over ``noise.trials - 1`` perturbed label trials (friction and pose noise)."""
     wins = 0
@@ -231,7 +218,7 @@ def label_quality(world: SimWorld, pose: np.ndarray, rng: np.random.Generator, n
         friction = base_friction * max(0.05, 1 + rng.normal(0, noise.friction))
         world.set_finger_friction(friction)
         try:
-            if extract_trial(world, perturbed(pose, rng, noise))[0] == 0:
+            if extract_trial(world, perturb_pose(pose, rng, noise.translation, noise.rotation))[0] == 0:
                 wins += lift_and_shake(world, world.gripper_pose())[0]
         finally:
             world.set_finger_friction(base_friction)
