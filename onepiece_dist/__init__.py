@@ -3,6 +3,9 @@
 Layers (imports go downward only; docs/architecture.md, checked by tests/test_layers.py): ``core`` <- ``objects``
 <- ``sim``; ``store`` <- ``learn``; all of them <- ``service`` <- ``api`` <- ``cli``. ``spec`` and ``errors`` are
 under every layer (``store`` uses ``errors`` only).
+
+The names below load on first use, so ``onepiece_dist.learn.dataset`` (the reader) imports with numpy, zarr and
+torch alone.
 """
 
 from onepiece_dist.errors import (
@@ -16,8 +19,16 @@ from onepiece_dist.errors import (
     SpecError,
     StoreError,
 )
-from onepiece_dist.spec import GripperSpec, JobSpec, SamplerSpec, VoxelSpec, load_job_spec
 
 __version__ = "0.1.0"
+_SPEC_NAMES = ("GripperSpec", "JobSpec", "SamplerSpec", "VoxelSpec", "load_job_spec")
 __all__ = ["ActorLost", "ClusterUnreachable", "GripperSpec", "JobCancelled", "JobError", "JobSpec", "MeshRejected",
            "MissingAssembly", "OnePieceError", "SamplerSpec", "SpecError", "StoreError", "VoxelSpec", "load_job_spec"]
+
+
+def __getattr__(name: str):
+    if name in _SPEC_NAMES:  # pydantic specs: imported when first asked for
+        from onepiece_dist import spec
+
+        return getattr(spec, name)
+    raise AttributeError(f"module 'onepiece_dist' has no attribute {name!r}")

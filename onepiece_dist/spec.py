@@ -150,6 +150,14 @@ class TrainSpec(_Frozen):
     learning_rate: float = Field(1e-3, gt=0, le=1)
     validation: float = Field(0.2, gt=0, lt=1, description="Share of objects (or patches) held out.")
     patience: int = Field(5, ge=1, description="Epochs without a better validation loss before stopping.")
+    device: Literal["auto", "cpu", "cuda"] = Field("auto", description="Where to train and evaluate: 'auto' "
+                                                   "takes a CUDA GPU when the trainer has one (on Ray the trainer "
+                                                   "actor asks for one when the cluster has GPU nodes), else the "
+                                                   "CPU; 'cuda' requires one.")
+    precision: Literal["fp32", "bf16"] = Field("fp32", description="bf16 autocast on the training step: faster "
+                                               "for the voxel CNN on a GPU, slower for PointNet (measured, "
+                                               "docs/performance.md).")
+    loader_workers: int = Field(0, ge=0, le=64, description="DataLoader worker processes reading the store.")
 
 
 class JobSpec(_Frozen):

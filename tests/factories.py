@@ -127,3 +127,25 @@ def box_slabs(extents: tuple[float, float, float], count: int) -> list[np.ndarra
         slab[:, 2] = np.where(corners[:, 2] < 0, low, high)
         slabs.append(slab)
     return slabs
+
+
+def synthetic_labelled_dataset(path: Path, rows: int, points: int = 64, group: str = "assembled/grasps",
+                               grid: tuple[int, int, int] = (4, 8, 2), seed: int = 0) -> Path:
+    """A complete format-1 dataset with ``rows`` labelled grasps in ``group`` (random clouds and codes; labels
+    that depend on the clouds, so a network can learn them); ``points=0`` stores no clouds (a code-only set)."""
+    from onepiece_dist.store.dataset import ObjectTable, write_dataset
+    from onepiece_dist.store.format import grasp_arrays
+
+    rng = np.random.default_rng(seed)
+    code_bytes = -(-int(np.prod(grid)) // 8)
+    offset = rng.normal(0, 0.01, rows)  # each cloud shifted along the closing axis; held when shifted one way
+    cloud = rng.normal(0, 0.01, (rows, max(points, 1), 3))
+    cloud[:, :, 1] += offset[:, None]
+    arrays = {"success": (offset > 0).astype(np.uint8), "points": cloud.astype(np.float16),
+              "quality": rng.random(rows), "code": rng.integers(0, 256, (rows, code_bytes)),
+              "patch" if group != "grasps" else "object": np.arange(rows) // 8}
+    if not points:
+        del arrays["points"]
+    attrs = {"grid_shape": list(grid), "code_bytes": code_bytes}
+    write_dataset(path, attrs, ObjectTable([], [], np.zeros(0)), {group: grasp_arrays(arrays)})
+    return path

@@ -14,10 +14,11 @@ from typer.testing import CliRunner
 
 from onepiece_dist.cli import app
 from onepiece_dist.errors import StoreError
-from onepiece_dist.learn import GraspDataset
+from onepiece_dist.learn import ChunkBatchSampler, GraspDataset
 from onepiece_dist.learn.train import average_precision, load_checkpoint, load_model, predict, train_model
 from onepiece_dist.service.evaluate import top_ranked_success
 from onepiece_dist.spec import TrainSpec
+from tests.factories import synthetic_labelled_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.slow
@@ -111,3 +112,90 @@ def test_external_example_trains_on_a_dataset_from_onepiece_run(labelled):
     assert out.returncode == 0, out.stderr[-2000:]
     assert "validation accuracy" in out.stdout
     assert torch.__version__
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory):
+    # 750-point clouds: 512-row chunks, so 1,500 rows span three
+    return synthetic_labelled_dataset(tmp_path_factory.mktemp("reader") / "s.zarr", rows=1500, points=750)
+
+
+def test_a_batch_read_equals_the_items_read_one_by_one(synthetic):
+    ds = GraspDataset(synthetic)
+    assert ds.chunk_rows == 512
+    positions = [900, 3, 1499, 3, 512, 700, 701, 0]  # unsorted, repeated, across chunks
+    batch = ds.__getitems__(positions)
+    for k, position in enumerate(positions):
+        item = ds[position]
+        for name in ("points", "code", "label", "quality", "group"):
+            assert torch.equal(batch[name][k], item[name]), (name, position)
+    root = zarr.open_group(str(synthetic), mode="r")
+    assert np.array_equal(batch["points"][2].numpy(), root["assembled/grasps/points"][1499].astype(np.float32))
+
+
+def test_a_loader_with_two_workers_gives_the_batches_of_one_without(synthetic):
+    from torch.utils.data import DataLoader
+
+    from onepiece_dist.learn.dataset import collate
+
+    def batches(workers: int) -> list[dict]:
+        train, _ = GraspDataset(synthetic).split_by_group(0.2, seed=0)
+        loader = DataLoader(train, batch_sampler=ChunkBatchSampler(train, 100, seed=3), collate_fn=collate,
+                            num_workers=workers)
+        return list(loader)
+
+    serial, parallel = batches(0), batches(2)
+    assert len(serial) == len(parallel) > 5
+    for a, b in zip(serial, parallel, strict=True):
+        assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+
+
+def test_the_sampler_visits_every_row_once_per_epoch_in_batches_that_touch_few_chunks(synthetic):
+    ds = GraspDataset(synthetic)
+    sampler = ChunkBatchSampler(ds, 64, seed=1)
+    batches = list(sampler)
+    seen = np.concatenate(batches)
+    assert len(batches) == len(sampler) and np.array_equal(np.sort(seen), np.arange(len(ds)))
+    per_batch = [len(np.unique(ds.rows[b] // ds.chunk_rows)) for b in batches]
+    assert max(per_batch) <= 2 + 2 * 64 // ds.chunk_rows
+    assert list(ChunkBatchSampler(ds, 64, seed=1))[0] == batches[0] and list(sampler)[0] != batches[0]
+
+
+def test_a_code_only_dataset_is_read_without_points(tmp_path):
+    path = synthetic_labelled_dataset(tmp_path / "codes.zarr", rows=100, points=0)
+    ds = GraspDataset(path)
+    assert ds.inputs == ("code", "quality") and "points" not in ds[0] and ds[0]["code"].shape == (4, 8, 2)
+    with pytest.raises(StoreError, match="holds no \\['points'\\]"):
+        GraspDataset(path, inputs=("points",))
+    result = train_model(path, TrainSpec(model="voxel", epochs=1, batch_size=16), tmp_path / "ckpt")
+    assert result.device == "cpu" and len(result.metrics) == 1
+
+
+def test_the_reader_imports_with_numpy_zarr_and_torch_alone(synthetic):
+    blocked = ("ray", "pybullet", "open3d", "pydantic", "typer", "trimesh", "rich")
+    code = (f"import sys; sys.modules.update(dict.fromkeys({blocked!r}));"
+            "from onepiece_dist.learn import GraspDataset; from onepiece_dist.learn.models import MODELS;"
+            f"ds = GraspDataset({str(synthetic)!r}); print(len(ds), MODELS['pointnet']()(ds.batch([0, 1])).shape)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["1500", "torch.Size([2])"]
+
+
+def test_device_selection_here_and_for_the_trainer_actor():
+    from onepiece_dist.learn.train import resolve_device
+    from onepiece_dist.service.trainer import trainer_gpus
+
+    assert resolve_device("cpu").type == "cpu"
+    assert resolve_device("auto").type == ("cuda" if torch.cuda.is_available() else "cpu")
+    if not torch.cuda.is_available():
+        with pytest.raises(RuntimeError, match="no CUDA GPU"):
+            resolve_device("cuda")
+    assert [trainer_gpus(d, g) for d, g in [("auto", 0), ("auto", 2), ("cpu", 2), ("cuda", 0)]] == [0, 1, 0, 1]
+
+
+def test_a_bf16_step_trains_and_checkpoints_load_on_the_cpu(synthetic, tmp_path):
+    spec = TrainSpec(model="pointnet", epochs=2, batch_size=64, precision="bf16", device="auto")
+    result = train_model(synthetic, spec, tmp_path / "ckpt", seed=0)
+    checkpoint = load_checkpoint(result.best_checkpoint)
+    assert all(t.device.type == "cpu" for t in checkpoint["state_dict"].values())
+    assert np.isfinite(result.metrics[-1]["train_loss"]) and load_model(result.best_checkpoint) is not None

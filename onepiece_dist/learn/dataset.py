@@ -1,12 +1,18 @@
 """A torch Dataset over a OnePiece-Dist Zarr dataset (format 1), for our trainer and external ones.
 
-The store is opened lazily in each DataLoader worker (zarr handles are not shared across processes), and
-:class:`ChunkBatchSampler` draws batches chunk by chunk in random order, so random access does not decode a
-whole chunk per item. Nothing is unpickled: the arrays are plain numbers.
+Importable with numpy, zarr and torch alone (no ray, pybullet, open3d or pydantic): ``pip install
+onepiece-dist[reader]`` documents that set. Nothing is unpickled: the arrays are plain numbers.
+
+Reading is per batch: :meth:`GraspDataset.__getitems__` (which torch's DataLoader calls with a whole batch of
+indices) reads each needed array once, only the requested rows (``oindex`` on the sorted unique rows, which
+decodes only the chunks that hold them), and returns the batch as tensors. :class:`ChunkBatchSampler` draws
+batches from a few random chunks at a time, so a batch touches few chunks. The store is opened lazily in each
+DataLoader worker (zarr handles are not shared across processes), so ``num_workers > 0`` works.
 """
 
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -17,16 +23,24 @@ from torch.utils.data import Dataset, Sampler
 from onepiece_dist.errors import StoreError
 from onepiece_dist.store.format import format_problem
 
+INPUTS = ("points", "code", "quality")  # what a dataset may hold besides labels; labels are always read
+MODEL_INPUTS = {"pointnet": ("points",), "voxel": ("code",)}
+SMALL_ARRAY_BYTES = 64 * 2**20  # arrays up to this size are read whole once per process, then indexed in memory
+
 
 class GraspDataset(Dataset):
-    """Items: ``points`` (P, 3) float32 gripper-frame points, ``label`` () float32 success, ``quality`` ()
-    float32, ``code`` (a, b, c) float32 occupancy, ``group`` () int64 (object or patch id, for splits).
+    """Items: ``label`` () float32 success and ``group`` () int64 (object or patch id, for splits), plus those
+    of ``inputs``: ``points`` (P, 3) float32 gripper-frame points, ``code`` (a, b, c) float32 occupancy,
+    ``quality`` () float32 robust quality.
 
     group : "grasps" (every object's grasps) or "assembled/grasps" (the one object's labelled grasps)
     rows : indices of the rows to use (a split); default all
+    inputs : which of "points", "code" and "quality" to read (default: all the dataset holds); e.g.
+             ``("code",)`` for a voxel model reads no points at all
     """
 
-    def __init__(self, path: str | os.PathLike, group: str = "assembled/grasps", rows: np.ndarray | None = None):
+    def __init__(self, path: str | os.PathLike, group: str = "assembled/grasps", rows: np.ndarray | None = None,
+                 inputs: tuple[str, ...] | None = None):
         self.path, self.group = str(path), group
         root = zarr.open_group(self.path, mode="r")
         attrs = root.attrs.asdict()
@@ -36,12 +50,17 @@ class GraspDataset(Dataset):
         if f"{group}/success" not in root:
             raise StoreError(f"{self.path}: {group}/success is missing: the dataset has no labels there "
                              "(run the 'label' stage, or extract with sim.label: true)")
+        present = tuple(name for name in INPUTS if f"{group}/{name}" in root)
+        self.inputs = present if inputs is None else tuple(inputs)
+        missing = sorted(set(self.inputs) - set(present))
+        if missing:
+            raise StoreError(f"{self.path}: {group} holds no {missing} (present: {list(present)})")
         self.grid_shape = tuple(attrs["grid_shape"])
         self.length = int(root[f"{group}/success"].shape[0])
         self.rows = np.arange(self.length) if rows is None else np.asarray(rows, dtype=np.int64)
-        self.chunk_rows = int(root[f"{group}/points"].chunks[0])
+        self.chunk_rows = min(int(root[f"{group}/{name}"].chunks[0]) for name in ("success", *self.inputs))
         self.groups = root[f"{group}/{'patch' if group.startswith('assembled') else 'object'}"][:].astype(np.int64)
-        self._root = None
+        self._root, self._small = None, {}
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -51,27 +70,38 @@ class GraspDataset(Dataset):
             self._root = zarr.open_group(self.path, mode="r")
         return self._root
 
-    def __getitem__(self, item: int) -> dict[str, torch.Tensor]:
-        return self.batch(np.array([item]))[0]
+    def _read(self, name: str, rows: np.ndarray) -> np.ndarray:
+        """Rows (sorted, unique) of ``group/name``: from memory for a small array (read whole on first use in
+        this process), else from the store."""
+        if name in self._small:
+            return self._small[name][rows]
+        array = self._arrays()[f"{self.group}/{name}"]
+        if array.nbytes <= SMALL_ARRAY_BYTES:
+            self._small[name] = array[...]
+            return self._small[name][rows]
+        return _rows(array, rows)
 
-    def batch(self, items: np.ndarray) -> list[dict[str, torch.Tensor]]:
-        """Items by position in this dataset, read with one slice per array (rows sorted)."""
-        rows = self.rows[np.asarray(items)]
-        order = np.argsort(rows)
-        lo, hi = int(rows[order[0]]), int(rows[order[-1]]) + 1
-        root, g = self._arrays(), self.group
-        block = {name: root[f"{g}/{name}"][lo:hi] for name in ("points", "success", "quality", "code")}
-        a, b, c = self.grid_shape
-        out = []
-        for row in rows:
-            k = row - lo
-            occupancy = np.unpackbits(block["code"][k], count=a * b * c, bitorder="big").reshape(a, b, c)
-            out.append({"points": torch.from_numpy(block["points"][k].astype(np.float32)),
-                        "label": torch.tensor(float(block["success"][k])),
-                        "quality": torch.tensor(float(block["quality"][k])),
-                        "code": torch.from_numpy(occupancy.astype(np.float32)),
-                        "group": torch.tensor(int(self.groups[row]))})
+    def __getitem__(self, item: int) -> dict[str, torch.Tensor]:
+        return {name: value[0] for name, value in self.__getitems__([item]).items()}
+
+    def __getitems__(self, items) -> dict[str, torch.Tensor]:
+        """The batch of positions ``items`` as tensors with a leading batch axis, in the order given: one read
+        per array, of the requested rows only."""
+        rows = self.rows[np.asarray(items, dtype=np.int64)]
+        wanted, back = np.unique(rows, return_inverse=True)
+        out = {"label": torch.from_numpy(self._read("success", wanted)[back].astype(np.float32)),
+               "group": torch.from_numpy(self.groups[rows])}
+        for name in ("points", "quality"):
+            if name in self.inputs:
+                out[name] = torch.from_numpy(self._read(name, wanted)[back].astype(np.float32))
+        if "code" in self.inputs:
+            a, b, c = self.grid_shape
+            packed = self._read("code", wanted)[back]
+            bits = np.unpackbits(packed, axis=1, count=a * b * c, bitorder="big")
+            out["code"] = torch.from_numpy(bits.reshape(len(rows), a, b, c).astype(np.float32))
         return out
+
+    batch = __getitems__
 
     def labels(self) -> np.ndarray:
         """(n,) success labels of this dataset's rows."""
@@ -87,13 +117,27 @@ class GraspDataset(Dataset):
 
     def _subset(self, rows: np.ndarray) -> GraspDataset:
         subset = GraspDataset.__new__(GraspDataset)
-        subset.__dict__.update({**self.__dict__, "rows": rows, "_root": None})
+        subset.__dict__.update({**self.__dict__, "rows": rows, "_root": None, "_small": {}})
         return subset
 
 
+def _rows(array, rows: np.ndarray) -> np.ndarray:
+    """``array[rows]`` for sorted unique ``rows``: one slice over their span when it is short (a sampler's batch:
+    zarr reads a slice faster than a selection of the same chunks), else an orthogonal selection, which decodes
+    only the chunks that hold them (a sparse split)."""
+    if len(rows) == 0:
+        return np.zeros((0, *array.shape[1:]), dtype=array.dtype)
+    lo, hi = int(rows[0]), int(rows[-1]) + 1
+    if hi - lo <= max(4 * len(rows), 2 * array.chunks[0]):
+        block = array[lo:hi]
+        return block if hi - lo == len(rows) else block[rows - lo]
+    return array.oindex[(rows, *[slice(None)] * (array.ndim - 1))]
+
+
 class ChunkBatchSampler(Sampler[list[int]]):
-    """Batches of positions that stay inside one storage chunk where possible: chunks in random order, items
-    shuffled within each chunk. Use with ``DataLoader(ds, batch_sampler=..., collate_fn=collate)``."""
+    """Batches of positions drawn from a few storage chunks at a time: chunks in random order, taken in groups of
+    about two batches' worth of rows, whose positions are shuffled together and cut into batches, so a batch
+    touches few chunks whatever its size. Use with ``DataLoader(ds, batch_sampler=..., collate_fn=collate)``."""
 
     def __init__(self, dataset: GraspDataset, batch_size: int, seed: int = 0):
         self.dataset, self.batch_size, self.seed, self.epoch = dataset, batch_size, seed, 0
@@ -102,15 +146,28 @@ class ChunkBatchSampler(Sampler[list[int]]):
         rng = np.random.default_rng([self.seed, self.epoch])
         self.epoch += 1
         chunk = self.dataset.rows // self.dataset.chunk_rows
-        for c in rng.permutation(np.unique(chunk)):
-            positions = rng.permutation(np.flatnonzero(chunk == c))
-            for start in range(0, len(positions), self.batch_size):
-                yield positions[start:start + self.batch_size].tolist()
+        order = np.argsort(chunk, kind="stable")
+        _, first_of, count = np.unique(chunk[order], return_index=True, return_counts=True)
+        members = [order[a:a + n] for a, n in zip(first_of, count, strict=True)]  # positions of each chunk
+        chunks = rng.permutation(len(members))
+        per_group = max(1, math.ceil(2 * self.batch_size / self.dataset.chunk_rows))
+        carry = np.zeros(0, dtype=np.int64)
+        for start in range(0, len(chunks), per_group):
+            taken = [members[k] for k in chunks[start:start + per_group]]
+            positions = np.concatenate([carry, rng.permutation(np.concatenate(taken))])
+            whole = len(positions) - len(positions) % self.batch_size
+            for first in range(0, whole, self.batch_size):
+                yield positions[first:first + self.batch_size].tolist()
+            carry = positions[whole:]
+        if len(carry):
+            yield carry.tolist()
 
     def __len__(self) -> int:
-        chunk = self.dataset.rows // self.dataset.chunk_rows
-        return int(sum(-(-np.sum(chunk == c) // self.batch_size) for c in np.unique(chunk)))
+        return math.ceil(len(self.dataset.rows) / self.batch_size)
 
 
-def collate(items: list[dict[str, torch.Tensor]]) -> dict[str, torch.Tensor]:
+def collate(items) -> dict[str, torch.Tensor]:
+    """A batch from :meth:`GraspDataset.__getitems__` as it is, or a list of single items stacked."""
+    if isinstance(items, dict):
+        return items
     return {key: torch.stack([item[key] for item in items]) for key in items[0]}

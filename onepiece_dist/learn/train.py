@@ -11,7 +11,7 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader
 
-from onepiece_dist.learn.dataset import ChunkBatchSampler, GraspDataset, collate
+from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate
 from onepiece_dist.learn.models import MODELS
 from onepiece_dist.spec import TrainSpec
 
@@ -23,6 +23,18 @@ class TrainResult:
     metrics: list[dict]
     best_checkpoint: Path
     stopped_early: bool
+    device: str
+
+
+def resolve_device(choice: str) -> torch.device:
+    """The torch device for ``train.device``: 'auto' is CUDA when this process sees a GPU, else the CPU."""
+    if choice == "cuda" and not torch.cuda.is_available():
+        raise RuntimeError("train.device='cuda' but this process sees no CUDA GPU (use 'auto' or 'cpu')")
+    return torch.device("cuda" if choice == "cuda" or (choice == "auto" and torch.cuda.is_available()) else "cpu")
+
+
+def to_device(batch: dict[str, torch.Tensor], device: torch.device) -> dict[str, torch.Tensor]:
+    return {k: v.to(device, non_blocking=True) for k, v in batch.items()}
 
 
 def average_precision(scores: np.ndarray, labels: np.ndarray) -> float:
@@ -48,14 +60,16 @@ def load_model(path: str | os.PathLike) -> torch.nn.Module:
     return model.eval()
 
 
-def predict(model: torch.nn.Module, dataset: GraspDataset, batch_size: int = 256) -> np.ndarray:
-    """Success probabilities (n,) in dataset order."""
-    model.eval()
+def predict(model: torch.nn.Module, dataset: GraspDataset, batch_size: int = 256,
+            device: torch.device | None = None) -> np.ndarray:
+    """Success probabilities (n,) in dataset order, computed on ``device`` (default: the model's)."""
+    device = device or next(model.parameters()).device
+    model = model.to(device).eval()
     out = []
     with torch.no_grad():
         for start in range(0, len(dataset), batch_size):
-            batch = collate(dataset.batch(np.arange(start, min(start + batch_size, len(dataset)))))
-            out.append(torch.sigmoid(model(batch)).numpy())
+            batch = to_device(dataset.batch(np.arange(start, min(start + batch_size, len(dataset)))), device)
+            out.append(torch.sigmoid(model(batch).float()).cpu().numpy())
     return np.concatenate(out) if out else np.zeros(0)
 
 
@@ -72,39 +86,57 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
                 seed: int = 0) -> TrainResult:
     """Fit ``spec.model`` on the labelled grasps; resumes from ``checkpoint_dir/last.pt`` if present."""
     torch.manual_seed(seed)
+    device = resolve_device(spec.device)
     folder = Path(checkpoint_dir)
     folder.mkdir(parents=True, exist_ok=True)
     group = "assembled/grasps" if spec.data == "assembled" else "grasps"
-    train_set, val_set = GraspDataset(dataset_path, group).split_by_group(spec.validation, seed)
-    model = MODELS[spec.model]()
+    train_set, val_set = GraspDataset(dataset_path, group, inputs=MODEL_INPUTS[spec.model]).split_by_group(
+        spec.validation, seed)
+    model = MODELS[spec.model]().to(device)
     optimiser = torch.optim.Adam(model.parameters(), lr=spec.learning_rate)
     state = _resume(folder, model, optimiser)
     loader = DataLoader(train_set, batch_sampler=ChunkBatchSampler(train_set, spec.batch_size, seed),
-                        collate_fn=collate)
+                        collate_fn=collate, num_workers=spec.loader_workers, pin_memory=device.type == "cuda",
+                        persistent_workers=spec.loader_workers > 0)
     loader.batch_sampler.epoch = state["epoch"]
+    step = TrainStep(model, optimiser, device, spec.precision)
     for epoch in range(state["epoch"], spec.epochs):
-        train_loss = _train_epoch(model, optimiser, loader)
+        train_loss = _train_epoch(step, loader)
         metrics = {"epoch": epoch, "train_loss": train_loss, **{f"val_{k}": v for k, v in
                                                                  evaluate(model, val_set).items()}}
         state["metrics"].append(metrics)
         state = _after_epoch(folder, spec, model, optimiser, state, metrics)
         if state["bad_epochs"] >= spec.patience:
-            return TrainResult(state["metrics"], folder / BEST, True)
-    return TrainResult(state["metrics"], folder / BEST, False)
+            return TrainResult(state["metrics"], folder / BEST, True, device.type)
+    return TrainResult(state["metrics"], folder / BEST, False, device.type)
 
 
-def _train_epoch(model, optimiser, loader) -> float:
-    model.train()
+class TrainStep:
+    """One optimiser step on a batch: moved to ``device``, with bf16 autocast when ``precision`` says so."""
+
+    def __init__(self, model: torch.nn.Module, optimiser, device: torch.device, precision: str = "fp32"):
+        self.model, self.optimiser, self.device = model, optimiser, device
+        self.autocast = precision == "bf16"
+
+    def __call__(self, batch: dict[str, torch.Tensor]) -> torch.Tensor:
+        batch = to_device(batch, self.device)
+        self.optimiser.zero_grad(set_to_none=True)
+        with torch.autocast(self.device.type, dtype=torch.bfloat16, enabled=self.autocast):
+            logits = self.model(batch)
+        loss = torch.nn.functional.binary_cross_entropy_with_logits(logits.float(), batch["label"])
+        loss.backward()
+        self.optimiser.step()
+        return loss.detach()
+
+
+def _train_epoch(step: TrainStep, loader) -> float:
+    step.model.train()
     losses = []
     for batch in loader:
         if len(batch["label"]) < 2:
             continue  # batch norm needs two samples
-        optimiser.zero_grad()
-        loss = torch.nn.functional.binary_cross_entropy_with_logits(model(batch), batch["label"])
-        loss.backward()
-        optimiser.step()
-        losses.append(loss.item())
-    return float(np.mean(losses)) if losses else 0.0
+        losses.append(step(batch))
+    return float(torch.stack(losses).mean().item()) if losses else 0.0
 
 
 def _resume(folder: Path, model, optimiser) -> dict:
@@ -121,8 +153,8 @@ def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, m
     improved = metrics["val_loss"] < state["best_loss"]
     state = {**state, "epoch": metrics["epoch"] + 1, "bad_epochs": 0 if improved else state["bad_epochs"] + 1,
              "best_loss": min(state["best_loss"], metrics["val_loss"])}
-    checkpoint = {"model": spec.model, "state_dict": model.state_dict(), "optimiser": optimiser.state_dict(),
-                  **state}
+    weights = {name: tensor.detach().cpu() for name, tensor in model.state_dict().items()}  # loads anywhere
+    checkpoint = {"model": spec.model, "state_dict": weights, "optimiser": optimiser.state_dict(), **state}
     if improved:
         torch.save(checkpoint, folder / BEST)
     tmp = folder / f".{LAST}.tmp"

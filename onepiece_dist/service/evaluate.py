@@ -21,12 +21,12 @@ def evaluation_spec(spec: JobSpec) -> JobSpec:
 def evaluate_model(model_path: str | os.PathLike, spec: JobSpec) -> dict:
     """Label the candidates of ``spec.objects`` in simulation, then score the model on them."""
     from onepiece_dist.learn.dataset import GraspDataset
-    from onepiece_dist.learn.train import average_precision, load_model, predict
+    from onepiece_dist.learn.train import average_precision, load_model, predict, resolve_device
 
     labelled = evaluation_spec(spec)
     status = run_local(labelled, job_id="evaluate")
     dataset = GraspDataset(labelled.output, "grasps")
-    scores = predict(load_model(model_path), dataset)
+    scores = predict(load_model(model_path), dataset, device=resolve_device(spec.train.device))
     labels = dataset.labels()
     top, random = top_ranked_success(scores, labels, dataset.groups)
     return {"objects": status.progress.objects_done - len(status.rejections), "grasps": int(len(labels)),

@@ -96,7 +96,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
                 ray.kill(actor)  # free their CPUs for the trainer
 
     def train(train_spec: JobSpec):
-        clients.append(TrainerClient.start())
+        clients.append(TrainerClient.start(train_spec))
         return clients[-1].fit(train_spec)
 
     try:

@@ -20,8 +20,6 @@ class Trainer:
     """Plain class; :class:`TrainerClient` runs it as an actor."""
 
     def fit(self, spec: JobSpec) -> TrainingReport:
-        import torch
-
         from onepiece_dist.learn.train import train_model
         from onepiece_dist.store.dataset import write_group
 
@@ -30,21 +28,27 @@ class Trainer:
         arrays = {k: np.array([m[k] for m in result.metrics], dtype=np.float32) for k in keys}
         report = TrainingReport(model=spec.train.model, data=spec.train.data, epochs=len(result.metrics),
                                 stopped_early=result.stopped_early, checkpoint=str(result.best_checkpoint),
-                                device="cuda" if torch.cuda.is_available() else "cpu",
+                                device=result.device,
                                 final=result.metrics[-1] if result.metrics else {})
         write_group(spec.output, "train", arrays, {"training": report.model_dump(mode="json")})
         return report
 
 
 class TrainerClient(ActorClient):
-    """The trainer as a Ray actor: one GPU when the cluster has one, else one CPU."""
+    """The trainer as a Ray actor: one GPU when ``train.device`` is 'cuda', or 'auto' and the cluster has GPU
+    nodes; else one CPU."""
 
     @classmethod
-    def start(cls) -> TrainerClient:
+    def start(cls, spec: JobSpec) -> TrainerClient:
         import ray
 
-        gpus = 1 if ray.cluster_resources().get("GPU", 0) >= 1 else 0
+        gpus = trainer_gpus(spec.train.device, ray.cluster_resources().get("GPU", 0))
         return cls(ray.remote(Trainer).options(num_gpus=gpus, num_cpus=0 if gpus else 1).remote(), "trainer actor")
 
     def fit(self, spec: JobSpec) -> TrainingReport:
         return self.call("fit", spec)
+
+
+def trainer_gpus(device: str, cluster_gpus: float) -> int:
+    """GPUs the trainer actor asks Ray for."""
+    return int(device == "cuda" or (device == "auto" and cluster_gpus >= 1))

@@ -88,7 +88,7 @@ class GroupAppender:
         for name, (total, row_shape, dtype) in layout.items():
             shape = (total, *row_shape)
             self.arrays[name] = group.create_array(name, shape=shape, dtype=dtype,
-                                                   chunks=chunks_for(shape, chunk_rows),
+                                                   chunks=chunks_for(shape, chunk_rows, np.dtype(dtype).itemsize),
                                                    compressors=[compressor_for(dtype)], overwrite=True)
             self.buffers[name], self.written[name] = [], 0
 
