@@ -164,3 +164,21 @@ def resample_points(points: np.ndarray, count: int, rng: np.random.Generator) ->
     if len(points) == 0:
         return np.zeros((count, 3))
     return points[rng.integers(0, len(points), count)]
+
+
+def solid_properties(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """Volume (m^3), centre of mass (3,) and inertia tensor (3, 3) about it per unit density of the solid a
+    closed, outward-wound triangle mesh bounds (signed tetrahedra from the origin; exact for polyhedra)."""
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    signed = np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
+    volume = float(signed.sum())
+    if abs(volume) < 1e-15:
+        return 0.0, vertices.mean(axis=0), np.zeros((3, 3))
+    com = (signed[:, None] * (a + b + c)).sum(axis=0) / (4.0 * volume)
+    # second moments of each tetrahedron (0, a, b, c): integral of x_i x_j = V/20 (sum_k p_i p_j + (sum p)_i (sum p)_j)
+    s = a + b + c
+    second = (np.einsum("n,ni,nj->ij", signed, s, s) + sum(np.einsum("n,ni,nj->ij", signed, p, p) for p in (a, b, c)))
+    second /= 20.0
+    second -= volume * np.outer(com, com)  # about the centre of mass
+    inertia = np.trace(second) * np.eye(3) - second
+    return volume, com, inertia

@@ -1,0 +1,85 @@
+"""Convex pieces clipped to an axis-aligned box, exactly (pure numpy).
+
+A convex piece is given by points whose convex hull it is (how pybullet and VHACD give them). Clipping the hull
+by one plane keeps the points on the inner side and adds the points where the plane cuts the hull's edges. Every
+edge of the hull joins two of its points, so cutting every segment between an inner and an outer point finds
+all of them (and only points of the hull); their 2D hull in the plane is the cap. The result of each cut is again
+a set of points whose hull is the clipped piece, so six cuts clip to a box, and a clipped piece stays convex.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+EPS = 1e-12
+
+
+def clip_to_box(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The hull of ``points`` (k, 3) intersected with the box [lower, upper] (3,), as (m, 3) float64 points whose
+    hull it is: the piece's points inside the box and the vertices of each cut face, without duplicates; (0, 3)
+    when the piece misses the box or only touches it (no volume)."""
+    out = np.asarray(points, dtype=np.float64)
+    for axis in range(3):
+        out = _cut(out, axis, float(lower[axis]), keep_above=True)
+        out = _cut(out, axis, float(upper[axis]), keep_above=False)
+        if len(out) < 4:
+            return np.zeros((0, 3))
+    _, first = np.unique(np.round(out, 12), axis=0, return_index=True)
+    out = out[np.sort(first)]
+    return out if len(out) >= 4 and np.ptp(out, axis=0).min() > 1e-9 else np.zeros((0, 3))
+
+
+def _cut(points: np.ndarray, axis: int, level: float, keep_above: bool) -> np.ndarray:
+    """Points of the hull of ``points`` on one side of the plane x[axis] = level."""
+    side = points[:, axis] - level if keep_above else level - points[:, axis]
+    inner, outer = points[side >= -EPS], points[side < -EPS]
+    if len(outer) == 0 or len(inner) == 0:
+        return points if len(outer) == 0 else np.zeros((0, 3))
+    d_in, d_out = side[side >= -EPS], side[side < -EPS]
+    t = d_in[:, None] / (d_in[:, None] - d_out[None, :])  # (i, o) where the segment meets the plane
+    cuts = inner[:, None, :] + t[..., None] * (outer[None, :, :] - inner[:, None, :])
+    on_plane = d_in <= EPS
+    cap = np.vstack([cuts.reshape(-1, 3), inner[on_plane]])
+    cap[:, axis] = level
+    others = [a for a in range(3) if a != axis]
+    return np.vstack([inner[~on_plane], cap[_hull_2d(cap[:, others])]])
+
+
+def _hull_2d(points: np.ndarray) -> np.ndarray:
+    """Indices of the vertices of the 2D convex hull of (n, 2) points (Andrew's monotone chain)."""
+    if len(points) < 3:
+        return np.arange(len(points))
+    rounded = np.round(points, 12)
+    _, unique = np.unique(rounded, axis=0, return_index=True)
+    order = unique[np.lexsort((points[unique, 1], points[unique, 0]))]
+    if len(order) < 3:
+        return order
+
+    def chain(indices) -> list[int]:
+        hull: list[int] = []
+        for i in indices:
+            while len(hull) >= 2 and _cross(points[hull[-2]], points[hull[-1]], points[i]) <= 0:
+                hull.pop()
+            hull.append(int(i))
+        return hull
+
+    lower, upper = chain(order), chain(order[::-1])
+    return np.array(lower[:-1] + upper[:-1], dtype=np.int64)
+
+
+def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+
+
+def hull_mesh(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Triangle mesh of the convex hull of (k, 3) points: vertices (n, 3) float64, faces (f, 3) int64 wound
+    outward (open3d's qhull, imported where used)."""
+    import open3d as o3d
+
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.array(points, dtype=np.float64)))
+    hull, _ = cloud.compute_convex_hull(joggle_inputs=False)
+    vertices, faces = np.asarray(hull.vertices, dtype=np.float64), np.asarray(hull.triangles, dtype=np.int64)
+    tri = vertices[faces] - vertices.mean(axis=0)
+    if np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() < 0:
+        faces = faces[:, ::-1]
+    return vertices, faces

@@ -1,0 +1,57 @@
+"""Convex pieces clipped to the patch box: exact polytopes."""
+
+import numpy as np
+import pytest
+
+from onepiece_dist.core.clip import clip_to_box
+
+
+def as_set(points: np.ndarray) -> set:
+    return {tuple(p) for p in np.round(points, 9)}
+
+
+def box_corners(lower, upper) -> np.ndarray:
+    return np.array([[x, y, z] for x in (lower[0], upper[0]) for y in (lower[1], upper[1])
+                     for z in (lower[2], upper[2])], dtype=float)
+
+
+def test_a_box_clipped_by_a_box_is_their_intersection_box():
+    piece = box_corners((-0.01, -0.02, -0.03), (0.01, 0.02, 0.03))
+    clipped = clip_to_box(piece, np.array([0.0, -0.01, -0.05]), np.array([0.05, 0.01, 0.01]))
+    assert as_set(clipped) == as_set(box_corners((0.0, -0.01, -0.03), (0.01, 0.01, 0.01)))
+
+
+def test_a_cylinder_hull_clipped_across_its_axis_keeps_its_ring_and_gains_the_cut_edges():
+    n, radius, half_height, cut = 16, 0.02, 0.03, 0.012
+    angles = 2 * np.pi * np.arange(n) / n
+    ring = np.stack([radius * np.cos(angles), radius * np.sin(angles)], axis=1)
+    piece = np.vstack([np.c_[ring, np.full(n, z)] for z in (-half_height, half_height)])
+    clipped = clip_to_box(piece, np.array([-cut, -1, -1]), np.array([cut, 1, 1]))
+    kept = ring[np.abs(ring[:, 0]) <= cut]
+    crossings = []  # where the polygon's edges cross x = +-cut
+    for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
+        for level in (-cut, cut):
+            if (a[0] - level) * (b[0] - level) < 0:
+                t = (level - a[0]) / (b[0] - a[0])
+                crossings.append(a + t * (b - a))
+    section = np.vstack([kept, crossings])
+    expected = np.vstack([np.c_[section, np.full(len(section), z)] for z in (-half_height, half_height)])
+    assert as_set(clipped) == as_set(expected)
+    assert np.all(np.abs(clipped[:, 0]) <= cut + 1e-12)
+
+
+def test_a_piece_outside_the_box_or_only_touching_it_gives_nothing():
+    piece = box_corners((0.1, 0.1, 0.1), (0.2, 0.2, 0.2))
+    assert clip_to_box(piece, np.zeros(3), np.full(3, 0.05)).shape == (0, 3)
+    assert clip_to_box(piece, np.zeros(3), np.full(3, 0.1)).shape == (0, 3)  # one corner touches
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_clipped_points_lie_in_the_box_and_the_inner_points_are_kept(seed):
+    rng = np.random.default_rng(seed)
+    piece = rng.normal(0, 0.02, (32, 3))
+    lower, upper = np.array([-0.01, -0.015, -0.02]), np.array([0.02, 0.01, 0.005])
+    clipped = clip_to_box(piece, lower, upper)
+    assert np.all((clipped >= lower - 1e-12) & (clipped <= upper + 1e-12))
+    inside = piece[np.all((piece > lower) & (piece < upper), axis=1)]
+    assert as_set(inside) <= as_set(clipped)
