@@ -386,11 +386,16 @@ def supplement(
 def schema(
     out: Annotated[Path, typer.Option(help="Folder for the JSON Schemas.")] = Path("schemas"),
 ) -> None:
-    """Write JSON Schemas of the job spec, job status and dataset layout."""
-    from onepiece_dist.schemas import write_schemas
+    """Write JSON Schemas of the job spec, job status and dataset layout (and, in a checkout, the array table of
+    docs/dataset_format.md)."""
+    from onepiece_dist.schemas import refresh_format_page, write_schemas
 
     for path in write_schemas(out):
         typer.echo(str(path))
+    page = Path(__file__).resolve().parents[1] / "docs" / "dataset_format.md"
+    if page.is_file():
+        refresh_format_page(page)
+        typer.echo(str(page))
 
 
 def main() -> None:

@@ -16,7 +16,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from onepiece_dist.errors import SpecError
 
-RESULTS_REVISION = 2  # bump when code changes what an extraction produces (2: one rigid body, coupled fingers)
+RESULTS_REVISION = 3  # bump when code changes what an extraction produces (2: one rigid body, coupled fingers;
+#                      3: parts keep the object's surface points and convex pieces, for patches)
 
 STAGES = ("ingest", "extract", "dedup", "assemble", "label", "train", "evaluate")
 Stage = Literal["ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"]
@@ -119,6 +120,11 @@ class SimSpec(_Frozen):
                                          "poses labelled around each patch's placement, besides the placement.")
     points_per_grasp: int = Field(750, ge=0, le=4096, description="Gripper-frame points stored per grasp "
                                   "(resampled with replacement; 0 stores none).")
+    transfer_codes: int = Field(200, ge=0, le=100_000, description="Label stage: unique codes (with two or more "
+                                "grasps, a seeded sample) whose source grasps are also labelled on their own objects, "
+                                "to measure how far a label transfers (docs/assembly.md); 0 skips it.")
+    transfer_grasps: int = Field(5, ge=2, le=64, description="Source grasps labelled per sampled code (its "
+                                 "representative and the first others).")
 
 
 class ViewSpec(_Frozen):

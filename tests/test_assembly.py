@@ -10,10 +10,17 @@ from typer.testing import CliRunner
 
 from onepiece_dist.cli import app
 from onepiece_dist.core.classifier import PLANES, classify_occupancy, l_feature_count
-from onepiece_dist.core.layout import assembly_geometry, corridor_intrusions, layout_patches, region_codes
+from onepiece_dist.core.layout import (
+    FACES,
+    assembly_geometry,
+    corridor_intrusions,
+    layout_patches,
+    patch_box,
+    region_codes,
+)
 from onepiece_dist.core.spatial import PointGrid
-from onepiece_dist.core.voxel import pack_codes
 from onepiece_dist.service.local import run_local
+from onepiece_dist.service.patches import read_patches
 from onepiece_dist.spec import GripperSpec
 from onepiece_dist.store import open_dataset
 
@@ -67,39 +74,85 @@ def small_dataset(tmp_path_factory):
     return spec, out, status
 
 
-def test_assembled_object_reproduces_every_unique_code(small_dataset):
+def test_each_unique_code_is_represented_by_its_first_grasp(small_dataset):
+    _, out, _ = small_dataset
+    ds = open_dataset(out)
+    codes, representative, code_index = ds["unique/code"], ds["unique/representative"], ds["grasps/code_index"]
+    assert np.array_equal(ds["grasps/code"][representative], codes)
+    first = np.array([np.flatnonzero(code_index == k)[0] for k in range(len(codes))])
+    assert np.array_equal(representative, first)
+    assert np.array_equal(ds["assembled/representative"], representative)
+
+
+def test_the_one_object_is_made_of_the_real_geometry_and_reproduces_every_unique_code(small_dataset):
     spec, out, status = small_dataset
     ds = open_dataset(out)
     report = ds.attrs["assembly"]
     assert report["fidelity"] == 1.0 and report["fidelity_failures"] == [] and report["corridor_intrusions"] == 0
-    assert status.assembly.unique_codes == len(ds["unique/code"])
+    assert status.assembly.unique_codes == len(ds["unique/code"]) and report["patch_pieces"] >= len(ds["unique/code"])
     assert {"extract", "dedup", "assemble"} <= set(status.timings) and "label" not in status.timings
     # recomputed here from the stored points and placements, independently of the stage's own check
     codes = region_codes(ds["assembled/points"].astype(np.float64), ds["assembled/placement"].astype(np.float64),
                          spec.grid_shape(), spec.voxel.resolution)
     assert np.array_equal(codes, ds["unique/code"])
-    assert report["label_trials_one_object"] < report["label_trials_all_grasps"]
+    # every patch point is a point of its source object's surface sample, seen from the representative's pose
+    patches = read_patches(ds)
+    k = int(np.argmax([len(p) for p in patches.points]))
+    row = patches.representative[k]
+    source = source_surface(spec, out, int(ds["grasps/object"][row]))
+    pose = ds["grasps/pose"][row].astype(np.float64)
+    placed = patches.points[k] @ pose[:3, :3].T + pose[:3, 3]
+    assert np.abs(placed[:, None, :] - source[None]).max(axis=2).min(axis=1).max() < 1e-7  # float32 pose
+    lower, upper = patch_box(spec.gripper, spec.voxel.resolution)
+    for piece in (p for patch in patches.pieces for p in patch):
+        assert np.all((piece >= lower - 1e-9) & (piece <= upper + 1e-9))
+    assert report["chamfer_patches"] > 0 and report["chamfer_mm"] < 3.0
+
+
+def source_surface(spec, out, obj: int) -> np.ndarray:
+    from onepiece_dist.service.results import part_key
+    from onepiece_dist.store import PartStore
+
+    content_id = bytes(open_dataset(out)["objects/id"][obj]).hex()
+    return PartStore(spec.parts_folder()).read_array(part_key(content_id, spec.result_key()), "object_surface")
+
+
+def synthetic_patches(count: int, rng) -> tuple[list, list]:
+    """Random convex pieces and surface points inside the patch box, as patches of real objects are."""
+    lower, upper = patch_box(GripperSpec(), 0.01)
+    pieces, points = [], []
+    for _ in range(count):
+        a, b = np.sort(rng.uniform(lower, upper, (2, 3)), axis=0)
+        pieces.append([np.array([[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])])])
+        points.append(rng.uniform(a, b, (50, 3)))
+    return pieces, points
 
 
 def test_no_patch_enters_another_patch_gripper_corridor():
     rng = np.random.default_rng(0)
-    codes = pack_codes(rng.random((60, *GRID)) < 0.4)
     plane = classify_occupancy(rng.random((60, *GRID)) < 0.4).plane
     gripper = GripperSpec()
-    layout = layout_patches(codes, plane, GRID, 0.01, gripper)
-    geometry = assembly_geometry(layout, 0.01)
+    pieces, points = synthetic_patches(60, rng)
+    layout = layout_patches(plane, gripper, 0.01)
+    geometry = assembly_geometry(layout, pieces, points, 0.01)
     assert corridor_intrusions(geometry["points"], geometry["point_patch"], layout.placements, gripper, 2.0).sum() == 0
-    assert np.array_equal(region_codes(geometry["points"], layout.placements, GRID, 0.01), codes)
-    # a pitch one voxel tighter lets neighbours in: the check can fail
-    tight = layout_patches(codes, np.zeros(60, dtype=np.int8), GRID, 0.01,
-                           GripperSpec(max_opening=0.06, closing_width=0.06))
-    crowded = assembly_geometry(tight, 0.01)
-    squeezed = tight.placements.copy()
+    squeezed = layout.placements.copy()  # a tighter grid lets neighbours in: the check can fail
     squeezed[:, :3, 3] *= 0.7
-    assert corridor_intrusions(crowded["points"], crowded["point_patch"], squeezed, gripper, 2.0).sum() > 0
+    assert corridor_intrusions(geometry["points"], geometry["point_patch"], squeezed, gripper, 2.0).sum() > 0
 
 
-def test_export_obj_ply_urdf_and_a_single_pybullet_body(small_dataset, tmp_path):
+def test_the_classifier_decides_where_and_how_a_patch_is_laid():
+    gripper = GripperSpec()
+    base = layout_patches(np.array([0, 0, 1, 2], dtype=np.int8), gripper, 0.01)
+    moved = layout_patches(np.array([0, 2, 1, 2], dtype=np.int8), gripper, 0.01)  # patch 1: uv -> vt
+    assert not np.allclose(base.placements[1], moved.placements[1])
+    for layout in (base, moved):  # the gripper approaches each patch along the inward normal of its class's face
+        for k, cls in enumerate(layout.face):
+            assert np.allclose(layout.placements[k][:3, 0], -FACES[cls][0])
+            assert np.allclose(layout.placements[k][:3, 1], FACES[cls][1])
+
+
+def test_export_obj_ply_urdf_and_a_single_pybullet_body_of_the_pieces(small_dataset, tmp_path):
     import pybullet as pb
     import trimesh
 
@@ -111,12 +164,56 @@ def test_export_obj_ply_urdf_and_a_single_pybullet_body(small_dataset, tmp_path)
     mesh = trimesh.load(tmp_path / "one.obj", force="mesh")
     assert isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) == len(open_dataset(out)["assembled/faces"])
     assert len(trimesh.load(tmp_path / "one.ply").faces) == len(mesh.faces)
+    groups = (tmp_path / "one.pieces.obj").read_text().count("\no piece") + 1
+    assert groups == open_dataset(out).attrs["assembly"]["patch_pieces"] + 1  # the pieces and the core
+    urdf = (tmp_path / "one.urdf").read_text()
+    mass = float(urdf.split('mass value="')[1].split('"')[0])
+    assert 0.01 < mass < 100 and mass != 1.0  # from the geometry at the simulation's density
     client = pb.connect(pb.DIRECT)
     try:
         body = pb.loadURDF(str(tmp_path / "one.urdf"), useFixedBase=True, physicsClientId=client)
         assert pb.getNumBodies(physicsClientId=client) == 1 and pb.getNumJoints(body, physicsClientId=client) == 0
+        # a compound of the pieces, not their hull: a ray between two patches reaches the core
+        ds = open_dataset(out)
+        placement, core_top = ds["assembled/placement"][0].astype(np.float64), ds["assembled/vertices"][-8:].max(0)
+        pitch_v = ds.attrs["assembly"]["grid_pitch_m"][0]
+        normal, gap = -placement[:3, 0], placement[:3, 3] + 0.5 * pitch_v * placement[:3, 1]
+        hit = pb.rayTest((gap + normal).tolist(), (gap - normal).tolist(), physicsClientId=client)[0]
+        face = int(np.argmax(np.abs(normal)))
+        assert hit[0] == body and abs(hit[3][face] - core_top[face]) < 0.005
     finally:
         pb.disconnect(client)
+
+
+@pytest.mark.sim
+def test_the_gripper_closed_on_the_exported_object_sees_each_patch_code(small_dataset, tmp_path):
+    import pybullet as pb
+
+    from onepiece_dist.sim.trials import extract_trial
+    from onepiece_dist.sim.world import SimWorld
+
+    spec, out, _ = small_dataset
+    exported = CliRunner().invoke(app, ["export", str(out), "--format", "urdf", "--out", str(tmp_path / "one.urdf")])
+    assert exported.exit_code == 0, exported.output
+    ds = open_dataset(out)
+    placements, codes = ds["assembled/placement"].astype(np.float64), ds["unique/code"]
+    points = ds["assembled/points"].astype(np.float64)
+    world = SimWorld(spec.gripper)
+    try:
+        world.obj = pb.loadURDF(str(tmp_path / "one.urdf"), useFixedBase=True, physicsClientId=world.client)
+        world.com = np.zeros(3)
+        tried = 0
+        for k in np.argsort([-int(np.unpackbits(c).sum()) for c in codes])[:6]:  # the fullest patches
+            outcome, settled, width, _, _ = extract_trial(world, placements[k])
+            if outcome != 0:
+                continue
+            tried += 1
+            assert width < spec.gripper.max_opening
+            assert np.array_equal(region_codes(points, settled[None], spec.grid_shape(), spec.voxel.resolution)[0],
+                                  codes[k])
+        assert tried >= 2
+    finally:
+        world.close()
 
 
 def test_render_writes_a_png_that_is_not_blank(small_dataset, tmp_path):
@@ -143,7 +240,7 @@ def labelled_spec(tmp_path, perturbations: int, points: int):
     """Two primitives through assembly and the label stage on the one object."""
     from onepiece_dist.spec import JobSpec
 
-    return JobSpec(objects="primitives[0:2]", grasps_per_object=8, output=str(tmp_path / "ds.zarr"),
+    return JobSpec(objects="primitives[0:2]", grasps_per_object=16, output=str(tmp_path / "ds.zarr"),
                    sampler={"surface_points": 2000}, stages=("ingest", "extract", "dedup", "assemble", "label"),
                    sim={"perturbations_per_patch": perturbations, "points_per_grasp": points})
 
@@ -209,6 +306,29 @@ def test_label_stage_runs_the_protocol_around_each_patch_of_the_one_object(tmp_p
     assert set(np.unique(ds["assembled/grasps/success"])) <= {0, 1}
     quality = ds["assembled/grasps/quality"]
     assert np.all((quality >= 0) & (quality <= 1))
+    transfer = status.labels.transfer  # label transfer, measured on the codes with two or more grasps
+    shared = int(np.sum(ds["unique/count"] >= 2))
+    assert shared > 0 and transfer.codes == min(shared, spec.sim.transfer_codes)
+    assert transfer.patch_vs_source.pairs == transfer.codes
+    assert transfer.grasps_labelled == transfer.codes + transfer.same_code.pairs
+    for measure in (transfer.patch_vs_source, transfer.same_code, transfer.random_pairs):
+        for value in (measure.success_agreement, measure.quality_correlation):
+            assert value is None or -1 <= value <= 1
+        assert measure.success_agreement is None or 0 <= measure.success_agreement <= 1
+    assert ds.attrs["assembly_labels"]["transfer"]["codes"] == transfer.codes
+    assert "transfer" in CliRunner().invoke(app, ["inspect", spec.output]).output
+
+
+def test_agreement_counts_equal_outcomes_and_correlates_qualities():
+    from onepiece_dist.service.transfer import agreement
+
+    pairs = [((1.0, 1.0), (1.0, 0.75)), ((0.0, 0.0), (1.0, 0.25)), ((1.0, 0.5), (1.0, 0.5))]
+    result = agreement(pairs)
+    assert result.pairs == 3 and result.success_agreement == pytest.approx(2 / 3, abs=1e-4)
+    assert result.quality_correlation == pytest.approx(np.corrcoef([1, 0, 0.5], [0.75, 0.25, 0.5])[0, 1], abs=1e-4)
+    constant = agreement([((1.0, 1.0), (1.0, 1.0))] * 2)
+    assert constant.success_agreement == 1.0 and constant.quality_correlation is None
+    assert agreement([]).pairs == 0
 
 
 @settings(max_examples=60, deadline=None)

@@ -24,3 +24,8 @@ def test_every_committed_result_renders_with_its_command_and_date():
 def test_the_committed_page_is_the_rendered_one():
     assert (ROOT / "docs" / "performance.md").read_text() == load_report().render(), \
         "docs/performance.md is stale: run `python benchmarks/report.py`"
+
+
+def test_the_assembly_figures_are_the_rendered_ones():
+    assert (ROOT / "docs" / "assembly.md").read_text() == load_report().render_assembly_page(), \
+        "docs/assembly.md figures are stale: run `python benchmarks/report.py`"

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from onepiece_dist.schemas import render_schemas
+from onepiece_dist.schemas import render_array_table, render_schemas
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -85,3 +85,8 @@ def test_the_layer_guard_sees_a_forbidden_import(tmp_path):
 def test_committed_schemas_match_models(name):
     committed = (ROOT / "schemas" / name).read_text()
     assert committed == render_schemas()[name], f"schemas/{name} drifted: run `onepiece schema`"
+
+
+def test_the_format_page_lists_every_array_the_layout_names():
+    page = (ROOT / "docs" / "dataset_format.md").read_text()
+    assert render_array_table() in page, "docs/dataset_format.md drifted: run `onepiece schema`"

@@ -1,11 +1,11 @@
-"""Assembling unique codes into ONE object (docs/assembly.md).
+"""Assembling the patches of the unique codes into ONE object (docs/assembly.md).
 
-Each unique code becomes a patch: one small cube per occupied voxel (edge 0.8 r, centred in its voxel, so every
-point of it falls in that voxel). Patches are grouped by their projection-plane class onto the +X (uv), +Y (ut)
-and +Z (vt) faces of a core box; on a face they sit in a grid, floating a gap above the face, and the gripper for
-a patch approaches along the face's inward normal (u = -n). The grid pitch is the smallest that keeps every
-neighbour out of the gripper's corridor (closing region, open fingers and the path of the palm), so no patch
-masks or stacks on another and a gripper at a patch's placement sees exactly that patch.
+Each unique code has a patch: real geometry in its own gripper frame (convex pieces and surface points inside the
+patch box, :func:`patch_box`). Patches are grouped by their projection-plane class onto the +X (uv), +Y (ut) and
++Z (vt) faces of a core box; on a face they sit in a grid, floating a gap above the face, and the gripper for a
+patch approaches along the face's inward normal (u = -n), as it did on the source object. The grid pitch is the
+smallest that keeps every neighbour out of the gripper's corridor (closing region, open fingers and the path of
+the palm), so no patch masks or stacks on another and a gripper at a patch's placement sees exactly that patch.
 """
 
 from __future__ import annotations
@@ -14,14 +14,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.frames import pose_from_axes, to_gripper_frame
+from onepiece_dist.core.clip import hull_mesh
+from onepiece_dist.core.frames import pose_from_axes, to_gripper_frame, transform_points
+from onepiece_dist.core.mesh import merge_meshes
 from onepiece_dist.core.spatial import PointGrid, posed_box_bounds
-from onepiece_dist.core.voxel import crop_codes, unpack_codes
+from onepiece_dist.core.voxel import crop_codes
 from onepiece_dist.spec import GripperSpec
 
-CUBE_FILL = 0.8  # cube edge as a fraction of the voxel edge
-POINTS_PER_CUBE_SIDE = 2  # dense points of the one object: a 2 x 2 grid on each cube face (24 per voxel)
-# face k: outward normal, v axis, t axis (all world axes, so every cube is axis-aligned)
+PATCH_MARGIN = 0.005  # m: the patch box's reach beyond the closing region across the fingers' width and height
+PATCH_SUPPORT = 0.01  # m: material kept beyond the fingertips (what supports the surface the pads hold)
+# face k: outward normal, v axis, t axis (all world axes)
 FACES = (
     (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])),
     (np.array([0, 1.0, 0]), np.array([0, 0, 1.0]), np.array([1.0, 0, 0])),
@@ -31,51 +33,59 @@ FACES = (
 
 @dataclass(frozen=True)
 class Layout:
-    """placements (U, 4, 4) gripper poses in the object frame; face (U,) int8; cube_centres (M, 3);
-    cube_patch (M,) int64 owner patch; cube_edge (m); core_half (3,) half extents of the core box (m);
-    pitch (v, t) (m)."""
+    """placements (U, 4, 4) gripper poses in the object frame; face (U,) int8; core_half (3,) half extents of the
+    core box (m); pitch (v, t) (m); extent (2, 3) the patch box (gripper frame) every patch fits in."""
 
     placements: np.ndarray
     face: np.ndarray
-    cube_centres: np.ndarray
-    cube_patch: np.ndarray
-    cube_edge: float
     core_half: np.ndarray
     pitch: tuple[float, float]
+    extent: np.ndarray
 
     @property
     def bounding_box(self) -> np.ndarray:
-        """(2, 3) lower and upper corners of the whole object."""
-        half = self.cube_edge / 2
-        lo = np.minimum(self.cube_centres.min(axis=0) - half, -self.core_half)
-        hi = np.maximum(self.cube_centres.max(axis=0) + half, self.core_half)
+        """(2, 3) lower and upper corners of the whole object (patch boxes and core)."""
+        corners = np.array([[x, y, z] for x in self.extent[:, 0] for y in self.extent[:, 1]
+                            for z in self.extent[:, 2]])
+        placed = np.einsum("pij,cj->pci", self.placements[:, :3, :3], corners) + self.placements[:, None, :3, 3]
+        placed = placed.reshape(-1, 3)
+        lo = np.minimum(placed.min(axis=0), -self.core_half) if len(placed) else -self.core_half
+        hi = np.maximum(placed.max(axis=0), self.core_half) if len(placed) else self.core_half
         return np.stack([lo, hi])
 
 
+def patch_box(gripper: GripperSpec, resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) (3,) of the patch box in the gripper frame: the closing region, grown by PATCH_MARGIN
+    along v and t and by PATCH_SUPPORT beyond the fingertips along u; it starts at the palm (u = 0)."""
+    half_v, half_t = gripper.closing_width / 2 + PATCH_MARGIN, gripper.closing_height / 2 + PATCH_MARGIN
+    return (np.array([0.0, -half_v, -half_t]),
+            np.array([gripper.closing_depth + PATCH_SUPPORT, half_v, half_t]))
+
+
 def grid_pitch(gripper: GripperSpec, resolution: float) -> tuple[float, float]:
-    """Patch spacing along v and t: a neighbour's closing region must clear this patch's open fingers."""
+    """Patch spacing along v and t: a neighbour's patch box must clear this patch's open fingers."""
     gap = resolution / 2
-    pitch_v = gripper.max_opening / 2 + gripper.finger_thickness + gripper.closing_width / 2 + gap
-    pitch_t = max(gripper.finger_height, gripper.closing_height) / 2 + gripper.closing_height / 2 + gap
+    lower, upper = patch_box(gripper, resolution)
+    pitch_v = gripper.max_opening / 2 + gripper.finger_thickness + upper[1] + gap
+    pitch_t = max(gripper.finger_height, gripper.closing_height) / 2 + upper[2] + gap
     return pitch_v, pitch_t
 
 
-def layout_patches(codes: np.ndarray, plane: np.ndarray, grid_shape: tuple[int, int, int], resolution: float,
-                   gripper: GripperSpec) -> Layout:
-    """Lay out (U, B) codes with their plane classes (U,) into one object."""
+def layout_patches(plane: np.ndarray, gripper: GripperSpec, resolution: float) -> Layout:
+    """Placements of U patches with plane classes (U,) int: each class on its face of the core box."""
     pitch = grid_pitch(gripper, resolution)
     cells = [_grid_cells(int(np.sum(plane == f)), pitch) for f in range(3)]
     core_half = _core_half(cells, pitch, resolution)
+    lower, upper = patch_box(gripper, resolution)
     gap = resolution / 2
-    placements = np.zeros((len(codes), 4, 4))
+    placements = np.zeros((len(plane), 4, 4))
     for f, (normal, axis_v, axis_t) in enumerate(FACES):
         members = np.flatnonzero(plane == f)
-        origin = normal * (core_half @ normal + gripper.closing_depth + gap)
+        origin = normal * (core_half @ normal + upper[0] + gap)
         for k, cell in zip(members, cells[f], strict=True):
             centre = origin + cell[0] * axis_v + cell[1] * axis_t
             placements[k] = pose_from_axes(centre[None], -normal[None], axis_v[None])[0]
-    centres, owner = patch_cubes(codes, placements, grid_shape, resolution)
-    return Layout(placements, plane.astype(np.int8), centres, owner, CUBE_FILL * resolution, core_half, pitch)
+    return Layout(placements, np.asarray(plane, dtype=np.int8), core_half, pitch, np.stack([lower, upper]))
 
 
 def _core_half(cells: list[np.ndarray], pitch: tuple[float, float], resolution: float) -> np.ndarray:
@@ -96,18 +106,6 @@ def _grid_cells(count: int, pitch: tuple[float, float]) -> np.ndarray:
     rows = int(np.ceil(count / cols))
     j, i = np.divmod(np.arange(count), cols)
     return np.stack([(i - (cols - 1) / 2) * pitch[0], (j - (rows - 1) / 2) * pitch[1]], axis=1)
-
-
-def patch_cubes(codes: np.ndarray, placements: np.ndarray, grid_shape: tuple[int, int, int],
-                resolution: float) -> tuple[np.ndarray, np.ndarray]:
-    """Centres (M, 3) in the object frame of every occupied voxel of every patch, and their patch (M,)."""
-    a, b, c = grid_shape
-    occ = unpack_codes(codes, grid_shape)
-    patch, i, j, k = np.nonzero(occ)
-    local = np.stack([(i + 0.5) * resolution, -b * resolution / 2 + (j + 0.5) * resolution,
-                      -c * resolution / 2 + (k + 0.5) * resolution], axis=1)
-    rot, origin = placements[patch, :3, :3], placements[patch, :3, 3]
-    return np.einsum("mij,mj->mi", rot, local) + origin, patch.astype(np.int64)
 
 
 def cube_points(centres: np.ndarray, edge: float | np.ndarray, per_side: int = 3) -> np.ndarray:
@@ -169,20 +167,30 @@ def box_arrays(centres: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.n
     return vertices, faces
 
 
-def assembly_geometry(layout: Layout, resolution: float) -> dict[str, np.ndarray]:
-    """Mesh, dense points and owners of the whole object.
+def assembly_geometry(layout: Layout, pieces: list[list[np.ndarray]], points: list[np.ndarray],
+                      resolution: float) -> dict[str, np.ndarray]:
+    """Mesh, dense points and owners of the whole object: every patch's convex pieces and surface points
+    (patch frame) placed by its placement, and the core box.
 
+    pieces : per patch, (k, 3) points of each convex piece; points : per patch, (m, 3) surface points
     returns : vertices (V, 3), faces (F, 3) int64, face_group (F,) int8 (plane class of the patch, 3 = core),
-              points (P, 3), point_patch (P,) int64 (-1 = core)
+              piece_patch (K,) int64 patch of each placed piece, points (P, 3), point_patch (P,) int64 (-1 = core)
     """
-    centres = np.vstack([layout.cube_centres, np.zeros((1, 3))])
-    edges = np.vstack([np.full((len(layout.cube_centres), 3), layout.cube_edge), 2 * layout.core_half[None]])
-    vertices, faces = box_arrays(centres, edges)
-    face_group = np.concatenate([np.repeat(layout.face[layout.cube_patch], 12), np.full(12, 3)]).astype(np.int8)
+    meshes, groups, owners = [], [], []
+    for k, (patch_pieces, placement) in enumerate(zip(pieces, layout.placements, strict=True)):
+        for piece in patch_pieces:
+            vertices, faces = hull_mesh(transform_points(piece, placement))
+            meshes.append((vertices, faces))
+            groups.append(np.full(len(faces), layout.face[k], dtype=np.int8))
+            owners.append(k)
+    core_vertices, core_faces = box_arrays(np.zeros((1, 3)), 2 * layout.core_half[None])
+    meshes.append((core_vertices, core_faces))
+    groups.append(np.full(len(core_faces), 3, dtype=np.int8))
+    vertices, faces = merge_meshes(meshes)
     per_side = max(2, int(np.ceil(2 * layout.core_half.max() / resolution)))
     core = cube_points(np.zeros((1, 3)), 2 * layout.core_half, per_side)
-    patch_points = cube_points(layout.cube_centres, layout.cube_edge, per_side=POINTS_PER_CUBE_SIDE)
-    owner = np.concatenate([np.repeat(layout.cube_patch, len(patch_points) // max(len(layout.cube_patch), 1)),
-                            np.full(len(core), -1)])
-    return {"vertices": vertices, "faces": faces, "face_group": face_group,
-            "points": np.vstack([patch_points, core]).astype(np.float32), "point_patch": owner.astype(np.int32)}
+    placed = [transform_points(p, layout.placements[k]) for k, p in enumerate(points)]
+    owner = np.concatenate([np.full(len(p), k) for k, p in enumerate(placed)] + [np.full(len(core), -1)])
+    return {"vertices": vertices, "faces": faces, "face_group": np.concatenate(groups),
+            "piece_patch": np.array(owners, dtype=np.int64), "points": np.vstack([*placed, core]),
+            "point_patch": owner.astype(np.int64)}

@@ -18,6 +18,7 @@ from onepiece_dist.service.results import CommitSummary, ObjectResult
 from onepiece_dist.service.status import AssemblyReport, LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
+from onepiece_dist.store.dataset import update_attributes
 
 
 class CentralActor:
@@ -57,13 +58,16 @@ class CentralActor:
                              exact_unique_codes=int(reader.array(exact).shape[0]))
 
     def assemble(self) -> AssemblyReport:
-        """Build the one object from the committed unique codes and store it under ``assembled/``."""
+        """Cut each unique code's patch from its representative's source object, build the one object from them
+        and store it under ``assembled/``."""
         from onepiece_dist.service.assemble import assemble_dataset
+        from onepiece_dist.service.patches import build_patches
 
+        reader = DatasetReader(self.spec.output)
         if self.unique_codes is None or self.grasps is None:
-            reader = DatasetReader(self.spec.output)
             self.unique_codes, self.grasps = reader["unique/code"], int(reader.array("grasps/code").shape[0])
-        self.assembly = assemble_dataset(self.spec, self.spec.output, self.unique_codes, self.grasps)
+        patches = build_patches(self.spec, reader, self.parts, reader["unique/representative"])
+        self.assembly = assemble_dataset(self.spec, self.spec.output, self.unique_codes, patches, self.grasps)
         return self.assembly
 
     def label(self) -> LabelReport:
@@ -76,7 +80,14 @@ class CentralActor:
                 raise MissingAssembly(f"{self.spec.output}: the label stage needs an assembled object "
                                       "(run the assemble stage first)")
             self.assembly = AssemblyReport.model_validate(found)
-        return label_assembly(self.spec, self.spec.output, self.assembly.grid_pitch_m)
+        report = label_assembly(self.spec, self.spec.output)
+        if self.spec.sim.transfer_codes:
+            from onepiece_dist.service.transfer import measure_transfer
+
+            transfer = measure_transfer(self.spec, DatasetReader(self.spec.output), self.parts)
+            report = report.model_copy(update={"transfer": transfer})
+            update_attributes(self.spec.output, {"assembly_labels": report.model_dump(mode="json")})
+        return report
 
 
 class CentralClient(ActorClient):

@@ -17,6 +17,8 @@ from onepiece_dist.store.dataset import GroupAppender, ObjectTable, begin_datase
 from onepiece_dist.store.format import CORE_GRASP_ARRAYS, GRASP_DTYPES, grasp_row_shape
 
 VIEW_PREFIX = "view_"  # per-object depth-view arrays in a part (not per grasp)
+OBJECT_PREFIX = "object_"  # per-object geometry in a part (surface points, convex pieces): read by assembly
+PER_OBJECT = (VIEW_PREFIX, OBJECT_PREFIX)
 
 
 def package_version() -> str:
@@ -66,11 +68,14 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     layout = _grasp_layout(shapes, spec.code_bytes(), clusters is not None)
     grasps = GroupAppender(out, "grasps", layout)
     views = GroupAppender(out, "views", _view_layout(shapes)) if spec.views.count else None
-    cameras_before = 0
+    cameras_before, first_row = 0, FirstRows(len(index))
     for k, result in enumerate(ok):
-        arrays = parts.read(result.part_key)
+        arrays = {name: parts.read_array(result.part_key, name) for name in shapes[k]
+                  if not name.startswith(OBJECT_PREFIX)}
         view_arrays = {name: arrays.pop(name) for name in list(arrays) if name.startswith(VIEW_PREFIX)}
-        grasps.append(_grasp_rows(arrays, k, index, clusters))
+        rows = _grasp_rows(arrays, k, index, clusters)
+        first_row.note(rows.get("exact_index", rows["code_index"]))
+        grasps.append(rows)
         if views is not None:
             views.append(_view_rows(view_arrays, k, cameras_before))
             cameras_before += len(view_arrays["view_camera"])
@@ -78,7 +83,7 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     if views is not None:
         views.close()
     objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
-    groups = _unique_groups(index, clusters)
+    groups = _unique_groups(index, clusters, first_row.rows)
     finish_dataset(out, objects, groups)
     summary = CommitSummary(grasps=int(layout["code"][0]), unique_codes=len(groups["unique"]["code"]),
                             exact_unique_codes=len(index))
@@ -105,19 +110,36 @@ def _grasp_rows(arrays: dict[str, np.ndarray], k: int, index: DedupIndex, cluste
     return rows
 
 
-def _unique_groups(index: DedupIndex, clusters) -> dict[str, dict[str, np.ndarray]]:
-    """unique/ (the exact set, or one representative per cluster with exact/ beside it)."""
+def _unique_groups(index: DedupIndex, clusters, first_row: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """unique/ (the exact set, or one representative per cluster with exact/ beside it). ``first_row`` (E,) is
+    the first row in grasps/ of each exact code: a code's representative grasp (a cluster's: that of its
+    representative code)."""
     if clusters is None:
-        return {"unique": {"code": index.unique, "count": index.counts}}
-    return {"unique": {"code": index.unique[clusters.representative], "count": clusters.counts},
+        return {"unique": {"code": index.unique, "count": index.counts, "representative": first_row}}
+    return {"unique": {"code": index.unique[clusters.representative], "count": clusters.counts,
+                       "representative": first_row[clusters.representative]},
             "exact": {"code": index.unique, "count": index.counts, "cluster": clusters.cluster}}
+
+
+class FirstRows:
+    """The first row in grasps/ of each of ``count`` exact codes, noted as the rows stream past in order."""
+
+    def __init__(self, count: int):
+        self.rows = np.full(count, -1, dtype=np.int64)
+        self.seen = 0
+
+    def note(self, exact: np.ndarray) -> None:
+        codes, first = np.unique(exact, return_index=True)
+        new = self.rows[codes] < 0
+        self.rows[codes[new]] = self.seen + first[new]
+        self.seen += len(exact)
 
 
 def _grasp_layout(shapes: list[dict], code_bytes: int, similar: bool) -> dict[str, tuple[int, tuple, np.dtype]]:
     """Final length, row shape and dtype of every grasps/ array, from the parts' metadata (the schema's core
     arrays when no object was accepted)."""
     if shapes:
-        rows = {name: shape[1:] for name, (shape, _) in shapes[0].items() if not name.startswith(VIEW_PREFIX)}
+        rows = {name: shape[1:] for name, (shape, _) in shapes[0].items() if not name.startswith(PER_OBJECT)}
     else:
         rows = {name: grasp_row_shape(name, code_bytes, 0) for name in CORE_GRASP_ARRAYS}
     names = [*rows, "object", "code_index", *(["exact_index"] if similar else [])]

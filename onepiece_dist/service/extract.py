@@ -16,7 +16,7 @@ from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_cand
 from onepiece_dist.core.voxel import canonical_codes, crop_codes, crop_points
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
-from onepiece_dist.service.results import ObjectResult
+from onepiece_dist.service.results import ObjectResult, part_key
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.format import grasp_arrays
@@ -29,7 +29,7 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
         loaded = load_object(ref, spec)
     except MeshRejected as err:
         return ObjectResult(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    key = f"{loaded.content_id}-{spec.result_key()}"
+    key = part_key(loaded.content_id, spec.result_key())
     if parts.is_committed(key):
         return _from_meta(index, ref.name, key, parts.read_meta(key), reused=True, start=start)
     try:
@@ -53,7 +53,8 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
         raise MeshRejected(mesh.name, f"no collision-free antipodal grasp narrower than max_opening="
                                       f"{spec.gripper.max_opening} m among {cands.tried} tried: "
                                       "the object cannot fit the gripper")
-    grasps, meta = _simulate(spec, mesh, cands, collision_dir)
+    pieces = _collision_pieces(spec, mesh, collision_dir)
+    grasps, meta = _simulate(spec, mesh, cands, pieces)
     views = _render_views(spec, mesh)
     clouds, source = crop_sources(spec, points, views, grasps["pose"])
     grid, res = spec.grid_shape(), spec.voxel.resolution
@@ -69,24 +70,32 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
         arrays["points"] = _grasp_points(clouds, source, grasps["pose"], spec, rng)
     if views is not None:
         arrays.update({"view_camera": views.cameras, "view_points": views.points, "view_of_point": views.point_view})
+    arrays.update({"object_surface": points, "object_piece_vertices": np.vstack(pieces),  # patches are cut from these
+                   "object_piece_sizes": np.array([len(p) for p in pieces], dtype=np.int64)})
     meta.update({"grasps": int(keep.sum()), "empty_crops": int((~keep).sum()), "candidates_tried": cands.tried,
+                 "volume": enclosed_volume(mesh),
                  "collisions": cands.rejected_collision,
                  "settled_code_differs": int(np.any(codes != static, axis=1).sum())})
     return arrays, meta
 
 
+def _collision_pieces(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> list[np.ndarray]:
+    """The object's convex pieces as the simulation uses them (cached per content id)."""
+    from onepiece_dist.sim.collision import convex_pieces
+
+    return convex_pieces(mesh, collision_dir, spec.sim.collision)
+
+
 def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
-              collision_dir: Path) -> tuple[dict[str, np.ndarray], dict]:
+              pieces: list[np.ndarray]) -> tuple[dict[str, np.ndarray], dict]:
     """Run the extract (and label) protocol; keep the trials whose fingers hold the object."""
     if not spec.sim.physics:
         return {"pose": cands.poses, "candidate_pose": cands.poses, "width": cands.widths}, {"trials": 0}
-    from onepiece_dist.sim.collision import convex_pieces
     from onepiece_dist.sim.trials import OUTCOMES, LabelNoise, run_trials
     from onepiece_dist.sim.world import process_world
 
     world = process_world(spec.gripper)
-    world.load_object(convex_pieces(mesh, collision_dir, spec.sim.collision), enclosed_volume(mesh),
-                      spec.gripper.friction)
+    world.load_object(pieces, enclosed_volume(mesh), spec.gripper.friction)
     noise = LabelNoise.from_spec(spec.sim)
     batch = run_trials(world, cands.poses, label=spec.sim.label, noise=noise,
                        rng=object_rng(mesh.content_id, spec.seed, stream=1))

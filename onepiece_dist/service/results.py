@@ -36,3 +36,9 @@ class CommitSummary:
     grasps: int
     unique_codes: int
     exact_unique_codes: int
+
+
+def part_key(content_id: str, result_key: str) -> str:
+    """The part of an object: its content id and the result key of the spec that extracted it (same physics,
+    same part). A dataset records its result key in ``provenance``, so later stages find its parts."""
+    return f"{content_id}-{result_key}"

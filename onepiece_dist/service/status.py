@@ -47,11 +47,39 @@ class AssemblyReport(_Report):
     bounding_box_m: list[float]
     patch_density_per_m2: float
     grid_pitch_m: list[float] = Field(description="Cell size of the patch grid on the core's faces (m).")
+    patch_pieces: int = Field(description="Convex pieces of all patches (clipped from the source objects).")
     fidelity: float = Field(description="Share of placements whose crop reproduces the unique code.")
     fidelity_failures: list[int] = Field(description="First 100 patches whose crop does not.")
+    chamfer_mm: float | None = Field(description="Mean symmetric Chamfer distance between a patch's crop on the "
+                                     "one object and its representative's stored points (mm; None without points).")
+    chamfer_max_mm: float | None = Field(description="The largest of those distances (mm).")
+    chamfer_patches: int = Field(description="Patches compared (a fixed sample of at most 200).")
     corridor_intrusions: int = Field(description="Points of other patches inside a patch's approach corridor.")
-    label_trials_one_object: int
-    label_trials_all_grasps: int
+    label_trials_one_object: int = Field(description="Label trials of the label stage on the one object: patches x "
+                                         "(1 + perturbations) x label_trials.")
+    label_trials_all_grasps: int = Field(description="Label trials that labelling every extracted grasp with the "
+                                         "same protocol costs: grasps x label_trials.")
+
+
+class PairAgreement(_Report):
+    """Agreement of two labels over pairs of grasps: success (same outcome) and quality (Pearson correlation;
+    None when either side is constant)."""
+
+    pairs: int
+    success_agreement: float | None
+    quality_correlation: float | None
+
+
+class TransferReport(_Report):
+    """How far a label transfers between grasps that share a code (service/transfer.py)."""
+
+    codes: int = Field(description="Unique codes sampled (each with two or more source grasps).")
+    grasps_labelled: int = Field(description="Source grasps labelled on their own objects for this measure.")
+    label_trials: int
+    patch_vs_source: PairAgreement = Field(description="(a) each patch on the one object vs its representative "
+                                           "on the source object.")
+    same_code: PairAgreement = Field(description="(b) the representative vs the other grasps of its code.")
+    random_pairs: PairAgreement = Field(description="(c) random pairs with different codes: the floor.")
 
 
 class LabelReport(_Report):
@@ -60,6 +88,7 @@ class LabelReport(_Report):
     label_trials: int
     labelled_grasps: int
     success_rate: float
+    transfer: TransferReport | None = Field(None, description="Label transfer, when sim.transfer_codes > 0.")
 
 
 class TrainingReport(_Report):

@@ -136,6 +136,11 @@ def _write_groups(path: str | os.PathLike, groups: dict[str, dict[str, np.ndarra
     zarr.open_group(str(path), mode="a").attrs.update(last_attrs)
 
 
+def update_attributes(path: str | os.PathLike, attrs: dict) -> None:
+    """Set root attributes of a complete dataset (the committer only)."""
+    zarr.open_group(str(path), mode="a").attrs.update(attrs)
+
+
 class DatasetReader:
     """Read access to a complete dataset. Arrays load lazily through :meth:`array`."""
 

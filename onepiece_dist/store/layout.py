@@ -29,6 +29,8 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     *_grasp_entries("grasps", "N"),
     ("unique/code", "uint8", "(U, B)", "distinct codes in byte order (cluster representatives if radius > 0)"),
     ("unique/count", "int64", "(U,)", "grasps per distinct code (per cluster when similar_radius > 0)"),
+    ("unique/representative", "int64", "(U,)", "row in grasps/ of each code's representative: its first grasp "
+     "(a cluster's: the first grasp of its representative code)"),
     ("exact/code", "uint8", "(E, B)", "with similar_radius > 0: the exact distinct codes"),
     ("exact/count", "int64", "(E,)", "with similar_radius > 0: grasps per exact code"),
     ("exact/cluster", "int64", "(E,)", "with similar_radius > 0: row in unique/ of each exact code's cluster"),
@@ -46,8 +48,14 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/face_group", "int8", "(F,)", "plane class of the patch a triangle belongs to, 3 = core"),
     ("assembled/points", "float32", "(P, 3)", "dense point cloud of the one object"),
     ("assembled/point_patch", "int32", "(P,)", "patch of each point, -1 = core"),
-    ("assembled/cube_centre", "float32", "(M, 3)", "centre of each voxel cube of the patches"),
-    ("assembled/cube_patch", "int32", "(M,)", "patch of each cube"),
+    ("assembled/representative", "int64", "(U,)", "row in grasps/ of the grasp each patch was cut from"),
+    ("assembled/patch_piece_count", "int64", "(U,)", "convex pieces of each patch (in patch order)"),
+    ("assembled/piece_vertex_count", "int64", "(K,)", "points of each convex piece (in piece order)"),
+    ("assembled/piece_vertices", "float64", "(W, 3)", "points of the pieces, patch (gripper) frame; each piece "
+     "is their convex hull"),
+    ("assembled/patch_point_count", "int64", "(U,)", "surface points of each patch"),
+    ("assembled/patch_points", "float64", "(Q, 3)", "source surface points inside each patch box, patch frame"),
+    ("assembled/source_volume", "float64", "(U,)", "volume of each patch's source object (m^3): its mass rule"),
     *_grasp_entries("assembled/grasps", "L"),
 )
 

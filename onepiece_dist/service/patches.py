@@ -1,0 +1,109 @@
+"""Patches: for each unique code, the real geometry its representative grasp held (docs/assembly.md).
+
+A patch is cut from the source object of the code's representative grasp at the settled pose, in the gripper
+frame: the object's collision pieces (the convex decomposition the simulation used) clipped to the patch box,
+and the object's dense surface points inside the same box. The patch box is the closing region grown by
+``PATCH_MARGIN`` across the fingers' height and width and by ``PATCH_SUPPORT`` beyond the fingertips (the material
+behind what the pads hold). Clipped convex pieces stay convex, so a patch is a few convex pieces, exact with
+respect to what was simulated. The source geometry comes from each object's extraction part (``object_*`` arrays).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from onepiece_dist.core.clip import clip_to_box
+from onepiece_dist.core.layout import patch_box
+from onepiece_dist.errors import StoreError
+from onepiece_dist.service.results import part_key
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import DatasetReader, PartStore
+
+SURFACE, PIECE_VERTICES, PIECE_SIZES = "object_surface", "object_piece_vertices", "object_piece_sizes"
+
+
+@dataclass(frozen=True)
+class Patches:
+    """U patches in their own (gripper) frames. representative (U,) int64 row in grasps/; pieces: per patch a list
+    of (k, 3) float64 convex-piece points; points: per patch (m, 3) float64 surface points in the patch box;
+    source_volume (U,) float64 volume of the source object (m^3, its mass rule: docs/assembly.md)."""
+
+    representative: np.ndarray
+    pieces: list[list[np.ndarray]]
+    points: list[np.ndarray]
+    source_volume: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.representative)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The flat arrays stored under ``assembled/`` (docs/dataset_format.md)."""
+        piece_list = [piece for pieces in self.pieces for piece in pieces]
+        return {"representative": self.representative.astype(np.int64),
+                "patch_piece_count": np.array([len(p) for p in self.pieces], dtype=np.int64),
+                "piece_vertex_count": np.array([len(p) for p in piece_list], dtype=np.int64),
+                "piece_vertices": _stack(piece_list),
+                "patch_point_count": np.array([len(p) for p in self.points], dtype=np.int64),
+                "patch_points": _stack(self.points),
+                "source_volume": self.source_volume.astype(np.float64)}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> Patches:
+        pieces = _split(arrays["piece_vertices"], arrays["piece_vertex_count"])
+        starts = np.concatenate([[0], np.cumsum(arrays["patch_piece_count"])]).astype(np.int64)
+        return cls(np.asarray(arrays["representative"], dtype=np.int64),
+                   [pieces[a:b] for a, b in zip(starts[:-1], starts[1:], strict=True)],
+                   _split(arrays["patch_points"], arrays["patch_point_count"]),
+                   np.asarray(arrays["source_volume"], dtype=np.float64))
+
+
+def _stack(rows: list[np.ndarray]) -> np.ndarray:
+    return np.vstack(rows).astype(np.float64) if rows else np.zeros((0, 3))
+
+
+def _split(rows: np.ndarray, counts: np.ndarray) -> list[np.ndarray]:
+    return np.split(np.asarray(rows, dtype=np.float64), np.cumsum(counts)[:-1]) if len(counts) else []
+
+
+PATCH_ARRAYS = ("representative", "patch_piece_count", "piece_vertex_count", "piece_vertices", "patch_point_count",
+                "patch_points", "source_volume")
+
+
+def read_patches(reader: DatasetReader) -> Patches:
+    return Patches.from_arrays({name: reader[f"assembled/{name}"] for name in PATCH_ARRAYS})
+
+
+def build_patches(spec: JobSpec, reader: DatasetReader, parts: PartStore, representative: np.ndarray) -> Patches:
+    """Cut the patch of every unique code from its representative's source object (read from its part)."""
+    objects = reader["grasps/object"][representative].astype(np.int64)
+    poses = reader["grasps/pose"][representative].astype(np.float64)
+    lower, upper = patch_box(spec.gripper, spec.voxel.resolution)
+    pieces: list[list[np.ndarray]] = [[] for _ in representative]
+    points: list[np.ndarray] = [np.zeros((0, 3))] * len(representative)
+    volume = np.zeros(len(representative))
+    for obj in np.unique(objects):
+        source = source_geometry(reader, parts, int(obj))
+        for k in np.flatnonzero(objects == obj):
+            rot, origin = poses[k, :3, :3], poses[k, :3, 3]
+            local = [clip_to_box((piece - origin) @ rot, lower, upper) for piece in source["pieces"]]
+            pieces[k] = [piece for piece in local if len(piece)]
+            surface = (source["surface"] - origin) @ rot
+            points[k] = surface[np.all((surface >= lower) & (surface <= upper), axis=1)]
+            volume[k] = source["volume"]
+    return Patches(np.asarray(representative, dtype=np.int64), pieces, points, volume)
+
+
+def source_geometry(reader: DatasetReader, parts: PartStore, obj: int) -> dict:
+    """Object ``obj``'s surface points (S, 3), convex pieces (list of (k, 3)) and volume, from its extraction
+    part (found by its content id and the dataset's result key)."""
+    key = part_key(bytes(reader.array("objects/id")[obj]).hex(), reader.attrs["provenance"]["result_key"])
+    name = reader.object_names[obj]
+    if not parts.is_committed(key):
+        raise StoreError(f"{parts.path(key)}: the extraction part of {name} is missing; assembly cuts patches from "
+                         "it (run the extract stage again with the same spec to recreate it)")
+    arrays = {n: parts.read_array(key, n) for n in (SURFACE, PIECE_VERTICES, PIECE_SIZES)}
+    sizes = arrays[PIECE_SIZES].astype(np.int64)
+    return {"surface": arrays[SURFACE].astype(np.float64), "volume": float(parts.read_meta(key)["volume"]),
+            "pieces": np.split(arrays[PIECE_VERTICES].astype(np.float64), np.cumsum(sizes)[:-1])}
