@@ -319,6 +319,24 @@ def test_label_stage_runs_the_protocol_around_each_patch_of_the_one_object(tmp_p
     assert "transfer" in CliRunner().invoke(app, ["inspect", spec.output]).output
 
 
+@pytest.mark.sim
+@pytest.mark.slow
+def test_a_job_that_labels_on_the_one_object_keeps_points_only_for_representatives(tmp_path):
+    from onepiece_dist.store.dataset import disk_bytes
+
+    lean = labelled_spec(tmp_path, perturbations=0, points=64).model_copy(update={
+        "cache_dir": str(tmp_path / "cache"), "sim": labelled_spec(tmp_path, 0, 64).sim.model_copy(
+            update={"transfer_codes": 0})})
+    full = lean.model_copy(update={"keep_all_points": True, "output": str(tmp_path / "full.zarr")})
+    run_local(lean), run_local(full)
+    small, big = open_dataset(lean.output), open_dataset(full.output)
+    assert not small.has("grasps/points") and big.has("grasps/points")
+    assert np.array_equal(small["unique/points"], big["grasps/points"][big["unique/representative"]])
+    assert np.array_equal(small["assembled/grasps/points"], big["assembled/grasps/points"])
+    saved = disk_bytes(big.path / "grasps") - disk_bytes(small.path / "grasps")
+    assert saved >= disk_bytes(big.path / "grasps" / "points") > 0  # the clouds, and nothing else, left out
+
+
 def test_agreement_counts_equal_outcomes_and_correlates_qualities():
     from onepiece_dist.service.transfer import agreement
 

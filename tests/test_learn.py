@@ -161,6 +161,19 @@ def test_the_sampler_visits_every_row_once_per_epoch_in_batches_that_touch_few_c
     assert list(ChunkBatchSampler(ds, 64, seed=1))[0] == batches[0] and list(sampler)[0] != batches[0]
 
 
+def test_weighting_by_code_count_weighs_each_patch_by_the_grasps_it_stands_for(labelled, tmp_path):
+    from onepiece_dist.learn.train import patch_weights
+
+    spec = TrainSpec(model="voxel", epochs=2, batch_size=16, weight_by_count=True)
+    weights = patch_weights(labelled, "assembled/grasps", spec)
+    counts = zarr.open_group(str(labelled), mode="r")["unique/count"][:]
+    assert torch.allclose(weights, torch.from_numpy(counts / counts.mean()).float())
+    assert patch_weights(labelled, "assembled/grasps", spec.model_copy(update={"weight_by_count": False})) is None
+    plain = train_model(labelled, spec.model_copy(update={"weight_by_count": False}), tmp_path / "a", seed=0)
+    weighted = train_model(labelled, spec, tmp_path / "b", seed=0)
+    assert plain.metrics[0]["train_loss"] != weighted.metrics[0]["train_loss"]
+
+
 def test_a_code_only_dataset_is_read_without_points(tmp_path):
     path = synthetic_labelled_dataset(tmp_path / "codes.zarr", rows=100, points=0)
     ds = GraspDataset(path)

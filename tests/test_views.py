@@ -82,7 +82,8 @@ def test_a_job_with_partial_view_crops_runs_end_to_end_on_embedded_ray(ray_sessi
     views = {"count": 12, "image_size": 192}
     spec = spec_factory(objects="primitives[0:4]", grasps_per_object=24, views={**views, "crop": "partial"},
                         stages=["ingest", "extract", "dedup", "assemble", "label", "train"],
-                        sim={"perturbations_per_patch": 1}, train={"epochs": 2}, output=str(tmp_path / "partial.zarr"))
+                        sim={"perturbations_per_patch": 1}, train={"epochs": 2}, output=str(tmp_path / "partial.zarr"),
+                        keep_all_points=True)
     final = Client().submit(spec).wait(timeout=300)
     assert final.state == "succeeded", final.error
     partial = open_dataset(spec.output)

@@ -99,7 +99,7 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
                         collate_fn=collate, num_workers=spec.loader_workers, pin_memory=device.type == "cuda",
                         persistent_workers=spec.loader_workers > 0)
     loader.batch_sampler.epoch = state["epoch"]
-    step = TrainStep(model, optimiser, device, spec.precision)
+    step = TrainStep(model, optimiser, device, spec.precision, patch_weights(dataset_path, group, spec))
     for epoch in range(state["epoch"], spec.epochs):
         train_loss = _train_epoch(step, loader)
         metrics = {"epoch": epoch, "train_loss": train_loss, **{f"val_{k}": v for k, v in
@@ -111,19 +111,34 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
     return TrainResult(state["metrics"], folder / BEST, False, device.type)
 
 
-class TrainStep:
-    """One optimiser step on a batch: moved to ``device``, with bf16 autocast when ``precision`` says so."""
+def patch_weights(dataset_path, group: str, spec: TrainSpec) -> torch.Tensor | None:
+    """(U,) loss weight per patch, unique/count scaled to mean 1, with ``weight_by_count`` on the one object's
+    grasps; else None (every grasp weighs 1)."""
+    if not (spec.weight_by_count and group == "assembled/grasps"):
+        return None
+    import zarr
 
-    def __init__(self, model: torch.nn.Module, optimiser, device: torch.device, precision: str = "fp32"):
+    counts = zarr.open_group(str(dataset_path), mode="r")["unique/count"][:].astype(np.float32)
+    return torch.from_numpy(counts / counts.mean())
+
+
+class TrainStep:
+    """One optimiser step on a batch: moved to ``device``, with bf16 autocast when ``precision`` says so, each
+    grasp's loss weighted by ``group_weights[group]`` when given."""
+
+    def __init__(self, model: torch.nn.Module, optimiser, device: torch.device, precision: str = "fp32",
+                 group_weights: torch.Tensor | None = None):
         self.model, self.optimiser, self.device = model, optimiser, device
         self.autocast = precision == "bf16"
+        self.group_weights = None if group_weights is None else group_weights.to(device)
 
     def __call__(self, batch: dict[str, torch.Tensor]) -> torch.Tensor:
         batch = to_device(batch, self.device)
         self.optimiser.zero_grad(set_to_none=True)
         with torch.autocast(self.device.type, dtype=torch.bfloat16, enabled=self.autocast):
             logits = self.model(batch)
-        loss = torch.nn.functional.binary_cross_entropy_with_logits(logits.float(), batch["label"])
+        weight = None if self.group_weights is None else self.group_weights[batch["group"]]
+        loss = torch.nn.functional.binary_cross_entropy_with_logits(logits.float(), batch["label"], weight=weight)
         loss.backward()
         self.optimiser.step()
         return loss.detach()

@@ -62,12 +62,12 @@ def assemble_dataset(spec: JobSpec, path: str | os.PathLike, codes: np.ndarray, 
 
 def _chamfer_to_representatives(spec: JobSpec, path, patches: Patches) -> np.ndarray:
     """(n,) symmetric mean Chamfer distance (m) between each sampled patch's crop (its closing region) and its
-    representative's stored points (grasps/points), for up to CHAMFER_PATCHES patches; empty without points."""
+    representative's stored points (unique/points), for up to CHAMFER_PATCHES patches; empty without points."""
     reader = DatasetReader(path)
-    if not reader.has("grasps/points") or not len(patches):
+    if not reader.has("unique/points") or not len(patches):
         return np.zeros(0)
     picked = np.unique(np.linspace(0, len(patches) - 1, min(CHAMFER_PATCHES, len(patches))).astype(np.int64))
-    stored = reader.array("grasps/points").oindex[patches.representative[picked]].astype(np.float64)
+    stored = reader.array("unique/points").oindex[picked].astype(np.float64)
     grid, res = spec.grid_shape(), spec.voxel.resolution
     out = []
     for k, theirs in zip(picked, stored, strict=True):

@@ -66,6 +66,9 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     begin_dataset(out, dataset_attrs(spec, results))
     shapes = [parts.array_shapes(r.part_key) for r in ok]
     layout = _grasp_layout(shapes, spec.code_bytes(), clusters is not None)
+    every_points = keeps_every_grasp_points(spec)
+    if not every_points:
+        layout.pop("points", None)
     grasps = GroupAppender(out, "grasps", layout)
     views = GroupAppender(out, "views", _view_layout(shapes)) if spec.views.count else None
     cameras_before, first_row = 0, FirstRows(len(index))
@@ -74,7 +77,9 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
                   if not name.startswith(OBJECT_PREFIX)}
         view_arrays = {name: arrays.pop(name) for name in list(arrays) if name.startswith(VIEW_PREFIX)}
         rows = _grasp_rows(arrays, k, index, clusters)
-        first_row.note(rows.get("exact_index", rows["code_index"]))
+        first_row.note(rows.get("exact_index", rows["code_index"]), rows.get("points"))
+        if not every_points:
+            rows.pop("points", None)
         grasps.append(rows)
         if views is not None:
             views.append(_view_rows(view_arrays, k, cameras_before))
@@ -83,7 +88,7 @@ def commit_dataset(spec: JobSpec, results: list[ObjectResult], parts: PartStore,
     if views is not None:
         views.close()
     objects = ObjectTable([r.name for r in ok], [r.content_id for r in ok], np.array([r.grasps for r in ok]))
-    groups = _unique_groups(index, clusters, first_row.rows)
+    groups = _unique_groups(index, clusters, first_row)
     finish_dataset(out, objects, groups)
     summary = CommitSummary(grasps=int(layout["code"][0]), unique_codes=len(groups["unique"]["code"]),
                             exact_unique_codes=len(index))
@@ -110,28 +115,43 @@ def _grasp_rows(arrays: dict[str, np.ndarray], k: int, index: DedupIndex, cluste
     return rows
 
 
-def _unique_groups(index: DedupIndex, clusters, first_row: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
-    """unique/ (the exact set, or one representative per cluster with exact/ beside it). ``first_row`` (E,) is
-    the first row in grasps/ of each exact code: a code's representative grasp (a cluster's: that of its
-    representative code)."""
+def keeps_every_grasp_points(spec: JobSpec) -> bool:
+    """Whether grasps/points holds every extracted grasp's points. A job that labels on the one object and not
+    every grasp needs them only for the representatives (unique/points), unless ``keep_all_points`` asks."""
+    return spec.keep_all_points or spec.sim.label or not spec.runs("label")
+
+
+def _unique_groups(index: DedupIndex, clusters, first: FirstRows) -> dict[str, dict[str, np.ndarray]]:
+    """unique/ (the exact set, or one representative per cluster with exact/ beside it). ``first`` holds the
+    first row in grasps/ of each exact code, a code's representative grasp (a cluster's: that of its
+    representative code), and its points."""
+    pick = slice(None) if clusters is None else clusters.representative
+    unique = {"code": index.unique[pick], "count": index.counts if clusters is None else clusters.counts,
+              "representative": first.rows[pick]}
+    if first.points is not None:
+        unique["points"] = first.points[pick]
     if clusters is None:
-        return {"unique": {"code": index.unique, "count": index.counts, "representative": first_row}}
-    return {"unique": {"code": index.unique[clusters.representative], "count": clusters.counts,
-                       "representative": first_row[clusters.representative]},
-            "exact": {"code": index.unique, "count": index.counts, "cluster": clusters.cluster}}
+        return {"unique": unique}
+    return {"unique": unique, "exact": {"code": index.unique, "count": index.counts, "cluster": clusters.cluster}}
 
 
 class FirstRows:
-    """The first row in grasps/ of each of ``count`` exact codes, noted as the rows stream past in order."""
+    """The first row in grasps/ of each of ``count`` exact codes, and its points (E, P, 3) when grasps have
+    points, noted as the rows stream past in order."""
 
     def __init__(self, count: int):
         self.rows = np.full(count, -1, dtype=np.int64)
+        self.points: np.ndarray | None = None
         self.seen = 0
 
-    def note(self, exact: np.ndarray) -> None:
+    def note(self, exact: np.ndarray, points: np.ndarray | None = None) -> None:
         codes, first = np.unique(exact, return_index=True)
         new = self.rows[codes] < 0
         self.rows[codes[new]] = self.seen + first[new]
+        if points is not None:
+            if self.points is None:
+                self.points = np.zeros((len(self.rows), *points.shape[1:]), dtype=points.dtype)
+            self.points[codes[new]] = points[first[new]]
         self.seen += len(exact)
 
 

@@ -31,6 +31,8 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("unique/count", "int64", "(U,)", "grasps per distinct code (per cluster when similar_radius > 0)"),
     ("unique/representative", "int64", "(U,)", "row in grasps/ of each code's representative: its first grasp "
      "(a cluster's: the first grasp of its representative code)"),
+    ("unique/points", "float16", "(U, P, 3)", "the representative's points (as grasps/points), kept when grasps/points "
+     "is left out (a job that labels on the one object) or not"),
     ("exact/code", "uint8", "(E, B)", "with similar_radius > 0: the exact distinct codes"),
     ("exact/count", "int64", "(E,)", "with similar_radius > 0: grasps per exact code"),
     ("exact/cluster", "int64", "(E,)", "with similar_radius > 0: row in unique/ of each exact code's cluster"),
