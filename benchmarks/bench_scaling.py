@@ -1,10 +1,13 @@
-"""Throughput of the Ray service with 1 and 2 extraction workers on this machine, and orchestration overhead.
+"""Throughput of the Ray service with 1 and 2 workers on this machine, for extraction and for the label stage on
+the one object, and orchestration overhead.
 
 Run: .venv/bin/python benchmarks/bench_scaling.py  (writes benchmarks/results/scaling.json)
 Each configuration runs the same job on a fresh embedded Ray with a fresh parts folder (nothing reused).
 Parallel efficiency = (objects/s with 2 workers) / (2 x objects/s with 1 worker). Orchestration overhead per
 object = (extract-stage wall time x workers - sum of per-object worker time) / objects: time a worker slot spends
-outside extract_object (scheduling, result transfer, central dedup merge, status writes).
+outside extract_object (scheduling, result transfer, central dedup merge, status writes). The label stage's
+speed-up = (label stage wall time with 1 worker) / (with 2): shards on workers, plus the central actor's sharding
+and merge (label transfer is off here: it is measured in the central actor).
 """
 
 from __future__ import annotations
@@ -31,7 +34,8 @@ def measure(workers: int) -> dict:
     from onepiece_dist.service.ray_runner import run_on_ray
 
     with tempfile.TemporaryDirectory() as folder:
-        spec = JobSpec(objects=OBJECTS, grasps_per_object=GRASPS, output=f"{folder}/ds.zarr")
+        spec = JobSpec(objects=OBJECTS, grasps_per_object=GRASPS, output=f"{folder}/ds.zarr",
+                       stages=("ingest", "extract", "dedup", "assemble", "label"), sim={"transfer_codes": 0})
         connect(None, num_cpus=2)
         try:
             status = run_on_ray(spec, f"bench-{workers}", workers=workers)
@@ -40,9 +44,13 @@ def measure(workers: int) -> dict:
         worker_seconds = _worker_seconds(Path(f"{folder}/ds.zarr.status.json"))
     wall = status.timings["extract"]
     objects = status.progress.objects_done
+    label_trials = status.labels.label_trials
     return {"workers": workers, "objects": objects, "extract_seconds": round(wall, 2),
             "objects_per_second": round(objects / wall, 3), "worker_seconds": round(worker_seconds, 2),
-            "orchestration_overhead_per_object_s": round((wall * workers - worker_seconds) / objects, 4)}
+            "orchestration_overhead_per_object_s": round((wall * workers - worker_seconds) / objects, 4),
+            "patches": status.assembly.unique_codes, "label_trials": label_trials,
+            "label_seconds": round(status.timings["label"], 2),
+            "label_trials_per_second": round(label_trials / status.timings["label"], 1)}
 
 
 def _worker_seconds(status_file: Path) -> float:
@@ -55,6 +63,8 @@ def main() -> dict:
     out = {"benchmark": "scaling", "date": date.today().isoformat(), "machine": f"{platform.machine()}, "
            f"{os.cpu_count()} cores", "objects": OBJECTS, "grasps_per_object": GRASPS, "runs": [one, two],
            "parallel_efficiency_2_workers": round(efficiency, 3), "target_efficiency": 0.85,
+           "label_speedup_2_workers": round(one["label_seconds"] / two["label_seconds"], 3),
+           "target_label_speedup": 1.7,
            "command": "python benchmarks/bench_scaling.py"}
     (Path(__file__).parent / "results" / "scaling.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))

@@ -19,6 +19,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from onepiece_dist.service.status import JobStatus  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
 from onepiece_dist.store import open_dataset  # noqa: E402
+from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -27,8 +28,11 @@ def figures(dataset: Path) -> dict:
     ds = open_dataset(dataset)
     summary = ds.summary()
     status = JobStatus.load(dataset)
+    grasp_bytes = disk_bytes(Path(dataset) / "grasps")
     return {"objects": summary["objects"], "grasps": summary["grasps"], "unique_codes": summary["unique_codes"],
-            "bytes_on_disk": summary["bytes_on_disk"], "assembly": ds.attrs["assembly"],
+            "bytes_on_disk": summary["bytes_on_disk"], "grasp_bytes": grasp_bytes,
+            "bytes_per_extracted_grasp": round(grasp_bytes / max(summary["grasps"], 1), 1),
+            "every_grasp_points": ds.has("grasps/points"), "assembly": ds.attrs["assembly"],
             "labels": ds.attrs.get("assembly_labels"), "timings": status.timings,
             "objects_source": ds.attrs["job_spec"]["objects"]}
 

@@ -96,14 +96,26 @@ def _fidelity_lines(r: dict) -> list[str]:
                   f"{row['success_rate']:.3f}", f"{row['agreement_with_reference']:.1%}"] for row in fid["rows"]])]
 
 
+def met(value: float, target: float) -> str:
+    return "met" if value >= target else "not met"
+
+
 def scaling_section(r: dict) -> list[str]:
+    labels = "label_seconds" in r["runs"][0]
     rows = [[run["workers"], run["extract_seconds"], run["objects_per_second"],
-             f"{run['orchestration_overhead_per_object_s']} s"] for run in r["runs"]]
-    return [f"## Service scaling: {provenance(r)}", "", f"{r['objects']}, {r['grasps_per_object']} candidates "
-            "each, embedded Ray, fresh parts.", "", *table(["workers", "extract stage (s)", "objects/s",
-                                                            "orchestration overhead per object"], rows),
-            "", f"Parallel efficiency at 2 workers: {r['parallel_efficiency_2_workers']:.0%} (target "
-            f"{r['target_efficiency']:.0%})."]
+             f"{run['orchestration_overhead_per_object_s']} s",
+             *([run["label_seconds"], run["label_trials_per_second"]] if labels else [])] for run in r["runs"]]
+    header = ["workers", "extract stage (s)", "objects/s", "orchestration overhead per object",
+              *(["label stage (s)", "label trials/s"] if labels else [])]
+    lines = [f"## Service scaling: {provenance(r)}", "", f"{r['objects']}, {r['grasps_per_object']} candidates "
+             "each, embedded Ray, fresh parts.", "", *table(header, rows), "",
+             f"Parallel efficiency of extraction at 2 workers: {r['parallel_efficiency_2_workers']:.1%} (target "
+             f"{r['target_efficiency']:.0%}: {met(r['parallel_efficiency_2_workers'], r['target_efficiency'])})."]
+    if labels:
+        lines[-1] += (f" Label stage with 2 workers: {r['label_speedup_2_workers']:.2f}x as fast as with 1 "
+                      f"({r['runs'][0]['patches']:,} patches; target {r['target_label_speedup']}x: "
+                      f"{met(r['label_speedup_2_workers'], r['target_label_speedup'])}).")
+    return lines
 
 
 def similar_section(r: dict) -> list[str]:
@@ -224,6 +236,7 @@ def default_job_figures(r: dict) -> str:
     size = " x ".join(f"{x:.2f}" for x in a["bounding_box_m"])
     ratio = a["label_trials_one_object"] / max(a["label_trials_all_grasps"], 1)
     cost = (f"the one object costs {ratio:.1f}x more" if ratio > 1 else f"the one object costs {1 / ratio:.1f}x less")
+    points = ", points" if r["every_grasp_points"] else "; points only for the representatives, in unique/points"
     chamfer = (f"{a['chamfer_mm']:.2f} mm mean, {a['chamfer_max_mm']:.2f} mm at most ({a['chamfer_patches']} "
                f"patches; target under 1 mm: {'met' if a['chamfer_max_mm'] < 1 else 'not met'})"
                if a["chamfer_mm"] is not None else "not measured (no stored points)")
@@ -235,7 +248,9 @@ def default_job_figures(r: dict) -> str:
              f"the representatives' stored crops {chamfer}, corridor intrusions {a['corridor_intrusions']}.", "",
              f"Label cost: {a['label_trials_one_object']:,} label trials on the one object against "
              f"{a['label_trials_all_grasps']:,} for labelling every extracted grasp with the same protocol: {cost} "
-             f"({r['grasps'] / max(r['unique_codes'], 1):.2f} grasps per unique code)."]
+             f"({r['grasps'] / max(r['unique_codes'], 1):.2f} grasps per unique code).", "",
+             f"Storage: {r['bytes_per_extracted_grasp']:,} bytes per extracted grasp in `grasps/` (pose, candidate "
+             f"pose, width, shift, codes, indices{points}); the whole dataset {r['bytes_on_disk'] / 1e6:.1f} MB."]
     if labels:
         lines += ["", f"Label stage: {labels['labelled_grasps']:,} of {labels['label_trials']:,} trials held after "
                   f"closing; {labels['success_rate']:.1%} of those succeed."]

@@ -149,3 +149,13 @@ def synthetic_labelled_dataset(path: Path, rows: int, points: int = 64, group: s
     attrs = {"grid_shape": list(grid), "code_bytes": code_bytes}
     write_dataset(path, attrs, ObjectTable([], [], np.zeros(0)), {group: grasp_arrays(arrays)})
     return path
+
+
+def stage_reached(client, job_id: str, stage: str, timeout: float = 300.0) -> bool:
+    """Poll a job until its status names ``stage`` (or ``timeout`` s pass)."""
+    import time
+
+    deadline = time.monotonic() + timeout
+    while client.status(job_id).stage != stage and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return client.status(job_id).stage == stage

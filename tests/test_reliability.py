@@ -2,6 +2,7 @@
 
 import errno
 import time
+from pathlib import Path
 
 import pytest
 
@@ -13,7 +14,7 @@ from onepiece_dist.service.local import run_local
 from onepiece_dist.spec import default_job_id
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import content_digest
-from tests.factories import objects_done_at_least
+from tests.factories import objects_done_at_least, stage_reached
 
 pytestmark = pytest.mark.slow
 
@@ -64,6 +65,32 @@ def test_killing_the_central_actor_mid_job_rebuilds_it_from_the_store(ray_sessio
     final = handle.wait(timeout=300)
     assert final.state == "succeeded", handle.error
     clean = spec_at(spec_factory, tmp_path, "dedupclean", objects="primitives[0:8]")
+    run_local(clean)
+    assert same(spec.output, clean.output)
+
+
+@pytest.mark.ray
+def test_killing_a_worker_while_it_labels_gives_the_fault_free_labels(ray_session, spec_factory, tmp_path):
+    ray = ray_session
+
+    def labelled(name: str):
+        return spec_factory(objects="primitives[0:8]", grasps_per_object=32, output=str(tmp_path / f"{name}.zarr"),
+                            stages=["ingest", "extract", "dedup", "assemble", "label"],
+                            sim={"perturbations_per_patch": 3, "points_per_grasp": 32, "transfer_codes": 20})
+
+    spec = labelled("labelkill")
+    job_id = default_job_id(spec)
+    client = Client()
+    handle = client.submit(spec)
+    assert stage_reached(client, job_id, "label")
+    deadline = time.monotonic() + 120
+    while not list(Path(spec.parts_folder()).glob("label-*.zarr")) and time.monotonic() < deadline:
+        time.sleep(0.05)  # until the workers have labelled a shard: both are busy with the next ones
+    ray.kill(ray.get_actor(f"label-{job_id}-0", namespace="onepiece"), no_restart=False)
+    final = handle.wait(timeout=300)
+    assert final.state == "succeeded", handle.error
+    assert final.retries >= 1 and final.labels.labelled_grasps > 0
+    clean = labelled("labelclean")
     run_local(clean)
     assert same(spec.output, clean.output)
 

@@ -95,9 +95,9 @@ class PoisonWorker:
     """Dies (the whole worker process) on one object, like a mesh that crashes a parser."""
 
     def __init__(self, spec, poison: str):
-        from onepiece_dist.service.ray_runner import ExtractionWorker
+        from onepiece_dist.service.ray_runner import SimWorker
 
-        self.inner, self.poison = ExtractionWorker(spec), poison
+        self.inner, self.poison = SimWorker(spec), poison
 
     def extract(self, ref, index):
         if ref.name == self.poison:
@@ -109,7 +109,7 @@ class PoisonWorker:
 @pytest.mark.slow
 def test_a_poison_object_is_quarantined_and_the_rest_proceeds(ray_session, spec_factory, tmp_path):
     ray = ray_session
-    from onepiece_dist.service.ray_runner import MAX_ATTEMPTS, ExtractionPool
+    from onepiece_dist.service.ray_runner import MAX_ATTEMPTS, WorkerPool
     from onepiece_dist.service.registry import RegistryClient
 
     spec = job_spec(spec_factory, tmp_path, "poison", objects="primitives[0:3]", grasps=8)
@@ -119,7 +119,7 @@ def test_a_poison_object_is_quarantined_and_the_rest_proceeds(ray_session, spec_
     status = JobStatus(job_id="poison-test", output=spec.output)
     registry = RegistryClient()
     registry.claim("poison-test", status.model_dump(mode="json"))
-    results = ExtractionPool(workers, registry, status, lambda result: None).run(refs)
+    results = WorkerPool(workers, registry, status, lambda result: None).run(refs)
     assert [r.status for r in results] == ["ok", "rejected", "ok"]
     assert "quarantined" in results[1].reason and status.retries >= MAX_ATTEMPTS
 

@@ -1,5 +1,6 @@
 """The central actor: the one writer of the global arrays. It merges each object's codes as its part is
-committed, commits the dataset, assembles the one object and labels it. A plain class (tested without Ray);
+committed, commits the dataset, assembles the one object, cuts its label stage into shards for the workers and
+merges what they label. A plain class (tested without Ray);
 :class:`CentralClient` is its thin client on Ray.
 
 After a restart its state is rebuilt from the store: :meth:`CentralActor.commit` folds in every part it has not
@@ -11,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from onepiece_dist.core.dedup import DedupIndex
-from onepiece_dist.errors import MissingAssembly
+from onepiece_dist.errors import JobError, MissingAssembly
 from onepiece_dist.service.actors import ActorClient, restartable_actor
 from onepiece_dist.service.commit import commit_dataset
-from onepiece_dist.service.results import CommitSummary, ObjectResult
+from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult
 from onepiece_dist.service.status import AssemblyReport, LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
@@ -70,17 +71,23 @@ class CentralActor:
         self.assembly = assemble_dataset(self.spec, self.spec.output, self.unique_codes, patches, self.grasps)
         return self.assembly
 
-    def label(self) -> LabelReport:
-        """The label stage on the one object (``assembled/grasps/``)."""
-        from onepiece_dist.service.label_one import label_assembly
+    def label_tasks(self) -> list[LabelTask]:
+        """The label stage in shards for the workers (the one object must be assembled)."""
+        from onepiece_dist.service.label_one import label_tasks
 
-        if self.assembly is None:
-            found = DatasetReader(self.spec.output).attrs.get("assembly")
-            if not found:
-                raise MissingAssembly(f"{self.spec.output}: the label stage needs an assembled object "
-                                      "(run the assemble stage first)")
-            self.assembly = AssemblyReport.model_validate(found)
-        report = label_assembly(self.spec, self.spec.output)
+        if not DatasetReader(self.spec.output).attrs.get("assembly"):
+            raise MissingAssembly(f"{self.spec.output}: the label stage needs an assembled object "
+                                  "(run the assemble stage first)")
+        return label_tasks(self.spec, self.spec.output)
+
+    def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport:
+        """Write the workers' labelled shards as ``assembled/grasps/``, then measure label transfer."""
+        from onepiece_dist.service.label_one import write_labels
+
+        for task, result in zip(tasks, results, strict=True):
+            if result.status != "ok":
+                raise JobError(f"label shard {result.index} (patches {task.start}-{task.stop - 1}): {result.reason}")
+        report = write_labels(self.spec, self.spec.output, tasks, self.parts)
         if self.spec.sim.transfer_codes:
             from onepiece_dist.service.transfer import measure_transfer
 
@@ -125,8 +132,11 @@ class CentralClient(ActorClient):
     def assemble(self) -> AssemblyReport:
         return self.call("assemble")
 
-    def label(self) -> LabelReport:
-        return self.call("label")
+    def label_tasks(self) -> list[LabelTask]:
+        return self.call("label_tasks")
+
+    def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport:
+        return self.call("merge_labels", tasks, results)
 
 
 def central_name(job_id: str) -> str:

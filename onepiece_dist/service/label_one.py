@@ -10,7 +10,10 @@ points come from the patch's real surface points. Results go to ``assembled/gras
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
+import time
 
 import numpy as np
 
@@ -19,10 +22,12 @@ from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_points
 from onepiece_dist.service.patches import Patches, read_patches
+from onepiece_dist.service.results import LabelShardResult, LabelTask
 from onepiece_dist.service.status import LabelReport
 from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader, write_group
-from onepiece_dist.store.format import grasp_arrays
+from onepiece_dist.store.format import grasp_arrays, grasp_row_shape
 
 
 def patch_cloud(patches: Patches, k: int, spec: JobSpec) -> np.ndarray:
@@ -49,30 +54,83 @@ def perturbed_poses(count: int, rng: np.random.Generator, shift: float = 0.004, 
     return np.stack([np.eye(4)] + [perturb_pose(np.eye(4), rng, shift, angle) for _ in range(count)])
 
 
-def label_assembly(spec: JobSpec, path: str | os.PathLike) -> LabelReport:
-    """Run the label protocol around every patch (``spec.sim.perturbations_per_patch`` perturbed poses besides
-    the placement); store ``assembled/grasps/`` and return counts."""
+LABEL_SHARD_PATCHES = 16  # patches per label task: enough work to hide a task's overhead, many tasks to share
+
+
+def label_tasks(spec: JobSpec, path: str | os.PathLike) -> list[LabelTask]:
+    """The label stage of the one object at ``path`` in shards of LABEL_SHARD_PATCHES patches, keyed by what
+    decides their labels (the placed patches and the label-relevant spec), so a re-run reuses finished shards."""
+    reader = DatasetReader(path)
+    patches = int(reader.array("assembled/placement").shape[0])
+    key = label_key(spec, reader)
+    return [LabelTask(start, min(start + LABEL_SHARD_PATCHES, patches), str(path), f"label-{key}-{k:05d}")
+            for k, start in enumerate(range(0, patches, LABEL_SHARD_PATCHES))]
+
+
+def label_key(spec: JobSpec, reader: DatasetReader) -> str:
+    """Hash of the one object's patches and placements and of the spec fields labels depend on."""
+    digest = hashlib.blake2b(digest_size=8)
+    for name in ("placement", "piece_vertices", "piece_vertex_count", "patch_piece_count", "patch_points",
+                 "source_volume"):
+        digest.update(np.ascontiguousarray(reader[f"assembled/{name}"]).tobytes())
+    relevant = spec.model_dump(mode="json", include={"seed", "gripper", "voxel", "views"})
+    relevant["sim"] = spec.sim.model_dump(mode="json", exclude={"transfer_codes", "transfer_grasps"})
+    digest.update(json.dumps(relevant, sort_keys=True).encode())
+    return digest.hexdigest()
+
+
+def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> LabelShardResult:
+    """Label one shard into its part (once: a committed part is reused). Runs in a worker."""
+    start = time.perf_counter()
+    if not parts.is_committed(task.part_key):
+        arrays = label_patches(spec, task.dataset, range(task.start, task.stop))
+        parts.write(task.part_key, arrays, {"patches": [task.start, task.stop]})
+        reused = False
+    else:
+        reused = True
+    grasps = int(parts.array_shapes(task.part_key)["patch"][0][0])
+    return LabelShardResult(index, "ok", task.part_key, grasps, reused=reused, seconds=time.perf_counter() - start)
+
+
+def label_patches(spec: JobSpec, path: str | os.PathLike, patches: range) -> dict[str, np.ndarray]:
+    """The label protocol around each of ``patches`` (``spec.sim.perturbations_per_patch`` perturbed poses
+    besides the placement): their labelled grasps in the layout of ``assembled/grasps/``."""
     from onepiece_dist.sim.trials import LabelNoise, run_trials
     from onepiece_dist.sim.world import process_world
 
     reader = DatasetReader(path)
     placements = reader["assembled/placement"].astype(np.float64)
-    patches = read_patches(reader)
-    perturbations = spec.sim.perturbations_per_patch
-    world = process_world(spec.gripper)
-    noise = LabelNoise.from_spec(spec.sim)
-    rows: dict[str, list] = {k: [] for k in ("patch", "pose", "candidate_pose", "width", "shift", "success",
-                                             "quality", "slip", "code", "candidate_code", "points")}
-    for k, placement in enumerate(placements):
-        if not patches.pieces[k]:
+    patch_set = read_patches(reader)
+    world, noise = process_world(spec.gripper), LabelNoise.from_spec(spec.sim)
+    rows: dict[str, list] = {k: [] for k in GRASP_ROWS}
+    for k in patches:
+        if not patch_set.pieces[k]:
             continue  # nothing of the source object in the patch box: nothing to grasp
-        world.load_object(patches.pieces[k], float(patches.source_volume[k]), spec.gripper.friction)
+        world.load_object(patch_set.pieces[k], float(patch_set.source_volume[k]), spec.gripper.friction)
         rng = object_rng(f"{k:032x}", spec.seed, stream=2)
-        poses = perturbed_poses(perturbations, rng)
+        poses = perturbed_poses(spec.sim.perturbations_per_patch, rng)
         batch = run_trials(world, poses, label=True, noise=noise, rng=rng)
-        _collect(rows, k, placement, patch_cloud(patches, k, spec), poses, batch, spec, rng)
-    arrays = {name: np.concatenate(values) if values else np.zeros(0) for name, values in rows.items()}
-    summary = LabelReport(label_trials=int(len(placements) * (1 + perturbations) * spec.sim.label_trials),
+        _collect(rows, k, placements[k], patch_cloud(patch_set, k, spec), poses, batch, spec, rng)
+    return grasp_arrays({name: np.concatenate(values) if values else _empty(name, spec)
+                         for name, values in rows.items()})
+
+
+GRASP_ROWS = ("patch", "pose", "candidate_pose", "width", "shift", "success", "quality", "slip", "code",
+              "candidate_code", "points")
+
+
+def _empty(name: str, spec: JobSpec) -> np.ndarray:
+    """No rows of grasp array ``name``, in its row shape."""
+    return np.zeros((0, *grasp_row_shape(name, spec.code_bytes(), max(spec.sim.points_per_grasp, 1))))
+
+
+def write_labels(spec: JobSpec, path: str | os.PathLike, tasks: list[LabelTask], parts: PartStore) -> LabelReport:
+    """Store the shards' labelled grasps, in patch order, as ``assembled/grasps/``; return the counts."""
+    shards = [parts.read(task.part_key) for task in tasks]
+    arrays = {name: np.concatenate([shard[name] for shard in shards]) if shards else _empty(name, spec)
+              for name in GRASP_ROWS}
+    patches = tasks[-1].stop if tasks else 0
+    summary = LabelReport(label_trials=int(patches * (1 + spec.sim.perturbations_per_patch) * spec.sim.label_trials),
                           labelled_grasps=int(len(arrays["patch"])),
                           success_rate=float(np.mean(arrays["success"])) if len(arrays["patch"]) else 0.0)
     write_group(path, "assembled/grasps", grasp_arrays(arrays), {"assembly_labels": summary.model_dump(mode="json")})

@@ -11,8 +11,9 @@ from collections.abc import Callable
 from onepiece_dist.objects import ObjectRef
 from onepiece_dist.service.central import CentralActor
 from onepiece_dist.service.extract import extract_object
+from onepiece_dist.service.label_one import label_shard
 from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
-from onepiece_dist.service.results import ObjectResult
+from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.service.trainer import Trainer
 from onepiece_dist.spec import JobSpec
@@ -39,5 +40,8 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
         if progress:
             progress(status)
 
-    runtime = Runtime(extract=extract, central=central, train=Trainer().fit)
+    def label(tasks: list[LabelTask]) -> list[LabelShardResult]:
+        return [label_shard(spec, task, index, central.parts) for index, task in enumerate(tasks)]
+
+    runtime = Runtime(extract=extract, central=central, label=label, train=Trainer().fit)
     return run_pipeline(spec, new_status(spec, job_id), runtime, report, refs)

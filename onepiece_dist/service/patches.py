@@ -46,7 +46,7 @@ class Patches:
                 "piece_vertex_count": np.array([len(p) for p in piece_list], dtype=np.int64),
                 "piece_vertices": _stack(piece_list),
                 "patch_point_count": np.array([len(p) for p in self.points], dtype=np.int64),
-                "patch_points": _stack(self.points),
+                "patch_points": _stack(self.points).astype(np.float32),  # as assembled/points: codes need no more
                 "source_volume": self.source_volume.astype(np.float64)}
 
     @classmethod

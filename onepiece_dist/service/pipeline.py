@@ -15,7 +15,7 @@ from typing import Protocol
 
 from onepiece_dist.errors import JobCancelled, JobError, SourceError
 from onepiece_dist.objects import ObjectRef, resolve_source
-from onepiece_dist.service.results import CommitSummary, ObjectResult
+from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult
 from onepiece_dist.service.status import AssemblyReport, JobStatus, LabelReport, Rejection, TrainingReport
 from onepiece_dist.spec import JobSpec
 
@@ -30,15 +30,18 @@ class Central(Protocol):
     def commit(self, results: list[ObjectResult]) -> CommitSummary: ...
     def committed(self) -> CommitSummary: ...
     def assemble(self) -> AssemblyReport: ...
-    def label(self) -> LabelReport: ...
+    def label_tasks(self) -> list[LabelTask]: ...
+    def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport: ...
 
 
 @dataclass(frozen=True)
 class Runtime:
-    """extract(refs, on_result) -> results in object order; the central actor; train(spec) -> report."""
+    """extract(refs, on_result) -> results in object order; the central actor; label(tasks) -> shard results in
+    task order (the workers simulate, not the central actor); train(spec) -> report."""
 
     extract: Callable[[list[ObjectRef], Callable[[ObjectResult], None]], list[ObjectResult]]
     central: Central
+    label: Callable[[list[LabelTask]], list[LabelShardResult]]
     train: Callable[[JobSpec], TrainingReport]
 
 
@@ -95,7 +98,8 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
             status.assembly = runtime.central.assemble()
     if spec.runs("label") and summary.exact_unique_codes:
         with stage(status, "label", report):
-            status.labels = runtime.central.label()
+            tasks = runtime.central.label_tasks()
+            status.labels = runtime.central.merge_labels(tasks, runtime.label(tasks))
     if spec.runs("train"):
         with stage(status, "train", report):
             status.training = runtime.train(spec)

@@ -1,4 +1,5 @@
-"""The Ray runtime of a job's pipeline: extraction worker actors fed with bounded in-flight work (``ray.wait``),
+"""The Ray runtime of a job's pipeline: simulation worker actors (extraction, then the label shards of the one
+object) fed with bounded in-flight work (``ray.wait``),
 the central actor and the trainer behind their clients, the registry, retries of objects whose worker died,
 quarantine of poison objects, cancellation.
 
@@ -18,9 +19,10 @@ from onepiece_dist.objects import ObjectRef
 from onepiece_dist.service.actors import restartable_actor
 from onepiece_dist.service.central import CentralClient, central_name
 from onepiece_dist.service.extract import extract_object
+from onepiece_dist.service.label_one import label_shard
 from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
 from onepiece_dist.service.registry import RegistryClient
-from onepiece_dist.service.results import ObjectResult
+from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.service.trainer import TrainerClient
 from onepiece_dist.spec import JobSpec
@@ -31,13 +33,18 @@ MAX_ATTEMPTS = 3  # an object whose worker dies this many times is quarantined
 POLL_SECONDS = 0.5
 
 
-class ExtractionWorker:
-    """One pybullet client per actor. A plain class, testable without Ray."""
+class SimWorker:
+    """One pybullet client per actor: extracts objects and labels shards of the one object. A plain class,
+    testable without Ray."""
 
     def __init__(self, spec: JobSpec, central: str | None = None):
         self.spec = spec
         self.parts = PartStore(spec.parts_folder())
         self.central = central
+
+    def label(self, task: LabelTask, index: int) -> LabelShardResult:
+        """Label one shard of the one object into its part."""
+        return dataclasses.replace(label_shard(self.spec, task, index, self.parts), node=_node_id())
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
         """Extract one object; its codes go to the central actor (named ``central``), once. When that message
@@ -83,40 +90,58 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         if progress:
             progress(current)
 
-    def extract(refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
+    def on_pool(stage: str, items: list, on_result, method: str, quarantined) -> list:
         import ray
 
-        actors = [restartable_actor(ExtractionWorker, f"extract-{job_id}-{k}", num_cpus=1,
+        actors = [restartable_actor(SimWorker, f"{stage}-{job_id}-{k}", num_cpus=1,
                                     scheduling_strategy="SPREAD").remote(spec, central_name(job_id))
-                  for k in range(worker_count(workers, len(refs)))]
+                  for k in range(worker_count(workers, len(items)))]
         try:
-            return ExtractionPool(actors, registry, status, on_result).run(refs)
+            return WorkerPool(actors, registry, status, on_result, method, quarantined).run(items)
         finally:
             for actor in actors:
-                ray.kill(actor)  # free their CPUs for the trainer
+                ray.kill(actor)  # free their CPUs for the next stage and the trainer
+
+    def extract(refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
+        return on_pool("extract", refs, on_result, "extract", quarantined_object)
+
+    def label(tasks: list[LabelTask]) -> list[LabelShardResult]:
+        return on_pool("label", tasks, lambda result: None, "label", quarantined_shard)
 
     def train(train_spec: JobSpec):
         clients.append(TrainerClient.start(train_spec))
         return clients[-1].fit(train_spec)
 
     try:
-        return run_pipeline(spec, status, Runtime(extract=extract, central=central, train=train), report, refs)
+        return run_pipeline(spec, status, Runtime(extract=extract, central=central, label=label, train=train), report,
+                            refs)
     finally:
         for client in clients:
             client.kill()
 
 
-class ExtractionPool:
-    """Feeds objects to worker actors, at most IN_FLIGHT_PER_WORKER each, and checks for a cancel request.
+def quarantined_object(index: int, ref: ObjectRef, reason: str) -> ObjectResult:
+    return ObjectResult(index, ref.name, "rejected", reason=reason)
 
-    When a worker dies, the objects it held are re-run one at a time on an otherwise idle worker (suspects), so a
-    later death is attributable: an object that kills its worker MAX_ATTEMPTS times while running alone is
-    quarantined; innocent objects that only shared a worker with it are never counted against.
+
+def quarantined_shard(index: int, task: LabelTask, reason: str) -> LabelShardResult:
+    return LabelShardResult(index, "rejected", reason=reason)
+
+
+class WorkerPool:
+    """Feeds items (objects, label shards) to worker actors' ``method(item, index)``, at most
+    IN_FLIGHT_PER_WORKER each, and checks for a cancel request.
+
+    When a worker dies, the items it held are re-run one at a time on an otherwise idle worker (suspects), so a
+    later death is attributable: an item that kills its worker MAX_ATTEMPTS times while running alone is
+    quarantined (``quarantined(index, item, reason)`` is its result); innocent items that only shared a worker
+    with it are never counted against. Results come back in item order.
     """
 
-    def __init__(self, actors: list, registry: RegistryClient, status: JobStatus,
-                 on_result: Callable[[ObjectResult], None]):
+    def __init__(self, actors: list, registry: RegistryClient, status: JobStatus, on_result: Callable,
+                 method: str = "extract", quarantined: Callable = quarantined_object):
         self.actors, self.registry, self.status, self.on_result = actors, registry, status, on_result
+        self.method, self.quarantined = method, quarantined
         self.pending: dict = {}  # ObjectRef -> (index, object ref, actor position, alone)
         self.attempts: dict[int, int] = {}
         self.suspects: set[int] = set()
@@ -124,14 +149,14 @@ class ExtractionPool:
         self.starting = {actor.__ray_ready__.remote(): k for k, actor in enumerate(actors)}
         self.ready: set[int] = set()
 
-    def run(self, refs: list[ObjectRef]) -> list[ObjectResult]:
+    def run(self, items: list) -> list:
         import ray
 
-        todo = deque(enumerate(refs))
-        results: list[ObjectResult] = []
+        todo = deque(enumerate(items))
+        results: list = []
         while todo or self.pending:
             if self.registry.cancel_requested(self.status.job_id):
-                raise JobCancelled(f"cancelled after {len(results)} of {len(refs)} objects")
+                raise JobCancelled(f"cancelled after {len(results)} of {len(items)} {self.method} tasks")
             self._note_started()
             self._fill(todo)
             ready, _ = ray.wait(list(self.pending) or list(self.starting), num_returns=1, timeout=POLL_SECONDS)
@@ -177,10 +202,11 @@ class ExtractionPool:
                     break
                 continue
             position = min(free, key=lambda k: load[k])
-            self.pending[self.actors[position].extract.remote(ref, index)] = (index, ref, position, alone)
+            call = getattr(self.actors[position], self.method)
+            self.pending[call.remote(ref, index)] = (index, ref, position, alone)
         todo.extendleft(reversed(deferred))
 
-    def _collect(self, object_ref, todo: deque) -> ObjectResult | None:
+    def _collect(self, object_ref, todo: deque):
         import ray
         from ray.exceptions import RayActorError, WorkerCrashedError
 
@@ -194,7 +220,7 @@ class ExtractionPool:
             if alone:
                 self.attempts[index] = self.attempts.get(index, 0) + 1
             if self.attempts.get(index, 0) >= MAX_ATTEMPTS:
-                return ObjectResult(index, ref.name, "rejected", reason=f"quarantined: its worker died "
-                                    f"{self.attempts[index]} times while running it alone ({type(err).__name__})")
+                return self.quarantined(index, ref, f"quarantined: its worker died {self.attempts[index]} times "
+                                                   f"while running it alone ({type(err).__name__})")
             todo.appendleft((index, ref))
             return None

@@ -42,3 +42,28 @@ def part_key(content_id: str, result_key: str) -> str:
     """The part of an object: its content id and the result key of the spec that extracted it (same physics,
     same part). A dataset records its result key in ``provenance``, so later stages find its parts."""
     return f"{content_id}-{result_key}"
+
+
+@dataclass(frozen=True)
+class LabelTask:
+    """A shard of the label stage: patches [start, stop) of the one object at ``dataset``; its labelled grasps go
+    to the part ``part_key`` (so a re-run, or a resumed job, finds the shard done)."""
+
+    start: int
+    stop: int
+    dataset: str
+    part_key: str
+
+
+@dataclass(frozen=True)
+class LabelShardResult:
+    """A labelled shard: 'ok' with its part and grasp count, or 'rejected' (its worker kept dying)."""
+
+    index: int
+    status: str
+    part_key: str = ""
+    grasps: int = 0
+    reason: str = ""
+    reused: bool = False
+    seconds: float = 0.0
+    node: str = ""

@@ -56,7 +56,7 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/piece_vertices", "float64", "(W, 3)", "points of the pieces, patch (gripper) frame; each piece "
      "is their convex hull"),
     ("assembled/patch_point_count", "int64", "(U,)", "surface points of each patch"),
-    ("assembled/patch_points", "float64", "(Q, 3)", "source surface points inside each patch box, patch frame"),
+    ("assembled/patch_points", "float32", "(Q, 3)", "source surface points inside each patch box, patch frame"),
     ("assembled/source_volume", "float64", "(U,)", "volume of each patch's source object (m^3): its mass rule"),
     *_grasp_entries("assembled/grasps", "L"),
 )
