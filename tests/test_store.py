@@ -46,9 +46,53 @@ def test_crash_mid_write_leaves_no_committed_part(tmp_path, monkeypatch):
         parts.read("k1")
 
 
-def test_stale_temporaries_are_removed(tmp_path):
-    (tmp_path / ".tmp-k1-deadbeef").mkdir()
-    assert PartStore(tmp_path).remove_stale_temporaries() == 1 and not list(tmp_path.iterdir())
+def test_temporaries_of_gone_writers_are_removed_and_those_of_live_ones_kept(tmp_path):
+    import json
+    import time
+
+    from onepiece_dist.store.parts import OWNER_FILE, STALE_AFTER_S, this_process
+
+    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+
+    def temporary(name: str, owner: dict | None) -> None:
+        (tmp_path / name).mkdir()
+        if owner is not None:
+            (tmp_path / name / OWNER_FILE).write_text(json.dumps(owner))
+
+    temporary(".tmp-k1-dead", {**this_process(), "pid": int(ended.stdout)})  # its writer has exited
+    temporary(".tmp-k2-live", this_process())  # this process, still writing
+    temporary(".tmp-k3-elsewhere", {**this_process(), "host": "another-host"})  # cannot be checked: waits
+    temporary(".tmp-k4-unknown", None)
+    parts = PartStore(tmp_path)
+    assert parts.remove_stale_temporaries() == 1 and not (tmp_path / ".tmp-k1-dead").exists()
+    assert parts.remove_stale_temporaries(now=time.time() + STALE_AFTER_S + 1) == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".tmp-k2-live"]
+
+
+def test_a_job_starting_on_a_shared_cache_leaves_another_jobs_part_write_alone(tmp_path, monkeypatch):
+    import threading
+
+    import onepiece_dist.store.parts as mod
+
+    original, inside, release = mod.write_array, threading.Event(), threading.Event()
+
+    def paused(group, name, data, rows=8192):
+        if name == "width":  # job 1 is in the middle of its part
+            inside.set()
+            assert release.wait(30)
+        return original(group, name, data)
+
+    monkeypatch.setattr(mod, "write_array", paused)
+    writer = threading.Thread(target=lambda: PartStore(tmp_path).write("k1", part_arrays(), {"grasps": 5}))
+    writer.start()
+    assert inside.wait(30)
+    assert PartStore(tmp_path).remove_stale_temporaries() == 0  # job 2 starts on the same cache
+    release.set()
+    writer.join(30)
+    committed = PartStore(tmp_path)
+    assert committed.is_committed("k1") and set(committed.read("k1")) == {"code", "width"}
+    assert np.array_equal(committed.read("k1")["width"], part_arrays()["width"])
+    assert not list(tmp_path.glob(".tmp-*"))
 
 
 def test_dataset_round_trip_and_incomplete_refusal(spec_factory):

@@ -9,8 +9,11 @@ of the same key (a retried task) finds it committed and discards its own copy, s
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
+import socket
+import time
 import uuid
 from pathlib import Path
 
@@ -21,6 +24,8 @@ from onepiece_dist.errors import StoreError
 from onepiece_dist.store.codecs import write_array
 
 _TMP = ".tmp-"
+OWNER_FILE = "owner.json"  # in a temporary: who writes it (host, pid, process start), so others leave it alone
+STALE_AFTER_S = 6 * 3600  # a temporary whose owner cannot be checked (another host, no owner file) expires then
 
 
 class PartStore:
@@ -42,10 +47,13 @@ class PartStore:
         self.folder.mkdir(parents=True, exist_ok=True)
         tmp = self.folder / f"{_TMP}{key}-{uuid.uuid4().hex[:8]}"
         try:
-            group = zarr.open_group(str(tmp), mode="w")
+            tmp.mkdir()
+            (tmp / OWNER_FILE).write_text(json.dumps(this_process()))
+            group = zarr.open_group(str(tmp), mode="a")
             for name, data in arrays.items():
                 write_array(group, name, data)
             group.attrs.update({"key": key, **meta})
+            (tmp / OWNER_FILE).unlink()
             return self._publish(tmp, key)
         except OSError as err:
             raise StoreError(f"cannot write part {key} in {self.folder}: {err.strerror or err}; "
@@ -91,10 +99,41 @@ class PartStore:
             return []
         return sorted(p.name[:-5] for p in self.folder.glob("*.zarr") if (p / "zarr.json").is_file())
 
-    def remove_stale_temporaries(self) -> int:
-        """Delete temporaries left by writers that crashed. Returns how many were removed."""
-        stale = list(self.folder.glob(f"{_TMP}*")) if self.folder.is_dir() else []
+    def remove_stale_temporaries(self, now: float | None = None) -> int:
+        """Delete temporaries whose writer is gone: its process on this host has ended, or (owner on another host,
+        or unknown) it is older than STALE_AFTER_S. A temporary that a live writer, of this job or another job on
+        the same cache, is still filling is left alone. Returns how many were removed."""
+        now = time.time() if now is None else now
+        stale = [path for path in (self.folder.glob(f"{_TMP}*") if self.folder.is_dir() else [])
+                 if _abandoned(path, now)]
         for path in stale:
             shutil.rmtree(path, ignore_errors=True)
         return len(stale)
+
+
+def this_process() -> dict:
+    """The owner record of a temporary written by this process."""
+    return {"host": socket.gethostname(), "pid": os.getpid(), "started": process_start(os.getpid())}
+
+
+def process_start(pid: int) -> str:
+    """When process ``pid`` started (clock ticks since boot, from /proc), or '' where that cannot be read: with the
+    pid it names one process, even after the pid is reused."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[19]
+    except (OSError, IndexError):
+        return ""
+
+
+def _abandoned(tmp: Path, now: float) -> bool:
+    try:
+        owner = json.loads((tmp / OWNER_FILE).read_text())
+    except (OSError, ValueError):
+        owner = None
+    if owner is None or owner.get("host") != socket.gethostname():
+        try:
+            return now - tmp.stat().st_mtime > STALE_AFTER_S
+        except OSError:
+            return False
+    return process_start(int(owner["pid"])) != owner.get("started")
 
