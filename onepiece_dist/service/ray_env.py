@@ -7,17 +7,22 @@
   clients set ``RAY_AUTH_MODE=token`` explicitly. The token file is made readable by its owner only.
 * The dashboard is off for the embedded Ray; a cluster head started by ``cluster/local_cluster.sh`` serves it on
   127.0.0.1 for the Jobs API.
+* Embedded means embedded: without an address we start a fresh Ray of our own (``address="local"``), never
+  joining one that Ray would find on the machine (``RAY_ADDRESS``, or the last cluster's file, alive or dead).
+  With an address, a cluster that does not answer is reported within seconds, naming the address.
 """
 
 from __future__ import annotations
 
 import os
+import socket
 from pathlib import Path
 
 NAMESPACE = "onepiece"
 LOOPBACK_ENV = {"RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_USAGE_STATS_ENABLED": "0"}
 CLUSTER_ENV = {"RAY_AUTH_MODE": "token"}  # clients of a cluster: its nodes run with token auth
 TOKEN_FILE = Path.home() / ".ray" / "auth_token"
+REACH_TIMEOUT_S = 3.0
 
 
 def loopback_environment(cluster_client: bool = False) -> None:
@@ -44,8 +49,21 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> None:
     if ray.is_initialized():
         return
     if address:
+        check_reachable(address)
         ray.init(address=address, namespace=NAMESPACE, log_to_driver=False, configure_logging=False)
     else:
-        ray.init(num_cpus=num_cpus, include_dashboard=False, namespace=NAMESPACE, log_to_driver=False,
-                 configure_logging=False)
+        ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, namespace=NAMESPACE,
+                 log_to_driver=False, configure_logging=False)
     secure_token_file()
+
+
+def check_reachable(address: str, timeout: float = REACH_TIMEOUT_S) -> None:
+    """Raise ConnectionError within ``timeout`` s when nothing listens at a 'host:port' address ('auto', which Ray
+    resolves inside a cluster, is left to Ray)."""
+    host, _, port = address.rpartition(":")
+    if address == "auto" or not host or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as err:
+        raise ConnectionError(f"nothing answers at {address} ({err.strerror or err})") from None
