@@ -54,7 +54,7 @@ def broken_inputs_folder(root: Path, outside: Path) -> dict[str, str]:
         "escape_urdf/obj.urdf": (urdf_text("../../outside/secret.obj"), "'..'"),
         "abs_urdf/obj.urdf": (urdf_text(str(outside / "secret.obj")), "absolute"),
         "file_urdf/obj.urdf": (urdf_text(f"file://{outside}/secret.obj"), "URL scheme"),
-        "pkg_urdf/obj.urdf": (urdf_text("package://outside/secret.obj"), "URL scheme"),
+        "pkg_urdf/obj.urdf": (urdf_text("package://outside/secret.obj"), "does not map"),
         "bad_xml/obj.urdf": ("<robot><link", "malformed URDF XML"),
         "degenerate.obj": ("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "degenerate"),
         "huge_units.obj": (box_obj_text(40.0), "wrong units"),

@@ -1,3 +1,4 @@
+import json
 import os
 import sys
 
@@ -9,7 +10,7 @@ from onepiece_dist.objects import load_object, resolve_source
 from onepiece_dist.service.extract import extract_object
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
-from tests.factories import box_obj_text, broken_inputs_folder
+from tests.factories import box_obj_text, broken_inputs_folder, urdf_text
 
 
 @pytest.fixture
@@ -96,3 +97,35 @@ def test_primitive_set_is_graspable():
     for ref in resolve_source("primitives"):
         mesh = load_object(ref, spec).mesh
         assert np.isfinite(mesh.vertices).all() and len(mesh.faces) >= 12
+
+
+def test_ros_package_paths_resolve_through_the_package_map_inside_the_input_root(tmp_path):
+    root, outside = tmp_path / "inputs", tmp_path / "outside"
+    (root / "pkgs" / "widget" / "meshes").mkdir(parents=True)
+    outside.mkdir()
+    (root / "pkgs" / "widget" / "meshes" / "box.obj").write_text(box_obj_text())
+    (outside / "secret.obj").write_text(box_obj_text())
+    (root / "onepiece_packages.json").write_text(json.dumps({"widget": "pkgs/widget", "leak": "../outside"}))
+    single_quoted = urdf_text("package://widget/meshes/box.obj").replace('"', "'")
+    for name, text in {"robot/good.urdf": single_quoted, "robot/unmapped.urdf": urdf_text("package://ros/x.obj"),
+                       "robot/leaky.urdf": urdf_text("package://leak/secret.obj")}.items():
+        (root / name).parent.mkdir(exist_ok=True)
+        (root / name).write_text(text)
+    os.environ["ROS_PACKAGE_PATH"] = str(outside)  # never consulted
+    try:
+        refs = resolve_source(str(root))
+        # the mesh the URDF claims (single-quoted attribute) is not listed again; the map is not an object
+        assert sorted(r.name for r in refs) == ["robot/good.urdf", "robot/leaky.urdf", "robot/unmapped.urdf"]
+        spec = JobSpec(grasps_per_object=8, sampler={"surface_points": 1000}, sim={"physics": False})
+        OpenAudit.record()
+        try:
+            results = {r.name: extract_object(spec, r, i, PartStore(tmp_path / "parts")) for i, r in enumerate(refs)}
+        finally:
+            opened = OpenAudit.stop()
+    finally:
+        del os.environ["ROS_PACKAGE_PATH"]
+    assert results["robot/good.urdf"].status == "ok"
+    assert "package 'ros'" in results["robot/unmapped.urdf"].reason and "does not map" in results[
+        "robot/unmapped.urdf"].reason
+    assert "'..'" in results["robot/leaky.urdf"].reason
+    assert not [p for p in opened if os.path.realpath(p).startswith(os.path.realpath(outside))]

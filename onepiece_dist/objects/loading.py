@@ -72,13 +72,13 @@ def _read_mesh(path: Path, root: Path, source: str, max_bytes: int) -> tuple[np.
 def _load_urdf(ref: ObjectRef, max_bytes: int) -> TriangleMesh:
     path = Path(ref.path)
     text = read_confined(path, Path(ref.root), ref.name, max_bytes).decode("utf-8", errors="replace")
-    visual, collision = parse_urdf(text, confined(path, ref.root, ref.name), ref.name)
+    visual, collision = parse_urdf(text, confined(path, ref.root, ref.name), ref.name, Path(ref.root))
     first_error: MeshRejected | None = None
     for elements in (visual, collision):
         if not elements:
             continue
         try:
-            parts = [_element_arrays(e, path.parent, ref.name, max_bytes) for e in elements]
+            parts = [_element_arrays(e, Path(ref.root), ref.name, max_bytes) for e in elements]  # paths confined
             return make_mesh(*merge_meshes(parts), ref.name, ref.scale)
         except MeshRejected as err:
             first_error = first_error or err

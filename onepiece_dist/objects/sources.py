@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from onepiece_dist.errors import SourceError
+from onepiece_dist.objects.paths import PACKAGE_MAP, package_folders
+from onepiece_dist.objects.urdf import mesh_filenames
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".glb")
 OBJECT_SUFFIXES = (*MESH_SUFFIXES, ".urdf")
@@ -116,10 +118,11 @@ def folder_refs(folder: Path) -> list[ObjectRef]:
     twice; companion files (materials, textures) are skipped; anything else is listed as unsupported so
     that it gets a rejection with a reason."""
     files = sorted(p for p in folder.rglob("*") if p.is_file() or p.is_symlink())
-    claimed = _urdf_claimed_meshes(f for f in files if f.suffix.lower() == ".urdf")
+    claimed = _urdf_claimed_meshes((f for f in files if f.suffix.lower() == ".urdf"), folder)
     refs = []
     for path in files:
-        if path.suffix.lower() in COMPANION_SUFFIXES or Path(os.path.normpath(path)) in claimed:
+        if path.suffix.lower() in COMPANION_SUFFIXES or path.name == PACKAGE_MAP or \
+                Path(os.path.normpath(path)) in claimed:
             continue
         refs.append(_file_ref(path, folder))
     return refs
@@ -146,9 +149,9 @@ def _kind(path: Path) -> str:
     return "mesh" if suffix in MESH_SUFFIXES else "unsupported"
 
 
-def _urdf_claimed_meshes(urdfs) -> set[Path]:
-    """Lexically normalised paths of the mesh files that the given URDFs name (best effort; bad URDFs and
-    paths are judged at load time)."""
+def _urdf_claimed_meshes(urdfs, root: Path) -> set[Path]:
+    """Paths of the mesh files that the given URDFs name, read with the XML parser (best effort; bad URDFs and
+    paths are judged, and rejected with a reason, at load time)."""
     claimed: set[Path] = set()
     for urdf in urdfs:
         real = Path(os.path.realpath(urdf))
@@ -158,7 +161,12 @@ def _urdf_claimed_meshes(urdfs) -> set[Path]:
             text = real.read_text(errors="replace")[:1_000_000]
         except OSError:
             continue
-        for name in re.findall(r'filename\s*=\s*"([^"]+)"', text):
-            if "://" not in name and not os.path.isabs(name):
+        for name in mesh_filenames(text):
+            if name.startswith("package://"):
+                package, _, rest = name[len("package://"):].partition("/")
+                folder = package_folders(root).get(package)
+                if folder is not None:
+                    claimed.add(Path(os.path.normpath(root / folder / rest)))
+            elif "://" not in name and not os.path.isabs(name):
                 claimed.add(Path(os.path.normpath(urdf.parent / name)))
     return claimed

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.objects.paths import relative_reference
+from onepiece_dist.objects.paths import package_reference, relative_reference
 
 
 @dataclass(frozen=True)
@@ -27,27 +27,44 @@ class GeometryElement:
     dims: tuple[float, ...] = ()
 
 
-def parse_urdf(text: str, urdf_path: Path, source: str) -> tuple[list[GeometryElement], list[GeometryElement]]:
-    """Visual and collision geometry of a one-link URDF. Mesh paths are confined to the URDF's folder."""
+def parse_urdf(text: str, urdf_path: Path, source: str,
+               root: Path | None = None) -> tuple[list[GeometryElement], list[GeometryElement]]:
+    """Visual and collision geometry of a one-link URDF. Mesh paths are confined to the URDF's folder;
+    ``package://`` paths resolve through the package map of the input ``root`` (objects/paths.py)."""
     try:
-        root = ET.fromstring(text)
+        robot = ET.fromstring(text)
     except ET.ParseError as err:
         raise MeshRejected(source, f"malformed URDF XML: {err}") from None
-    if root.tag != "robot":
-        raise MeshRejected(source, f"URDF root element is <{root.tag}>, expected <robot>")
-    links = [link for link in root.findall("link") if link.find("visual") is not None
+    if robot.tag != "robot":
+        raise MeshRejected(source, f"URDF root element is <{robot.tag}>, expected <robot>")
+    links = [link for link in robot.findall("link") if link.find("visual") is not None
              or link.find("collision") is not None]
     if len(links) != 1:
         raise MeshRejected(source, f"URDF has {len(links)} links with geometry; only single-link objects "
                                    "are supported")
     link = links[0]
     folder = urdf_path.parent
-    visual = [_element(e, folder, source) for e in link.findall("visual")]
-    collision = [_element(e, folder, source) for e in link.findall("collision")]
+    visual = [_element(e, folder, source, root) for e in link.findall("visual")]
+    collision = [_element(e, folder, source, root) for e in link.findall("collision")]
     return visual, collision
 
 
-def _element(node: ET.Element, folder: Path, source: str) -> GeometryElement:
+def mesh_reference(filename: str, folder: Path, source: str, root: Path | None) -> Path:
+    """The confined file a URDF <mesh filename> names (relative to the URDF, or package:// through the map)."""
+    if filename.startswith("package://") and root is not None:
+        return package_reference(filename, root, source)
+    return relative_reference(filename, folder, source)
+
+
+def mesh_filenames(text: str) -> list[str]:
+    """Every <mesh filename="..."> of a URDF, read with the XML parser (any quoting); [] if it does not parse."""
+    try:
+        return [mesh.get("filename", "") for mesh in ET.fromstring(text).iter("mesh") if mesh.get("filename")]
+    except ET.ParseError:
+        return []
+
+
+def _element(node: ET.Element, folder: Path, source: str, root: Path | None = None) -> GeometryElement:
     origin = _origin(node.find("origin"), source)
     geometry = node.find("geometry")
     shape = geometry[0] if geometry is not None and len(geometry) else None
@@ -58,7 +75,7 @@ def _element(node: ET.Element, folder: Path, source: str) -> GeometryElement:
         if not filename:
             raise MeshRejected(source, "<mesh> has no filename")
         scale = _floats(shape.get("scale", "1 1 1"), 3, "mesh scale", source)
-        return GeometryElement("mesh", origin, relative_reference(filename, folder, source), tuple(scale))
+        return GeometryElement("mesh", origin, mesh_reference(filename, folder, source, root), tuple(scale))
     dims = {"box": ("size", 3), "cylinder": ("radius length", 2), "sphere": ("radius", 1)}.get(shape.tag)
     if dims is None:
         raise MeshRejected(source, f"unsupported URDF geometry <{shape.tag}>")
