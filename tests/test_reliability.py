@@ -1,9 +1,11 @@
 """Reliability battery: faults in the middle of jobs, concurrency, a full disk (docs/reliability.md)."""
 
 import errno
+import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import onepiece_dist.store.parts as parts_module
@@ -11,8 +13,8 @@ from onepiece_dist.api import Client, read_status
 from onepiece_dist.errors import JobError
 from onepiece_dist.service.central import central_name
 from onepiece_dist.service.local import run_local
-from onepiece_dist.spec import default_job_id
-from onepiece_dist.store import PartStore
+from onepiece_dist.spec import JobSpec, default_job_id
+from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
 from tests.factories import objects_done_at_least, stage_reached
 
@@ -93,6 +95,59 @@ def test_killing_a_worker_while_it_labels_gives_the_fault_free_labels(ray_sessio
     clean = labelled("labelclean")
     run_local(clean)
     assert same(spec.output, clean.output)
+
+
+@pytest.mark.ray
+def test_killing_the_central_actor_while_it_assembles_gives_the_fault_free_dataset(ray_session, spec_factory,
+                                                                                 tmp_path):
+    ray = ray_session
+
+    def assembled(name: str):
+        return spec_factory(objects="primitives[0:8]", grasps_per_object=48, output=str(tmp_path / f"{name}.zarr"),
+                            stages=["ingest", "extract", "dedup", "assemble"])
+
+    spec = assembled("asmkill")
+    job_id = default_job_id(spec)
+    client = Client()
+    handle = client.submit(spec)
+    assert stage_reached(client, job_id, "assemble")
+    ray.kill(ray.get_actor(central_name(job_id), namespace="onepiece"), no_restart=False)
+    final = handle.wait(timeout=300)
+    assert final.state == "succeeded", handle.error
+    clean = assembled("asmclean")
+    run_local(clean)
+    assert same(spec.output, clean.output)
+
+
+@pytest.mark.ray
+def test_killing_the_trainer_mid_training_resumes_from_its_last_epoch_with_the_same_metrics(ray_session, tmp_path):
+    from onepiece_dist.service.ray_runner import run_on_ray
+    from tests.factories import synthetic_labelled_dataset
+
+    ray = ray_session
+
+    def trained(name: str):
+        synthetic_labelled_dataset(tmp_path / f"{name}.zarr", rows=3000, points=64)
+        return JobSpec(output=str(tmp_path / f"{name}.zarr"), stages=("train",),
+                       train={"model": "pointnet", "epochs": 6, "batch_size": 64, "patience": 6})
+
+    spec, job_id = trained("trainkill"), "trainkill"
+    last = Path(f"{spec.output}.train") / "last.pt"
+    done = {}
+    driver = threading.Thread(target=lambda: done.update(status=run_on_ray(spec, job_id)))
+    driver.start()
+    deadline = time.monotonic() + 240
+    while not last.is_file() and time.monotonic() < deadline:
+        time.sleep(0.05)  # the first epoch is checkpointed: kill in the middle of a later one
+    time.sleep(1.0)
+    ray.kill(ray.get_actor(f"trainer-{job_id}", namespace="onepiece"), no_restart=False)
+    driver.join(300)
+    resumed = done["status"].training
+    reference = run_on_ray(trained("trainclean"), "trainclean").training
+    assert resumed.epochs == reference.epochs == 6
+    assert resumed.final == reference.final  # the same seed, resumed from last.pt: the same metrics
+    assert np.array_equal(open_dataset(spec.output)["train/train_loss"],
+                          open_dataset(str(tmp_path / "trainclean.zarr"))["train/train_loss"])
 
 
 @pytest.mark.ray

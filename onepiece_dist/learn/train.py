@@ -161,6 +161,8 @@ def _resume(folder: Path, model, optimiser) -> dict:
         model.load_state_dict(checkpoint["state_dict"])
         optimiser.load_state_dict(checkpoint["optimiser"])
         state = {k: checkpoint[k] for k in state}
+        if "rng" in checkpoint:  # dropout draws go on as if never interrupted
+            torch.set_rng_state(checkpoint["rng"])
     return state
 
 
@@ -169,7 +171,8 @@ def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, m
     state = {**state, "epoch": metrics["epoch"] + 1, "bad_epochs": 0 if improved else state["bad_epochs"] + 1,
              "best_loss": min(state["best_loss"], metrics["val_loss"])}
     weights = {name: tensor.detach().cpu() for name, tensor in model.state_dict().items()}  # loads anywhere
-    checkpoint = {"model": spec.model, "state_dict": weights, "optimiser": optimiser.state_dict(), **state}
+    checkpoint = {"model": spec.model, "state_dict": weights, "optimiser": optimiser.state_dict(),
+                  "rng": torch.get_rng_state(), **state}
     if improved:
         torch.save(checkpoint, folder / BEST)
     tmp = folder / f".{LAST}.tmp"

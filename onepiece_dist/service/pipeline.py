@@ -90,13 +90,17 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
             results = runtime.extract(refs, lambda result: (record_result(status, result), report(status)))
         with stage(status, "dedup", report):
             summary = runtime.central.commit(results)
-    else:
+    elif spec.runs("assemble") or spec.runs("label"):
         summary = runtime.central.committed()
-    status.progress.unique_codes = summary.unique_codes
-    if spec.runs("assemble") and summary.exact_unique_codes:
+    else:
+        summary = None  # training alone needs only the labelled grasps
+    if summary is not None:
+        status.progress.unique_codes = summary.unique_codes
+    shapes = summary.exact_unique_codes if summary is not None else 0
+    if spec.runs("assemble") and shapes:
         with stage(status, "assemble", report):
             status.assembly = runtime.central.assemble()
-    if spec.runs("label") and summary.exact_unique_codes:
+    if spec.runs("label") and shapes:
         with stage(status, "label", report):
             tasks = runtime.central.label_tasks()
             status.labels = runtime.central.merge_labels(tasks, runtime.label(tasks))

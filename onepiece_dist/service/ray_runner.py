@@ -109,7 +109,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         return on_pool("label", tasks, lambda result: None, "label", quarantined_shard)
 
     def train(train_spec: JobSpec):
-        clients.append(TrainerClient.start(train_spec))
+        clients.append(TrainerClient.start(train_spec, job_id))
         return clients[-1].fit(train_spec)
 
     try:

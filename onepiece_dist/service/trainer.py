@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.service.actors import ActorClient
+from onepiece_dist.service.actors import ActorClient, restartable_actor
 from onepiece_dist.service.status import TrainingReport
 from onepiece_dist.spec import JobSpec
 
@@ -39,11 +39,15 @@ class TrainerClient(ActorClient):
     nodes; else one CPU."""
 
     @classmethod
-    def start(cls, spec: JobSpec) -> TrainerClient:
+    def start(cls, spec: JobSpec, job_id: str) -> TrainerClient:
+        """The job's trainer actor ``trainer-<job>``; restarted by Ray if it dies, and a restarted trainer resumes
+        from the last epoch's checkpoint (``last.pt``) when the call is made again."""
         import ray
 
         gpus = trainer_gpus(spec.train.device, ray.cluster_resources().get("GPU", 0))
-        return cls(ray.remote(Trainer).options(num_gpus=gpus, num_cpus=0 if gpus else 1).remote(), "trainer actor")
+        name = f"trainer-{job_id}"
+        handle = restartable_actor(Trainer, name, num_gpus=gpus, num_cpus=0 if gpus else 1).remote()
+        return cls(handle, f"trainer actor {name}")
 
     def fit(self, spec: JobSpec) -> TrainingReport:
         return self.call("fit", spec)
