@@ -11,6 +11,7 @@ running when the submitter goes away.
 
 from __future__ import annotations
 
+import contextlib
 import shlex
 import threading
 import time
@@ -51,7 +52,8 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
         return run_on_ray(spec, job_id, workers=workers, progress=progress, refs=refs)
     finally:
         if started_here:
-            ray.shutdown()
+            with contextlib.suppress(Exception):  # a runtime that died under the job may not shut down cleanly
+                ray.shutdown()
 
 
 def _connect_or_raise(connect, address: str | None) -> None:

@@ -49,5 +49,10 @@ class ActorLost(JobError):
     """A central actor (dedup/assembly, trainer, registry) stayed unreachable past its patience."""
 
 
+class RuntimeLost(JobError):
+    """The Ray runtime under a running job went away (node death, raylet or GCS gone). Committed work is kept:
+    ``onepiece resume`` finishes the job."""
+
+
 class ClusterUnreachable(OnePieceError, ConnectionError):
     """No Ray cluster answers at the given address."""

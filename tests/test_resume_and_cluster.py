@@ -143,3 +143,27 @@ def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path):
     run_local(reference)
     for name in ("grasps/code", "unique/code", "unique/count"):
         assert np.array_equal(open_dataset(out)[name], open_dataset(reference.output)[name]), name
+
+
+@pytest.mark.ray
+@pytest.mark.slow
+def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_path):
+    out = tmp_path / "lost.zarr"
+    slow = ["--objects", "primitives[0:8]", "--grasps", "600", "--stages", "ingest,extract,dedup"]
+    job = subprocess.Popen([*ONEPIECE, "run", *slow, "--out", str(out)], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for(lambda: objects_done(out) >= 1, 180, "the first object")
+        agents = [p for p in psutil.Process(job.pid).children(recursive=True)
+                  if "agent.py" in " ".join(p.cmdline()) and "dashboard" in " ".join(p.cmdline())]
+        assert agents, "no dashboard agent under the embedded Ray"
+        for agent in agents:
+            agent.kill()  # the raylet exits with its agent, as when a node dies
+        stdout, stderr = job.communicate(timeout=180)
+    finally:
+        if job.poll() is None:
+            job.kill()
+    assert job.returncode == 1, stderr[-2000:]
+    assert f"onepiece resume {out}" in stderr and "lost the Ray runtime" in stderr
+    assert "Traceback" not in stderr, stderr[-3000:]
+    assert [line for line in stderr.splitlines() if "onepiece resume" in line][0].startswith("job failed: ")

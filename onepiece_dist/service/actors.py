@@ -9,10 +9,20 @@ from __future__ import annotations
 
 import time
 
-from onepiece_dist.errors import ActorLost
+from onepiece_dist.errors import ActorLost, RuntimeLost
 
 ACTOR_PATIENCE_S = 120.0  # how long a central actor may take to come back
 RETRY_SECONDS = 0.5
+
+
+def runtime_alive() -> bool:
+    """Whether the connected Ray still has a live node for actors to restart on (False when the GCS is gone)."""
+    import ray
+
+    try:
+        return any(node.get("Alive") for node in ray.nodes())
+    except Exception:  # noqa: BLE001 - any failure to reach the GCS means the runtime is gone
+        return False
 
 
 def restartable_actor(cls, name: str, **options):
@@ -41,6 +51,9 @@ class ActorClient:
             try:
                 return ray.get(getattr(self.handle, method).remote(*args))
             except RayActorError as err:
+                if not runtime_alive():
+                    raise RuntimeLost(f"the Ray runtime is gone ({self.what} during {method}: "
+                                      f"{type(err).__name__})") from err
                 if time.monotonic() > deadline:
                     raise ActorLost(f"{self.what} unreachable for {self.patience_s:.0f} s during {method}: "
                                     f"{type(err).__name__}") from err

@@ -10,11 +10,14 @@ function and central actor as the in-process runner, so both give the same datas
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from collections import deque
 from collections.abc import Callable
 
-from onepiece_dist.errors import JobCancelled, JobError
+from ray.exceptions import RaySystemError
+
+from onepiece_dist.errors import JobCancelled, JobError, RuntimeLost
 from onepiece_dist.objects import ObjectRef
 from onepiece_dist.service.actors import restartable_actor
 from onepiece_dist.service.central import CentralClient, central_name
@@ -86,7 +89,11 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
 
     def report(current: JobStatus) -> None:
         current.save(spec.output)
-        registry.update(job_id, current.model_dump(mode="json"), wait=current.state != "running")
+        try:
+            registry.update(job_id, current.model_dump(mode="json"), wait=current.state != "running")
+        except (RuntimeLost, RaySystemError):
+            if current.state == "running":
+                raise  # while running, a lost runtime ends the job; once it has ended, the status file says it
         if progress:
             progress(current)
 
@@ -115,9 +122,17 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
     try:
         return run_pipeline(spec, status, Runtime(extract=extract, central=central, label=label, train=train), report,
                             refs)
+    except JobError as err:
+        if isinstance(err, RuntimeLost) or isinstance(err.__cause__, RuntimeLost | RaySystemError):
+            lost = err if isinstance(err, RuntimeLost) else err.__cause__
+            raise RuntimeLost(f"job {job_id} lost the Ray runtime during its {status.stage} stage "
+                              f"({type(lost.__cause__ or lost).__name__}); committed work is kept: finish it with "
+                              f"`onepiece resume {spec.output}`") from None
+        raise
     finally:
         for client in clients:
-            client.kill()
+            with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
+                client.kill()
 
 
 def quarantined_object(index: int, ref: ObjectRef, reason: str) -> ObjectResult:
