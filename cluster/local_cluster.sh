@@ -2,7 +2,8 @@
 # A local multi-node Ray cluster on this machine, loopback only:
 #   cluster/local_cluster.sh start [WORKERS]   head (0 CPUs; dashboard and Jobs API on 127.0.0.1:8265) + WORKERS
 #                                              worker nodes with 1 CPU each (default 2); prints the Jobs API URL
-#   cluster/local_cluster.sh stop              stops every Ray process of this user on this machine
+#   cluster/local_cluster.sh stop              stops the nodes that `start` started (those of its GCS port), not
+#                                              any other Ray of this machine
 # Every node advertises 127.0.0.1 (cluster/ray_start_loopback.py keeps Ray from replacing it with the machine's
 # address), so no Ray server listens beyond loopback. Token auth stays on; the token file is made 0600.
 set -euo pipefail
@@ -30,6 +31,19 @@ start() {
 
 case "${1:-}" in
   start) shift; start "$@" ;;
-  stop)  "$ray_bin" stop --force >&2 ;;
+  stop)  "$venv/bin/python" - "$port" <<'PY' >&2 ;;
+import sys, psutil
+port = sys.argv[1]
+mine = [p for p in psutil.process_iter(["cmdline"]) if p.info["cmdline"] and any(
+    f"127.0.0.1:{port}" in arg or arg == f"--gcs_server_port={port}" for arg in p.info["cmdline"])]
+family = {q for p in mine for q in [p, *p.children(recursive=True)] if q.is_running()}
+for proc in family:
+    try:
+        proc.kill()
+    except psutil.NoSuchProcess:
+        pass
+psutil.wait_procs(list(family), timeout=10)
+print(f"stopped {len(family)} processes of the cluster on port {port}")
+PY
   *)     echo "usage: $0 start [WORKERS] | stop" >&2; exit 2 ;;
 esac
