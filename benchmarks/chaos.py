@@ -34,7 +34,8 @@ PORTS = {"ONEPIECE_RAY_PORT": "6410", "ONEPIECE_DASHBOARD_PORT": "8290", "ONEPIE
 
 
 def job_specs(count: int, folder: Path) -> list[JobSpec]:
-    return [JobSpec(objects="primitives[0:6]", grasps_per_object=48, seed=seed, output=str(folder / f"chaos{seed}.zarr"),
+    return [JobSpec(objects="primitives[0:6]", grasps_per_object=48, seed=seed,
+                    output=str(folder / f"chaos{seed}.zarr"),
                     sampler={"surface_points": 3000}, stages=("ingest", "extract", "dedup", "assemble", "label"),
                     sim={"perturbations_per_patch": 2, "points_per_grasp": 64, "transfer_codes": 0})
             for seed in range(count)]
@@ -47,33 +48,30 @@ def cluster(command: str, *args: str) -> str:
 
 
 def kill_random_worker(rng: random.Random) -> str | None:
-    """Kill one simulation worker actor (extraction or labelling) of any job; returns its name."""
-    import ray
+    """Kill (SIGKILL) the process of one simulation worker actor of any job, as a crash would; returns what."""
+    import psutil
 
-    names = [a["name"] for a in ray.util.list_named_actors(all_namespaces=True)
-             if a["namespace"] == "onepiece" and a["name"].startswith(("extract-", "label-"))]
-    if not names:
+    workers = sorted((p for p in psutil.process_iter(["pid", "cmdline"])
+                      if p.info["cmdline"] and p.info["cmdline"][0].startswith("ray::SimWorker")),
+                     key=lambda p: p.info["pid"])
+    if not workers:
         return None
-    name = rng.choice(sorted(names))
+    victim = rng.choice(workers)
     try:
-        ray.kill(ray.get_actor(name, namespace="onepiece"), no_restart=False)
-    except ValueError:
+        what = f"{victim.info['cmdline'][0]} (pid {victim.pid})"
+        victim.kill()
+    except psutil.NoSuchProcess:
         return None
-    return name
+    return what
 
 
 def run(jobs: int, seed: int) -> dict:
-    import ray
-
-    from onepiece_dist.service.ray_env import connect
-
     rng = random.Random(seed)
     folder = Path(tempfile.mkdtemp(prefix="onepiece-chaos-"))
     specs = job_specs(jobs, folder)
     address = cluster("start", "2")
     kills: list[str] = []
     try:
-        connect(f"127.0.0.1:{PORTS['ONEPIECE_RAY_PORT']}")
         client = Client(address)
         handles = [client.submit(spec) for spec in specs]
         start = time.monotonic()
@@ -87,7 +85,6 @@ def run(jobs: int, seed: int) -> dict:
                 kills.append(killed)
         finals = [client.status(h.job_id) for h in handles]
     finally:
-        ray.shutdown()
         cluster("stop")
     return compare(specs, finals, kills, folder)
 
@@ -103,7 +100,8 @@ def compare(specs: list[JobSpec], finals, kills: list[str], folder: Path) -> dic
         rows.append({"job": default_job_id(spec), "state": final.state, "retries": final.retries,
                      "identical": ok and content_digest(spec.output, training=False)
                      == content_digest(clean.output, training=False),
-                     "lost_grasps": max(0, expected - grasps), "duplicated_grasps": max(0, grasps - expected)})
+                     "lost_grasps": max(0, expected - grasps), "duplicated_grasps": max(0, grasps - expected),
+                     "quarantined": [r.name for r in final.rejections if r.reason.startswith("quarantined")]})
     return {"jobs": rows, "kills": kills, "recoveries": sum(r["state"] == "succeeded" and r["retries"] > 0
                                                              for r in rows),
             "lost_grasps": sum(r["lost_grasps"] for r in rows),
