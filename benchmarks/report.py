@@ -285,10 +285,38 @@ def render_assembly_page() -> str:
     return text[:start] + default_job_figures(result) + text[end:]
 
 
+RELIABILITY_PAGE = HERE.parent / "docs" / "reliability.md"
+CHAOS_START = "<!-- chaos: rendered by benchmarks/report.py from benchmarks/results/chaos.json -->"
+CHAOS_END = "<!-- end of chaos -->"
+
+
+def chaos_section(r: dict) -> str:
+    rows = [[j["job"], j["state"], j["retries"], "yes" if j["identical"] else "no", j["lost_grasps"],
+             j["duplicated_grasps"]] for j in r["jobs"]]
+    lost, dup = r["lost_grasps"], r["duplicated_grasps"]
+    return "\n".join([CHAOS_START, f"## Chaos run: {provenance(r)}", "",
+                      f"{len(r['jobs'])} jobs at once on the local multi-node cluster (head + 2 worker nodes), "
+                      f"{len(r['kills'])} simulation worker processes killed at seeded random times; each dataset "
+                      "compared with its fault-free run (content digest).", "",
+                      *table(["job", "state", "re-runs", "identical", "grasps lost", "grasps duplicated"], rows), "",
+                      f"Recovered jobs: {r['recoveries']}. Grasps lost: {lost} (target 0: {met(-lost, 0)}); grasps "
+                      f"duplicated: {dup} (target 0: {met(-dup, 0)}).", CHAOS_END])
+
+
+def render_reliability_page() -> str:
+    text = RELIABILITY_PAGE.read_text()
+    result = load("chaos")
+    if result is None:
+        return text
+    start, end = text.index(CHAOS_START), text.index(CHAOS_END) + len(CHAOS_END)
+    return text[:start] + chaos_section(result) + text[end:]
+
+
 def main() -> None:
     PAGE.write_text(render())
     ASSEMBLY_PAGE.write_text(render_assembly_page())
-    print(PAGE, ASSEMBLY_PAGE)
+    RELIABILITY_PAGE.write_text(render_reliability_page())
+    print(PAGE, ASSEMBLY_PAGE, RELIABILITY_PAGE)
 
 
 if __name__ == "__main__":

@@ -29,3 +29,8 @@ def test_the_committed_page_is_the_rendered_one():
 def test_the_assembly_figures_are_the_rendered_ones():
     assert (ROOT / "docs" / "assembly.md").read_text() == load_report().render_assembly_page(), \
         "docs/assembly.md figures are stale: run `python benchmarks/report.py`"
+
+
+def test_the_chaos_figures_are_the_rendered_ones():
+    assert (ROOT / "docs" / "reliability.md").read_text() == load_report().render_reliability_page(), \
+        "docs/reliability.md chaos figures are stale: run `python benchmarks/report.py`"
