@@ -276,13 +276,19 @@ def _or_dash(value) -> str:
     return "-" if value is None else str(value)
 
 
-def render_assembly_page() -> str:
-    text = ASSEMBLY_PAGE.read_text()
-    result = load("default_job")
+def render_block(page: Path, start_mark: str, end_mark: str, name: str, section) -> str:
+    """``page``'s text with the block between the two marks rendered by ``section`` from result ``name`` (kept
+    as it is when that result is missing)."""
+    text = page.read_text()
+    result = load(name)
     if result is None:
         return text
-    start, end = text.index(FIGURES_START), text.index(FIGURES_END) + len(FIGURES_END)
-    return text[:start] + default_job_figures(result) + text[end:]
+    start, end = text.index(start_mark), text.index(end_mark) + len(end_mark)
+    return text[:start] + section(result) + text[end:]
+
+
+def render_assembly_page() -> str:
+    return render_block(ASSEMBLY_PAGE, FIGURES_START, FIGURES_END, "default_job", default_job_figures)
 
 
 RELIABILITY_PAGE = HERE.parent / "docs" / "reliability.md"
@@ -304,12 +310,7 @@ def chaos_section(r: dict) -> str:
 
 
 def render_reliability_page() -> str:
-    text = RELIABILITY_PAGE.read_text()
-    result = load("chaos")
-    if result is None:
-        return text
-    start, end = text.index(CHAOS_START), text.index(CHAOS_END) + len(CHAOS_END)
-    return text[:start] + chaos_section(result) + text[end:]
+    return render_block(RELIABILITY_PAGE, CHAOS_START, CHAOS_END, "chaos", chaos_section)
 
 
 def main() -> None:
