@@ -30,7 +30,6 @@ class CentralActor:
         self.merged: set[int] = set()
         self.unique_codes: np.ndarray | None = None  # (U, B) uint8 as committed, while this process holds them
         self.grasps: int | None = None
-        self.assembly: AssemblyReport | None = None
 
     def add(self, object_index: int, part_key: str, codes: np.ndarray | None = None) -> int:
         """Merge the codes of object ``object_index``, once (a repeated call changes nothing): ``codes`` as sent
@@ -68,8 +67,7 @@ class CentralActor:
         if self.unique_codes is None or self.grasps is None:
             self.unique_codes, self.grasps = reader["unique/code"], int(reader.array("grasps/code").shape[0])
         patches = build_patches(self.spec, reader, self.parts, reader["unique/representative"])
-        self.assembly = assemble_dataset(self.spec, self.spec.output, self.unique_codes, patches, self.grasps)
-        return self.assembly
+        return assemble_dataset(self.spec, self.spec.output, self.unique_codes, patches, self.grasps)
 
     def label_tasks(self) -> list[LabelTask]:
         """The label stage in shards for the workers (the one object must be assembled)."""

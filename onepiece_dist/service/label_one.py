@@ -10,6 +10,7 @@ points come from the patch's real surface points. Results go to ``assembled/gras
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -63,8 +64,8 @@ def label_tasks(spec: JobSpec, path: str | os.PathLike) -> list[LabelTask]:
     reader = DatasetReader(path)
     patches = int(reader.array("assembled/placement").shape[0])
     key = label_key(spec, reader)
-    return [LabelTask(start, min(start + LABEL_SHARD_PATCHES, patches), str(path), f"label-{key}-{k:05d}")
-            for k, start in enumerate(range(0, patches, LABEL_SHARD_PATCHES))]
+    return [LabelTask(start, min(start + LABEL_SHARD_PATCHES, patches), str(path), key)
+            for start in range(0, patches, LABEL_SHARD_PATCHES)]
 
 
 def label_key(spec: JobSpec, reader: DatasetReader) -> str:
@@ -83,7 +84,7 @@ def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) ->
     """Label one shard into its part (once: a committed part is reused). Runs in a worker."""
     start = time.perf_counter()
     if not parts.is_committed(task.part_key):
-        arrays = label_patches(spec, task.dataset, range(task.start, task.stop))
+        arrays = label_patches(spec, task)
         parts.write(task.part_key, arrays, {"patches": [task.start, task.stop]})
         reused = False
     else:
@@ -92,18 +93,24 @@ def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) ->
     return LabelShardResult(index, "ok", task.part_key, grasps, reused=reused, seconds=time.perf_counter() - start)
 
 
-def label_patches(spec: JobSpec, path: str | os.PathLike, patches: range) -> dict[str, np.ndarray]:
-    """The label protocol around each of ``patches`` (``spec.sim.perturbations_per_patch`` perturbed poses
+@functools.lru_cache(maxsize=1)
+def one_object(path: str, label_key: str) -> tuple[np.ndarray, Patches]:
+    """Placements (U, 4, 4) and patches of the one object at ``path``, read once per worker process for all the
+    shards it labels (``label_key`` names the assembly, so a new one is read anew)."""
+    reader = DatasetReader(path)
+    return reader["assembled/placement"].astype(np.float64), read_patches(reader)
+
+
+def label_patches(spec: JobSpec, task: LabelTask) -> dict[str, np.ndarray]:
+    """The label protocol around each patch of ``task`` (``spec.sim.perturbations_per_patch`` perturbed poses
     besides the placement): their labelled grasps in the layout of ``assembled/grasps/``."""
     from onepiece_dist.sim.trials import LabelNoise, run_trials
     from onepiece_dist.sim.world import process_world
 
-    reader = DatasetReader(path)
-    placements = reader["assembled/placement"].astype(np.float64)
-    patch_set = read_patches(reader)
+    placements, patch_set = one_object(task.dataset, task.label_key)
     world, noise = process_world(spec.gripper), LabelNoise.from_spec(spec.sim)
     rows: dict[str, list] = {k: [] for k in GRASP_ROWS}
-    for k in patches:
+    for k in range(task.start, task.stop):
         if not patch_set.pieces[k]:
             continue  # nothing of the source object in the patch box: nothing to grasp
         world.load_object(patch_set.pieces[k], float(patch_set.source_volume[k]), spec.gripper.friction)

@@ -46,13 +46,18 @@ def part_key(content_id: str, result_key: str) -> str:
 
 @dataclass(frozen=True)
 class LabelTask:
-    """A shard of the label stage: patches [start, stop) of the one object at ``dataset``; its labelled grasps go
-    to the part ``part_key`` (so a re-run, or a resumed job, finds the shard done)."""
+    """A shard of the label stage: patches [start, stop) of the one object at ``dataset``, whose patches and
+    label-relevant spec hash to ``label_key``; its labelled grasps go to the part ``part_key`` (so a re-run, or a
+    resumed job, finds the shard done)."""
 
     start: int
     stop: int
     dataset: str
-    part_key: str
+    label_key: str
+
+    @property
+    def part_key(self) -> str:
+        return f"label-{self.label_key}-{self.start:06d}"
 
 
 @dataclass(frozen=True)
