@@ -65,22 +65,37 @@ def kill_random_worker(rng: random.Random) -> str | None:
     return what
 
 
+def kill_worker_node(agent_port: int) -> str | None:
+    """Kill (SIGKILL) the raylet of the worker node whose agent listens on ``agent_port``: the node is gone, with
+    every worker actor on it; a replacement node joins (``local_cluster.sh add``)."""
+    import psutil
+
+    for proc in psutil.process_iter(["name", "cmdline"]):
+        if proc.info["name"] == "raylet" and f"--listen-port={agent_port}" in " ".join(proc.info["cmdline"] or []):
+            proc.kill()
+            cluster("add", "3")
+            return f"worker node with agent port {agent_port} (raylet pid {proc.pid}); a replacement node joined"
+    return None
+
+
 def run(jobs: int, seed: int) -> dict:
     rng = random.Random(seed)
     folder = Path(tempfile.mkdtemp(prefix="onepiece-chaos-"))
     specs = job_specs(jobs, folder)
     address = cluster("start", "2")
     kills: list[str] = []
+    node_kill_at = rng.randint(3, 8)  # the node goes after this many worker kills
     try:
         client = Client(address)
         handles = [client.submit(spec) for spec in specs]
         start = time.monotonic()
-        while time.monotonic() - start < 600:
+        while time.monotonic() - start < 900:
             states = [client.status(h.job_id).state for h in handles]
             if all(s in ("succeeded", "failed", "cancelled") for s in states):
                 break
-            time.sleep(rng.uniform(1.0, 4.0))
-            killed = kill_random_worker(rng)
+            time.sleep(rng.uniform(3.0, 10.0))
+            killed = (kill_worker_node(int(PORTS["ONEPIECE_AGENT_PORT"]) + 1) if len(kills) == node_kill_at
+                      else kill_random_worker(rng))
             if killed:
                 kills.append(killed)
         finals = [client.status(h.job_id) for h in handles]
@@ -101,7 +116,8 @@ def compare(specs: list[JobSpec], finals, kills: list[str], folder: Path) -> dic
                      "identical": ok and content_digest(spec.output, training=False)
                      == content_digest(clean.output, training=False),
                      "lost_grasps": max(0, expected - grasps), "duplicated_grasps": max(0, grasps - expected),
-                     "quarantined": [r.name for r in final.rejections if r.reason.startswith("quarantined")]})
+                     "quarantined": [r.name for r in final.rejections if r.reason.startswith("quarantined")],
+                     "error": final.error[-400:]})
     return {"jobs": rows, "kills": kills, "recoveries": sum(r["state"] == "succeeded" and r["retries"] > 0
                                                              for r in rows),
             "lost_grasps": sum(r["lost_grasps"] for r in rows),

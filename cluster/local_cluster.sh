@@ -2,6 +2,7 @@
 # A local multi-node Ray cluster on this machine, loopback only:
 #   cluster/local_cluster.sh start [WORKERS]   head (0 CPUs; dashboard and Jobs API on 127.0.0.1:8265) + WORKERS
 #                                              worker nodes with 1 CPU each (default 2); prints the Jobs API URL
+#   cluster/local_cluster.sh add N             one more worker node (1 CPU), agent port = base + N (N > WORKERS)
 #   cluster/local_cluster.sh stop              stops the nodes that `start` started (those of its GCS port), not
 #                                              any other Ray of this machine
 # Every node advertises 127.0.0.1 (cluster/ray_start_loopback.py keeps Ray from replacing it with the machine's
@@ -29,8 +30,14 @@ start() {
   echo "http://127.0.0.1:$dashboard_port"
 }
 
+add_node() {  # one more worker node; N picks its agent port
+  ray_start --address="127.0.0.1:$port" --node-ip-address=127.0.0.1 --num-cpus=1 \
+    --dashboard-agent-listen-port=$((agent_port + $1)) --disable-usage-stats >&2
+}
+
 case "${1:-}" in
   start) shift; start "$@" ;;
+  add)   shift; add_node "${1:?usage: $0 add N}" ;;
   stop)  "$venv/bin/python" - "$port" <<'PY' >&2 ;;
 import sys, psutil
 port = sys.argv[1]
@@ -45,5 +52,5 @@ for proc in family:
 psutil.wait_procs(list(family), timeout=10)
 print(f"stopped {len(family)} processes of the cluster on port {port}")
 PY
-  *)     echo "usage: $0 start [WORKERS] | stop" >&2; exit 2 ;;
+  *)     echo "usage: $0 start [WORKERS] | add N | stop" >&2; exit 2 ;;
 esac

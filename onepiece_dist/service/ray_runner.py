@@ -12,15 +12,18 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-from collections import deque
+import shutil
+from collections import Counter, deque
 from collections.abc import Callable
+from pathlib import Path
 
-from ray.exceptions import RaySystemError
+from ray.exceptions import OutOfMemoryError, RaySystemError
 
 from onepiece_dist.errors import JobCancelled, JobError, RuntimeLost
 from onepiece_dist.objects import ObjectRef
 from onepiece_dist.service.actors import restartable_actor
 from onepiece_dist.service.central import CentralClient, central_name
+from onepiece_dist.service.crashes import CrashLog, crash_folder, crashed_on
 from onepiece_dist.service.extract import extract_object
 from onepiece_dist.service.label_one import label_shard
 from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
@@ -32,7 +35,8 @@ from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 
 IN_FLIGHT_PER_WORKER = 2
-MAX_ATTEMPTS = 3  # an object whose worker dies this many times is quarantined
+MAX_CRASHES = 3  # an item that crashes its worker (a crash record, Ray's OOM kill) this many times alone: quarantined
+MAX_UNEXPLAINED = 20  # deaths alone with no record (SIGKILL from outside): only bounds a job something keeps killing
 POLL_SECONDS = 0.5
 
 
@@ -40,18 +44,26 @@ class SimWorker:
     """One pybullet client per actor: extracts objects and labels shards of the one object. A plain class,
     testable without Ray."""
 
-    def __init__(self, spec: JobSpec, central: str | None = None):
+    def __init__(self, spec: JobSpec, central: str | None = None, crashes: str | None = None):
         self.spec = spec
         self.parts = PartStore(spec.parts_folder())
         self.central = central
+        self.crash_log = CrashLog(crashes) if crashes else None
+
+    def starting(self, method: str, index: int) -> None:
+        """Note the item in this process's crash record (see :mod:`onepiece_dist.service.crashes`)."""
+        if self.crash_log is not None:
+            self.crash_log.starting(method, index)
 
     def label(self, task: LabelTask, index: int) -> LabelShardResult:
         """Label one shard of the one object into its part."""
+        self.starting("label", index)
         return dataclasses.replace(label_shard(self.spec, task, index, self.parts), node=_node_id())
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
         """Extract one object; its codes go to the central actor (named ``central``), once. When that message
         is lost (the actor restarting), the central actor's commit reads them from the part instead."""
+        self.starting("extract", index)
         result = extract_object(self.spec, ref, index, self.parts)
         central = CentralClient.find(self.central) if self.central and result.status == "ok" else None
         if central is not None:
@@ -86,6 +98,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
     PartStore(spec.parts_folder()).remove_stale_temporaries()
     central = CentralClient.start(spec, job_id)
     clients = [central]
+    crashes = crash_folder(spec.parts_folder(), job_id)
 
     def report(current: JobStatus) -> None:
         current.save(spec.output)
@@ -101,10 +114,10 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         import ray
 
         actors = [restartable_actor(SimWorker, f"{stage}-{job_id}-{k}", num_cpus=1,
-                                    scheduling_strategy="SPREAD").remote(spec, central_name(job_id))
+                                    scheduling_strategy="SPREAD").remote(spec, central_name(job_id), str(crashes))
                   for k in range(worker_count(workers, len(items)))]
         try:
-            return WorkerPool(actors, registry, status, on_result, method, quarantined).run(items)
+            return WorkerPool(actors, registry, status, on_result, method, quarantined, crashes).run(items)
         finally:
             for actor in actors:
                 ray.kill(actor)  # free their CPUs for the next stage and the trainer
@@ -133,6 +146,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         for client in clients:
             with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
                 client.kill()
+        shutil.rmtree(crashes, ignore_errors=True)
 
 
 def quarantined_object(index: int, ref: ObjectRef, reason: str) -> ObjectResult:
@@ -148,17 +162,19 @@ class WorkerPool:
     IN_FLIGHT_PER_WORKER each, and checks for a cancel request.
 
     When a worker dies, the items it held are re-run one at a time on an otherwise idle worker (suspects), so a
-    later death is attributable: an item that kills its worker MAX_ATTEMPTS times while running alone is
-    quarantined (``quarantined(index, item, reason)`` is its result); innocent items that only shared a worker
-    with it are never counted against. Results come back in item order.
+    later death is attributable: an item that crashes its worker MAX_CRASHES times while running alone (a crash
+    record in ``crashes``, see :mod:`onepiece_dist.service.crashes`, or a kill by Ray's memory monitor), or whose
+    worker dies MAX_UNEXPLAINED times while running it alone with no record (killed from outside), is quarantined (``quarantined(index, item,
+    reason)`` is its result); innocent items that only shared a worker with it are never counted against. Without
+    a crash folder every death counts as a crash. Results come back in item order.
     """
 
     def __init__(self, actors: list, registry: RegistryClient, status: JobStatus, on_result: Callable,
-                 method: str = "extract", quarantined: Callable = quarantined_object):
+                 method: str = "extract", quarantined: Callable = quarantined_object, crashes: Path | None = None):
         self.actors, self.registry, self.status, self.on_result = actors, registry, status, on_result
-        self.method, self.quarantined = method, quarantined
+        self.method, self.quarantined, self.crashes = method, quarantined, crashes
         self.pending: dict = {}  # ObjectRef -> (index, object ref, actor position, alone)
-        self.attempts: dict[int, int] = {}
+        self.deaths: dict[int, Counter] = {}  # item -> {"crash": n, "unexplained": n} while it ran alone
         self.suspects: set[int] = set()
         # work goes only to actors that have started: on a busy cluster some may wait for CPUs for a long time
         self.starting = {actor.__ray_ready__.remote(): k for k, actor in enumerate(actors)}
@@ -232,10 +248,22 @@ class WorkerPool:
             self._restarting(position)
             self.status.retries += 1
             self.suspects.add(index)
-            if alone:
-                self.attempts[index] = self.attempts.get(index, 0) + 1
-            if self.attempts.get(index, 0) >= MAX_ATTEMPTS:
-                return self.quarantined(index, ref, f"quarantined: its worker died {self.attempts[index]} times "
-                                                   f"while running it alone ({type(err).__name__})")
+            reason = self._death(index, err) if alone else None
+            if reason:
+                return self.quarantined(index, ref, reason)
             todo.appendleft((index, ref))
             return None
+
+    def _death(self, index: int, err: Exception) -> str | None:
+        """Count a death of the worker that ran item ``index`` alone; the quarantine reason, once it is one."""
+        crashed = (self.crashes is None or crashed_on(self.crashes, self.method, index)
+                   or isinstance(err, OutOfMemoryError) or "low on memory" in str(err))
+        deaths = self.deaths.setdefault(index, Counter())
+        deaths["crash" if crashed else "unexplained"] += 1
+        if deaths["crash"] >= MAX_CRASHES:
+            return (f"quarantined: it crashed its worker {deaths['crash']} times while running alone "
+                    f"({type(err).__name__})")
+        if deaths["unexplained"] >= MAX_UNEXPLAINED:
+            return (f"quarantined: its worker died {deaths['unexplained']} times while running it alone, with no "
+                    f"crash record (killed from outside?) ({type(err).__name__})")
+        return None
