@@ -1,6 +1,46 @@
+import json
+import os
+import platform
+from datetime import date
+from pathlib import Path
+
 import pytest
 
 from tests.factories import small_spec
+
+FIGURES = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "reliability.json"
+
+
+def pytest_addoption(parser):
+    parser.addoption("--record-figures", action="store_true",
+                     help="write the figures the reliability tests measure to benchmarks/results/reliability.json "
+                          "(docs/reliability.md renders them: python benchmarks/report.py)")
+
+
+def pytest_configure(config):
+    config.recorded_figures = {}
+
+
+@pytest.fixture
+def record_figure(request):
+    """``record_figure(text)``: the figure this test measured, in words; kept only with ``--record-figures``.
+    Call it after the test's assertions, so that only a passing test records."""
+
+    def record(text: str) -> None:
+        test_id = request.node.nodeid.removeprefix("tests/")
+        request.config.recorded_figures[test_id] = {"figure": text, "date": str(date.today()),
+                                                    "machine": f"{platform.machine()}, {os.cpu_count()} cores"}
+
+    return record
+
+
+def pytest_sessionfinish(session):
+    figures = session.config.recorded_figures
+    if session.config.getoption("--record-figures") and figures:
+        old = json.loads(FIGURES.read_text()) if FIGURES.exists() else {"figures": {}}
+        old["command"] = "scripts/dev test --record-figures"
+        old["figures"] = dict(sorted({**old["figures"], **figures}.items()))
+        FIGURES.write_text(json.dumps(old, indent=2) + "\n")
 
 
 @pytest.fixture

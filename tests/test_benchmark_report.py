@@ -31,6 +31,26 @@ def test_the_assembly_figures_are_the_rendered_ones():
         "docs/assembly.md figures are stale: run `python benchmarks/report.py`"
 
 
-def test_the_chaos_figures_are_the_rendered_ones():
+def test_the_reliability_figures_are_the_rendered_ones():
     assert (ROOT / "docs" / "reliability.md").read_text() == load_report().render_reliability_page(), \
-        "docs/reliability.md chaos figures are stale: run `python benchmarks/report.py`"
+        "docs/reliability.md figures are stale: run `python benchmarks/report.py`"
+
+
+def test_every_guarantee_names_tests_that_exist_and_each_recorded_its_figure():
+    report = load_report()
+    page = (ROOT / "docs" / "reliability.md").read_text()
+    rows = [line for line in page[page.index(report.GUARANTEES_START):page.index(report.GUARANTEES_END)].splitlines()
+            if line.startswith("| ")][2:]
+    assert len(rows) >= 15
+    for row in rows:
+        ids = report.test_ids(row.split(" | ")[2])
+        assert ids, row
+        for test_id in ids:
+            file, name = test_id.split("::")
+            assert f"def {name}(" in (ROOT / "tests" / file).read_text(), test_id
+        assert "not recorded" not in row, f"no figure recorded for {ids}: run scripts/dev test --record-figures"
+
+
+def test_test_ids_follow_the_file_named_before():
+    ids = load_report().test_ids("`a.py::test_x`, `::test_y`, `b.py::test_z`")
+    assert ids == ["a.py::test_x", "a.py::test_y", "b.py::test_z"]

@@ -1,5 +1,6 @@
 import json
 import os
+import time
 
 import pytest
 from typer.testing import CliRunner
@@ -40,7 +41,7 @@ def test_unknown_source_exits_2(tmp_path):
     assert result.exit_code == 2 and "unknown built-in set" in result.output
 
 
-def test_run_with_an_address_that_does_not_answer_fails_within_seconds_naming_it(tmp_path):
+def test_run_with_an_address_that_does_not_answer_fails_within_seconds_naming_it(tmp_path, record_figure):
     import time
 
     start = time.monotonic()
@@ -48,11 +49,12 @@ def test_run_with_an_address_that_does_not_answer_fails_within_seconds_naming_it
                                       "--out", str(tmp_path / "x.zarr")])
     assert result.exit_code == 3 and "127.0.0.1:1" in result.output
     assert time.monotonic() - start < 20
+    record_figure(f"exit 3 in {time.monotonic() - start:.1f} s, naming the address")
 
 
 @pytest.mark.ray
 @pytest.mark.slow
-def test_embedded_runs_start_their_own_ray_even_with_a_dead_cluster_on_record(tmp_path):
+def test_embedded_runs_start_their_own_ray_even_with_a_dead_cluster_on_record(tmp_path, record_figure):
     """A cluster that died without `ray stop` leaves its address in Ray's temp folder; an embedded run must not
     try to join it (it used to hang for minutes on GCS time-outs)."""
     import subprocess
@@ -63,6 +65,7 @@ def test_embedded_runs_start_their_own_ray_even_with_a_dead_cluster_on_record(tm
     saved = record.read_text() if record.is_file() else None
     record.parent.mkdir(parents=True, exist_ok=True)
     record.write_text("127.0.0.1:1")
+    started = time.monotonic()
     try:
         out = subprocess.run([sys.executable, "-m", "onepiece_dist.cli", "run", "--objects", "primitives[0:1]",
                               "--grasps", "4", "--stages", "ingest,extract,dedup", "--out", str(tmp_path / "e.zarr")],
@@ -71,3 +74,5 @@ def test_embedded_runs_start_their_own_ray_even_with_a_dead_cluster_on_record(tm
         record.write_text(saved) if saved is not None else record.unlink(missing_ok=True)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().endswith("e.zarr")
+    elapsed = time.monotonic() - started
+    record_figure(f"dead cluster on record: the run started its own Ray and finished in {elapsed:.1f} s")

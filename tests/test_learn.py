@@ -81,20 +81,22 @@ class Exploit:
         return (Path.write_text, (Path("/tmp/onepiece-pwned"), "pwned"))
 
 
-def test_a_planted_malicious_checkpoint_is_refused(tmp_path):
+def test_a_planted_malicious_checkpoint_is_refused(tmp_path, record_figure):
     bad = tmp_path / "bad.pt"
     with open(bad, "wb") as handle:
         pickle.dump({"state_dict": Exploit()}, handle)
     with pytest.raises(pickle.UnpicklingError):
         load_checkpoint(bad)
     assert not Path("/tmp/onepiece-pwned").exists()
+    record_figure("malicious checkpoint refused (UnpicklingError), its payload never ran")
 
 
-def test_torch_load_is_never_called_without_weights_only():
+def test_torch_load_is_never_called_without_weights_only(record_figure):
     calls = []
     for path in [*ROOT.glob("onepiece_dist/**/*.py"), *ROOT.glob("examples/*.py"), *ROOT.glob("benchmarks/*.py")]:
         calls += [(path, m.group(0)) for m in re.finditer(r"torch\.load\([^)]*\)", path.read_text())]
     assert calls and all("weights_only=True" in call for _, call in calls)
+    record_figure(f"{len(calls)} torch.load calls, all with weights_only=True")
 
 
 def test_average_precision_and_top_ranked_success():

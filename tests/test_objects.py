@@ -40,7 +40,7 @@ class OpenAudit:
         return opened
 
 
-def test_each_bad_file_is_rejected_with_its_reason_and_good_files_proceed(broken, tmp_path):
+def test_each_bad_file_is_rejected_with_its_reason_and_good_files_proceed(broken, tmp_path, record_figure):
     root, outside, expected = broken
     spec = JobSpec(objects=str(root), grasps_per_object=8, sampler={"surface_points": 1000}, max_file_bytes=20_000,
                    sim={"physics": False})
@@ -61,6 +61,8 @@ def test_each_bad_file_is_rejected_with_its_reason_and_good_files_proceed(broken
             assert outcome in result.reason, (name, result.reason)
     real_outside = os.path.realpath(outside)
     assert not [p for p in opened if os.path.realpath(p).startswith(real_outside)]
+    record_figure(f"{sum(o != 'ok' for o in expected.values())} hostile files, one rejection each with its reason; "
+                  f"{sum(o == 'ok' for o in expected.values())} good ones extracted; 0 opens outside the root")
 
 
 def test_pybullet_sets_resolve_and_load():

@@ -31,7 +31,7 @@ def spec_at(spec_factory, tmp_path, name, objects="primitives[0:6]"):
 
 
 def test_disk_full_fails_clearly_commits_nothing_partial_and_resume_gives_the_same_dataset(
-        spec_factory, tmp_path, monkeypatch):
+        spec_factory, tmp_path, monkeypatch, record_figure):
     spec = spec_at(spec_factory, tmp_path, "full")
     original, writes = parts_module.write_array, {"n": 0}
 
@@ -53,10 +53,13 @@ def test_disk_full_fails_clearly_commits_nothing_partial_and_resume_gives_the_sa
     clean = spec_at(spec_factory, tmp_path, "clean")
     run_local(clean)
     assert same(spec.output, clean.output)
+    record_figure(f"{len(parts.committed_keys())} parts committed before ENOSPC, 0 temporaries, "
+                  f"{resumed.progress.objects_reused} reused on resume, identical dataset")
 
 
 @pytest.mark.ray
-def test_killing_the_central_actor_mid_job_rebuilds_it_from_the_store(ray_session, spec_factory, tmp_path):
+def test_killing_the_central_actor_mid_job_rebuilds_it_from_the_store(ray_session, spec_factory, tmp_path,
+                                                                      record_figure):
     ray = ray_session
     spec = spec_at(spec_factory, tmp_path, "dedupkill", objects="primitives[0:8]")
     job_id = default_job_id(spec)
@@ -69,10 +72,12 @@ def test_killing_the_central_actor_mid_job_rebuilds_it_from_the_store(ray_sessio
     clean = spec_at(spec_factory, tmp_path, "dedupclean", objects="primitives[0:8]")
     run_local(clean)
     assert same(spec.output, clean.output)
+    record_figure(f"central actor killed after >= 2 objects; {final.retries} re-runs, identical dataset")
 
 
 @pytest.mark.ray
-def test_killing_a_worker_while_it_labels_gives_the_fault_free_labels(ray_session, spec_factory, tmp_path):
+def test_killing_a_worker_while_it_labels_gives_the_fault_free_labels(ray_session, spec_factory, tmp_path,
+                                                                      record_figure):
     ray = ray_session
 
     def labelled(name: str):
@@ -95,11 +100,13 @@ def test_killing_a_worker_while_it_labels_gives_the_fault_free_labels(ray_sessio
     clean = labelled("labelclean")
     run_local(clean)
     assert same(spec.output, clean.output)
+    record_figure(f"1 label worker killed; {final.retries} re-runs, {final.labels.labelled_grasps} labelled grasps, "
+                  "identical dataset")
 
 
 @pytest.mark.ray
 def test_killing_the_central_actor_while_it_assembles_gives_the_fault_free_dataset(ray_session, spec_factory,
-                                                                                 tmp_path):
+                                                                                 tmp_path, record_figure):
     ray = ray_session
 
     def assembled(name: str):
@@ -117,10 +124,12 @@ def test_killing_the_central_actor_while_it_assembles_gives_the_fault_free_datas
     clean = assembled("asmclean")
     run_local(clean)
     assert same(spec.output, clean.output)
+    record_figure("central actor killed while it assembles; identical dataset")
 
 
 @pytest.mark.ray
-def test_killing_the_trainer_mid_training_resumes_from_its_last_epoch_with_the_same_metrics(ray_session, tmp_path):
+def test_killing_the_trainer_mid_training_resumes_from_its_last_epoch_with_the_same_metrics(ray_session, tmp_path,
+                                                                                            record_figure):
     from onepiece_dist.service.ray_runner import run_on_ray
     from tests.factories import synthetic_labelled_dataset
 
@@ -148,10 +157,12 @@ def test_killing_the_trainer_mid_training_resumes_from_its_last_epoch_with_the_s
     assert resumed.final == reference.final  # the same seed, resumed from last.pt: the same metrics
     assert np.array_equal(open_dataset(spec.output)["train/train_loss"],
                           open_dataset(str(tmp_path / "trainclean.zarr"))["train/train_loss"])
+    record_figure(f"trainer killed 1 s after its first checkpoint ({resumed.epochs} epochs); the same final "
+                  "metrics and per-epoch losses as a run without the kill")
 
 
 @pytest.mark.ray
-def test_the_same_job_submitted_twice_at_once_runs_once(ray_session, spec_factory, tmp_path):
+def test_the_same_job_submitted_twice_at_once_runs_once(ray_session, spec_factory, tmp_path, record_figure):
     spec = spec_at(spec_factory, tmp_path, "twice")
     client = Client()
     first, second = client.submit(spec), client.submit(spec)
@@ -160,10 +171,11 @@ def test_the_same_job_submitted_twice_at_once_runs_once(ray_session, spec_factor
     errors = [h.error for h in (first, second) if h.error is not None]
     assert len(errors) == 1 and "already running" in str(errors[0])
     assert read_status(spec.output).state == "succeeded"
+    record_figure(f"{len(errors)} of 2 submissions refused (already running)")
 
 
 @pytest.mark.ray
-def test_two_different_jobs_at_once_equal_their_serial_runs(ray_session, spec_factory, tmp_path):
+def test_two_different_jobs_at_once_equal_their_serial_runs(ray_session, spec_factory, tmp_path, record_figure):
     a = spec_at(spec_factory, tmp_path, "a", objects="primitives[0:4]")
     b = spec_at(spec_factory, tmp_path, "b", objects="primitives[4:8]")
     client = Client()
@@ -173,10 +185,12 @@ def test_two_different_jobs_at_once_equal_their_serial_runs(ray_session, spec_fa
         serial = spec.model_copy(update={"output": str(tmp_path / f"{name}.zarr")})
         run_local(serial)
         assert same(spec.output, serial.output)
+    record_figure("2 jobs at once, both equal to their serial runs")
 
 
 @pytest.mark.ray
-def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_session, spec_factory, tmp_path):
+def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_session, spec_factory, tmp_path,
+                                                                      record_figure):
     ray = ray_session
     spec = spec_at(spec_factory, tmp_path, "killed3", objects="primitives[0:8]")
     job_id = default_job_id(spec)
@@ -199,15 +213,20 @@ def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_sessio
     run_local(clean)
     assert same(spec.output, clean.output)
     print(f"kills={len(recoveries)} re-executions={final.retries} recovery_s={[round(r, 2) for r in recoveries]}")
+    record_figure(f"{len(recoveries)} kills, {final.retries} re-runs, next object "
+                  f"{min(recoveries):.2f}-{max(recoveries):.2f} s after each kill, identical dataset")
 
 
-def test_the_store_holds_no_pickled_data(spec_factory, tmp_path):
+def test_the_store_holds_no_pickled_data(spec_factory, tmp_path, record_figure):
     import json
 
     spec = spec_at(spec_factory, tmp_path, "nopickle", objects="primitives[0:2]")
     run_local(spec)
+    arrays = 0
     for meta in (tmp_path / "nopickle.zarr").rglob("zarr.json"):
         node = json.loads(meta.read_text())
         if node.get("node_type") == "array":
+            arrays += 1
             assert node["data_type"] in ("uint8", "int8", "int32", "int64", "float16", "float32", "float64"), meta
             assert all(c["name"] in ("bytes", "blosc", "zstd", "transpose") for c in node["codecs"]), meta
+    record_figure(f"{arrays} arrays, every one numeric with bytes/blosc codecs")

@@ -12,7 +12,7 @@ import numpy as np
 import psutil
 import pytest
 
-from onepiece_dist.api import read_status
+from onepiece_dist.api import Client, read_status
 from onepiece_dist.service.local import run_local
 from onepiece_dist.service.status import status_path
 from onepiece_dist.spec import JobSpec
@@ -46,7 +46,7 @@ def objects_done(output: Path) -> int:
 
 @pytest.mark.ray
 @pytest.mark.slow
-def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path):
+def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, record_figure):
     out = tmp_path / "ds.zarr"
     before = ray_daemons()
     driver = subprocess.Popen([*ONEPIECE, "run", *SMALL, "--out", str(out)], cwd=tmp_path, start_new_session=True,
@@ -70,6 +70,8 @@ def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path):
     for name in ("grasps/code", "grasps/pose", "unique/code", "unique/count"):
         assert np.array_equal(a[name], b[name]), name
     assert ray_daemons() <= before  # the killed driver's embedded Ray left no orphan daemons
+    record_figure(f"driver killed after {committed} of 8 objects; {status.progress.objects_reused} reused on resume, "
+                  "0 orphan daemons, 0 temporaries, identical codes")
 
 
 def cluster_exposed_sockets() -> list:
@@ -81,8 +83,9 @@ def cluster_exposed_sockets() -> list:
             and c.laddr.ip not in ("127.0.0.1", "::ffff:127.0.0.1", "::1")]
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def local_cluster():
+    """One local multi-node cluster for the module's tests, in file order; the node-removal test comes last."""
     script = ROOT / "cluster" / "local_cluster.sh"
     started = subprocess.run([str(script), "start", "2"], capture_output=True, text=True, timeout=240)
     assert started.returncode == 0, started.stderr[-3000:]
@@ -114,6 +117,50 @@ def test_job_submitted_to_a_local_multi_node_cluster_runs_on_two_nodes(local_clu
     assert unreachable.returncode == 3
 
 
+def driver_jobs(address: str) -> int:
+    """How many drivers (jobs) the cluster at ``address`` has seen."""
+    return len(Client(address).jobs_api().list_jobs())
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+def test_an_embedded_run_never_joins_a_live_cluster_on_record(local_cluster, tmp_path, record_figure):
+    """`ray start --head` put the local cluster on record (/tmp/ray/ray_current_cluster); a run without --address
+    starts its own Ray all the same."""
+    record = Path("/tmp/ray/ray_current_cluster")
+    assert record.is_file() and record.read_text().strip().endswith(":6390")
+    before = driver_jobs(local_cluster)
+    started = time.monotonic()
+    out = subprocess.run([*ONEPIECE, "run", "--objects", "primitives[0:1]", "--grasps", "4", "--stages",
+                          "ingest,extract,dedup", "--out", str(tmp_path / "e.zarr")], capture_output=True, text=True,
+                         timeout=180, env={**os.environ, "RAY_ADDRESS": ""})
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert read_status(tmp_path / "e.zarr").state == "succeeded"
+    assert driver_jobs(local_cluster) == before  # the cluster saw no new driver
+    record_figure(f"live cluster on record: the run started its own Ray, the cluster saw 0 new drivers, "
+                  f"{time.monotonic() - started:.1f} s")
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+def test_stopping_one_local_cluster_leaves_another_running(local_cluster, record_figure):
+    script = ROOT / "cluster" / "local_cluster.sh"
+    other = {**os.environ, "ONEPIECE_RAY_PORT": "6395", "ONEPIECE_DASHBOARD_PORT": "8275",
+             "ONEPIECE_AGENT_PORT": "52380"}
+    started = subprocess.run([str(script), "start", "0"], capture_output=True, text=True, timeout=240, env=other)
+    assert started.returncode == 0, started.stderr[-3000:]
+    stopped = subprocess.run([str(script), "stop"], capture_output=True, text=True, timeout=120, env=other)
+    assert stopped.returncode == 0, stopped.stderr[-2000:]
+    assert not gcs_processes(6395)
+    assert gcs_processes(6390) and driver_jobs(local_cluster) >= 0  # ours still answers
+    record_figure(f"{stopped.stderr.strip().splitlines()[-1]}; the module's cluster still answers")
+
+
+def gcs_processes(port: int) -> list[psutil.Process]:
+    return [p for p in psutil.process_iter(["name", "cmdline"]) if p.info["name"] == "gcs_server"
+            and f"--gcs_server_port={port}" in (p.info["cmdline"] or [])]
+
+
 def worker_node_raylet(agent_port: int) -> psutil.Process:
     """The raylet of the local cluster's worker node whose agent listens on ``agent_port``."""
     for proc in psutil.process_iter(["name", "cmdline"]):
@@ -124,7 +171,7 @@ def worker_node_raylet(agent_port: int) -> psutil.Process:
 
 @pytest.mark.cluster
 @pytest.mark.slow
-def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path):
+def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, record_figure):
     out = tmp_path / "lost_node.zarr"
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}:{os.environ.get('PATH', '')}"}
     submitted = subprocess.run([*ONEPIECE, "submit", "--address", local_cluster, *SMALL, "--out", str(out)],
@@ -143,11 +190,13 @@ def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path):
     run_local(reference)
     for name in ("grasps/code", "unique/code", "unique/count"):
         assert np.array_equal(open_dataset(out)[name], open_dataset(reference.output)[name]), name
+    record_figure(f"raylet of 1 of 2 worker nodes SIGKILLed after {done_at_kill} of 8 objects; job succeeded, "
+                  f"{status['retries']} re-runs, identical codes")
 
 
 @pytest.mark.ray
 @pytest.mark.slow
-def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_path):
+def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_path, record_figure):
     out = tmp_path / "lost.zarr"
     slow = ["--objects", "primitives[0:8]", "--grasps", "600", "--stages", "ingest,extract,dedup"]
     job = subprocess.Popen([*ONEPIECE, "run", *slow, "--out", str(out)], stdout=subprocess.PIPE,
@@ -167,3 +216,4 @@ def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_p
     assert f"onepiece resume {out}" in stderr and "lost the Ray runtime" in stderr
     assert "Traceback" not in stderr, stderr[-3000:]
     assert [line for line in stderr.splitlines() if "onepiece resume" in line][0].startswith("job failed: ")
+    record_figure(f"one line, exit {job.returncode}, no traceback")
