@@ -12,15 +12,26 @@ running when the submitter goes away.
 from __future__ import annotations
 
 import contextlib
+import json
 import shlex
 import threading
 import time
+import uuid
+from collections.abc import Iterator
 from pathlib import Path
 
-from onepiece_dist.errors import ClusterUnreachable, JobError
+from onepiece_dist.errors import (
+    ClusterUnreachable,
+    DriverGone,
+    JobError,
+    JobNotFound,
+    SpecError,
+    VersionMismatch,
+)
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.service.local import run_local
 from onepiece_dist.service.pipeline import ProgressFn
+from onepiece_dist.service.registry import CLUSTER_INFO_MARK, package_version
 from onepiece_dist.service.status import JobStatus, status_path
 from onepiece_dist.spec import JobSpec, default_job_id
 from onepiece_dist.store import DatasetReader, open_dataset
@@ -67,15 +78,57 @@ def read_status(dataset: str | Path) -> JobStatus:
     """The status written beside a dataset (readable after the cluster is gone)."""
     path = status_path(dataset)
     if not path.is_file():
-        raise JobError(f"no job status at {path}")
+        raise JobNotFound(f"no job status at {path} (without --address, give the dataset path)")
     return JobStatus.load(dataset)
+
+
+def wait_for_dataset(dataset: str | Path, timeout: float | None = None, poll: float = 1.0) -> JobStatus:
+    """Block until the job writing ``dataset`` ends (its status file says so); its final status. Raises
+    JobNotFound (no status file), DriverGone (its driver on this machine has exited without ending the job),
+    TimeoutError after ``timeout`` s."""
+    deadline = None if timeout is None else time.monotonic() + timeout
+    while (current := read_status(dataset)).state not in TERMINAL:
+        if not _driver_alive(current.driver):
+            raise DriverGone(f"job {current.job_id}'s driver ({current.driver}) ended during its {current.stage} "
+                             f"stage without finishing it; finish it with `onepiece resume {dataset}`")
+        if deadline is not None and time.monotonic() > deadline:
+            raise TimeoutError(f"job {current.job_id} still {current.state} after {timeout} s")
+        time.sleep(poll)
+    return current
+
+
+def _driver_alive(driver: str) -> bool:
+    """Whether the 'host:pid' driver still runs; a driver on another machine counts as alive (it cannot be
+    checked from here)."""
+    import os
+    import socket
+
+    host, _, pid = driver.rpartition(":")
+    if host != socket.gethostname() or not pid.isdigit():
+        return True
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def local_jobs(folder: str | Path) -> list[dict]:
+    """A row per job status file under ``folder`` (as :meth:`Client.jobs` gives)."""
+    from onepiece_dist.service.status import STATUS_SUFFIX
+
+    return [_job_row(JobStatus.load(str(path)[: -len(STATUS_SUFFIX)]).model_dump(mode="json"))
+            for path in sorted(Path(folder).glob(f"**/*{STATUS_SUFFIX}"))]
 
 
 class JobHandle:
     """A submitted job: ``status()``, ``wait()``, ``cancel()``."""
 
-    def __init__(self, client: Client, job_id: str, output: str, thread: threading.Thread | None = None):
-        self.client, self.job_id, self.output, self._thread = client, job_id, output, thread
+    def __init__(self, client: Client, job_id: str, output: str, thread: threading.Thread | None = None,
+                 note: str = ""):
+        self.client, self.job_id, self.output, self._thread, self.note = client, job_id, output, thread, note
         self.error: JobError | None = None  # why a job driven from this process did not run or failed
 
     def status(self) -> JobStatus:
@@ -89,6 +142,8 @@ class JobHandle:
             if self._thread.is_alive():
                 raise TimeoutError(f"job {self.job_id} still running after {timeout} s")
             return self.status()
+        if self.client.address is not None:
+            return self.client.wait(self.job_id, timeout, poll)
         while (current := self.status()).state not in TERMINAL:
             if deadline is not None and time.monotonic() > deadline:
                 raise TimeoutError(f"job {self.job_id} still running after {timeout} s")
@@ -123,18 +178,65 @@ class Client:
         return self._jobs_api
 
     def submit(self, spec: JobSpec, job_id: str | None = None, runtime_env: dict | None = None) -> JobHandle:
+        """Start ``spec``: in this process's embedded Ray, or on the cluster (Jobs API) after checking that its
+        paths are absolute and that it runs this package's version. Submitting an id whose job is active returns
+        that job; one whose job has ended gets a fresh id (``<id>-2``, ...): ``handle.note`` says which."""
         job_id = job_id or default_job_id(spec)
         if self.address is None:
             return self._submit_local(spec, job_id)
+        check_remote_paths(spec)
+        cluster = self.cluster_info()
+        if cluster["version"] != package_version():
+            raise VersionMismatch(f"the cluster at {self.address} runs onepiece-dist {cluster['version']}, this "
+                                  f"client {package_version()}: install the same version on both")
+        job_id, note = self._free_job_id(job_id)
+        if note.endswith("still active"):
+            return JobHandle(self, job_id, spec.output, note=note)
         entrypoint = (f"python -m onepiece_dist.cli run --address auto --job-id {shlex.quote(job_id)} "
                       f"--spec-json {shlex.quote(spec.model_dump_json())}")
+        self.jobs_api().submit_job(entrypoint=entrypoint, submission_id=job_id, runtime_env=runtime_env,
+                                   metadata={"output": spec.output})
+        return JobHandle(self, job_id, spec.output, note=note)
+
+    def _free_job_id(self, job_id: str) -> tuple[str, str]:
+        """``job_id`` if the cluster has no job by it, the same if that job is still active, else the first free
+        ``<job_id>-N``; and a note for the user when it is not simply ``job_id``."""
+        for n in range(1, 1000):
+            candidate = job_id if n == 1 else f"{job_id}-{n}"
+            state = self._ray_state(candidate)
+            if state is None:
+                return candidate, "" if n == 1 else f"job {job_id} has ended before; submitted as {candidate}"
+            if state not in TERMINAL:
+                return candidate, f"job {candidate} is still active"
+        raise JobError(f"no free job id after {job_id}")
+
+    def _ray_state(self, job_id: str) -> str | None:
+        """The Jobs API's state of ``job_id`` in our words, or None when the cluster has no such job."""
         try:
-            self.jobs_api().submit_job(entrypoint=entrypoint, submission_id=job_id, runtime_env=runtime_env,
-                                       metadata={"output": spec.output})
+            return _RAY_JOB_STATES.get(str(self.jobs_api().get_job_status(job_id)).split(".")[-1], "pending")
         except RuntimeError as err:
-            if "already exists" not in str(err):
-                raise
-        return JobHandle(self, job_id, spec.output)
+            if "does not exist" in str(err) or "not found" in str(err).lower():
+                return None
+            raise
+
+    def cluster_info(self, timeout: float = 120.0) -> dict:
+        """The cluster's package version and job registry (``{"version", "jobs": {id: status}}``), read inside the
+        cluster by a short Ray job (``onepiece cluster-info``), so a client that reaches only the Jobs API sees
+        the jobs' progress as their drivers report it."""
+        api, reader = self.jobs_api(), f"onepiece-info-{uuid.uuid4().hex[:12]}"
+        api.submit_job(entrypoint="python -m onepiece_dist.cli cluster-info --address auto", submission_id=reader)
+        deadline = time.monotonic() + timeout
+        while _RAY_JOB_STATES.get(str(api.get_job_status(reader)).split(".")[-1]) not in TERMINAL:
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"reading the job registry at {self.address} took over {timeout} s")
+            time.sleep(0.2)
+        logs = api.get_job_logs(reader)
+        with contextlib.suppress(Exception):
+            api.delete_job(reader)
+        lines = [line for line in logs.splitlines() if line.startswith(CLUSTER_INFO_MARK)]
+        if not lines:
+            raise JobError(f"could not read the job registry at {self.address}: {logs[-800:]}")
+        return json.loads(lines[-1][len(CLUSTER_INFO_MARK):])
 
     def _submit_local(self, spec: JobSpec, job_id: str) -> JobHandle:
         from onepiece_dist.service.ray_env import connect
@@ -155,42 +257,111 @@ class Client:
         return handle
 
     def status(self, job_id: str, output: str | None = None) -> JobStatus:
-        """Latest status: the registry (embedded Ray), else the Jobs API state plus the status file."""
+        """Latest status: the registry (embedded Ray), else the status file; on a cluster, the cluster's registry
+        (the driver's own reports), with the Jobs API's word on a driver that ended without reporting."""
         if self.address is None:
             output = output or (self._local[job_id].output if job_id in self._local else None)
             found = self._registry_status(job_id)
             if found is None and output and status_path(output).is_file():
                 found = read_status(output)
             return found or JobStatus(job_id=job_id, state="pending", output=output or "")
+        ray_state = self._ray_state(job_id)
+        if ray_state is None:
+            raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
+        reported = self.cluster_info()["jobs"].get(job_id)
         info = self.jobs_api().get_job_info(job_id)
-        output = output or (info.metadata or {}).get("output")
-        status = read_status(output) if output and status_path(output).is_file() else JobStatus(job_id=job_id)
-        status.state = _RAY_JOB_STATES.get(str(info.status).split(".")[-1], "pending")  # the driver's fate
+        status = (JobStatus.model_validate(reported) if reported
+                  else JobStatus(job_id=job_id, output=(info.metadata or {}).get("output", "")))
+        if ray_state in TERMINAL and status.state not in TERMINAL:  # the driver ended without a last report
+            status.state = "cancelled" if ray_state == "cancelled" else "failed"
+            status.error = status.error or f"the job's driver ended ({ray_state}): {info.message or ''}".strip()
+        elif not reported:
+            status.state = ray_state
         return status
+
+    def wait(self, job_id: str, timeout: float | None = None, poll: float = 1.0) -> JobStatus:
+        """Block until the cluster's job ends (polling the Jobs API); its final status. TimeoutError after
+        ``timeout`` s, JobNotFound when there is no such job."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while (state := self._ray_state(job_id)) not in TERMINAL:
+            if state is None:
+                raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"job {job_id} still {state} after {timeout} s")
+            time.sleep(poll)
+        return self.status(job_id)
 
     def _registry_status(self, job_id: str) -> JobStatus | None:
         registry = _registry()
         found = registry.get(job_id) if registry else None
         return JobStatus.model_validate(found) if found else None
 
-    def cancel(self, job_id: str) -> None:
+    def cancel(self, job_id: str) -> str:
+        """Ask the job to stop; returns its state when asked ('running' or 'pending' means the stop was sent)."""
         if self.address is None:
             registry = _registry()
-            if registry:
-                registry.request_cancel(job_id)
-        else:
+            if registry is None or not registry.request_cancel(job_id):
+                raise JobNotFound(f"no job {job_id} in this process's Ray")
+            return "running"
+        state = self._ray_state(job_id)
+        if state is None:
+            raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
+        if state not in TERMINAL:
             self.jobs_api().stop_job(job_id)
+        return state
 
     def jobs(self) -> list[dict]:
+        """Every job: id, state, stage, objects done and total, output."""
         if self.address is None:
             registry = _registry()
-            return registry.jobs() if registry else []
-        return [{"job_id": j.submission_id, "state": _RAY_JOB_STATES.get(str(j.status).split(".")[-1], "pending"),
-                 "output": (j.metadata or {}).get("output", "")} for j in self.jobs_api().list_jobs()
-                if j.submission_id]
+            return [_job_row(s) for s in registry.jobs()] if registry else []
+        reported = self.cluster_info()["jobs"]
+        rows = []
+        for job in self.jobs_api().list_jobs():
+            if not job.submission_id or job.submission_id.startswith("onepiece-info-"):
+                continue
+            state = _RAY_JOB_STATES.get(str(job.status).split(".")[-1], "pending")
+            found = reported.get(job.submission_id) or {"job_id": job.submission_id, "state": state,
+                                                        "output": (job.metadata or {}).get("output", "")}
+            rows.append(_job_row({**found, "state": state if state in TERMINAL else found["state"]}))
+        return rows
 
     def logs(self, job_id: str) -> str:
         return self.jobs_api().get_job_logs(job_id)
+
+    def follow_logs(self, job_id: str) -> Iterator[str]:
+        """The job's driver log as it grows, until the job ends."""
+        import asyncio
+
+        queue: list[str] = []
+
+        async def tail() -> None:
+            async for chunk in self.jobs_api().tail_job_logs(job_id):
+                queue.append(chunk)
+
+        thread = threading.Thread(target=lambda: asyncio.run(tail()), daemon=True)
+        thread.start()
+        while thread.is_alive() or queue:
+            while queue:
+                yield queue.pop(0)
+            thread.join(0.2)
+
+
+def _job_row(status: dict) -> dict:
+    progress = status.get("progress") or {}
+    return {"job_id": status["job_id"], "state": status.get("state", "pending"), "stage": status.get("stage", ""),
+            "objects_done": progress.get("objects_done", 0), "objects_total": progress.get("objects_total", 0),
+            "output": status.get("output", "")}
+
+
+def check_remote_paths(spec: JobSpec) -> None:
+    """A job for a cluster names its paths absolutely: every node resolves a relative one against its own working
+    folder, so its parts would scatter over the nodes' disks."""
+    for field in ("output", "cache_dir"):
+        value = getattr(spec, field)
+        if value and not Path(value).is_absolute():
+            raise SpecError(f"{field}: {value!r} is relative; a job on a cluster needs an absolute path on the "
+                            "volume every node mounts (e.g. /data/dataset.zarr)")
 
 
 def _registry():

@@ -1,91 +1,88 @@
 """The `onepiece` command line: each command builds a spec and calls one library function.
 
-Exit codes: 0 ok, 1 job failed or cancelled, 2 bad arguments or spec, 3 cluster unreachable.
-Machine-readable output (paths, --json) goes to stdout; human output and progress to stderr.
+Machine-readable output (paths, --json) goes to stdout; human output and progress to stderr. Exit codes: see
+``cli_common.EXIT_CODES`` (printed by --help and in the README).
 """
 
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
-from onepiece_dist.errors import ClusterUnreachable, JobError, SourceError, SpecError, StoreError
+from onepiece_dist.cli_common import (
+    EXIT_FAILED,
+    EXIT_TABLE,
+    EXIT_USAGE,
+    Address,
+    ProgressDisplay,
+    err,
+    exit_codes,
+    spec_default,
+    spec_or_exit,
+)
+from onepiece_dist.cli_jobs import register as register_job_commands
+from onepiece_dist.errors import JobError, JobNotFound, SourceError, SpecError, StoreError
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE grasp-dataset generation.")
-
-EXIT_FAILED, EXIT_USAGE, EXIT_UNREACHABLE = 1, 2, 3
-
-
-def _err(message: str) -> None:
-    typer.echo(message, err=True)
+app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE grasp-dataset generation.",
+                  epilog=EXIT_TABLE)
+register_job_commands(app)
+_err = err
 
 
-def build_spec(spec_file: Path | None, overrides: dict[str, Any]):
-    """The JobSpec from an optional file plus command-line overrides (None values ignored)."""
-    from onepiece_dist.spec import load_job_spec, parse_job_spec
+def _version(value: bool) -> None:
+    if value:
+        from onepiece_dist.service.registry import package_version
 
-    given = {k: v for k, v in overrides.items() if v is not None}
-    if spec_file is not None:
-        return load_job_spec(spec_file, given)
-    return parse_job_spec(given, "command line")
+        typer.echo(f"onepiece-dist {package_version()}")
+        raise typer.Exit()
 
 
-Address = Annotated[str | None, typer.Option(help="Ray address: 'auto', 'host:port' (run) or the Jobs API "
-                                           "URL 'http://host:8265' (submit, status, wait, cancel, logs, list).")]
+@app.callback()
+def main_options(
+    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                          help="Print the package version and exit.")] = False,
+) -> None:
+    """ONE PIECE grasp-dataset generation."""
 
 
 @app.command()
 def run(
     spec_file: Annotated[Path | None, typer.Argument(metavar="[SPEC]", help="YAML or JSON job spec.")] = None,
-    objects: Annotated[str | None, typer.Option(help="Object source: built-in set, folder or glob.")] = None,
-    out: Annotated[str | None, typer.Option(help="Dataset path (Zarr directory).")] = None,
-    grasps: Annotated[int | None, typer.Option(help="Grasp candidates per object.")] = None,
-    seed: Annotated[int | None, typer.Option(help="Random seed.")] = None,
-    stages: Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup.")] = None,
+    objects: Annotated[str | None, typer.Option(help=f"Object source: built-in set, folder or glob. "
+                                                     f"{spec_default('objects')}")] = None,
+    out: Annotated[str | None, typer.Option(help=f"Dataset path (Zarr directory). {spec_default('output')}")] = None,
+    grasps: Annotated[int | None, typer.Option(help=f"Grasp candidates per object. "
+                                                    f"{spec_default('grasps_per_object')}")] = None,
+    seed: Annotated[int | None, typer.Option(help=f"Random seed. {spec_default('seed')}")] = None,
+    stages: Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup. "
+                                                    "(default: all)")] = None,
     address: Address = None,
     job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
     workers: Annotated[int | None, typer.Option(help="Extraction workers (default: the cluster's CPUs).")] = None,
     spec_json: Annotated[str | None, typer.Option(hidden=True, help="The whole spec as JSON (used by submit).")] = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the final status as JSON on stdout.")] = False,
 ) -> None:
     """Run a job end to end (embedded Ray on 127.0.0.1 unless --address) and print the dataset path."""
     overrides = {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed,
                  "stages": stages.split(",") if stages else None}
-    spec = _spec_or_exit(spec_file, overrides, spec_json)
-    _run_and_report(spec, address, job_id, workers, in_process)
+    spec = spec_or_exit(spec_file, overrides, spec_json)
+    _run_and_report(spec, address, job_id, workers, in_process, as_json)
 
 
-def _spec_or_exit(spec_file: Path | None, overrides: dict, spec_json: str | None = None):
-    try:
-        if spec_json is not None:
-            from onepiece_dist.spec import parse_job_spec
-
-            return parse_job_spec(json.loads(spec_json), "--spec-json")
-        return build_spec(spec_file, overrides)
-    except (SpecError, json.JSONDecodeError) as err:
-        _err(f"error: {err}")
-        raise typer.Exit(EXIT_USAGE) from None
-
-
-def _run_and_report(spec, address, job_id, workers, in_process) -> None:
+def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = False) -> None:
     from onepiece_dist.api import run_job
 
-    try:
+    if address and address.startswith(("http://", "https://")):
+        _err(f"error: run drives the job from here and needs a Ray address ('auto' or host:port), not the Jobs API "
+             f"URL {address}; to run it on the cluster, use `onepiece submit`")
+        raise typer.Exit(EXIT_USAGE)
+    with exit_codes(), ProgressDisplay() as display:
         status = run_job(spec, address=address, in_process=in_process, job_id=job_id, workers=workers,
-                         progress=_progress_printer())
-    except SourceError as err:
-        _err(f"error: {err}")
-        raise typer.Exit(EXIT_USAGE) from None
-    except ClusterUnreachable as err:
-        _err(f"error: {err}")
-        raise typer.Exit(EXIT_UNREACHABLE) from None
-    except JobError as err:
-        _err(f"job failed: {err}")
-        raise typer.Exit(EXIT_FAILED) from None
+                         progress=display)
     for rejection in status.rejections:
         _err(f"rejected {rejection.name}: {rejection.reason}")
     _err(f"job {status.job_id}: {status.progress.objects_done} objects ({status.progress.objects_reused} reused), "
@@ -99,7 +96,7 @@ def _run_and_report(spec, address, job_id, workers, in_process) -> None:
         t = status.training
         _err(f"trained {t.model} for {t.epochs} epochs: validation accuracy "
              f"{t.final.get('val_accuracy', 0):.2f}, AP {t.final.get('val_ap', 0):.2f}")
-    typer.echo(status.output)
+    typer.echo(status.model_dump_json() if as_json else status.output)
 
 
 @app.command()
@@ -115,130 +112,10 @@ def resume(
     try:
         status = read_status(job)
         spec = parse_job_spec(status.spec, f"{job} status")
-    except (JobError, SpecError) as err:
-        _err(f"error: {err}")
+    except (JobNotFound, SpecError) as error:
+        _err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
     _run_and_report(spec, address, status.job_id, workers, in_process=False)
-
-
-@app.command()
-def submit(
-    spec_file: Annotated[Path | None, typer.Argument(metavar="[SPEC]", help="YAML or JSON job spec.")] = None,
-    address: Address = None,
-    objects: Annotated[str | None, typer.Option(help="Object source.")] = None,
-    out: Annotated[str | None, typer.Option(help="Dataset path, as seen by the cluster.")] = None,
-    grasps: Annotated[int | None, typer.Option(help="Grasp candidates per object.")] = None,
-    seed: Annotated[int | None, typer.Option(help="Random seed.")] = None,
-    stages: Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup.")] = None,
-    job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
-) -> None:
-    """Submit a job to a cluster through the Ray Jobs API and print its id (it outlives this command)."""
-    if not address:
-        _err("error: submit needs --address (the cluster's Jobs API, e.g. http://127.0.0.1:8265)")
-        raise typer.Exit(EXIT_USAGE)
-    spec = _spec_or_exit(spec_file, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed,
-                                     "stages": stages.split(",") if stages else None})
-    handle = _cluster_call(lambda c: c.submit(spec, job_id=job_id, runtime_env=_worker_runtime_env()), address)
-    typer.echo(handle.job_id)
-
-
-def _worker_runtime_env() -> dict | None:
-    """workers/runtime_env.yaml when run from a checkout, else none (nodes run the installed package)."""
-    import yaml
-
-    path = Path(__file__).resolve().parents[1] / "workers" / "runtime_env.yaml"
-    return yaml.safe_load(path.read_text()) if path.is_file() else None
-
-
-def _cluster_call(action, address: str | None):
-    from onepiece_dist.api import Client
-
-    try:
-        return action(Client(address))
-    except ClusterUnreachable as err:
-        _err(f"error: {err}")
-        raise typer.Exit(EXIT_UNREACHABLE) from None
-    except (ConnectionError, OSError) as err:
-        _err(f"error: cluster unreachable at {address}: {err}")
-        raise typer.Exit(EXIT_UNREACHABLE) from None
-
-
-@app.command()
-def status(
-    job: Annotated[str, typer.Argument(help="Job id (with --address) or dataset path.")],
-    address: Address = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
-) -> None:
-    """Show a job's state, stage and progress."""
-    from onepiece_dist.api import read_status
-
-    try:
-        current = _cluster_call(lambda c: c.status(job), address) if address else read_status(job)
-    except JobError as err:
-        _err(f"error: {err}")
-        raise typer.Exit(EXIT_USAGE) from None
-    _print_status(current, as_json)
-
-
-def _print_status(current, as_json: bool) -> None:
-    if as_json:
-        typer.echo(current.model_dump_json())
-        return
-    p = current.progress
-    typer.echo(f"{current.job_id}: {current.state} ({current.stage}) objects {p.objects_done}/{p.objects_total}, "
-               f"grasps {p.grasps}, unique codes {p.unique_codes}", err=True)
-
-
-@app.command()
-def wait(
-    job: Annotated[str, typer.Argument(help="Job id.")],
-    address: Address = None,
-    timeout: Annotated[float | None, typer.Option(help="Give up after this many seconds.")] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
-) -> None:
-    """Wait for a submitted job to end; exit 0 if it succeeded, 1 otherwise."""
-    from onepiece_dist.api import JobHandle
-
-    final = _cluster_call(lambda c: JobHandle(c, job, output="").wait(timeout=timeout), address)
-    _print_status(final, as_json)
-    if final.state != "succeeded":
-        raise typer.Exit(EXIT_FAILED)
-
-
-@app.command()
-def cancel(job: Annotated[str, typer.Argument(help="Job id.")], address: Address = None) -> None:
-    """Cancel a submitted job."""
-    _cluster_call(lambda c: c.cancel(job), address)
-    _err(f"cancel requested for {job}")
-
-
-@app.command()
-def logs(job: Annotated[str, typer.Argument(help="Job id.")], address: Address = None) -> None:
-    """Print a submitted job's driver log."""
-    typer.echo(_cluster_call(lambda c: c.logs(job), address))
-
-
-@app.command(name="list")
-def list_jobs(
-    address: Address = None,
-    folder: Annotated[Path, typer.Option(help="Without --address: where to look for job status files.")] = Path("."),
-    as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
-) -> None:
-    """List jobs: those of a cluster (--address) or the status files under a folder."""
-    if address:
-        rows = _cluster_call(lambda c: c.jobs(), address)
-    else:
-        from onepiece_dist.service.status import STATUS_SUFFIX, JobStatus
-
-        rows = []
-        for path in sorted(folder.glob(f"**/*{STATUS_SUFFIX}")):
-            found = JobStatus.load(str(path)[: -len(STATUS_SUFFIX)])
-            rows.append({"job_id": found.job_id, "state": found.state, "output": found.output})
-    if as_json:
-        typer.echo(json.dumps(rows))
-        return
-    for row in rows:
-        typer.echo(f"{row['job_id']}\t{row['state']}\t{row['output']}")
 
 
 def _print_mapping(mapping: dict, as_json: bool) -> None:
@@ -249,25 +126,6 @@ def _print_mapping(mapping: dict, as_json: bool) -> None:
     width = max((len(k) for k in mapping), default=0)
     for key, value in mapping.items():
         typer.echo(f"{key:>{width}}: {value}")
-
-
-def _progress_printer():
-    if not sys.stderr.isatty():
-        return None
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-    bar = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                   TimeRemainingColumn(), transient=True)
-    task = bar.add_task("extract", total=None)
-    bar.start()
-
-    def update(status) -> None:
-        bar.update(task, completed=status.progress.objects_done, total=status.progress.objects_total,
-                   description=status.stage)
-        if status.progress.objects_done >= status.progress.objects_total:
-            bar.stop()
-
-    return update
 
 
 @app.command()
@@ -340,12 +198,15 @@ def evaluate(
     """Accuracy and AP on unseen objects, and simulated success of the top-ranked grasp versus a random one."""
     from onepiece_dist.service.evaluate import evaluate_model
 
-    spec = _spec_or_exit(None, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
+    spec = spec_or_exit(None, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
     try:
         report = evaluate_model(model, spec)
-    except (SourceError, StoreError, FileNotFoundError, ValueError) as err:
-        _err(f"error: {err}")
+    except (SourceError, StoreError, FileNotFoundError, ValueError) as error:
+        _err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
+    except JobError as error:
+        _err(f"evaluation failed: {error}")
+        raise typer.Exit(EXIT_FAILED) from None
     _print_mapping(report, as_json)
 
 
@@ -386,16 +247,18 @@ def supplement(
 def schema(
     out: Annotated[Path, typer.Option(help="Folder for the JSON Schemas.")] = Path("schemas"),
 ) -> None:
-    """Write JSON Schemas of the job spec, job status and dataset layout (and, in a checkout, the array table of
-    docs/dataset_format.md)."""
-    from onepiece_dist.schemas import refresh_format_page, write_schemas
+    """Write JSON Schemas of the job spec, job status and dataset layout (and, in a checkout, the tables of
+    docs/dataset_format.md and examples/job.yaml)."""
+    from onepiece_dist.schemas import refresh_format_page, render_example_job, write_schemas
 
     for path in write_schemas(out):
         typer.echo(str(path))
-    page = Path(__file__).resolve().parents[1] / "docs" / "dataset_format.md"
+    checkout = Path(__file__).resolve().parents[1]
+    page, example = checkout / "docs" / "dataset_format.md", checkout / "examples" / "job.yaml"
     if page.is_file():
         refresh_format_page(page)
-        typer.echo(str(page))
+        example.write_text(render_example_job())
+        typer.echo(f"{page}\n{example}")
 
 
 def main() -> None:

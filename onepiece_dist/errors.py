@@ -56,3 +56,15 @@ class RuntimeLost(JobError):
 
 class ClusterUnreachable(OnePieceError, ConnectionError):
     """No Ray cluster answers at the given address."""
+
+
+class JobNotFound(OnePieceError, LookupError):
+    """No job with this id on the cluster, or no job status at this dataset path."""
+
+
+class VersionMismatch(OnePieceError, ValueError):
+    """The cluster runs another version of the package than the client that submits to it."""
+
+
+class DriverGone(JobError):
+    """The process that drove a job ended without finishing it (killed, or its machine went down)."""

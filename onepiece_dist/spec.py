@@ -85,7 +85,8 @@ class VoxelSpec(_Frozen):
 class SamplerSpec(_Frozen):
     """Grasp candidate sampling."""
 
-    method: Literal["antipodal", "normal"] = "antipodal"
+    method: Literal["antipodal", "normal"] = Field("antipodal",
+        description="Candidate sampler: antipodal point pairs, or approach along the surface normal.")
     surface_points: int = Field(10000, ge=500, le=2_000_000, description="Dense surface points per object.")
     approach_angles: int = Field(8, ge=1, le=64, description="Approach directions tried around each grasp axis.")
     friction_cone: float = Field(0.5, gt=0, le=3, description="Friction coefficient of the antipodal cone test.")
@@ -148,12 +149,13 @@ class ViewSpec(_Frozen):
 class TrainSpec(_Frozen):
     """The train stage: which network on which labelled grasps."""
 
-    model: Literal["pointnet", "voxel"] = "pointnet"
+    model: Literal["pointnet", "voxel"] = Field("pointnet",
+        description="Grasp network: PointNet on the crop's points, or a 3D CNN on its voxel code.")
     data: Literal["assembled", "all"] = Field("assembled", description="Labelled grasps of the one object "
                                               "(assembled/grasps) or of every object (grasps, needs sim.label).")
-    epochs: int = Field(10, ge=1, le=1000)
-    batch_size: int = Field(64, ge=2, le=4096)
-    learning_rate: float = Field(1e-3, gt=0, le=1)
+    epochs: int = Field(10, ge=1, le=1000, description="Passes over the training split.")
+    batch_size: int = Field(64, ge=2, le=4096, description="Grasps per gradient step.")
+    learning_rate: float = Field(1e-3, gt=0, le=1, description="Adam learning rate.")
     validation: float = Field(0.2, gt=0, lt=1, description="Share of objects (or patches) held out.")
     patience: int = Field(5, ge=1, description="Epochs without a better validation loss before stopping.")
     device: Literal["auto", "cpu", "cuda"] = Field("auto", description="Where to train and evaluate: 'auto' "
@@ -173,8 +175,10 @@ class JobSpec(_Frozen):
 
     objects: str = Field("pybullet:named", description="Object source: a built-in set "
                          "(pybullet:named, pybullet:random_urdfs[0:64], primitives), a folder or a glob.")
-    grasps_per_object: int = Field(64, ge=1, le=100_000)
-    seed: int = Field(0, ge=0, lt=2**63)
+    grasps_per_object: int = Field(64, ge=1, le=100_000,
+        description="Grasp candidates sampled and simulated per object.")
+    seed: int = Field(0, ge=0, lt=2**63,
+        description="Random seed; each object's stream derives from it and the object's content.")
     output: str = Field("onepiece-out/dataset.zarr", description="Dataset path (Zarr v3 directory).")
     cache_dir: str | None = Field(None, description="Folder of per-object results shared across jobs; "
                                   "defaults to the dataset's own parts/ folder.")

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from onepiece_dist.schemas import render_array_table, render_schemas
+from onepiece_dist.schemas import render_array_table, render_example_job, render_format_page, render_schemas
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -33,8 +33,11 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "service": (BASE | {"core", "objects", "sim", "store", "learn"},
                 {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil"}),
     "api": (BASE | {"objects", "service", "store"}, {"ray"}),
-    "schemas": (BASE | {"objects", "service", "store"}, {"pydantic"}),
-    "cli": (BASE | {"api", "objects", "service", "store", "schemas"}, {"typer", "rich", "yaml", "pydantic"}),
+    "schemas": (BASE | {"objects", "service", "store"}, {"pydantic", "yaml"}),
+    "cli_common": (BASE, {"typer", "rich"}),
+    "cli_jobs": (BASE | {"api", "service", "cli_common"}, {"typer", "yaml"}),
+    "cli": (BASE | {"api", "objects", "service", "store", "schemas", "cli_common", "cli_jobs"},
+            {"typer", "rich", "yaml", "pydantic"}),
 }
 STDLIB = set(sys.stdlib_module_names)
 
@@ -87,6 +90,17 @@ def test_committed_schemas_match_models(name):
     assert committed == render_schemas()[name], f"schemas/{name} drifted: run `onepiece schema`"
 
 
-def test_the_format_page_lists_every_array_the_layout_names():
+def test_the_format_page_lists_every_array_and_attribute_the_layout_names():
     page = (ROOT / "docs" / "dataset_format.md").read_text()
-    assert render_array_table() in page, "docs/dataset_format.md drifted: run `onepiece schema`"
+    assert render_format_page(page) == page, "docs/dataset_format.md drifted: run `onepiece schema`"
+    assert render_array_table() in page and "| `assembly_labels` | no |" in page
+
+
+def test_the_example_job_lists_every_field_at_its_default():
+    from onepiece_dist.spec import JobSpec, load_job_spec
+
+    example = ROOT / "examples" / "job.yaml"
+    assert example.read_text() == render_example_job(), "examples/job.yaml drifted: run `onepiece schema`"
+    assert load_job_spec(example, {}) == JobSpec()
+    for name in JobSpec.model_fields:
+        assert f"\n{name}:" in example.read_text(), name

@@ -206,8 +206,30 @@ def test_the_status_names_each_stage_while_it_runs_and_times_it(spec_factory, tm
         if not seen or seen[-1] != status.stage:
             seen.append(status.stage)
         assert read_status(spec.output).stage == status.stage  # saved before it is reported
+        if status.stage in ("ingest", "extract"):
+            assert status.progress.unique_codes == 0  # no count that is not the unique count
 
     final = run_local(spec, progress=watch)
     assert seen == ["ingest", "extract", "dedup", "assemble", "label", "train", "done"]
     assert set(final.timings) == {"ingest", "extract", "dedup", "assemble", "label", "train"}
     assert final.assembly.unique_codes == final.progress.unique_codes and final.labels.labelled_grasps > 0
+    assert final.progress.unique_codes == open_dataset(spec.output).array("unique/code").shape[0]
+    assert_the_layout_names_everything_in(spec.output)
+
+
+def assert_the_layout_names_everything_in(path: str) -> None:
+    """Every array and root attribute the writer wrote is in store/layout.py (so in the docs and the schema)."""
+    import zarr
+
+    from onepiece_dist.store.layout import ARRAYS, DatasetAttributes
+
+    def arrays(group, prefix=""):
+        found = {prefix + name for name, _ in group.arrays()}
+        for name, sub in group.groups():
+            found |= arrays(sub, f"{prefix}{name}/")
+        return found
+
+    root = zarr.open_group(path, mode="r")
+    assert arrays(root) - {entry[0] for entry in ARRAYS} == set()
+    assert set(root.attrs) - set(DatasetAttributes.model_fields) == set()
+    assert {"train/val_ap", "assembled/grasps/success"} <= arrays(root)

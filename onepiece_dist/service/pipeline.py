@@ -7,6 +7,9 @@ the central actor lives and who trains. Stages: ingest, extract, dedup (the comm
 
 from __future__ import annotations
 
+import logging
+import os
+import socket
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -21,6 +24,7 @@ from onepiece_dist.spec import JobSpec
 
 Report = Callable[[JobStatus], None]  # called whenever the status changes: save it, publish it, draw progress
 ProgressFn = Callable[[JobStatus], None]  # a caller's progress display, called after each report
+log = logging.getLogger("onepiece_dist.job")  # progress lines: the CLI shows them on stderr, `ray job logs` too
 
 
 class Central(Protocol):
@@ -47,7 +51,7 @@ class Runtime:
 
 def new_status(spec: JobSpec, job_id: str) -> JobStatus:
     return JobStatus(job_id=job_id, state="running", stage="ingest", output=spec.output,
-                     spec=spec.model_dump(mode="json"))
+                     spec=spec.model_dump(mode="json"), driver=f"{socket.gethostname()}:{os.getpid()}")
 
 
 @contextmanager
@@ -55,10 +59,20 @@ def stage(status: JobStatus, name: str, report: Report) -> Iterator[None]:
     """Run the block as stage ``name``: shown in the status while it runs, its wall time in ``timings``."""
     status.stage = name
     report(status)
+    log.info("job %s: %s started", status.job_id, name)
     start = time.perf_counter()
     yield
     status.timings[name] = time.perf_counter() - start
+    log.info("job %s: %s done in %.1f s%s", status.job_id, name, status.timings[name], _stage_summary(status, name))
     report(status)
+
+
+def _stage_summary(status: JobStatus, name: str) -> str:
+    p = status.progress
+    summaries = {"ingest": f" ({p.objects_total} objects)",
+                 "extract": f" ({p.objects_done} objects, {p.grasps} grasps, {len(status.rejections)} rejected)",
+                 "dedup": f" ({p.unique_codes} unique codes)"}
+    return summaries.get(name, "")
 
 
 def run_pipeline(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Report,
@@ -71,11 +85,13 @@ def run_pipeline(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Rep
     except BaseException as err:
         status.state = "cancelled" if isinstance(err, JobCancelled) else "failed"
         status.error = f"{type(err).__name__}: {err}"
+        log.info("job %s %s during its %s stage (%s)", status.job_id, status.state, status.stage, type(err).__name__)
         report(status)
         if isinstance(err, JobError | SourceError) or not isinstance(err, Exception):
             raise
         raise JobError(f"job {status.job_id} {status.state}: {err}") from err
     status.state, status.stage = "succeeded", "done"
+    log.info("job %s succeeded", status.job_id)
     report(status)
     return status
 
@@ -90,6 +106,7 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
             results = runtime.extract(refs, lambda result: (record_result(status, result), report(status)))
         with stage(status, "dedup", report):
             summary = runtime.central.commit(results)
+            status.progress.unique_codes = summary.unique_codes
     elif spec.runs("assemble") or spec.runs("label"):
         summary = runtime.central.committed()
     else:
@@ -112,6 +129,8 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
 def record_result(status: JobStatus, result: ObjectResult) -> None:
     """Fold one object's result into the job's progress."""
     status.progress.objects_done += 1
+    log.info("job %s: extract %d/%d objects (%s: %s, %d grasps)", status.job_id, status.progress.objects_done,
+             status.progress.objects_total, result.name, result.status, result.grasps)
     status.worker_seconds += result.seconds
     if result.node and result.node not in status.nodes:
         status.nodes.append(result.node)

@@ -164,9 +164,10 @@ class WorkerPool:
     When a worker dies, the items it held are re-run one at a time on an otherwise idle worker (suspects), so a
     later death is attributable: an item that crashes its worker MAX_CRASHES times while running alone (a crash
     record in ``crashes``, see :mod:`onepiece_dist.service.crashes`, or a kill by Ray's memory monitor), or whose
-    worker dies MAX_UNEXPLAINED times while running it alone with no record (killed from outside), is quarantined (``quarantined(index, item,
-    reason)`` is its result); innocent items that only shared a worker with it are never counted against. Without
-    a crash folder every death counts as a crash. Results come back in item order.
+    worker dies MAX_UNEXPLAINED times while running it alone with no record (killed from outside), is
+    quarantined (``quarantined(index, item, reason)`` is its result); innocent items that only shared a worker
+    with it are never counted against. Without a crash folder every death counts as a crash. Results come back
+    in item order.
     """
 
     def __init__(self, actors: list, registry: RegistryClient, status: JobStatus, on_result: Callable,

@@ -86,3 +86,19 @@ def on_this_node():
     from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
     return NodeAffinitySchedulingStrategy(ray.get_runtime_context().get_node_id(), soft=True)
+
+
+CLUSTER_INFO_MARK = "ONEPIECE_CLUSTER_INFO "
+
+
+def cluster_info() -> dict:
+    """What a client outside the cluster asks of it (run inside it, by ``onepiece cluster-info``): the package
+    version the cluster runs and every job's latest status from the registry."""
+    return {"version": package_version(), "jobs": {status["job_id"]: status for status in RegistryClient().jobs()}}
+
+
+def package_version() -> str:
+    """The installed version of this package (client and cluster compare theirs before a submit)."""
+    from importlib.metadata import version
+
+    return version("onepiece-dist")

@@ -122,6 +122,7 @@ class JobStatus(BaseModel):
     labels: LabelReport | None = Field(None, description="Report of the label stage on the one object.")
     training: TrainingReport | None = Field(None, description="Report of the train stage.")
     error: str = ""
+    driver: str = Field("", description="'host:pid' of the process that drives the job (its pipeline).")
     created: float = Field(default_factory=time.time)
     updated: float = Field(default_factory=time.time)
 

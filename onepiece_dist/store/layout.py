@@ -59,6 +59,11 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/patch_points", "float32", "(Q, 3)", "source surface points inside each patch box, patch frame"),
     ("assembled/source_volume", "float64", "(U,)", "volume of each patch's source object (m^3): its mass rule"),
     *_grasp_entries("assembled/grasps", "L"),
+    ("train/train_loss", "float32", "(T,)", "training loss of each epoch (T epochs run)"),
+    ("train/val_loss", "float32", "(T,)", "validation loss of each epoch"),
+    ("train/val_accuracy", "float32", "(T,)", "validation accuracy of each epoch"),
+    ("train/val_ap", "float32", "(T,)", "validation average precision of each epoch"),
+    ("train/val_positives", "float32", "(T,)", "share of positive labels in the validation split"),
 )
 
 
@@ -78,12 +83,19 @@ class DatasetAttributes(BaseModel):
     onepiece_format: int = Field(1, description="Format version of this layout.")
     complete: bool = Field(description="Written true last by the committer; readers refuse false.")
     job_spec: dict = Field(description="The JobSpec that made the dataset.")
-    gripper: dict
-    voxel: dict
+    gripper: dict = Field(description="The gripper (job_spec.gripper): its frame and closing region.")
+    voxel: dict = Field(description="The voxel grid (job_spec.voxel).")
     grid_shape: list[int] = Field(description="(a, b, c) voxels along (u, v, t).")
     code_bytes: int = Field(description="B = ceil(a*b*c/8).")
-    code_bit_order: str
-    pose_convention: str
+    code_bit_order: str = Field(description="How a code's bits pack: C order over (u, v, t), numpy packbits "
+                                            "bitorder 'big'.")
+    pose_convention: str = Field(description="What grasps/pose holds: gripper-to-object 4x4, columns u, v, t.")
     provenance: dict = Field(description="package_version, seed, result_key.")
     rejected: list[dict] = Field(description="Objects rejected with a reason: {name, reason}.")
-    stats: dict
+    stats: dict = Field(description="Extraction counts: objects total, ok and rejected, grasps, empty crops, "
+                                    "candidates tried, collisions, settled codes that differ from the nominal.")
+    assembly: dict | None = Field(None, description="The assemble stage's report (AssemblyReport in "
+                                                    "schemas/job_status.schema.json), once assembled.")
+    assembly_labels: dict | None = Field(None, description="The label stage's report (LabelReport, with label "
+                                                           "transfer), once labelled on the one object.")
+    training: dict | None = Field(None, description="The train stage's report (TrainingReport), once trained.")

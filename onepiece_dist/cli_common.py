@@ -1,0 +1,154 @@
+"""What every `onepiece` command shares: exit codes, error lines, the spec from file and flags, progress display."""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from onepiece_dist.errors import (
+    ClusterUnreachable,
+    JobError,
+    JobNotFound,
+    SourceError,
+    SpecError,
+    VersionMismatch,
+)
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_UNREACHABLE, EXIT_TIMEOUT = 0, 1, 2, 3, 4
+EXIT_CODES = {EXIT_OK: "ok", EXIT_FAILED: "the job failed or was cancelled (a refused scan, for supplement)",
+              EXIT_USAGE: "usage or input error: bad arguments or spec, unknown source, no such job or dataset, "
+                          "relative output for a cluster, package version differs from the cluster's",
+              EXIT_UNREACHABLE: "cluster unreachable", EXIT_TIMEOUT: "timed out (wait, submit --wait)"}
+EXIT_TABLE = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items()) + "."
+
+Address = Annotated[str | None, typer.Option(
+    envvar="RAY_ADDRESS", show_envvar=True,
+    help="Ray address: 'auto' or 'host:port' (run, resume) or the Jobs API URL 'http://host:8265' (submit, "
+         "status, wait, cancel, logs, list). Default: embedded Ray on 127.0.0.1 (run) or the local status file.")]
+
+
+def err(message: str) -> None:
+    typer.echo(message, err=True)
+
+
+def spec_default(field: str) -> str:
+    """A JobSpec field's default, for --help."""
+    from onepiece_dist.spec import JobSpec
+
+    return f"(default: {JobSpec.model_fields[field].default})"
+
+
+def build_spec(spec_file: Path | None, overrides: dict[str, Any]):
+    """The JobSpec from an optional file plus command-line overrides (None values ignored)."""
+    from onepiece_dist.spec import load_job_spec, parse_job_spec
+
+    given = {k: v for k, v in overrides.items() if v is not None}
+    if spec_file is not None:
+        return load_job_spec(spec_file, given)
+    return parse_job_spec(given, "command line")
+
+
+def spec_or_exit(spec_file: Path | None, overrides: dict, spec_json: str | None = None):
+    try:
+        if spec_json is not None:
+            from onepiece_dist.spec import parse_job_spec
+
+            return parse_job_spec(json.loads(spec_json), "--spec-json")
+        return build_spec(spec_file, overrides)
+    except (SpecError, json.JSONDecodeError) as error:
+        err(f"error: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+
+
+def print_status(current, as_json: bool) -> None:
+    if as_json:
+        typer.echo(current.model_dump_json())
+        return
+    p = current.progress
+    line = (f"{current.job_id}: {current.state} ({current.stage}) objects {p.objects_done}/{p.objects_total}, "
+            f"grasps {p.grasps}, unique codes {p.unique_codes or '-'}")
+    err(line + (f"; error: {current.error}" if current.error else ""))
+
+
+@contextmanager
+def exit_codes(address: str | None = None) -> Iterator[None]:
+    """Turn the library's errors into one line on stderr and the CLI's exit code (the table above). Connection
+    errors count as an unreachable cluster only when talking to one (``address``)."""
+    try:
+        yield
+    except (JobNotFound, SpecError, SourceError, VersionMismatch) as error:
+        _fail(EXIT_USAGE, f"error: {error}")
+    except TimeoutError as error:
+        _fail(EXIT_TIMEOUT, f"timed out: {error}")
+    except ClusterUnreachable as error:
+        _fail(EXIT_UNREACHABLE, f"error: {error}")
+    except JobError as error:
+        _fail(EXIT_FAILED, f"job failed: {error}")
+    except (ConnectionError, OSError) as error:
+        if address is None:
+            raise
+        _fail(EXIT_UNREACHABLE, f"error: cluster unreachable at {address}: {error}")
+
+
+def _fail(code: int, message: str) -> None:
+    err(message)
+    raise typer.Exit(code) from None
+
+
+def exit_for(state: str) -> None:
+    if state != "succeeded":
+        raise typer.Exit(EXIT_FAILED)
+
+
+class _StderrLines(logging.Handler):
+    """Log records as lines on the current ``sys.stderr`` (looked up at each record, so tests can capture it)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        sys.stderr.write(self.format(record) + "\n")
+
+
+class ProgressDisplay:
+    """A job's progress on stderr, every stage: a rich bar on a terminal, else one log line per event (what a Ray
+    job's log shows). A context manager: the bar is stopped (the cursor shown again) however the job ends."""
+
+    def __init__(self, enabled: bool = True):
+        self.enabled, self.bar, self.task, self.handler = enabled, None, None, None
+
+    def __enter__(self) -> ProgressDisplay:
+        if self.enabled and sys.stderr.isatty():
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self.bar = Progress(TextColumn("{task.description:<8}"), BarColumn(), TextColumn("{task.fields[count]}"),
+                                TimeElapsedColumn(), console=Console(stderr=True), transient=True)
+            self.task = self.bar.add_task("ingest", total=None, count="")
+            self.bar.start()
+        elif self.enabled:
+            self.handler = _StderrLines()
+            self.handler.setFormatter(logging.Formatter("%(asctime)s %(message)s", "%H:%M:%S"))
+            logger = logging.getLogger("onepiece_dist")
+            logger.addHandler(self.handler)
+            logger.setLevel(logging.INFO)
+        return self
+
+    def __call__(self, status) -> None:
+        if self.bar is None:
+            return
+        p = status.progress
+        counted = status.stage == "extract" and p.objects_total
+        self.bar.update(self.task, description=status.stage, total=p.objects_total if counted else None,
+                        completed=p.objects_done if counted else 0,
+                        count=f"{p.objects_done}/{p.objects_total} objects" if counted else "")
+
+    def __exit__(self, *exc) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+        if self.handler is not None:
+            logging.getLogger("onepiece_dist").removeHandler(self.handler)
