@@ -95,31 +95,79 @@ def local_cluster():
         subprocess.run([str(script), "stop"], capture_output=True, timeout=120)
 
 
+def onepiece(*args: str, cwd: Path, timeout: float = 180, background: bool = False):
+    """The CLI as a user runs it, from ``cwd`` (another folder than the dataset's); ``background``: a Popen."""
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}:{os.environ.get('PATH', '')}"}
+    if background:
+        return subprocess.Popen([*ONEPIECE, *args], cwd=cwd, env=env, text=True, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE)
+    return subprocess.run([*ONEPIECE, *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+
+
 @pytest.mark.cluster
 @pytest.mark.slow
-def test_job_submitted_to_a_local_multi_node_cluster_runs_on_two_nodes(local_cluster, tmp_path):
-    out = tmp_path / "cluster.zarr"
-    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}:{os.environ.get('PATH', '')}"}
-    submitted = subprocess.run([*ONEPIECE, "submit", "--address", local_cluster, "--objects", "primitives[0:6]",
-                                "--grasps", "32", "--out", str(out)], capture_output=True, text=True, timeout=120,
-                               env=env)
-    assert submitted.returncode == 0, submitted.stderr[-2000:]
-    job_id = submitted.stdout.strip()
-    waited = subprocess.run([*ONEPIECE, "wait", job_id, "--address", local_cluster, "--json", "--timeout", "300"],
-                            capture_output=True, text=True, timeout=360, env=env)
-    assert waited.returncode == 0, waited.stderr[-2000:]
-    status = json.loads(waited.stdout)
-    assert status["state"] == "succeeded" and len(status["nodes"]) >= 2
+def test_a_job_on_the_local_multi_node_cluster_is_followed_from_another_folder(local_cluster, tmp_path,
+                                                                               record_figure):
+    out, elsewhere, job = tmp_path / "cluster.zarr", tmp_path / "elsewhere", "cluster-follow"
+    elsewhere.mkdir()
+    address = ["--address", local_cluster]
+    submitted = onepiece("submit", *address, "--objects", "primitives[0:6]", "--grasps", "32", "--out", str(out),
+                         "--job-id", job, "--wait", "--timeout", "300", cwd=elsewhere, background=True)
+    watched = wait_for(lambda: _running_status(job, address, elsewhere), 180, "the job's status from the registry")
+    follow = onepiece("logs", job, *address, "--follow", cwd=elsewhere, background=True)
+    stdout, stderr = submitted.communicate(timeout=360)
+    assert submitted.returncode == 0 and stdout.strip() == job, stderr[-2000:]
+    followed, _ = follow.communicate(timeout=120)
+    assert follow.returncode == 0 and "extract 6/6 objects" in followed and f"job {job} succeeded" in followed
+    status_path(out).rename(tmp_path / "moved.status.json")  # what the client reads next is the cluster's
+    final = json.loads(onepiece("status", job, *address, "--json", cwd=elsewhere).stdout)
+    assert final["state"] == "succeeded" and final["progress"]["objects_done"] == 6 and len(final["nodes"]) >= 2
+    listed = {row["job_id"]: row for row in json.loads(onepiece("list", *address, "--json", cwd=elsewhere).stdout)}
+    assert listed[job]["state"] == "succeeded" and listed[job]["objects_done"] == 6
     assert open_dataset(out).summary()["objects"] == 6
     assert cluster_exposed_sockets() == []
-    unreachable = subprocess.run([*ONEPIECE, "status", job_id, "--address", "http://127.0.0.1:9"],
-                                 capture_output=True, text=True, timeout=60, env=env)
-    assert unreachable.returncode == 3
+    assert onepiece("status", job, "--address", "http://127.0.0.1:9", cwd=elsewhere).returncode == 3
+    record_figure(f"followed from another folder: status (registry) showed stage {watched['stage']!r}, logs "
+                  f"--follow ended with the job, submit --wait exit 0; {len(final['nodes'])} nodes")
+
+
+def _running_status(job: str, address: list[str], cwd: Path) -> dict | None:
+    shown = onepiece("status", job, *address, "--json", cwd=cwd, timeout=120)
+    if shown.returncode != 0:
+        return None  # not submitted yet
+    status = json.loads(shown.stdout)
+    return status if status["state"] == "running" and status["stage"] else None
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+def test_cluster_commands_say_what_is_wrong_with_their_exit_codes(local_cluster, tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from onepiece_dist.cli import app
+
+    address = ["--address", local_cluster]
+    missing = onepiece("wait", "job-nonexistent", *address, "--timeout", "5", cwd=tmp_path)
+    assert missing.returncode == 2 and "no job job-nonexistent" in missing.stderr
+    bad = ["--objects", "pybullet:nope", "--out", str(tmp_path / "bad.zarr"), "--job-id", "doomed"]
+    first = onepiece("submit", *address, *bad, "--wait", cwd=tmp_path)
+    assert first.returncode == 1, first.stderr[-2000:]
+    again = onepiece("submit", *address, *bad, cwd=tmp_path)
+    assert again.returncode == 0 and again.stdout.strip() == "doomed-2" and "submitted as doomed-2" in again.stderr
+    assert onepiece("wait", "doomed-2", *address, "--timeout", "120", cwd=tmp_path).returncode == 1
+    ended = onepiece("cancel", "doomed", *address, cwd=tmp_path)
+    assert ended.returncode == 0 and "already ended (failed)" in ended.stderr
+    monkeypatch.setattr("onepiece_dist.api.package_version", lambda: "9.9.9")
+    other = CliRunner().invoke(app, ["submit", *address, "--objects", "primitives[0:1]", "--out",
+                                     str(tmp_path / "v.zarr")])
+    assert other.exit_code == 2 and "this client 9.9.9" in other.output
 
 
 def driver_jobs(address: str) -> int:
-    """How many drivers (jobs) the cluster at ``address`` has seen."""
-    return len(Client(address).jobs_api().list_jobs())
+    """How many drivers (jobs) the cluster at ``address`` has seen, leaving out our clients' registry readers
+    (``onepiece-info-*``, whose entries outlive their deletion)."""
+    return sum(not (job.submission_id or "").startswith("onepiece-info-")
+               for job in Client(address).jobs_api().list_jobs())
 
 
 @pytest.mark.cluster
