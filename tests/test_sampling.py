@@ -56,3 +56,16 @@ def test_both_samplers_give_right_handed_collision_free_frames(method):
     rot = cands.poses[:, :3, :3]
     assert np.allclose(np.linalg.det(rot), 1.0) and np.allclose(rot.transpose(0, 2, 1) @ rot, np.eye(3), atol=1e-9)
     assert not collides(points, cands.poses, GRIPPER).any()
+
+
+def test_the_batched_collision_check_equals_the_per_pose_one():
+    from onepiece_dist.core.frames import in_box, pose_from_axes
+    from onepiece_dist.core.sampling import gripper_boxes
+
+    rng = np.random.default_rng(5)
+    points = rng.uniform(-0.06, 0.06, (3000, 3))
+    poses = pose_from_axes(rng.uniform(-0.1, 0.1, (2500, 3)), rng.normal(size=(2500, 3)), rng.normal(size=(2500, 3)))
+    expected = np.array([any(in_box(to_gripper_frame(points, pose[None])[0], lo, hi).any()
+                             for lo, hi in gripper_boxes(GRIPPER)) for pose in poses])
+    assert 0 < expected.sum() < len(poses)
+    assert np.array_equal(collides(points, poses, GRIPPER), expected)

@@ -56,3 +56,24 @@ def test_canonical_form_is_shared_by_a_code_and_its_turned_twin(seed):
     assert np.array_equal(canonical_codes(codes, GRID), canonical_codes(turned, GRID))
     canon = canonical_codes(codes, GRID)
     assert all(c.tobytes() in (a.tobytes(), b.tobytes()) for c, a, b in zip(canon, codes, turned, strict=True))
+
+
+def random_poses(rng: np.random.Generator, count: int, spread: float) -> np.ndarray:
+    return pose_from_axes(rng.uniform(-spread, spread, (count, 3)), rng.normal(size=(count, 3)),
+                          rng.normal(size=(count, 3)))
+
+
+def test_the_batched_crop_equals_the_per_pose_crop_through_the_index(monkeypatch):
+    from onepiece_dist.core import voxel
+
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-0.05, 0.05, (6000, 3))
+    poses = random_poses(rng, 700, 0.04)  # several batches of the dense path
+    monkeypatch.setattr(voxel, "DENSE_POINTS", 10**9)
+    dense = voxel.crop_regions(points, poses, (4, 8, 2), 0.01, keep_points=True)
+    monkeypatch.setattr(voxel, "DENSE_POINTS", 0)
+    indexed = voxel.crop_regions(points, poses, (4, 8, 2), 0.01, keep_points=True)
+    assert np.array_equal(dense[0], indexed[0]) and np.array_equal(dense[1], indexed[1])
+    assert dense[1].sum() > 0 and all(np.array_equal(a, b) for a, b in zip(dense[2], indexed[2], strict=True))
+    for pose, inside in zip(poses[:50], dense[2], strict=False):  # what crop_points gives, in its order
+        assert np.array_equal(inside, voxel.crop_points(points, pose, (4, 8, 2), 0.01))

@@ -50,6 +50,23 @@ def to_gripper_frame(points: np.ndarray, poses: np.ndarray) -> np.ndarray:
     return np.matmul(points[None, :, :], rot) - offset[:, None, :]
 
 
+def gripper_frame_batches(points: np.ndarray, poses: np.ndarray, pairs: int = 4_000_000):
+    """Every point in every gripper frame, as contiguous coordinate planes, a batch of poses at a time (about
+    ``pairs`` point-pose pairs each): one matrix product per batch instead of one per pose.
+
+    points : (m, 3) float, poses : (n, 4, 4) float
+    yields : (start, coords) with coords (3, k, m) float64, the u, v, t of each point in poses[start:start + k]
+    """
+    step = max(1, pairs // max(len(points), 1))
+    for start in range(0, len(poses), step):
+        rot = poses[start:start + step, :3, :3]
+        offset = np.einsum("nj,nji->ni", poses[start:start + step, :3, 3], rot)  # (k, 3), as to_gripper_frame
+        stacked = rot.transpose(2, 0, 1).reshape(-1, 3) @ points.T  # row j * k + pose: axis j of that pose
+        coords = stacked.reshape(3, len(rot), len(points))
+        coords -= offset.T[:, :, None]
+        yield start, coords
+
+
 def transform_points(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """Apply one (4, 4) transform to (m, 3) points."""
     return points @ pose[:3, :3].T + pose[:3, 3]

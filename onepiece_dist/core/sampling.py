@@ -10,13 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.frames import in_box, perpendicular, pose_from_axes, to_gripper_frame
+from onepiece_dist.core.frames import gripper_frame_batches, perpendicular, pose_from_axes
 from onepiece_dist.core.mesh import TriangleMesh
 from onepiece_dist.spec import GripperSpec, SamplerSpec
 
 _RAY_START = 1e-5
 _COLLISION_POINTS = 4000
-_POINTS_PER_BATCH = 4_000_000
+COLLISION_CASCADE = (128, 1024)  # prefixes of the probe points tried before all of them
 
 
 @dataclass(frozen=True)
@@ -146,14 +146,28 @@ def gripper_boxes(gripper: GripperSpec, opening: float | None = None) -> np.ndar
 
 
 def collides(points: np.ndarray, poses: np.ndarray, gripper: GripperSpec) -> np.ndarray:
-    """(n,) bool: does any of the (m, 3) object points lie inside the open gripper at each pose?"""
-    boxes = gripper_boxes(gripper)
+    """(n,) bool: does any of the (m, 3) object points lie inside the open gripper at each pose?
+
+    A cascade, exact: the first COLLISION_CASCADE[0] points are tried on every pose, and only the poses they leave
+    free meet the next, larger prefix (a pose that meets a point of a prefix meets one of the whole set; the probe
+    points are in random order, so a small prefix already finds most collisions)."""
     hit = np.zeros(len(poses), dtype=bool)
-    step = max(1, _POINTS_PER_BATCH // max(len(points), 1))
-    for start in range(0, len(poses), step):
-        pts_g = to_gripper_frame(points, poses[start:start + step])
-        inside = np.zeros(pts_g.shape[:2], dtype=bool)
+    undecided = np.arange(len(poses))
+    for size in (*COLLISION_CASCADE, len(points)):
+        found = _collides_all(points[:size], poses[undecided], gripper_boxes(gripper))
+        hit[undecided[found]] = True
+        undecided = undecided[~found]
+        if size >= len(points) or len(undecided) == 0:
+            break
+    return hit
+
+
+def _collides_all(points: np.ndarray, poses: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    hit = np.zeros(len(poses), dtype=bool)
+    for start, (u, v, t) in gripper_frame_batches(points, poses):
+        inside = np.zeros(u.shape, dtype=bool)
         for lower, upper in boxes:
-            inside |= in_box(pts_g, lower, upper)
-        hit[start:start + step] = inside.any(axis=1)
+            inside |= (u >= lower[0]) & (u < upper[0]) & (v >= lower[1]) & (v < upper[1]) & (t >= lower[2]) & (
+                t < upper[2])
+        hit[start:start + len(u)] = inside.any(axis=1)
     return hit

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from onepiece_dist.core.frames import closing_region_bounds, to_gripper_frame
+from onepiece_dist.core.frames import closing_region_bounds, gripper_frame_batches, to_gripper_frame
 from onepiece_dist.core.spatial import PointGrid, posed_box_bounds
 
 
@@ -55,6 +55,9 @@ def voxel_indices(points_g: np.ndarray, grid_shape: tuple[int, int, int], resolu
     return np.where(inside, flat, -1)
 
 
+DENSE_POINTS = 50_000  # clouds up to this size are cropped for a whole batch of poses in one matrix product
+
+
 def crop_codes(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int],
                resolution: float) -> tuple[np.ndarray, np.ndarray]:
     """Voxel codes of an object's surface points seen from many gripper poses.
@@ -63,15 +66,53 @@ def crop_codes(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int
     poses : (n, 4, 4) float gripper poses in the object frame
     returns : codes (n, B) uint8, counts (n,) int64 points inside each closing region
     """
+    codes, counts, _ = crop_regions(points, poses, grid_shape, resolution)
+    return codes, counts
+
+
+def crop_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int], resolution: float,
+                 keep_points: bool = False) -> tuple[np.ndarray, np.ndarray, list[np.ndarray] | None]:
+    """:func:`crop_codes`, and with ``keep_points`` the gripper-frame points inside each pose's closing region
+    ((k_i, 3) float64 per pose, in point order, as :func:`crop_points` gives them). Clouds of up to DENSE_POINTS
+    points are transformed for a batch of poses at once; larger ones (the one object) through a grid index, so
+    each pose costs what is near it."""
     nvox = int(np.prod(grid_shape))
     occupancy = np.zeros((len(poses), nvox), dtype=bool)
     counts = np.zeros(len(poses), dtype=np.int64)
-    for k, inside in enumerate(_points_near_regions(points, poses, grid_shape, resolution)):
+    kept: list[np.ndarray] | None = [] if keep_points else None
+    regions = (_dense_regions if len(points) <= DENSE_POINTS else _indexed_regions)(points, poses, grid_shape,
+                                                                                   resolution)
+    for rows, inside in regions:  # rows (q,) pose of each inside point, in pose then point order
         flat = voxel_indices(inside, grid_shape, resolution)
-        flat = flat[flat >= 0]
-        occupancy[k, flat] = True
-        counts[k] = len(flat)
-    return np.packbits(occupancy, axis=1, bitorder="big"), counts
+        occupancy[rows, flat] = True
+        counts += np.bincount(rows, minlength=len(poses))
+        if kept is not None:
+            kept.append(inside)
+    if kept is not None:
+        stacked = np.concatenate(kept) if kept else np.zeros((0, 3))
+        kept = np.split(stacked, np.cumsum(counts)[:-1])
+    return np.packbits(occupancy, axis=1, bitorder="big"), counts, kept
+
+
+def _dense_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int], resolution: float):
+    """(rows, inside points) per batch of poses: every point transformed, those in the closing region kept."""
+    a, b, c = grid_shape
+    lower, upper = closing_region_bounds(a * resolution, b * resolution, c * resolution)
+    for start, (u, v, t) in gripper_frame_batches(points, poses):
+        slab = t >= lower[2]  # the region is thin along t: test it first, then the rest on the few that pass
+        slab &= t < upper[2]
+        pairs = np.flatnonzero(slab)  # pose-major, so pose then point order
+        u, v, t = u.ravel()[pairs], v.ravel()[pairs], t.ravel()[pairs]
+        inside = (u >= lower[0]) & (u < upper[0]) & (v >= lower[1]) & (v < upper[1])
+        pairs = pairs[inside]
+        yield start + pairs // len(points), np.stack([u[inside], v[inside], t[inside]], axis=1)
+
+
+def _indexed_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int], resolution: float):
+    """(rows, inside points) per pose, from the points near each posed closing region."""
+    for k, near in enumerate(_points_near_regions(points, poses, grid_shape, resolution)):
+        inside = near[voxel_indices(near, grid_shape, resolution) >= 0]
+        yield np.full(len(inside), k, dtype=np.int64), inside
 
 
 def _points_near_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int],
@@ -82,7 +123,7 @@ def _points_near_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tupl
     lower, upper = closing_region_bounds(a * resolution, b * resolution, c * resolution)
     index = PointGrid(points, float(np.max(upper - lower)))
     for pose in poses:
-        near = points[index.in_box(*posed_box_bounds(lower, upper, pose))]
+        near = points[np.sort(index.in_box(*posed_box_bounds(lower, upper, pose)))]  # in point order
         yield to_gripper_frame(near, pose[None])[0]
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_points, sample_surface
 from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_candidates
-from onepiece_dist.core.voxel import canonical_codes, crop_codes, crop_points
+from onepiece_dist.core.voxel import canonical_codes, crop_regions
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
 from onepiece_dist.service.results import ObjectResult, part_key
@@ -58,16 +58,16 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
     views = _render_views(spec, mesh)
     clouds, source = crop_sources(spec, points, views, grasps["pose"])
     grid, res = spec.grid_shape(), spec.voxel.resolution
-    codes, counts = crop_codes_from(clouds, source, grasps["pose"], grid, res)
-    static, _ = crop_codes_from(clouds, source, grasps["candidate_pose"], grid, res)
+    codes, counts, inside = crop_codes_from(clouds, source, grasps["pose"], grid, res, keep_points=True)
+    static, _, _ = crop_codes_from(clouds, source, grasps["candidate_pose"], grid, res)
     keep = counts > 0
     grasps = {name: value[keep] for name, value in grasps.items()}
-    codes, static, source = codes[keep], static[keep], source[keep]
+    codes, static = codes[keep], static[keep]
     if spec.voxel.canonical:
         codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
     arrays = grasp_arrays({**grasps, "code": codes, "candidate_code": static})
     if spec.sim.points_per_grasp:
-        arrays["points"] = _grasp_points(clouds, source, grasps["pose"], spec, rng)
+        arrays["points"] = _grasp_points([inside[i] for i in np.flatnonzero(keep)], spec.sim.points_per_grasp, rng)
     if views is not None:
         arrays.update({"view_camera": views.cameras, "view_points": views.points, "view_of_point": views.point_view})
     arrays.update({"object_surface": points, "object_piece_vertices": np.vstack(pieces),  # patches are cut from these
@@ -130,24 +130,25 @@ def crop_sources(spec: JobSpec, points: np.ndarray, views, poses: np.ndarray) ->
 
 
 def crop_codes_from(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndarray, grid: tuple[int, int, int],
-                    resolution: float) -> tuple[np.ndarray, np.ndarray]:
-    """crop_codes with pose i cropped from ``clouds[source[i]]``; poses of one cloud are cropped together."""
+                    resolution: float, keep_points: bool = False):
+    """crop_regions with pose i cropped from ``clouds[source[i]]``; poses of one cloud are cropped together.
+    -> codes (N, B) uint8, counts (N,) int64, and with ``keep_points`` each pose's inside points (else None)."""
     codes = np.zeros((len(poses), (int(np.prod(grid)) + 7) // 8), dtype=np.uint8)
     counts = np.zeros(len(poses), dtype=np.int64)
+    inside: list = [None] * len(poses)
     for k in np.unique(source):
         rows = np.flatnonzero(source == k)
-        codes[rows], counts[rows] = crop_codes(clouds[k], poses[rows], grid, resolution)
-    return codes, counts
+        codes[rows], counts[rows], found = crop_regions(clouds[k], poses[rows], grid, resolution, keep_points)
+        for row, points in zip(rows, found or [], strict=False):
+            inside[row] = points
+    return codes, counts, inside if keep_points else None
 
 
-def _grasp_points(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndarray, spec: JobSpec,
-                  rng: np.random.Generator) -> np.ndarray:
-    """(n, P, 3) float16 gripper-frame points inside the closing region at each pose, resampled to P."""
-    count = spec.sim.points_per_grasp
-    out = np.zeros((len(poses), count, 3), dtype=np.float16)
-    for i, (k, pose) in enumerate(zip(source, poses, strict=True)):
-        inside = crop_points(clouds[k], pose, spec.grid_shape(), spec.voxel.resolution)
-        out[i] = resample_points(inside, count, rng)
+def _grasp_points(inside: list[np.ndarray], count: int, rng: np.random.Generator) -> np.ndarray:
+    """(n, P, 3) float16: each grasp's gripper-frame points inside its closing region, resampled to P."""
+    out = np.zeros((len(inside), count, 3), dtype=np.float16)
+    for i, points in enumerate(inside):
+        out[i] = resample_points(points, count, rng)
     return out
 
 
