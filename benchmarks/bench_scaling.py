@@ -62,9 +62,9 @@ def main() -> dict:
     efficiency = two["objects_per_second"] / (2 * one["objects_per_second"])
     out = {"benchmark": "scaling", "date": date.today().isoformat(), "machine": f"{platform.machine()}, "
            f"{os.cpu_count()} cores", "objects": OBJECTS, "grasps_per_object": GRASPS, "runs": [one, two],
-           "parallel_efficiency_2_workers": round(efficiency, 3), "target_efficiency": 0.85,
+           "parallel_efficiency_2_workers": round(efficiency, 3), "target_efficiency": 0.9,
            "label_speedup_2_workers": round(one["label_seconds"] / two["label_seconds"], 3),
-           "target_label_speedup": 1.7,
+           "target_label_speedup": 1.8,  # issue 16: 90% efficiency at 2 workers, extraction and labelling
            "command": "python benchmarks/bench_scaling.py"}
     (Path(__file__).parent / "results" / "scaling.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))

@@ -15,7 +15,8 @@ def load_report():
 
 def test_every_committed_result_renders_with_its_command_and_date():
     page = load_report().render()
-    for title in ("End to end", "Exact dedup", "Global merge", "Grasp trials", "Service scaling",
+    for title in ("End to end", "Candidate generation and extraction overhead", "Exact dedup", "Global merge",
+                  "Grasp trials", "Service scaling",
                   "Similar-shape filter", "Storage per grasp"):
         assert f"## {title}: `python benchmarks/" in page
     assert "Not run yet" not in page
