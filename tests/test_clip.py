@@ -55,3 +55,33 @@ def test_clipped_points_lie_in_the_box_and_the_inner_points_are_kept(seed):
     assert np.all((clipped >= lower - 1e-12) & (clipped <= upper + 1e-12))
     inside = piece[np.all((piece > lower) & (piece < upper), axis=1)]
     assert as_set(inside) <= as_set(clipped)
+
+
+def reference_hull_2d(points: np.ndarray) -> np.ndarray:
+    """Andrew's monotone chain over every point, as clip.py had it before the interior filter."""
+    _, unique = np.unique(np.round(points, 12), axis=0, return_index=True)
+    order = unique[np.lexsort((points[unique, 1], points[unique, 0]))]
+
+    def chain(indices):
+        hull = []
+        for i in indices:
+            while len(hull) >= 2 and ((points[hull[-1], 0] - points[hull[-2], 0]) * (points[i, 1] - points[hull[-2], 1])
+                                      - (points[hull[-1], 1] - points[hull[-2], 1])
+                                      * (points[i, 0] - points[hull[-2], 0])) <= 0:
+                hull.pop()
+            hull.append(int(i))
+        return hull
+
+    return np.array(chain(order)[:-1] + chain(order[::-1])[:-1])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_2d_hull_skips_inner_points_and_gives_the_same_vertices(seed):
+    from onepiece_dist.core.clip import _hull_2d
+
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-0.02, 0.02, (400, 2))
+    points = np.vstack([points, points[:20], [[-0.03, 0.0], [-0.03, 0.01], [-0.03, -0.01]]])  # duplicates, collinear
+    if seed % 2:
+        points = np.round(points, 3)  # a grid: many collinear points on the hull
+    assert np.array_equal(_hull_2d(points), reference_hull_2d(points))

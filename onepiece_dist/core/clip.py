@@ -54,21 +54,42 @@ def _hull_2d(points: np.ndarray) -> np.ndarray:
     order = unique[np.lexsort((points[unique, 1], points[unique, 0]))]
     if len(order) < 3:
         return order
+    order = order[~_inside_extremes(points[order])]  # Akl-Toussaint: most cut points are inside the cap
 
-    def chain(indices) -> list[int]:
+    xy = points.tolist()  # plain floats: the same IEEE arithmetic as numpy's, without a scalar per access
+
+    def chain(indices: list[int]) -> list[int]:
         hull: list[int] = []
         for i in indices:
-            while len(hull) >= 2 and _cross(points[hull[-2]], points[hull[-1]], points[i]) <= 0:
+            px, py = xy[i]
+            while len(hull) >= 2:
+                (ox, oy), (ax, ay) = xy[hull[-2]], xy[hull[-1]]
+                if (ax - ox) * (py - oy) - (ay - oy) * (px - ox) > 0:  # a left turn: keep
+                    break
                 hull.pop()
-            hull.append(int(i))
+            hull.append(i)
         return hull
 
-    lower, upper = chain(order), chain(order[::-1])
+    ordered = order.tolist()
+    lower, upper = chain(ordered), chain(ordered[::-1])
     return np.array(lower[:-1] + upper[:-1], dtype=np.int64)
 
 
-def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+def _inside_extremes(points: np.ndarray, margin: float = 1e-12) -> np.ndarray:
+    """(n,) bool: points strictly inside (by ``margin``) the polygon of the extreme points in eight directions
+    (Akl-Toussaint). That polygon lies in the hull, so its interior lies in the hull's interior: none of these
+    points is a hull vertex, and the monotone chain gives the same hull without them."""
+    x, y = points[:, 0], points[:, 1]
+    extremes = [np.argmin(x), np.argmin(x + y), np.argmin(y), np.argmax(x - y), np.argmax(x), np.argmax(x + y),
+                np.argmax(y), np.argmin(x - y)]  # counter-clockwise around the hull
+    corners = [int(i) for k, i in enumerate(extremes) if i != extremes[k - 1]]
+    inside = np.zeros(len(points), dtype=bool)
+    if len(set(corners)) < 3:
+        return inside
+    inside[:] = True
+    for a, b in zip(points[corners], np.roll(points[corners], -1, axis=0), strict=True):
+        inside &= (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]) > margin
+    return inside
 
 
 def hull_mesh(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
