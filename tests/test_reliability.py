@@ -45,7 +45,8 @@ def test_disk_full_fails_clearly_commits_nothing_partial_and_resume_gives_the_sa
     with pytest.raises(JobError, match="No space left on device"):
         run_local(spec)
     parts = PartStore(f"{spec.output}.parts")
-    assert len(parts.committed_keys()) == 2 and not list(parts.folder.glob(".tmp-*"))
+    committed_before = len(parts.committed_keys())
+    assert committed_before == 2 and not list(parts.folder.glob(".tmp-*"))
     assert read_status(spec.output).state == "failed"
     monkeypatch.setattr(parts_module, "write_array", original)  # space freed
     resumed = run_local(spec)
@@ -53,7 +54,7 @@ def test_disk_full_fails_clearly_commits_nothing_partial_and_resume_gives_the_sa
     clean = spec_at(spec_factory, tmp_path, "clean")
     run_local(clean)
     assert same(spec.output, clean.output)
-    record_figure(f"{len(parts.committed_keys())} parts committed before ENOSPC, 0 temporaries, "
+    record_figure(f"{committed_before} parts committed before ENOSPC, 0 temporaries, "
                   f"{resumed.progress.objects_reused} reused on resume, identical dataset")
 
 
