@@ -8,6 +8,9 @@
    must agree).
 2. A profile of `extract_arrays` on the same object (cProfile, one core): seconds per part (sampling, physics,
    crops, the rest) and candidates/s, so the page shows what is left that is not the physics.
+3. A profile of the label stage's work on the one object (`label_patches` on three shards of a 4-object job's
+   one object): per patch, the trials (physics) against the set-up around them (loading the patch, crops, rows),
+   and label trials/s against the protocol's rate on whole objects (benchmarks/results/sim.json).
 Single-threaded BLAS (one core). Writes benchmarks/results/candidates.json. Target (issue 16): >= 10,000
 candidates/s/core.
 """
@@ -105,6 +108,34 @@ def profile(spec: JobSpec, mesh) -> dict:
             "physics_share": round(parts["physics"] / total, 3)}
 
 
+def label_profile() -> dict:
+    from onepiece_dist.service.label_one import label_patches, label_tasks
+    from onepiece_dist.service.local import run_local
+
+    output = str(Path(tempfile.mkdtemp(prefix="onepiece-label-")) / "one.zarr")
+    spec = JobSpec(objects="pybullet:random_urdfs[0:4]", grasps_per_object=200, output=output,
+                   stages=("ingest", "extract", "dedup", "assemble"))
+    run_local(spec)
+    tasks = label_tasks(spec, output)
+    label_patches(spec, tasks[0])  # warm: the one object read once per process, the world built
+    prof = cProfile.Profile()
+    start = time.perf_counter()
+    prof.enable()
+    for task in tasks[1:4]:
+        label_patches(spec, task)
+    prof.disable()
+    total = time.perf_counter() - start
+    patches = sum(task.stop - task.start for task in tasks[1:4])
+    trials = patches * (1 + spec.sim.perturbations_per_patch) * spec.sim.label_trials
+    physics = _own_time(pstats.Stats(prof).stats, "sim/trials.py")
+    protocol = json.loads((HERE / "results" / "sim.json").read_text())["label_trials_per_s_per_core"]
+    return {"patches": patches, "trials_per_patch": trials // patches, "seconds": round(total, 3),
+            "ms_per_patch": round(1000 * total / patches, 1), "trials_ms_per_patch": round(1000 * physics / patches, 1),
+            "setup_share": round(1 - physics / total, 3), "label_trials_per_s_per_core": round(trials / total, 1),
+            "protocol_label_trials_per_s_per_core": protocol,
+            "rate_over_protocol": round(trials / total / protocol, 3)}
+
+
 def _own_time(stats: dict, fragment: str) -> float:
     """Cumulative seconds of the outermost calls into files matching ``fragment`` (their callees included)."""
     total = 0.0
@@ -123,7 +154,8 @@ def main() -> None:
     result = {"command": f"python benchmarks/bench_candidates.py --candidates {args.candidates}",
               "date": str(date.today()), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
               "object": OBJECT, "target_candidates_per_s_per_core": TARGET,
-              "generation": generation(spec, mesh, args.candidates), "extract_profile": profile(spec, mesh)}
+              "generation": generation(spec, mesh, args.candidates), "extract_profile": profile(spec, mesh),
+              "label_profile": label_profile(), "targets": {"label_setup_share": 0.2, "label_rate_over_protocol": 0.8}}
     (HERE / "results" / "candidates.json").write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps(result, indent=2))
 

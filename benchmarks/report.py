@@ -204,7 +204,23 @@ def candidates_section(r: dict) -> list[str]:
                                                   for name, sec in parts.items()]), "",
             "Parts: sampling (core/sampling.py: ray casting, poses, collision check), physics (sim/: the closing "
             "and settling trials in pybullet), crops (core/voxel.py: codes at the settled and the candidate pose, "
-            "the settled crop's points), rest (loading, writing, bookkeeping)."]
+            "the settled crop's points), rest (loading, writing, bookkeeping).", *_label_lines(r)]
+
+
+def _label_lines(r: dict) -> list[str]:
+    lab, t = r.get("label_profile"), r.get("targets", {})
+    if not lab:
+        return []
+    setup, ratio = lab["setup_share"], lab["rate_over_protocol"]
+    return ["", f"Label stage on the one object ({lab['patches']} patches of a 4-object job, "
+            f"{lab['trials_per_patch']} trials each, one core, cProfile): {lab['ms_per_patch']} ms per patch, of "
+            f"which the trials {lab['trials_ms_per_patch']} ms; set-up around them {setup:.1%} of the time (target "
+            f"below {t['label_setup_share']:.0%}: {met(-setup, -t['label_setup_share'])}). "
+            f"{lab['label_trials_per_s_per_core']} label trials/s/core, {ratio:.2f} of the protocol's "
+            f"{lab['protocol_label_trials_per_s_per_core']}/s on whole objects "
+            f"(target {t['label_rate_over_protocol']}: {met(ratio, t['label_rate_over_protocol'])}): a trial on a "
+            "patch (a compound of convex pieces) costs more physics than on a whole object; the set-up is not where "
+            "the time goes."]
 
 
 def train_section(r: dict) -> list[str]:
