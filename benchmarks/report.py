@@ -194,7 +194,8 @@ def candidates_section(r: dict) -> list[str]:
     return [f"## Candidate generation and extraction overhead: {provenance(r)}", "",
             f"{r['object']}, {g['surface_points']:,} surface points, one core (single-threaded BLAS).", "",
             f"Candidate generation (antipodal sampling, open-gripper collision check): {g['candidates']:,} "
-            f"candidates from {g['poses_tested']:,} poses in {g['seconds']} s: {rate:,} candidates/s/core (target "
+            f"candidates from {g['poses_tested']:,} poses in {g['seconds']} s (median of {g.get('repeats', 1)} runs): "
+            f"{rate:,} candidates/s/core (target "
             f"{target:,}: {met(rate, target)}). The collision check alone, on {g['collision_check_poses']:,} raw "
             f"poses ({g['colliding_share']:.0%} colliding): {g['collision_check_speedup_vs_per_pose']}x the "
             "per-pose check it replaced (same run, same answers).", "",

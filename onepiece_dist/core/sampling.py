@@ -164,7 +164,7 @@ def collides(points: np.ndarray, poses: np.ndarray, gripper: GripperSpec) -> np.
 
 def _collides_all(points: np.ndarray, poses: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     hit = np.zeros(len(poses), dtype=bool)
-    for start, (u, v, t) in gripper_frame_batches(points, poses):
+    for start, (u, v, t) in gripper_frame_batches(points, poses, pairs=100_000):  # the fastest here
         inside = np.zeros(u.shape, dtype=bool)
         for lower, upper in boxes:
             inside |= (u >= lower[0]) & (u < upper[0]) & (v >= lower[1]) & (v < upper[1]) & (t >= lower[2]) & (
