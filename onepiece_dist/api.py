@@ -110,8 +110,8 @@ def _driver_alive(driver: str) -> bool:
         os.kill(int(pid), 0)
     except ProcessLookupError:
         return False
-    except PermissionError:
-        return True
+    except PermissionError:  # alive, someone else's
+        pass
     return True
 
 
@@ -213,11 +213,18 @@ class Client:
     def _ray_state(self, job_id: str) -> str | None:
         """The Jobs API's state of ``job_id`` in our words, or None when the cluster has no such job."""
         try:
-            return _RAY_JOB_STATES.get(str(self.jobs_api().get_job_status(job_id)).split(".")[-1], "pending")
+            return _our_state(self.jobs_api().get_job_status(job_id))
         except RuntimeError as err:
             if "does not exist" in str(err) or "not found" in str(err).lower():
                 return None
             raise
+
+    def _existing_state(self, job_id: str) -> str:
+        """:meth:`_ray_state`, raising JobNotFound when the cluster has no such job."""
+        state = self._ray_state(job_id)
+        if state is None:
+            raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
+        return state
 
     def cluster_info(self, timeout: float = 120.0) -> dict:
         """The cluster's package version and job registry (``{"version", "jobs": {id: status}}``), read inside the
@@ -226,7 +233,7 @@ class Client:
         api, reader = self.jobs_api(), f"onepiece-info-{uuid.uuid4().hex[:12]}"
         api.submit_job(entrypoint="python -m onepiece_dist.cli cluster-info --address auto", submission_id=reader)
         deadline = time.monotonic() + timeout
-        while _RAY_JOB_STATES.get(str(api.get_job_status(reader)).split(".")[-1]) not in TERMINAL:
+        while _our_state(api.get_job_status(reader)) not in TERMINAL:
             if time.monotonic() > deadline:
                 raise TimeoutError(f"reading the job registry at {self.address} took over {timeout} s")
             time.sleep(0.2)
@@ -265,9 +272,7 @@ class Client:
             if found is None and output and status_path(output).is_file():
                 found = read_status(output)
             return found or JobStatus(job_id=job_id, state="pending", output=output or "")
-        ray_state = self._ray_state(job_id)
-        if ray_state is None:
-            raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
+        ray_state = self._existing_state(job_id)
         reported = self.cluster_info()["jobs"].get(job_id)
         info = self.jobs_api().get_job_info(job_id)
         status = (JobStatus.model_validate(reported) if reported
@@ -283,9 +288,7 @@ class Client:
         """Block until the cluster's job ends (polling the Jobs API); its final status. TimeoutError after
         ``timeout`` s, JobNotFound when there is no such job."""
         deadline = None if timeout is None else time.monotonic() + timeout
-        while (state := self._ray_state(job_id)) not in TERMINAL:
-            if state is None:
-                raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
+        while (state := self._existing_state(job_id)) not in TERMINAL:
             if deadline is not None and time.monotonic() > deadline:
                 raise TimeoutError(f"job {job_id} still {state} after {timeout} s")
             time.sleep(poll)
@@ -303,9 +306,7 @@ class Client:
             if registry is None or not registry.request_cancel(job_id):
                 raise JobNotFound(f"no job {job_id} in this process's Ray")
             return "running"
-        state = self._ray_state(job_id)
-        if state is None:
-            raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
+        state = self._existing_state(job_id)
         if state not in TERMINAL:
             self.jobs_api().stop_job(job_id)
         return state
@@ -320,7 +321,7 @@ class Client:
         for job in self.jobs_api().list_jobs():
             if not job.submission_id or job.submission_id.startswith("onepiece-info-"):
                 continue
-            state = _RAY_JOB_STATES.get(str(job.status).split(".")[-1], "pending")
+            state = _our_state(job.status)
             found = reported.get(job.submission_id) or {"job_id": job.submission_id, "state": state,
                                                         "output": (job.metadata or {}).get("output", "")}
             rows.append(_job_row({**found, "state": state if state in TERMINAL else found["state"]}))
@@ -345,6 +346,11 @@ class Client:
             while queue:
                 yield queue.pop(0)
             thread.join(0.2)
+
+
+def _our_state(ray_status) -> str:
+    """A Jobs API status (``JobStatus.RUNNING``...) in our words."""
+    return _RAY_JOB_STATES.get(str(ray_status).split(".")[-1], "pending")
 
 
 def _job_row(status: dict) -> dict:

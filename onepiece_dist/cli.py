@@ -17,11 +17,18 @@ from onepiece_dist.cli_common import (
     EXIT_TABLE,
     EXIT_USAGE,
     Address,
+    Grasps,
+    JobId,
+    Objects,
     ProgressDisplay,
+    Seed,
+    SpecFile,
+    Stages,
     err,
     exit_codes,
     spec_default,
     spec_or_exit,
+    spec_overrides,
 )
 from onepiece_dist.cli_jobs import register as register_job_commands
 from onepiece_dist.errors import JobError, JobNotFound, SourceError, SpecError, StoreError
@@ -50,25 +57,21 @@ def main_options(
 
 @app.command()
 def run(
-    spec_file: Annotated[Path | None, typer.Argument(metavar="[SPEC]", help="YAML or JSON job spec.")] = None,
-    objects: Annotated[str | None, typer.Option(help=f"Object source: built-in set, folder or glob. "
-                                                     f"{spec_default('objects')}")] = None,
+    spec_file: SpecFile = None,
+    objects: Objects = None,
     out: Annotated[str | None, typer.Option(help=f"Dataset path (Zarr directory). {spec_default('output')}")] = None,
-    grasps: Annotated[int | None, typer.Option(help=f"Grasp candidates per object. "
-                                                    f"{spec_default('grasps_per_object')}")] = None,
-    seed: Annotated[int | None, typer.Option(help=f"Random seed. {spec_default('seed')}")] = None,
-    stages: Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup. "
-                                                    "(default: all)")] = None,
+    grasps: Grasps = None,
+    seed: Seed = None,
+    stages: Stages = None,
     address: Address = None,
-    job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
+    job_id: JobId = None,
     workers: Annotated[int | None, typer.Option(help="Extraction workers (default: the cluster's CPUs).")] = None,
     spec_json: Annotated[str | None, typer.Option(hidden=True, help="The whole spec as JSON (used by submit).")] = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the final status as JSON on stdout.")] = False,
 ) -> None:
     """Run a job end to end (embedded Ray on 127.0.0.1 unless --address) and print the dataset path."""
-    overrides = {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed,
-                 "stages": stages.split(",") if stages else None}
+    overrides = spec_overrides(objects, out, grasps, seed, stages)
     spec = spec_or_exit(spec_file, overrides, spec_json)
     _run_and_report(spec, address, job_id, workers, in_process, as_json)
 

@@ -55,6 +55,22 @@ def build_spec(spec_file: Path | None, overrides: dict[str, Any]):
     return parse_job_spec(given, "command line")
 
 
+SpecFile = Annotated[Path | None, typer.Argument(metavar="[SPEC]", help="YAML or JSON job spec.")]
+Objects = Annotated[str | None, typer.Option(help=f"Object source: built-in set, folder or glob. "
+                                                  f"{spec_default('objects')}")]
+Grasps = Annotated[int | None, typer.Option(help=f"Grasp candidates per object. {spec_default('grasps_per_object')}")]
+Seed = Annotated[int | None, typer.Option(help=f"Random seed. {spec_default('seed')}")]
+Stages = Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup. (default: all)")]
+JobId = Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")]
+
+
+def spec_overrides(objects: str | None, out: str | None, grasps: int | None, seed: int | None,
+                   stages: str | None) -> dict[str, Any]:
+    """The spec fields that the job options of run and submit set (None: keep the spec's)."""
+    return {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed,
+            "stages": stages.split(",") if stages else None}
+
+
 def spec_or_exit(spec_file: Path | None, overrides: dict, spec_json: str | None = None):
     try:
         if spec_json is not None:

@@ -13,12 +13,18 @@ import typer
 from onepiece_dist.cli_common import (
     EXIT_USAGE,
     Address,
+    Grasps,
+    JobId,
+    Objects,
+    Seed,
+    SpecFile,
+    Stages,
     err,
     exit_codes,
     exit_for,
     print_status,
-    spec_default,
     spec_or_exit,
+    spec_overrides,
 )
 
 Timeout = Annotated[float | None, typer.Option(help="Give up after this many seconds (exit 4).")]
@@ -34,16 +40,14 @@ def cluster_call(action, address: str | None):
 
 
 def submit(
-    spec_file: Annotated[Path | None, typer.Argument(metavar="[SPEC]", help="YAML or JSON job spec.")] = None,
+    spec_file: SpecFile = None,
     address: Address = None,
-    objects: Annotated[str | None, typer.Option(help=f"Object source. {spec_default('objects')}")] = None,
+    objects: Objects = None,
     out: Annotated[str | None, typer.Option(help="Dataset path as the cluster's nodes see it; absolute.")] = None,
-    grasps: Annotated[int | None, typer.Option(help=f"Grasp candidates per object. "
-                                                    f"{spec_default('grasps_per_object')}")] = None,
-    seed: Annotated[int | None, typer.Option(help=f"Random seed. {spec_default('seed')}")] = None,
-    stages: Annotated[str | None, typer.Option(help="Comma-separated stages, e.g. ingest,extract,dedup. "
-                                                    "(default: all)")] = None,
-    job_id: Annotated[str | None, typer.Option(help="Job id (default: derived from the spec).")] = None,
+    grasps: Grasps = None,
+    seed: Seed = None,
+    stages: Stages = None,
+    job_id: JobId = None,
     wait_for_it: Annotated[bool, typer.Option("--wait", help="Wait for the job to end; exit with its code.")] = False,
     timeout: Timeout = None,
     as_json: AsJson = False,
@@ -52,8 +56,7 @@ def submit(
     if not address:
         err("error: submit needs --address (the cluster's Jobs API, e.g. http://127.0.0.1:8265) or RAY_ADDRESS")
         raise typer.Exit(EXIT_USAGE)
-    spec = spec_or_exit(spec_file, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed,
-                                    "stages": stages.split(",") if stages else None})
+    spec = spec_or_exit(spec_file, spec_overrides(objects, out, grasps, seed, stages))
     handle = cluster_call(lambda c: c.submit(spec, job_id=job_id, runtime_env=_worker_runtime_env()), address)
     if handle.note:
         err(handle.note)

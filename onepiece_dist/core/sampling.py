@@ -151,10 +151,10 @@ def collides(points: np.ndarray, poses: np.ndarray, gripper: GripperSpec) -> np.
     A cascade, exact: the first COLLISION_CASCADE[0] points are tried on every pose, and only the poses they leave
     free meet the next, larger prefix (a pose that meets a point of a prefix meets one of the whole set; the probe
     points are in random order, so a small prefix already finds most collisions)."""
-    hit = np.zeros(len(poses), dtype=bool)
+    hit, boxes = np.zeros(len(poses), dtype=bool), gripper_boxes(gripper)
     undecided = np.arange(len(poses))
     for size in (*COLLISION_CASCADE, len(points)):
-        found = _collides_all(points[:size], poses[undecided], gripper_boxes(gripper))
+        found = _collides_all(points[:size], poses[undecided], boxes)
         hit[undecided[found]] = True
         undecided = undecided[~found]
         if size >= len(points) or len(undecided) == 0:

@@ -21,7 +21,7 @@ import numpy as np
 from onepiece_dist.core.frames import perturb_pose
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
-from onepiece_dist.core.voxel import crop_codes, crop_points
+from onepiece_dist.core.voxel import crop_codes, crop_regions
 from onepiece_dist.service.patches import Patches, read_patches
 from onepiece_dist.service.results import LabelShardResult, LabelTask
 from onepiece_dist.service.status import LabelReport
@@ -155,8 +155,8 @@ def _collect(rows, k, placement, points, poses, batch, spec, rng) -> None:
     rows["candidate_pose"].append(placement @ poses[ok])
     for name in ("width", "shift", "quality", "slip", "success"):
         rows[name].append(getattr(batch, name)[ok])
-    rows["code"].append(crop_codes(points, settled, grid, res)[0])
+    codes, _, inside = crop_regions(points, settled, grid, res, keep_points=True)
+    rows["code"].append(codes)
     rows["candidate_code"].append(crop_codes(points, poses[ok], grid, res)[0])
     count = max(spec.sim.points_per_grasp, 1)
-    rows["points"].append(np.stack([resample_points(crop_points(points, p, grid, res), count, rng)
-                                    for p in settled]))
+    rows["points"].append(np.stack([resample_points(found, count, rng) for found in inside]))
