@@ -66,7 +66,7 @@ def main() -> dict:
             points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
             poses = sample_candidates(mesh, points, normals, GRASPS, spec.gripper, spec.sampler, rng).poses
             loaded.append((convex_pieces(mesh, Path(cache), "vhacd"), enclosed_volume(mesh), poses))
-            world.load_object(*loaded[-1][:2], 1.0)
+            world.load_object(*loaded[-1][:2], spec.sim.density)
             for name, run in (("extract", lambda p: run_trials(world, p)),
                               ("label", lambda p: run_trials(world, p, label=True)),
                               ("baseline", lambda p: baseline(world, p))):
@@ -106,7 +106,7 @@ def label_all(spec: JobSpec, loaded: list, physics: PhysicsSettings,
     rng = np.random.default_rng(7)
     seconds, success = 0.0, []
     for pieces, volume, poses in loaded:
-        world.load_object(pieces, volume, 1.0)
+        world.load_object(pieces, volume, spec.sim.density)
         moved = poses.copy()
         moved[:, :3, 3] += rng.normal(0, jitter, (len(poses), 3)) if jitter else 0.0
         start = time.perf_counter()

@@ -44,7 +44,9 @@ class GripperSpec(_Frozen):
     closing_depth: float = Field(0.04, gt=0, description="Closing region extent along u (m).")
     closing_width: float = Field(0.08, gt=0, description="Closing region extent along v (m).")
     closing_height: float = Field(0.02, gt=0, description="Closing region extent along t (m).")
-    friction: float = Field(1.0, gt=0, le=5, description="Finger pad friction coefficient.")
+    friction: float = Field(0.4, gt=0, le=5, description="Finger pad friction coefficient: rubber pads on "
+                            "smooth household surfaces (plastic, glass, glazed ceramic) are about 0.4 to 0.6; "
+                            "0.4 makes labels discriminate (docs/trials.md).")
     closing_force: float = Field(40.0, gt=0, le=1000, description="Force limit of each finger (N).")
     finger_mass: float = Field(0.02, gt=0, description="Mass of one finger (kg).")
 
@@ -111,6 +113,8 @@ class SimSpec(_Frozen):
                           "pose; false crops at the static candidate pose.")
     collision: Literal["vhacd", "hull"] = Field("vhacd", description="Object collision geometry: convex "
                                                 "decomposition (default) or the plain convex hull.")
+    density: float = Field(400.0, gt=10, le=20_000, description="Object density (kg/m^3) over the mesh's enclosed "
+                           "volume; mass clipped to 0.05-2 kg (docs/trials.md).")
     label: bool = Field(False, description="Also lift and shake each grasp and store success labels.")
     label_trials: int = Field(1, ge=1, le=32, description="K: label trials per grasp (the nominal one plus K-1 "
                               "with pose and friction noise); quality = success fraction.")

@@ -20,7 +20,7 @@ SPEC = JobSpec()
 def box_world():
     mesh = box_mesh((0.03, 0.05, 0.06))
     world = process_world(SPEC.gripper)
-    world.load_object([mesh.vertices], enclosed_volume(mesh), SPEC.gripper.friction)
+    world.load_object([mesh.vertices], enclosed_volume(mesh), SPEC.sim.density)
     return world
 
 
@@ -104,7 +104,7 @@ def test_a_box_cut_into_convex_pieces_is_held_like_the_whole_box():
     world = SimWorld(SPEC.gripper)
     results = []
     for pieces in (box_slabs(extents, 1), box_slabs(extents, 3)):
-        world.load_object(pieces, float(np.prod(extents)), SPEC.gripper.friction)
+        world.load_object(pieces, float(np.prod(extents)), SPEC.sim.density)
         results.append(run_trials(world, poses, label=True))
     world.close()
     whole, cut = results
@@ -144,7 +144,7 @@ def test_a_cylinder_is_held_across_its_diameter_and_missed_beside_it():
 
     mesh = cylinder_mesh(0.02, 0.1)  # axis z, centred at the origin
     world = SimWorld(SPEC.gripper)
-    world.load_object([mesh.vertices], enclosed_volume(mesh), SPEC.gripper.friction)
+    world.load_object([mesh.vertices], enclosed_volume(mesh), SPEC.sim.density)
     palm = 0.02 + SPEC.gripper.closing_depth - 0.025  # fingertips 2.5 cm past the near side
     side = pose_from_axes(np.array([[palm, 0, 0], [palm, 0, 0.08]]), np.array([[-1.0, 0, 0]] * 2),
                           np.array([[0, 1.0, 0]] * 2))  # approach along -x, close along y

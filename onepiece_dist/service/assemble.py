@@ -19,7 +19,6 @@ from onepiece_dist.errors import MissingAssembly
 from onepiece_dist.objects.meshio import write_obj, write_ply
 from onepiece_dist.service.patches import Patches, read_patches
 from onepiece_dist.service.status import AssemblyReport
-from onepiece_dist.sim.world import DENSITY
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.dataset import DatasetReader, write_group
 
@@ -126,7 +125,8 @@ def export_assembly(path: str | os.PathLike, fmt: str, out: str | os.PathLike) -
     mesh, collision = out.with_suffix(".obj"), out.with_name(f"{out.stem}.pieces.obj")
     write_obj(vertices, faces, mesh)
     write_pieces_obj(pieces, collision)
-    mass, com, inertia = solid_of_pieces(pieces, DENSITY)
+    density = JobSpec.model_validate(reader.attrs["job_spec"]).sim.density  # the density its labels used
+    mass, com, inertia = solid_of_pieces(pieces, density)
     out.write_text(URDF_TEMPLATE.format(
         com=" ".join(f"{x:.6g}" for x in com), mass=mass, mesh=mesh.name, pieces=collision.name,
         ixx=inertia[0, 0], ixy=inertia[0, 1], ixz=inertia[0, 2], iyy=inertia[1, 1], iyz=inertia[1, 2],

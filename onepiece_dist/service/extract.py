@@ -95,7 +95,7 @@ def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
     from onepiece_dist.sim.world import process_world
 
     world = process_world(spec.gripper)
-    world.load_object(pieces, enclosed_volume(mesh), spec.gripper.friction)
+    world.load_object(pieces, enclosed_volume(mesh), spec.sim.density)
     noise = LabelNoise.from_spec(spec.sim)
     batch = run_trials(world, cands.poses, label=spec.sim.label, noise=noise,
                        rng=object_rng(mesh.content_id, spec.seed, stream=1))

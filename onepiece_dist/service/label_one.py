@@ -113,7 +113,7 @@ def label_patches(spec: JobSpec, task: LabelTask) -> dict[str, np.ndarray]:
     for k in range(task.start, task.stop):
         if not patch_set.pieces[k]:
             continue  # nothing of the source object in the patch box: nothing to grasp
-        world.load_object(patch_set.pieces[k], float(patch_set.source_volume[k]), spec.gripper.friction)
+        world.load_object(patch_set.pieces[k], float(patch_set.source_volume[k]), spec.sim.density)
         rng = object_rng(f"{k:032x}", spec.seed, stream=2)
         poses = perturbed_poses(spec.sim.perturbations_per_patch, rng)
         batch = run_trials(world, poses, label=True, noise=noise, rng=rng)

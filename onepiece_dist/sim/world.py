@@ -28,7 +28,6 @@ TIME_STEP = 1.0 / 240.0
 SOLVER_ITERATIONS = 50
 CONE_FRICTION = False  # pyramid friction (two directions, each limited by mu N), as MuJoCo's default cone
 FINGER_COUPLING_FORCE = 1000.0  # N: the gear that keeps both fingers at the same opening
-DENSITY = 150.0  # kg/m^3, as ACRONYM
 MIN_MASS, MAX_MASS = 0.05, 2.0  # kg
 
 
@@ -124,24 +123,28 @@ class SimWorld:
         for link in (0, 1):
             pb.changeDynamics(self.gripper, link, lateralFriction=friction, physicsClientId=self.client)
 
-    def load_object(self, pieces: list[np.ndarray], volume: float, friction: float) -> None:
+    def load_object(self, pieces: list[np.ndarray], volume: float, density: float) -> None:
         """Replace the object by one rigid body whose collision shape is the compound of convex ``pieces``
-        ((k, 3) vertex arrays in the mesh frame; each piece is the hull of its points).
+        ((k, 3) vertex arrays in the mesh frame; each piece is the hull of its points), of mass ``density`` (kg/m^3)
+        times ``volume`` (m^3) clipped to [MIN_MASS, MAX_MASS].
 
         One body, not a body per piece joined by fixed joints: pybullet's fixed-joint chain lets the pieces give
         way under the fingers (a box cut into three slabs dropped a quarter of its centred grasps;
         tests/test_sim.py holds the cut box to the whole one).
+
+        The object's own friction coefficient is 1: Bullet multiplies the two bodies' coefficients at a contact,
+        so each finger contact has the pads' coefficient (``gripper.friction``), as the spec says.
         """
         if self.obj is not None:
             pb.removeBody(self.obj, physicsClientId=self.client)
         c = self.client
         self.com = np.vstack(pieces).mean(axis=0)
-        mass = float(np.clip(DENSITY * volume, MIN_MASS, MAX_MASS))
+        mass = float(np.clip(density * volume, MIN_MASS, MAX_MASS))
         with _hulls_file([p - self.com for p in pieces], self._scratch) as path:
             shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=path, physicsClientId=c)
             self.obj = pb.createMultiBody(baseMass=mass, baseCollisionShapeIndex=shape, basePosition=self.com.tolist(),
                                           useMaximalCoordinates=True, physicsClientId=c)
-        pb.changeDynamics(self.obj, -1, lateralFriction=friction, physicsClientId=c)
+        pb.changeDynamics(self.obj, -1, lateralFriction=1.0, physicsClientId=c)
 
     def object_pose(self) -> np.ndarray:
         """(4, 4) world pose of the object's mesh frame."""

@@ -1,0 +1,150 @@
+"""Training with a budget in gradient steps, held-out scoring and the statistics of benchmarks/paper_experiment.py.
+
+Every arm trains the same network for the same number of gradient steps; the checkpoint kept is the one with the
+lowest loss on the arm's own validation split (whole objects for A and R, whole patches for B): the only
+hyper-parameter chosen, and never on the held-out objects.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class TrainJob:
+    """One training run: ``rows`` of ``group`` in the dataset at ``path`` (None: all), scored on the held-out
+    dataset's grasps."""
+
+    arm: str
+    seed: int
+    path: str
+    group: str
+    rows: np.ndarray | None
+    heldout_path: str
+    model: str
+    steps: int
+    batch_size: int
+    learning_rate: float
+    validation: float
+    evaluations: int = 10
+
+
+def fit_and_score(job: TrainJob) -> dict:
+    """Train ``job.steps`` gradient steps, keep the best validation checkpoint, score every held-out grasp.
+    Runs on one CPU thread (the experiment runs two of these at once on two cores)."""
+    import torch
+
+    from onepiece_dist.learn.dataset import MODEL_INPUTS, GraspDataset, collate
+    from onepiece_dist.learn.models import MODELS
+    from onepiece_dist.learn.train import TrainStep, evaluate, predict
+
+    torch.set_num_threads(1)
+    torch.manual_seed(job.seed)
+    inputs = MODEL_INPUTS[job.model]
+    full = GraspDataset(job.path, job.group, rows=job.rows, inputs=inputs)
+    train, val = full.split_by_group(job.validation, job.seed)
+    model = MODELS[job.model]()
+    step = TrainStep(model, torch.optim.Adam(model.parameters(), lr=job.learning_rate), torch.device("cpu"))
+    rng = np.random.default_rng([job.seed, 11])
+    best, best_state, curve, start = float("inf"), None, [], time.perf_counter()
+    every = max(1, job.steps // job.evaluations)
+    for k in range(1, job.steps + 1):
+        model.train()
+        step(collate(train.batch(np.sort(rng.choice(len(train), min(job.batch_size, len(train)), replace=False)))))
+        if k % every == 0 or k == job.steps:
+            metrics = evaluate(model, val)
+            curve.append({"step": k, **{f"val_{key}": round(value, 4) for key, value in metrics.items()}})
+            if metrics["loss"] < best:
+                best, best_state = metrics["loss"], {n: t.detach().clone() for n, t in model.state_dict().items()}
+    seconds = time.perf_counter() - start
+    model.load_state_dict(best_state)
+    heldout = GraspDataset(job.heldout_path, "grasps", inputs=inputs)
+    scores = predict(model, heldout)
+    return {"arm": job.arm, "seed": job.seed, "train_grasps": len(train), "validation_grasps": len(val),
+            "train_seconds": round(seconds, 1), "best_step": min(curve, key=lambda c: c["val_loss"])["step"],
+            "curve": curve, "scores": scores.astype(np.float32)}
+
+
+def heldout_metrics(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> dict:
+    """Per-object success of the model's best-scored grasp and mean success of its 5 best; AP over all grasps."""
+    from onepiece_dist.learn.train import average_precision
+
+    top1, top5 = per_object_top(scores, labels, groups)
+    return {"top1": float(top1.mean()), "top5": float(top5.mean()), "ap": average_precision(scores, labels),
+            "accuracy": float(np.mean((scores > 0.5) == (labels > 0.5)))}
+
+
+def per_object_top(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(objects,) success of each object's top-1 grasp and mean success of its top 5, objects in sorted order."""
+    top1, top5 = [], []
+    for g in np.unique(groups):
+        mine = groups == g
+        order = np.argsort(-scores[mine], kind="stable")
+        top1.append(labels[mine][order[0]])
+        top5.append(labels[mine][order[:5]].mean())
+    return np.asarray(top1, dtype=np.float64), np.asarray(top5, dtype=np.float64)
+
+
+def baselines(labels: np.ndarray, groups: np.ndarray) -> dict:
+    """Expected success of a random choice per object, and of an oracle (1 when the object has any success)."""
+    objects = np.unique(groups)
+    return {"random_choice": float(np.mean([labels[groups == g].mean() for g in objects])),
+            "oracle": float(np.mean([labels[groups == g].max() for g in objects])),
+            "positive_rate": float(labels.mean()), "objects": int(len(objects)), "grasps": int(len(labels))}
+
+
+def bootstrap_interval(per_object: np.ndarray, seed: int = 0, draws: int = 2000) -> tuple[float, float]:
+    """95% percentile interval of the mean of ``per_object`` (objects resampled with replacement)."""
+    if len(per_object) == 0:
+        return 0.0, 0.0
+    rng = np.random.default_rng([seed, 5])
+    means = per_object[rng.integers(0, len(per_object), (draws, len(per_object)))].mean(axis=1)
+    low, high = np.percentile(means, [2.5, 97.5])
+    return float(low), float(high)
+
+
+def arm_summary(runs: list[dict], labels: np.ndarray, groups: np.ndarray) -> dict:
+    """Mean and spread over training seeds; the CI of top-1 over held-out objects, on the seed-averaged
+    per-object success."""
+    per_seed = [heldout_metrics(run["scores"], labels, groups) for run in runs]
+    top1_objects = np.mean([per_object_top(run["scores"], labels, groups)[0] for run in runs], axis=0)
+    out = {key: {"mean": float(np.mean([m[key] for m in per_seed])), "std": float(np.std([m[key] for m in per_seed]))}
+           for key in ("top1", "top5", "ap", "accuracy")}
+    low, high = bootstrap_interval(top1_objects)
+    out["top1"]["ci95"] = [round(low, 4), round(high, 4)]
+    out["seeds"] = [{"seed": run["seed"], **{k: round(v, 4) for k, v in m.items()}, "best_step": run["best_step"],
+                     "train_seconds": run["train_seconds"], "train_grasps": run["train_grasps"]}
+                    for run, m in zip(runs, per_seed, strict=True)]
+    return out
+
+
+def pair_agreement(success: np.ndarray, quality: np.ndarray, cluster: np.ndarray, seed: int,
+                   per_cluster: int = 5) -> dict:
+    """How much a shared cluster (code) decides the label: over pairs (first member, each of up to
+    ``per_cluster - 1`` others) of every cluster with two or more grasps, and over as many random pairs of grasps
+    in different clusters: success agreement and quality correlation."""
+    rng = np.random.default_rng([seed, 13])
+    order = np.argsort(cluster, kind="stable")
+    starts = np.flatnonzero(np.r_[True, cluster[order][1:] != cluster[order][:-1]])
+    ends = np.r_[starts[1:], len(order)]
+    firsts, others = [], []
+    for a, b in zip(starts, ends, strict=True):
+        for k in range(a + 1, min(b, a + per_cluster)):
+            firsts.append(order[a])
+            others.append(order[k])
+    same = _agreement(success, quality, np.asarray(firsts, dtype=np.int64), np.asarray(others, dtype=np.int64))
+    n = max(len(firsts), 1)
+    i, j = rng.integers(0, len(cluster), n), rng.integers(0, len(cluster), n)
+    keep = cluster[i] != cluster[j]
+    return {"same_code": same, "random_pairs": _agreement(success, quality, i[keep], j[keep])}
+
+
+def _agreement(success: np.ndarray, quality: np.ndarray, i: np.ndarray, j: np.ndarray) -> dict:
+    if len(i) == 0:
+        return {"pairs": 0, "success_agreement": None, "quality_correlation": None}
+    constant = np.std(quality[i]) == 0 or np.std(quality[j]) == 0
+    return {"pairs": int(len(i)), "success_agreement": round(float(np.mean(success[i] == success[j])), 4),
+            "quality_correlation": None if constant else round(float(np.corrcoef(quality[i], quality[j])[0, 1]), 4)}
