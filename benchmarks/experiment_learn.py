@@ -106,6 +106,22 @@ def bootstrap_interval(per_object: np.ndarray, seed: int = 0, draws: int = 2000)
     return float(low), float(high)
 
 
+def ap_interval(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray, seed: int = 0,
+                draws: int = 1000) -> tuple[float, float]:
+    """95% percentile interval of the AP of ``scores`` when the held-out objects are resampled with replacement."""
+    from onepiece_dist.learn.train import average_precision
+
+    objects = np.unique(groups)
+    members = [np.flatnonzero(groups == g) for g in objects]
+    rng = np.random.default_rng([seed, 23])
+    values = []
+    for _ in range(draws):
+        rows = np.concatenate([members[k] for k in rng.integers(0, len(objects), len(objects))])
+        values.append(average_precision(scores[rows], labels[rows]))
+    low, high = np.percentile(values, [2.5, 97.5])
+    return float(low), float(high)
+
+
 def arm_summary(runs: list[dict], labels: np.ndarray, groups: np.ndarray) -> dict:
     """Mean and spread over training seeds; the CI of top-1 over held-out objects, on the seed-averaged
     per-object success."""
@@ -115,6 +131,8 @@ def arm_summary(runs: list[dict], labels: np.ndarray, groups: np.ndarray) -> dic
            for key in ("top1", "top5", "ap", "accuracy")}
     low, high = bootstrap_interval(top1_objects)
     out["top1"]["ci95"] = [round(low, 4), round(high, 4)]
+    out["ap"]["ci95"] = [round(x, 4) for x in ap_interval(np.mean([run["scores"] for run in runs], axis=0),
+                                                             labels, groups)]
     out["seeds"] = [{"seed": run["seed"], **{k: round(v, 4) for k, v in m.items()}, "best_step": run["best_step"],
                      "train_seconds": run["train_seconds"], "train_grasps": run["train_grasps"]}
                     for run, m in zip(runs, per_seed, strict=True)]

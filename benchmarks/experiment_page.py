@@ -25,14 +25,15 @@ def _arm_rows(out: dict) -> list[str]:
         rows.append(f"| {arm['arm']} | {arm['label_trials']:,} | {arm['core_seconds']:,.0f} | "
                     f"{arm['time_ratio']:.2f}x | {arm['labelled_storage_ratio']:.2f}x | "
                     f"{arm['dataset_storage_ratio']:.2f}x | {h['top1']['mean']:.1%} [{low:.1%}, {high:.1%}] | "
-                    f"{h['top5']['mean']:.1%} | {h['ap']['mean']:.3f} +- {h['ap']['std']:.3f} |")
+                    f"{h['top5']['mean']:.1%} | {h['ap']['mean']:.3f} +- {h['ap']['std']:.3f} "
+                    f"[{h['ap']['ci95'][0]:.3f}, {h['ap']['ci95'][1]:.3f}] |")
     return rows
 
 
 def headline(out: dict) -> list[str]:
     held = out["heldout"]
     return ["| arm | label trials | core-seconds | time ratio A/arm | labelled storage A/arm | whole dataset A/arm | "
-            "held-out top-1 (95% CI) | top-5 | AP (mean +- sd over seeds) |",
+            "held-out top-1 (95% CI) | top-5 | AP (mean +- sd over seeds) [95% CI] |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |", *_arm_rows(out),
             f"| paper (ONE PIECE) | | | {PAPER['time_ratio']} | {PAPER['storage_ratio']} | | {PAPER['success']} | | |",
             "", f"Held-out: {held['objects']} unseen objects, {held['grasps']:,} labelled candidates, positive rate "
@@ -58,6 +59,41 @@ def verdict(out: dict) -> list[str]:
              f"one object. Even with every candidate a duplicate, B cannot be cheaper than its extraction: the "
              f"ratio is capped at {out['cost_curve']['cap']}x by label cost / extract cost. B static (crops at the "
              "candidate pose, no physics in extraction) lowers the extraction cost; see its row."]
+    return lines
+
+
+def analysis(out: dict) -> list[str]:
+    """What the measured figures say beyond the targets: which measure separates the arms, how B compares with
+    R, why the static arm and the whole datasets cost what they cost, and what would lift the ratio."""
+    arms = {row["arm"]: row for row in out["arms"]}
+    a, held = arms["A"], out["heldout"]
+    lines = [f"- **Which measure decides.** Every held-out object has a successful candidate (oracle "
+             f"{held['oracle']:.1%}) and {held['positive_rate']:.1%} of candidates succeed, so the top-1 grasp "
+             "succeeds almost always for every arm: top-1 barely separates them. AP (ranking all candidates) does: "
+             + ", ".join(f"{name} {row['heldout']['ap']['mean']:.3f}" for name, row in arms.items()) + "."]
+    pairs = [(name, "R" + name[1:]) for name in arms if name.startswith("B r") and "R" + name[1:] in arms]
+    if pairs:
+        lines.append("- **B against R, same number of labels.** " + "; ".join(
+            f"{b}: AP {arms[b]['heldout']['ap']['mean']:.3f} in {arms[b]['core_seconds']:,.0f} core-s, {r}: AP "
+            f"{arms[r]['heldout']['ap']['mean']:.3f} in {arms[r]['core_seconds']:,.0f} core-s" for b, r in pairs)
+            + ". Labelling a random subset on the objects themselves needs no extraction and no assembly.")
+    static, b0 = arms.get("B static r0"), arms.get("B r0")
+    if static and b0:
+        lines.append(f"- **Static crops.** Without physics in extraction the extract stage costs "
+                     f"{static['stages']['extract']:,.0f} core-s instead of {b0['stages']['extract']:,.0f}, but its "
+                     f"codes are less redundant ({static['unique_codes']:,} unique of {static['extracted_grasps']:,} "
+                     f"candidates, against {b0['unique_codes']:,} of {b0['extracted_grasps']:,} settled grasps: "
+                     "closing the fingers moves the object into a few typical poses), so it labels more shapes and "
+                     f"costs more in all ({static['core_seconds']:,.0f} core-s).")
+    if b0:
+        lines.append(f"- **Whole dataset.** B r0's dataset is {b0['dataset_bytes'] / 1e6:,.1f} MB against A's "
+                     f"{a['dataset_bytes'] / 1e6:,.1f} MB: the one object is stored as its dense point cloud twice "
+                     "(assembled/points in the object frame and assembled/patch_points in each patch's frame, "
+                     "float32 both), far more than the labelled grasps themselves.")
+    lines.append("- **What would lift the time ratio.** The cap is label cost / extract cost per candidate: more "
+                 "label trials per label (a costlier protocol), or cheaper extraction physics (fewer settling "
+                 "steps, a cheaper closing model), raise it; more candidates per object and coarser codes or larger "
+                 "radii bring B towards it (see the curve), at the price in label agreement the trade-off shows.")
     return lines
 
 
@@ -98,12 +134,30 @@ def tradeoff_table(out: dict) -> list[str]:
     return lines
 
 
+def transfer_table(out: dict) -> list[str]:
+    lines = ["| radius | B's patch label vs its representative (A) | vs every grasp of its code (A) | quality "
+             "correlation (every grasp) | shuffled patches | independent labels (floor) | grasps (not in A) |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in out["label_transfer"]:
+        if not r["aligned"]:
+            lines.append(f"| {r['radius']} | A's and B's grasps differ: not measured | | | | | |")
+            continue
+        rep, every, floor = r["patch_vs_representative"], r["patch_vs_every_grasp"], r["shuffled_patches"]
+        lines.append(f"| {r['radius']} | {_pct(rep['success_agreement'])} | {_pct(every['success_agreement'])} | "
+                     f"{every['quality_correlation']} | {_pct(floor['success_agreement'])} | "
+                     f"{_pct(r.get('independent_floor')) if 'independent_floor' in r else 'not recorded'} | "
+                     f"{every['pairs']:,} "
+                     f"({r.get('unmatched_grasps', 0)}) |")
+    return lines
+
+
 def write_page(out: dict, path: Path) -> None:
     args = out["args"]
     lines = ["# The paper's experiment, in simulation", "",
              f"Command: `{out['command'].strip()}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} "
              "minutes). Rendered from benchmarks/results/paper_experiment.json by benchmarks/experiment_page.py.", "",
-             *headline(out), "", "## What holds here", "", *verdict(out), "", "## Scale and protocol", "",
+             *headline(out), "", "## What holds here", "", *verdict(out), "", "## What the figures say", "",
+             *analysis(out), "", "## Scale and protocol", "",
              f"Train: {args['objects']} objects (pybullet named + random_urdfs; {out['train_objects_ok']} passed "
              f"validation), {args['grasps']} candidates each from the paper's normal-direction sampler, seed "
              f"{args['seed']}. Held-out: random_urdfs from index 500 on, {args['heldout']} objects x "
@@ -121,7 +175,17 @@ def write_page(out: dict, path: Path) -> None:
              "## Cost ratios against candidates per object and radius", "",
              "![time and storage ratios](paper_experiment_cost.png)", "", *curve_table(out), "",
              "Unique counts measured on the first n extracted candidates of each train object; costs per candidate "
-             "and per patch are this run's.", "", "## The method's trade-off: which resolution to pick", "",
+             "and per patch are this run's.", "", "## Label transfer: the premise, measured", "", *transfer_table(out), "",
+             "B labels each shape once, on its patch of the one object, and that label stands for every grasp that "
+             "shares the code (or cluster). A labelled each of those grasps on its own object, so the agreement "
+             "above is how far B's labels are the labels A would have given. Shuffled patches: the agreement with "
+             "the label of an unrelated shape, from one random permutation of the patch labels; where a few large "
+             "clusters hold most grasps (radius 1 and 2) one permutation swings widely. Independent labels: "
+             "p q + (1 - p)(1 - q) for positive rates p (patches) and q (grasps), the agreement of labels that "
+             "ignore the shape (recorded from 2026-11-26's second version of the script on). Grasps whose patch "
+             "has no label (its placement's trial was invalid) are left out: with a radius that can drop a large "
+             "cluster, hence the smaller counts.", "",
+             "## The method's trade-off: which resolution to pick", "",
              "![unique fraction against label agreement](paper_experiment_tradeoff.png)", "", *tradeoff_table(out),
              "", "Codes re-cropped from every train object's surface at A's grasp poses; labels are A's (each grasp "
              "labelled on its own object). Same-code pairs: the first grasp of each code (cluster, at radius r) "

@@ -1,7 +1,7 @@
 """The ONE PIECE paper's experiment, in simulation, powerful enough to decide (issue 17), as one command.
 
     .venv/bin/python benchmarks/paper_experiment.py [--quick] [--objects 64] [--grasps 2000] [--heldout 64]
-        [--heldout-grasps 200] [--label-trials 4] [--steps 300] [--seeds 3] [--radii 0,1,2]
+        [--heldout-grasps 200] [--label-trials 4] [--steps 300] [--seeds 3] [--radii 0,1,2] [--crop partial]
 
 Arms, all on the same train objects, candidates, seed, label protocol (K trials per label) and network:
   A  label every candidate of every train object on its own object;
@@ -64,6 +64,7 @@ def base_spec(args, folder: Path) -> JobSpec:
     """The spec every arm shares: the paper's normal-direction sampler, the default physics, K label trials."""
     return JobSpec(objects=objects_source(args.objects), grasps_per_object=args.grasps, seed=args.seed,
                    sampler={"method": "normal"}, output=str(folder / "unused.zarr"),
+                   views={"count": args.views, "crop": "partial"} if args.crop == "partial" else {},
                    sim={"label_trials": args.label_trials, "perturbations_per_patch": 0, "transfer_codes": 0,
                         "points_per_grasp": args.points})
 
@@ -261,6 +262,55 @@ def tradeoff(spec: JobSpec, folder: Path, resolutions_mm: list[float], radii: li
     return rows
 
 
+def label_transfer(folder: Path, radius: int, seed: int) -> dict:
+    """How far B's label, computed once per shape on the one object, holds for the grasps that share the shape:
+    B's patch label against A's label (on its own object) of (a) the patch's representative grasp and (b) every
+    grasp of its code or cluster; (c) the floor: the same with the patch labels shuffled across patches. A and B
+    sample the same candidates (same seed): a grasp of B is matched to A's grasp with the same object and
+    candidate pose; grasps of B that A did not keep are left out (counted)."""
+    from onepiece_dist.store import open_dataset
+
+    a, b = open_dataset(str(folder / "A.zarr")), open_dataset(str(folder / f"B-settled-{radius}.zarr"))
+    in_a = match_rows(b, a)
+    code_index, representative = b["grasps/code_index"], b["unique/representative"]
+    success = np.where(in_a >= 0, a["grasps/success"][np.maximum(in_a, 0)], -1).astype(np.float64)
+    quality = np.where(in_a >= 0, a["grasps/quality"][np.maximum(in_a, 0)], np.nan).astype(np.float64)
+    patch_success = np.full(len(representative), np.nan)
+    patch_quality = np.full(len(representative), np.nan)
+    patch = b["assembled/grasps/patch"]
+    first = np.unique(patch, return_index=True)[1]  # the placement: the first labelled grasp of each patch
+    patch_success[patch[first]] = b["assembled/grasps/success"][first]
+    patch_quality[patch[first]] = b["assembled/grasps/quality"][first]
+    shuffled = np.random.default_rng([seed, 19]).permutation(len(representative))
+
+    def agree(rows: np.ndarray, codes: np.ndarray, order: np.ndarray) -> dict:
+        keep = ~np.isnan(patch_success[order][codes]) & (in_a[rows] >= 0)
+        rows, codes = rows[keep], codes[keep]
+        return {"pairs": int(len(rows)),
+                "success_agreement": round(float(np.mean(patch_success[order][codes] == success[rows])), 4),
+                "quality_correlation": round(float(np.corrcoef(patch_quality[order][codes], quality[rows])[0, 1]), 4)
+                if len(rows) > 1 and np.std(quality[rows]) > 0 and np.std(patch_quality[order][codes]) > 0 else None}
+
+    codes = np.arange(len(representative))
+    every = np.arange(len(code_index))
+    kept = ~np.isnan(patch_success[code_index]) & (in_a >= 0)
+    p, q = patch_success[code_index][kept].mean(), success[kept].mean()  # labels that ignore the shape agree at:
+    return {"radius": radius, "aligned": True, "unmatched_grasps": int(np.sum(in_a < 0)),
+            "patch_vs_representative": agree(representative, codes, codes),
+            "patch_vs_every_grasp": agree(every, code_index, codes),
+            "shuffled_patches": agree(every, code_index, shuffled),
+            "independent_floor": round(float(p * q + (1 - p) * (1 - q)), 4) if kept.any() else None}
+
+
+def match_rows(b, a) -> np.ndarray:
+    """(N_b,) row in ``a`` of each grasp of ``b`` with the same object (by name) and candidate pose; -1 if none."""
+    a_names, b_names = a.object_names, b.object_names
+    a_keys = {(a_names[o], p.tobytes()): k for k, (o, p) in enumerate(zip(a["grasps/object"],
+                                                                          a["grasps/candidate_pose"], strict=True))}
+    return np.array([a_keys.get((b_names[o], p.tobytes()), -1)
+                     for o, p in zip(b["grasps/object"], b["grasps/candidate_pose"], strict=True)], dtype=np.int64)
+
+
 def parse_args(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for name, default in (("objects", 64), ("grasps", 2000), ("heldout", 64), ("heldout-grasps", 200),
@@ -272,6 +322,9 @@ def parse_args(argv=None):
     parser.add_argument("--curve", default="250,500,1000,2000", help="candidates per object of the cost curve")
     parser.add_argument("--tradeoff", default="20,10,5", help="voxel resolutions (mm) of the trade-off")
     parser.add_argument("--model", choices=("pointnet", "voxel"), default="pointnet")
+    parser.add_argument("--crop", choices=("full", "partial"), default="full",
+                        help="crop grasp points from the full surface or from depth views (docs/views.md)")
+    parser.add_argument("--views", type=int, default=16, help="depth views per object with --crop partial")
     parser.add_argument("--quick", action="store_true", help="a few objects: a smoke test of the whole script")
     parser.add_argument("--out", type=Path, default=ROOT, help="where results/ JSON and docs/ pages go")
     args = parser.parse_args(argv)
@@ -290,6 +343,7 @@ def main(argv=None) -> dict:
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     out["wall_seconds"] = round(time.perf_counter() - start, 1)
+    out["decision"]["within_two_hours"] = out["wall_seconds"] <= 7200  # at the size run (the page says which)
     (args.out / "benchmarks" / "results").mkdir(parents=True, exist_ok=True)
     (args.out / "docs").mkdir(parents=True, exist_ok=True)
     (args.out / "benchmarks" / "results" / "paper_experiment.json").write_text(json.dumps(out, indent=2) + "\n")
@@ -317,13 +371,14 @@ def run_experiment(args, folder: Path) -> dict:
     radii = [int(r) for r in args.radii.split(",")]
     curve = cost_curves(gen, costs, folder, [int(n) for n in args.curve.split(",") if int(n) <= args.grasps], radii)
     trade = tradeoff(gen["specs"]["A"], folder, [float(x) for x in args.tradeoff.split(",")], radii)
+    transfer = [label_transfer(folder, r, args.seed) for r in radii]
     out = {"benchmark": "paper_experiment", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {os.cpu_count()} cores", "args": {k: str(v) if isinstance(v, Path)
                                                                                 else v for k, v in vars(args).items()},
            "command": "python benchmarks/paper_experiment.py " + " ".join(sys.argv[1:]),
            "generation_wall_seconds": round(generation_wall, 1), "heldout": baselines(labels, groups),
            "heldout_job": gen["heldout"], "train_objects_ok": gen["A"]["objects_ok"], "arms": costs,
-           "cost_curve": curve, "tradeoff": trade}
+           "cost_curve": curve, "tradeoff": trade, "label_transfer": transfer}
     out["decision"] = decide(out)
     return out
 
@@ -339,8 +394,7 @@ def decide(out: dict) -> dict:
         row["time_ratio"] = round(a["core_seconds"] / max(row["core_seconds"], 1e-9), 3)
         row["labelled_storage_ratio"] = round(a["labelled_bytes"] / max(row["labelled_bytes"], 1), 3)
         row["dataset_storage_ratio"] = round(a["dataset_bytes"] / max(row["dataset_bytes"], 1), 3)
-        row["top1_within_a"] = bool(low <= row["heldout"]["top1"]["mean"] <= high or
-                                    row["heldout"]["top1"]["mean"] >= high)
+        row["top1_within_a"] = bool(round(row["heldout"]["top1"]["mean"], 4) >= low)  # in A's interval or above
     eligible = [r for r in out["arms"] if r["arm"].startswith("B") and r["top1_within_a"]]
     best = max(eligible, key=lambda r: r["time_ratio"]) if eligible else None
     control = arms.get("R" + best["arm"][1:]) if best and best["arm"].startswith("B r") else None

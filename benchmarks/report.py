@@ -145,8 +145,8 @@ def storage_section(r: dict, experiment: dict | None) -> list[str]:
     if experiment:
         a, one = experiment["arms"][0], experiment["arms"][1]
         lines += ["", f"All-objects versus one-object labelled data (`{experiment['command'].strip()}`, "
-                  f"{experiment['date']}): arm A {a['labelled_data_bytes'] / 1e6:.2f} MB "
-                  f"({a['labelled_grasps']} grasps), arm {one['arm']} {one['labelled_data_bytes'] / 1e6:.2f} MB "
+                  f"{experiment['date']}, docs/paper_experiment.md): arm A {a['labelled_bytes'] / 1e6:.2f} MB "
+                  f"({a['labelled_grasps']} grasps), arm {one['arm']} {one['labelled_bytes'] / 1e6:.2f} MB "
                   f"({one['labelled_grasps']} grasps); whole datasets {a['dataset_bytes'] / 1e6:.2f} MB and "
                   f"{one['dataset_bytes'] / 1e6:.2f} MB (the paper: 43.7 GB versus 6.9 GB)."]
     if r.get("compressor_sweep"):

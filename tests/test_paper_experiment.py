@@ -1,0 +1,83 @@
+"""benchmarks/paper_experiment.py: its statistics, its page rendered from the committed results, and `--quick` as a
+smoke test of the whole script (every arm generated, trained and scored for real)."""
+
+import importlib
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+learn = importlib.import_module("experiment_learn")
+page = importlib.import_module("experiment_page")
+
+
+def test_the_bootstrap_interval_holds_the_mean_and_narrows_with_more_objects():
+    rng = np.random.default_rng(0)
+    few, many = rng.random(10) < 0.7, rng.random(400) < 0.7
+    low, high = learn.bootstrap_interval(few.astype(float))
+    assert low <= few.mean() <= high
+    wide = high - low
+    low, high = learn.bootstrap_interval(many.astype(float))
+    assert low <= many.mean() <= high and high - low < wide / 3
+
+
+def test_top_k_success_takes_each_objects_best_scored_grasps():
+    labels = np.array([0, 1, 1, 0, 0, 0, 1], dtype=float)
+    groups = np.array([0, 0, 0, 1, 1, 1, 1])
+    scores = np.array([0.9, 0.8, 0.1, 0.2, 0.3, 0.1, 0.95])
+    top1, top5 = learn.per_object_top(scores, labels, groups)
+    assert top1.tolist() == [0.0, 1.0]
+    assert top5.tolist() == [pytest.approx(2 / 3), 0.25]
+    base = learn.baselines(labels, groups)
+    assert base["oracle"] == 1.0 and base["random_choice"] == pytest.approx((2 / 3 + 0.25) / 2)
+
+
+def test_pair_agreement_is_perfect_when_the_code_decides_the_label_and_lower_for_random_pairs():
+    cluster = np.repeat(np.arange(40), 5)
+    quality = np.repeat(np.linspace(0, 1, 40), 5)
+    success = (quality > 0.5).astype(float)
+    out = learn.pair_agreement(success, quality, cluster, seed=0)
+    assert out["same_code"]["success_agreement"] == 1.0 and out["same_code"]["pairs"] == 160
+    assert out["same_code"]["quality_correlation"] == pytest.approx(1.0)
+    assert out["random_pairs"]["success_agreement"] < 0.7
+
+
+def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
+    result = json.loads((ROOT / "benchmarks" / "results" / "paper_experiment.json").read_text())
+    page.write_page(result, tmp_path / "page.md")
+    assert (ROOT / "docs" / "paper_experiment.md").read_text() == (tmp_path / "page.md").read_text(), \
+        "docs/paper_experiment.md is stale: rerun benchmarks/paper_experiment.py (or render its results)"
+
+
+@pytest.mark.slow
+@pytest.mark.sim
+def test_the_quick_experiment_runs_every_arm_and_renders_a_page_that_decides(tmp_path):
+    subprocess.run([sys.executable, str(ROOT / "benchmarks" / "paper_experiment.py"), "--quick", "--out",
+                    str(tmp_path)], check=True, capture_output=True, timeout=600)
+    out = json.loads((tmp_path / "benchmarks" / "results" / "paper_experiment.json").read_text())
+    arms = {row["arm"]: row for row in out["arms"]}
+    assert set(arms) == {"A", "B r0", "B r1", "B static r0", "R r0", "R r1"}
+    for name in ("r0", "r1"):  # R labels exactly as many grasps as its B arm, on their own objects
+        assert arms[f"R {name}"]["labelled_grasps"] == arms[f"B {name}"]["labelled_grasps"] > 0
+    assert arms["B r1"]["unique_codes"] <= arms["B r0"]["unique_codes"]
+    for row in out["arms"]:
+        held = row["heldout"]
+        assert len(held["seeds"]) == 2 and held["top1"]["ci95"][0] <= held["top1"]["mean"] <= held["top1"]["ci95"][1]
+        assert held["ap"]["ci95"][0] <= held["ap"]["ci95"][1]
+        assert row["time_ratio"] == pytest.approx(arms["A"]["core_seconds"] / row["core_seconds"], rel=1e-2)
+    assert out["heldout"]["objects"] >= 2 and 0 <= out["heldout"]["positive_rate"] <= 1
+    assert [r["candidates_per_object"] for r in out["cost_curve"]["rows"]] == [12, 12, 24, 24]
+    assert {(r["resolution_mm"], r["radius"]) for r in out["tradeoff"]} == {(10.0, 0), (10.0, 1)}
+    for row in out["label_transfer"]:  # B's patch labels against A's labels of the same grasps
+        every = row["patch_vs_every_grasp"]
+        assert row["aligned"] and every["pairs"] > 0 and 0 <= every["success_agreement"] <= 1
+        assert row["unmatched_grasps"] < every["pairs"]
+    text = (tmp_path / "docs" / "paper_experiment.md").read_text()
+    assert "| paper (ONE PIECE) |" in text and "**Time, 8x:**" in text
+    assert ("not met" in text) == (not (out["decision"]["time_met"] and out["decision"]["storage_met"]))
+    assert (tmp_path / "docs" / "paper_experiment_cost.png").stat().st_size > 1000
