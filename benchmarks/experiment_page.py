@@ -190,7 +190,8 @@ def write_page(out: dict, path: Path) -> None:
              "", "Codes re-cropped from every train object's surface at A's grasp poses; labels are A's (each grasp "
              "labelled on its own object). Same-code pairs: the first grasp of each code (cluster, at radius r) "
              "against up to four others; random pairs: as many pairs of grasps with different codes. The code "
-             "decides the label as far as same-code agreement exceeds random-pair agreement."]
+             "decides the label as far as same-code agreement exceeds random-pair agreement. The plot leaves out "
+             "rows with fewer than 30 same-code pairs."]
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -221,7 +222,7 @@ def plot_tradeoff(out: dict, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(5.5, 3.8), dpi=110)
     for r in out["tradeoff"]:
         same = r["same_code"]["success_agreement"]
-        if same is None:
+        if same is None or r["same_code"]["pairs"] < 30:  # e.g. 20 mm with a radius: one cluster, a few pairs
             continue
         ax.scatter(r["unique_fraction"], same, marker="os^"[min(r["radius"], 2)])
         ax.annotate(f"{r['resolution_mm']:g}mm r{r['radius']}", (r["unique_fraction"], same), fontsize=7)
