@@ -153,16 +153,20 @@ def pair_agreement(success: np.ndarray, quality: np.ndarray, cluster: np.ndarray
         for k in range(a + 1, min(b, a + per_cluster)):
             firsts.append(order[a])
             others.append(order[k])
-    same = _agreement(success, quality, np.asarray(firsts, dtype=np.int64), np.asarray(others, dtype=np.int64))
+    i, j = np.asarray(firsts, dtype=np.int64), np.asarray(others, dtype=np.int64)
+    same = label_agreement(success[i], quality[i], success[j], quality[j])
     n = max(len(firsts), 1)
     i, j = rng.integers(0, len(cluster), n), rng.integers(0, len(cluster), n)
     keep = cluster[i] != cluster[j]
-    return {"same_code": same, "random_pairs": _agreement(success, quality, i[keep], j[keep])}
+    i, j = i[keep], j[keep]
+    return {"same_code": same, "random_pairs": label_agreement(success[i], quality[i], success[j], quality[j])}
 
 
-def _agreement(success: np.ndarray, quality: np.ndarray, i: np.ndarray, j: np.ndarray) -> dict:
-    if len(i) == 0:
-        return {"pairs": 0, "success_agreement": None, "quality_correlation": None}
-    constant = np.std(quality[i]) == 0 or np.std(quality[j]) == 0
-    return {"pairs": int(len(i)), "success_agreement": round(float(np.mean(success[i] == success[j])), 4),
-            "quality_correlation": None if constant else round(float(np.corrcoef(quality[i], quality[j])[0, 1]), 4)}
+def label_agreement(success_a: np.ndarray, quality_a: np.ndarray, success_b: np.ndarray,
+                    quality_b: np.ndarray) -> dict:
+    """Success agreement and quality correlation of paired labels (n,) a and (n,) b: the label stage's own
+    measure (service/transfer.py), as a plain dict."""
+    from onepiece_dist.service.transfer import agreement
+
+    pairs = list(zip(zip(success_a, quality_a, strict=True), zip(success_b, quality_b, strict=True), strict=True))
+    return agreement(pairs).model_dump()

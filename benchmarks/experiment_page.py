@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from report import table
+
 PAPER = {"time_ratio": "8x", "storage_ratio": "6.3x", "success": "89% = 89% (real robot)"}
 STAGES = ("ingest", "extract", "dedup", "assemble", "label")
 
@@ -17,25 +19,21 @@ def _met(flag: bool) -> str:
     return "met" if flag else "not met"
 
 
-def _arm_rows(out: dict) -> list[str]:
-    rows = []
-    for arm in out["arms"]:
-        h = arm["heldout"]
-        low, high = h["top1"]["ci95"]
-        rows.append(f"| {arm['arm']} | {arm['label_trials']:,} | {arm['core_seconds']:,.0f} | "
-                    f"{arm['time_ratio']:.2f}x | {arm['labelled_storage_ratio']:.2f}x | "
-                    f"{arm['dataset_storage_ratio']:.2f}x | {h['top1']['mean']:.1%} [{low:.1%}, {high:.1%}] | "
-                    f"{h['top5']['mean']:.1%} | {h['ap']['mean']:.3f} +- {h['ap']['std']:.3f} "
-                    f"[{h['ap']['ci95'][0]:.3f}, {h['ap']['ci95'][1]:.3f}] |")
-    return rows
+def _arm_row(arm: dict) -> list[str]:
+    h = arm["heldout"]
+    (low, high), (ap_low, ap_high) = h["top1"]["ci95"], h["ap"]["ci95"]
+    return [arm["arm"], f"{arm['label_trials']:,}", f"{arm['core_seconds']:,.0f}", f"{arm['time_ratio']:.2f}x",
+            f"{arm['labelled_storage_ratio']:.2f}x", f"{arm['dataset_storage_ratio']:.2f}x",
+            f"{h['top1']['mean']:.1%} [{low:.1%}, {high:.1%}]", f"{h['top5']['mean']:.1%}",
+            f"{h['ap']['mean']:.3f} +- {h['ap']['std']:.3f} [{ap_low:.3f}, {ap_high:.3f}]"]
 
 
 def headline(out: dict) -> list[str]:
     held = out["heldout"]
-    return ["| arm | label trials | core-seconds | time ratio A/arm | labelled storage A/arm | whole dataset A/arm | "
-            "held-out top-1 (95% CI) | top-5 | AP (mean +- sd over seeds) [95% CI] |",
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |", *_arm_rows(out),
-            f"| paper (ONE PIECE) | | | {PAPER['time_ratio']} | {PAPER['storage_ratio']} | | {PAPER['success']} | | |",
+    paper = ["paper (ONE PIECE)", "", "", PAPER["time_ratio"], PAPER["storage_ratio"], "", PAPER["success"], "", ""]
+    return [*table(["arm", "label trials", "core-seconds", "time ratio A/arm", "labelled storage A/arm",
+                    "whole dataset A/arm", "held-out top-1 (95% CI)", "top-5", "AP (mean +- sd over seeds) [95% CI]"],
+                   [*map(_arm_row, out["arms"]), paper]),
             "", f"Held-out: {held['objects']} unseen objects, {held['grasps']:,} labelled candidates, positive rate "
             f"{held['positive_rate']:.1%}; random choice {held['random_choice']:.1%}, oracle {held['oracle']:.1%}."]
 
@@ -103,52 +101,42 @@ def _full(out: dict) -> bool:
 
 
 def cost_table(out: dict) -> list[str]:
-    lines = ["| arm | " + " | ".join(STAGES) + " | train (s per seed) | core-seconds | labelled grasps | "
-             "labelled MB | whole dataset MB |", "| --- " * (len(STAGES) + 6) + "|"]
-    for arm in out["arms"]:
-        cells = [f"{arm['stages'].get(s, 0.0):,.1f}" for s in STAGES]
-        lines.append(f"| {arm['arm']} | " + " | ".join(cells) + f" | {arm['train_seconds']} | "
-                     f"{arm['core_seconds']:,.1f} | {arm['labelled_grasps']:,} | {arm['labelled_bytes'] / 1e6:.2f} | "
-                     f"{arm['dataset_bytes'] / 1e6:.2f} |")
-    return lines
+    return table(["arm", *STAGES, "train (s per seed)", "core-seconds", "labelled grasps", "labelled MB",
+                  "whole dataset MB"],
+                 [[arm["arm"], *(f"{arm['stages'].get(s, 0.0):,.1f}" for s in STAGES), arm["train_seconds"],
+                   f"{arm['core_seconds']:,.1f}", f"{arm['labelled_grasps']:,}", f"{arm['labelled_bytes'] / 1e6:.2f}",
+                   f"{arm['dataset_bytes'] / 1e6:.2f}"] for arm in out["arms"]])
 
 
 def curve_table(out: dict) -> list[str]:
-    lines = ["| candidates per object | radius | grasps | unique | time ratio A/B | labelled storage A/B |",
-             "| --- | --- | --- | --- | --- | --- |"]
-    for r in out["cost_curve"]["rows"]:
-        lines.append(f"| {r['candidates_per_object']} | {r['radius']} | {r['grasps']:,} | {r['unique']:,} | "
-                     f"{r['time_ratio']}x | {r['storage_ratio']}x |")
-    return lines
+    return table(["candidates per object", "radius", "grasps", "unique", "time ratio A/B", "labelled storage A/B"],
+                 [[r["candidates_per_object"], r["radius"], f"{r['grasps']:,}", f"{r['unique']:,}",
+                   f"{r['time_ratio']}x", f"{r['storage_ratio']}x"] for r in out["cost_curve"]["rows"]])
 
 
 def tradeoff_table(out: dict) -> list[str]:
-    lines = ["| resolution (mm) | radius | unique fraction | same-code success agreement | same-code quality "
-             "correlation | random-pair agreement | random-pair correlation | pairs |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for r in out["tradeoff"]:
-        s, p = r["same_code"], r["random_pairs"]
-        lines.append(f"| {r['resolution_mm']:g} | {r['radius']} | {r['unique_fraction']:.3f} | "
-                     f"{_pct(s['success_agreement'])} | {s['quality_correlation']} | {_pct(p['success_agreement'])} | "
-                     f"{p['quality_correlation']} | {s['pairs']:,} |")
-    return lines
+    return table(["resolution (mm)", "radius", "unique fraction", "same-code success agreement",
+                  "same-code quality correlation", "random-pair agreement", "random-pair correlation", "pairs"],
+                 [[f"{r['resolution_mm']:g}", r["radius"], f"{r['unique_fraction']:.3f}",
+                   _pct(r["same_code"]["success_agreement"]), r["same_code"]["quality_correlation"],
+                   _pct(r["random_pairs"]["success_agreement"]), r["random_pairs"]["quality_correlation"],
+                   f"{r['same_code']['pairs']:,}"] for r in out["tradeoff"]])
 
 
 def transfer_table(out: dict) -> list[str]:
-    lines = ["| radius | B's patch label vs its representative (A) | vs every grasp of its code (A) | quality "
-             "correlation (every grasp) | shuffled patches | independent labels (floor) | grasps (not in A) |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
-    for r in out["label_transfer"]:
-        if not r["aligned"]:
-            lines.append(f"| {r['radius']} | A's and B's grasps differ: not measured | | | | | |")
-            continue
-        rep, every, floor = r["patch_vs_representative"], r["patch_vs_every_grasp"], r["shuffled_patches"]
-        lines.append(f"| {r['radius']} | {_pct(rep['success_agreement'])} | {_pct(every['success_agreement'])} | "
-                     f"{every['quality_correlation']} | {_pct(floor['success_agreement'])} | "
-                     f"{_pct(r.get('independent_floor')) if 'independent_floor' in r else 'not recorded'} | "
-                     f"{every['pairs']:,} "
-                     f"({r.get('unmatched_grasps', 0)}) |")
-    return lines
+    return table(["radius", "B's patch label vs its representative (A)", "vs every grasp of its code (A)",
+                  "quality correlation (every grasp)", "shuffled patches", "independent labels (floor)",
+                  "grasps (not in A)"], [_transfer_row(r) for r in out["label_transfer"]])
+
+
+def _transfer_row(r: dict) -> list:
+    if not r["aligned"]:
+        return [r["radius"], "A's and B's grasps differ: not measured", "", "", "", "", ""]
+    rep, every, floor = r["patch_vs_representative"], r["patch_vs_every_grasp"], r["shuffled_patches"]
+    return [r["radius"], _pct(rep["success_agreement"]), _pct(every["success_agreement"]),
+            every["quality_correlation"], _pct(floor["success_agreement"]),
+            _pct(r.get("independent_floor")) if "independent_floor" in r else "not recorded",
+            f"{every['pairs']:,} ({r.get('unmatched_grasps', 0)})"]
 
 
 def write_page(out: dict, path: Path) -> None:
@@ -175,7 +163,8 @@ def write_page(out: dict, path: Path) -> None:
              "## Cost ratios against candidates per object and radius", "",
              "![time and storage ratios](paper_experiment_cost.png)", "", *curve_table(out), "",
              "Unique counts measured on the first n extracted candidates of each train object; costs per candidate "
-             "and per patch are this run's.", "", "## Label transfer: the premise, measured", "", *transfer_table(out), "",
+             "and per patch are this run's.", "", "## Label transfer: the premise, measured", "",
+             *transfer_table(out), "",
              "B labels each shape once, on its patch of the one object, and that label stands for every grasp that "
              "shares the code (or cluster). A labelled each of those grasps on its own object, so the agreement "
              "above is how far B's labels are the labels A would have given. Shuffled patches: the agreement with "

@@ -37,7 +37,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from experiment_learn import TrainJob, arm_summary, baselines, fit_and_score, pair_agreement  # noqa: E402
+from experiment_learn import TrainJob, arm_summary, baselines, fit_and_score, label_agreement, pair_agreement  # noqa: E402
 from experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
 
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
@@ -71,7 +71,6 @@ def base_spec(args, folder: Path) -> JobSpec:
 
 def run_job(name: str, spec_json: str) -> dict:
     """One single-process job (its stages' wall seconds are core-seconds); what it cost and what it made."""
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
     from onepiece_dist.service.local import run_local
     from onepiece_dist.store.dataset import disk_bytes
 
@@ -156,7 +155,8 @@ def arm_costs(gen: dict) -> list[dict]:
                      "labelled_grasps": b["labelled_grasps"], "matches": b["arm"],
                      "stages": {"ingest": a["stages"].get("ingest", 0.0),
                                 "label": round(share * (a["stages"]["extract"] + a["stages"].get("dedup", 0)), 1)},
-                     "labelled_bytes": int(share * a["labelled_bytes"]), "dataset_bytes": int(share * a["dataset_bytes"])})
+                     "labelled_bytes": int(share * a["labelled_bytes"]),
+                     "dataset_bytes": int(share * a["dataset_bytes"])})
     for row in rows:
         row["core_seconds"] = round(sum(row["stages"].values()), 1)
     return rows
@@ -212,8 +212,9 @@ def cost_curves(gen: dict, costs: list[dict], folder: Path, counts: list[int], r
         for r in radii:
             u = len(similar_clusters(exact.unique, exact.counts, nbits, r).representative)
             g = int(keep.sum())
+            b_seconds = per["extract_per_grasp"] * g + per["patch"] * u
             rows.append({"candidates_per_object": n, "radius": r, "grasps": g, "unique": u,
-                         "time_ratio": round(per["a_per_grasp"] * g / (per["extract_per_grasp"] * g + per["patch"] * u), 3),
+                         "time_ratio": round(per["a_per_grasp"] * g / b_seconds, 3),
                          "storage_ratio": round(per["a_bytes"] * g / max(per["b_bytes"] * u, 1), 3)})
     return {"per_unit_seconds": {k: round(v, 6) for k, v in per.items()}, "rows": rows,
             "cap": round(per["a_per_grasp"] / per["extract_per_grasp"], 3)}
@@ -268,6 +269,7 @@ def label_transfer(folder: Path, radius: int, seed: int) -> dict:
     grasp of its code or cluster; (c) the floor: the same with the patch labels shuffled across patches. A and B
     sample the same candidates (same seed): a grasp of B is matched to A's grasp with the same object and
     candidate pose; grasps of B that A did not keep are left out (counted)."""
+    from onepiece_dist.service.transfer import patch_labels
     from onepiece_dist.store import open_dataset
 
     a, b = open_dataset(str(folder / "A.zarr")), open_dataset(str(folder / f"B-settled-{radius}.zarr"))
@@ -277,19 +279,15 @@ def label_transfer(folder: Path, radius: int, seed: int) -> dict:
     quality = np.where(in_a >= 0, a["grasps/quality"][np.maximum(in_a, 0)], np.nan).astype(np.float64)
     patch_success = np.full(len(representative), np.nan)
     patch_quality = np.full(len(representative), np.nan)
-    patch = b["assembled/grasps/patch"]
-    first = np.unique(patch, return_index=True)[1]  # the placement: the first labelled grasp of each patch
-    patch_success[patch[first]] = b["assembled/grasps/success"][first]
-    patch_quality[patch[first]] = b["assembled/grasps/quality"][first]
+    for k, (patch_s, patch_q) in patch_labels(b).items():  # each patch's label at its placement
+        patch_success[k], patch_quality[k] = patch_s, patch_q
     shuffled = np.random.default_rng([seed, 19]).permutation(len(representative))
 
     def agree(rows: np.ndarray, codes: np.ndarray, order: np.ndarray) -> dict:
         keep = ~np.isnan(patch_success[order][codes]) & (in_a[rows] >= 0)
         rows, codes = rows[keep], codes[keep]
-        return {"pairs": int(len(rows)),
-                "success_agreement": round(float(np.mean(patch_success[order][codes] == success[rows])), 4),
-                "quality_correlation": round(float(np.corrcoef(patch_quality[order][codes], quality[rows])[0, 1]), 4)
-                if len(rows) > 1 and np.std(quality[rows]) > 0 and np.std(patch_quality[order][codes]) > 0 else None}
+        return label_agreement(patch_success[order][codes], patch_quality[order][codes], success[rows],
+                               quality[rows])
 
     codes = np.arange(len(representative))
     every = np.arange(len(code_index))
