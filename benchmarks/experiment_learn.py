@@ -30,6 +30,7 @@ class TrainJob:
     learning_rate: float
     validation: float
     evaluations: int = 10
+    validation_cap: int = 4096  # grasps of the validation split scored at each evaluation (a seeded sample)
 
 
 def fit_and_score(job: TrainJob) -> dict:
@@ -46,6 +47,9 @@ def fit_and_score(job: TrainJob) -> dict:
     inputs = MODEL_INPUTS[job.model]
     full = GraspDataset(job.path, job.group, rows=job.rows, inputs=inputs)
     train, val = full.split_by_group(job.validation, job.seed)
+    if len(val) > job.validation_cap:  # the same sample at every evaluation: checkpoints stay comparable
+        val = val._subset(np.sort(np.random.default_rng([job.seed, 13]).choice(val.rows, job.validation_cap,
+                                                                                 replace=False)))
     model = MODELS[job.model]()
     step = TrainStep(model, torch.optim.Adam(model.parameters(), lr=job.learning_rate), torch.device("cpu"))
     rng = np.random.default_rng([job.seed, 11])

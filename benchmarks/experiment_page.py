@@ -47,7 +47,8 @@ def verdict(out: dict) -> list[str]:
              f"- **B at least as good as R with the same label budget:** "
              f"{'holds' if d['b_at_least_r'] else 'does not hold'} ({best} against {d['control'] or 'no control'}).",
              f"- **Held-out positive rate in 30-70%:** {_met(d['positive_rate_met'])} "
-             f"({d['heldout_positive_rate']:.1%}; docs/trials.md says why physics alone does not bring it there).",
+             f"({d['heldout_positive_rate']:.1%}, {_label_rule(out)}; docs/trials.md, Physical defaults and the "
+             "label rule).",
              f"- **Whole experiment within 2 hours here:** {out['wall_seconds'] / 60:.1f} minutes at the size run "
              f"({'the full size' if _full(out) else 'not the full size: see Scale below'}).", "",
              "Why the time ratio is what it is (core-seconds measured in this run): labelling one candidate on its "
@@ -55,9 +56,25 @@ def verdict(out: dict) -> list[str]:
              f"extracting it costs B {per['extract_per_grasp'] * 1000:.1f} ms (ingest, one settling trial, crops, "
              f"dedup), and each unique shape then costs {per['patch'] * 1000:.1f} ms to assemble and label on the "
              f"one object. Even with every candidate a duplicate, B cannot be cheaper than its extraction: the "
-             f"ratio is capped at {out['cost_curve']['cap']}x by label cost / extract cost. B static (crops at the "
-             "candidate pose, no physics in extraction) lowers the extraction cost; see its row."]
+             f"ratio is capped at {out['cost_curve']['cap']}x by label cost / extract cost."
+             + (" B static (crops at the candidate pose, no physics in extraction) lowers the extraction cost; see "
+                "its row." if "B static r0" in {a["arm"] for a in out["arms"]} else "")]
     return lines
+
+
+def _label_rule(out: dict) -> str:
+    k = out["args"]["label_trials"]
+    if out["args"].get("success", "nominal") == "every_trial":
+        return f"positive = all {k} trials held"
+    return f"positive = the nominal trial held, of {k}"
+
+
+def _phases(out: dict) -> str:
+    if "training_wall_seconds" not in out:
+        return ""
+    return (f" Wall time: generation {out['generation_wall_seconds'] / 60:.1f} min (two single-process jobs at a "
+            f"time), training {out['training_wall_seconds'] / 60:.1f} min (two processes), cost curve, trade-off "
+            f"and label transfer {out['analysis_wall_seconds'] / 60:.1f} min.")
 
 
 def analysis(out: dict) -> list[str]:
@@ -150,12 +167,12 @@ def write_page(out: dict, path: Path) -> None:
              f"validation), {args['grasps']} candidates each from the paper's normal-direction sampler, seed "
              f"{args['seed']}. Held-out: random_urdfs from index 500 on, {args['heldout']} objects x "
              f"{args['heldout_grasps']} candidates, labelled with the same protocol. Label protocol: "
-             f"{args['label_trials']} trials per label (the nominal lift-and-shake plus perturbed ones; success = the "
-             "nominal trial). Physics: the defaults (docs/trials.md, Physical defaults). Network: "
+             f"{args['label_trials']} trials per label (the nominal lift-and-shake plus perturbed ones; "
+             f"{_label_rule(out)}). Physics: the defaults (docs/trials.md, Physical defaults). Network: "
              f"{args['model']} on {args['points']} gripper-frame points per grasp, {args['steps']} gradient steps of "
              f"{args['batch_size']} for every arm, Adam {args['learning_rate']}, the checkpoint with the lowest loss "
              f"on the arm's own validation split (20% of its objects, or of its patches for B), {args['seeds']} "
-             "seeds. The full size is `--objects 64 --grasps 2000 --heldout 64 --heldout-grasps 200`.",
+             "seeds. The full size is `--objects 64 --grasps 2000 --heldout 64 --heldout-grasps 200`." + _phases(out),
              "", "## Cost per stage (core-seconds; each job ran in one process on one core)", "", *cost_table(out),
              "", "B arms after the first radius reuse its extracted parts; each is charged the same extraction. "
              "R's cost is A's per labelled candidate times the grasps it labels (a seeded subset of A's labelled "
@@ -176,7 +193,9 @@ def write_page(out: dict, path: Path) -> None:
              "cluster, hence the smaller counts.", "",
              "## The method's trade-off: which resolution to pick", "",
              "![unique fraction against label agreement](paper_experiment_tradeoff.png)", "", *tradeoff_table(out),
-             "", "Codes re-cropped from every train object's surface at A's grasp poses; labels are A's (each grasp "
+             "", "Codes re-cropped from every train object's surface at A's grasp poses"
+             + (f" (the first {args['tradeoff_grasps']:,} labelled candidates of each object)"
+                if "tradeoff_grasps" in args else "") + "; labels are A's (each grasp "
              "labelled on its own object). Same-code pairs: the first grasp of each code (cluster, at radius r) "
              "against up to four others; random pairs: as many pairs of grasps with different codes. The code "
              "decides the label as far as same-code agreement exceeds random-pair agreement. The plot leaves out "

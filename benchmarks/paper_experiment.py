@@ -46,7 +46,8 @@ from onepiece_dist.spec import JobSpec  # noqa: E402
 
 HELDOUT_START = 500  # random_urdfs from here on are never train objects
 QUICK = {"objects": 4, "grasps": 24, "heldout": 3, "heldout_grasps": 16, "label_trials": 2, "steps": 20,
-         "seeds": 2, "radii": "0,1", "curve": "12,24", "tradeoff": "10", "model": "pointnet"}
+         "seeds": 2, "radii": "0,1", "curve": "12,24", "tradeoff": "10", "tradeoff_grasps": 16, "model": "pointnet",
+         "static": True}
 
 
 def objects_source(count: int) -> str:
@@ -61,11 +62,13 @@ def objects_source(count: int) -> str:
 
 
 def base_spec(args, folder: Path) -> JobSpec:
-    """The spec every arm shares: the paper's normal-direction sampler, the default physics, K label trials."""
+    """The spec every arm shares: the paper's normal-direction sampler, the default physics, K label trials and
+    the label rule (``--success``: every_trial, a grasp is positive when all K trials hold)."""
     return JobSpec(objects=objects_source(args.objects), grasps_per_object=args.grasps, seed=args.seed,
                    sampler={"method": "normal"}, output=str(folder / "unused.zarr"),
                    views={"count": args.views, "crop": "partial"} if args.crop == "partial" else {},
-                   sim={"label_trials": args.label_trials, "perturbations_per_patch": 0, "transfer_codes": 0,
+                   sim={"label_trials": args.label_trials, "success": args.success, "perturbations_per_patch": 0,
+                        "transfer_codes": 0,
                         "points_per_grasp": args.points})
 
 
@@ -111,7 +114,7 @@ def generation_specs(args, folder: Path) -> dict:
 
     radii = [int(r) for r in args.radii.split(",")]
     return {"A": a, "heldout": heldout, "B": b_specs("settled", True, radii),
-            "B static": b_specs("static", False, [0])}
+            "B static": b_specs("static", False, [0]) if args.static else []}
 
 
 def generate(args, folder: Path) -> dict:
@@ -139,7 +142,7 @@ def arm_costs(gen: dict) -> list[dict]:
     a = gen["A"]
     rows = [{"arm": "A", "label_trials": a["grasps"] * gen["label_trials"], "labelled_grasps": a["grasps"],
              "stages": a["stages"], "labelled_bytes": a["labelled_bytes"], "dataset_bytes": a["dataset_bytes"]}]
-    for chain in ("B", "B static"):
+    for chain in [c for c in ("B", "B static") if gen[c]]:
         first = gen[chain][0]
         extraction = {k: first["stages"].get(k, 0.0) for k in ("ingest", "extract", "dedup")}
         for job in gen[chain]:
@@ -228,9 +231,11 @@ def _rank_within_object(owner: np.ndarray) -> np.ndarray:
     return rank
 
 
-def tradeoff(spec: JobSpec, folder: Path, resolutions_mm: list[float], radii: list[int]) -> list[dict]:
-    """For each resolution and radius: unique fraction of A's grasps, and the agreement of labels of grasps that
-    share a code against random pairs (A labels every grasp, so this needs no more physics)."""
+def tradeoff(spec: JobSpec, folder: Path, resolutions_mm: list[float], radii: list[int],
+             per_object: int) -> list[dict]:
+    """For each resolution and radius: unique fraction of A's grasps (the first ``per_object`` labelled
+    candidates of each object), and the agreement of labels of grasps that share a code against random pairs
+    (A labels every grasp, so this needs no more physics)."""
     from onepiece_dist.core.mesh import sample_surface
     from onepiece_dist.core.sampling import object_rng
     from onepiece_dist.core.voxel import crop_codes
@@ -238,8 +243,9 @@ def tradeoff(spec: JobSpec, folder: Path, resolutions_mm: list[float], radii: li
     from onepiece_dist.store import open_dataset
 
     ds = open_dataset(str(folder / "A.zarr"))
-    poses, owner = ds["grasps/pose"].astype(np.float64), ds["grasps/object"]
-    success, quality = ds["grasps/success"].astype(np.float64), ds["grasps/quality"].astype(np.float64)
+    keep = _rank_within_object(ds["grasps/object"]) < per_object
+    poses, owner = ds["grasps/pose"][keep].astype(np.float64), ds["grasps/object"][keep]
+    success, quality = ds["grasps/success"][keep].astype(np.float64), ds["grasps/quality"][keep].astype(np.float64)
     refs = {r.name: r for r in resolve_source(spec.objects)}
     clouds = []
     for name in ds.object_names:
@@ -312,13 +318,19 @@ def match_rows(b, a) -> np.ndarray:
 def parse_args(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     for name, default in (("objects", 64), ("grasps", 2000), ("heldout", 64), ("heldout-grasps", 200),
-                          ("label-trials", 4), ("steps", 300), ("seeds", 3), ("seed", 0), ("points", 256),
+                          ("label-trials", 4), ("steps", 500), ("seeds", 3), ("seed", 0), ("points", 256),
                           ("batch-size", 64)):
         parser.add_argument(f"--{name}", type=int, default=default)
     parser.add_argument("--learning-rate", type=float, default=1e-3)
     parser.add_argument("--radii", default="0,1,2", help="similar-shape radii of the B arms")
     parser.add_argument("--curve", default="250,500,1000,2000", help="candidates per object of the cost curve")
     parser.add_argument("--tradeoff", default="20,10,5", help="voxel resolutions (mm) of the trade-off")
+    parser.add_argument("--tradeoff-grasps", type=int, default=500,
+                        help="the trade-off uses each object's first N labelled candidates of arm A")
+    parser.add_argument("--success", choices=("nominal", "every_trial"), default="every_trial",
+                        help="binary label: the nominal trial held, or all K trials held (docs/trials.md)")
+    parser.add_argument("--static", action="store_true",
+                        help="also run B static (crops at the candidate pose, no extraction physics)")
     parser.add_argument("--model", choices=("pointnet", "voxel"), default="pointnet")
     parser.add_argument("--crop", choices=("full", "partial"), default="full",
                         help="crop grasp points from the full surface or from depth views (docs/views.md)")
@@ -358,7 +370,9 @@ def run_experiment(args, folder: Path) -> dict:
     gen["label_trials"] = args.label_trials
     generation_wall = time.perf_counter() - timer
     costs = arm_costs(gen)
+    timer = time.perf_counter()
     runs = train_all(train_jobs(args, costs, folder))
+    training_wall = time.perf_counter() - timer
     from onepiece_dist.store import open_dataset
 
     ho = open_dataset(str(folder / "heldout.zarr"))
@@ -367,14 +381,18 @@ def run_experiment(args, folder: Path) -> dict:
         row["heldout"] = arm_summary([r for r in runs if r["arm"] == row["arm"]], labels, groups)
         row["train_seconds"] = round(float(np.mean([s["train_seconds"] for s in row["heldout"]["seeds"]])), 1)
     radii = [int(r) for r in args.radii.split(",")]
+    timer = time.perf_counter()
     curve = cost_curves(gen, costs, folder, [int(n) for n in args.curve.split(",") if int(n) <= args.grasps], radii)
-    trade = tradeoff(gen["specs"]["A"], folder, [float(x) for x in args.tradeoff.split(",")], radii)
+    trade = tradeoff(gen["specs"]["A"], folder, [float(x) for x in args.tradeoff.split(",")], radii,
+                     args.tradeoff_grasps)
     transfer = [label_transfer(folder, r, args.seed) for r in radii]
+    analysis_wall = time.perf_counter() - timer
     out = {"benchmark": "paper_experiment", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {os.cpu_count()} cores", "args": {k: str(v) if isinstance(v, Path)
                                                                                 else v for k, v in vars(args).items()},
            "command": "python benchmarks/paper_experiment.py " + " ".join(sys.argv[1:]),
-           "generation_wall_seconds": round(generation_wall, 1), "heldout": baselines(labels, groups),
+           "generation_wall_seconds": round(generation_wall, 1), "training_wall_seconds": round(training_wall, 1),
+           "analysis_wall_seconds": round(analysis_wall, 1), "heldout": baselines(labels, groups),
            "heldout_job": gen["heldout"], "train_objects_ok": gen["A"]["objects_ok"], "arms": costs,
            "cost_curve": curve, "tradeoff": trade, "label_transfer": transfer}
     out["decision"] = decide(out)

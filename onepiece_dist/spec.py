@@ -118,6 +118,9 @@ class SimSpec(_Frozen):
     label: bool = Field(False, description="Also lift and shake each grasp and store success labels.")
     label_trials: int = Field(1, ge=1, le=32, description="K: label trials per grasp (the nominal one plus K-1 "
                               "with pose and friction noise); quality = success fraction.")
+    success: Literal["nominal", "every_trial"] = Field("nominal", description="Binary label (grasps/success): "
+        "the nominal trial held, or every one of the K trials held (a robust label, as Dex-Net thresholds robust "
+        "quality; docs/trials.md). The same with K = 1.")
     pose_noise: float = Field(0.003, ge=0, le=0.05, description="Translation noise of perturbed trials (m).")
     rotation_noise: float = Field(0.05, ge=0, le=1, description="Rotation noise of perturbed trials (rad).")
     friction_noise: float = Field(0.2, ge=0, le=1, description="Relative friction noise of perturbed trials.")

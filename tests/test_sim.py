@@ -152,3 +152,18 @@ def test_a_cylinder_is_held_across_its_diameter_and_missed_beside_it():
     world.close()
     assert OUTCOMES[batch.outcome[0]] == "ok" and batch.success[0] and abs(batch.width[0] - 0.04) < 0.004
     assert OUTCOMES[batch.outcome[1]] == "no_contact" and not batch.success[1]  # 3 cm above the top
+
+
+def test_the_every_trial_rule_labels_positive_only_grasps_that_held_in_all_k_trials(box_world):
+    from onepiece_dist.sim.trials import LabelNoise
+    from onepiece_dist.spec import SimSpec
+
+    poses = np.concatenate([top_grasp(x_offset=x) for x in (0.0, 0.008, 0.012, 0.014)])
+    shaky = {"label_trials": 4, "pose_noise": 0.02, "friction_noise": 0.9}
+    nominal = run_trials(box_world, poses, label=True, noise=LabelNoise.from_spec(SimSpec(**shaky)),
+                         rng=np.random.default_rng(0))
+    robust = run_trials(box_world, poses, label=True, rng=np.random.default_rng(0),
+                        noise=LabelNoise.from_spec(SimSpec(**shaky, success="every_trial")))
+    np.testing.assert_array_equal(robust.quality, nominal.quality)  # same trials, only the rule differs
+    np.testing.assert_array_equal(robust.success, nominal.quality == 1.0)
+    assert np.all(robust.success <= nominal.success) and robust.success.sum() < nominal.success.sum()

@@ -4,7 +4,8 @@
 stall, then settle; the settled object pose relative to the gripper and the final width are recorded. Candidates
 that start in collision, or whose fingers do not both touch the object, are dropped with a reason.
 *label*: extract, then gravity on, lift, shake linearly and rotationally; success = both fingers still touch the
-object; quality = success fraction over K trials with friction and pose noise.
+object; quality = success fraction over K trials with friction and pose noise; the binary label is the nominal
+trial's success or, with ``sim.success: every_trial``, success in all K trials.
 """
 
 from __future__ import annotations
@@ -197,17 +198,20 @@ def _trajectory(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True)
 class LabelNoise:
-    """Perturbations of the robust-quality trials: translation (m), rotation (rad), relative friction. Built from
-    the job's :class:`SimSpec` by :meth:`from_spec`, the one place its defaults live."""
+    """Perturbations of the robust-quality trials: translation (m), rotation (rad), relative friction; and whether
+    the binary label asks every trial to hold (``every_trial``) or only the nominal one. Built from the job's
+    :class:`SimSpec` by :meth:`from_spec`, the one place its defaults live."""
 
     trials: int
     translation: float
     rotation: float
     friction: float
+    every_trial: bool = False
 
     @classmethod
     def from_spec(cls, sim: SimSpec) -> LabelNoise:
-        return cls(sim.label_trials, sim.pose_noise, sim.rotation_noise, sim.friction_noise)
+        return cls(sim.label_trials, sim.pose_noise, sim.rotation_noise, sim.friction_noise,
+                   sim.success == "every_trial")
 
 
 def label_quality(world: SimWorld, pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> float:
@@ -229,8 +233,9 @@ def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False, noise: L
                rng: np.random.Generator | None = None) -> TrialBatch:
     """Extract (and optionally label) every candidate pose (n, 4, 4) on the loaded object.
 
-    With ``label``, each held grasp is lifted and shaken once at its candidate pose (``success``), plus
-    ``noise.trials - 1`` perturbed repetitions; ``quality`` = success fraction over all of them.
+    With ``label``, each held grasp is lifted and shaken once at its candidate pose, plus ``noise.trials - 1``
+    perturbed repetitions; ``quality`` = success fraction over all of them; ``success`` = the nominal trial held,
+    or with ``noise.every_trial`` all of them did.
     """
     n = len(poses)
     noise = noise or LabelNoise.from_spec(SimSpec())
@@ -243,4 +248,6 @@ def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False, noise: L
         if label and outcome[i] == 0:
             success[i], slip[i] = lift_and_shake(world, world.gripper_pose())
             quality[i] = (success[i] + label_quality(world, pose, rng, noise)) / noise.trials
+            if noise.every_trial:
+                success[i] = quality[i] == 1.0
     return TrialBatch(outcome, settled, width, shift, steps, success, quality, slip)
