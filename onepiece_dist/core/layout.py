@@ -174,7 +174,7 @@ def assembly_geometry(layout: Layout, pieces: list[list[np.ndarray]], points: li
 
     pieces : per patch, (k, 3) points of each convex piece; points : per patch, (m, 3) surface points
     returns : vertices (V, 3), faces (F, 3) int64, face_group (F,) int8 (plane class of the patch, 3 = core),
-              piece_patch (K,) int64 patch of each placed piece, points (P, 3), point_patch (P,) int64 (-1 = core)
+              piece_patch (K,) int64 patch of each placed piece, points (P, 3), point_patch (P,) int32 (-1 = core)
     """
     meshes, groups, owners = [], [], []
     for k, (patch_pieces, placement) in enumerate(zip(pieces, layout.placements, strict=True)):
@@ -189,8 +189,21 @@ def assembly_geometry(layout: Layout, pieces: list[list[np.ndarray]], points: li
     vertices, faces = merge_meshes(meshes)
     per_side = max(2, int(np.ceil(2 * layout.core_half.max() / resolution)))
     core = cube_points(np.zeros((1, 3)), 2 * layout.core_half, per_side)
-    placed = [transform_points(p, layout.placements[k]) for k, p in enumerate(points)]
-    owner = np.concatenate([np.full(len(p), k) for k, p in enumerate(placed)] + [np.full(len(core), -1)])
+    placed, owner = _placed_points(points, layout.placements, core)
     return {"vertices": vertices, "faces": faces, "face_group": np.concatenate(groups),
-            "piece_patch": np.array(owners, dtype=np.int64), "points": np.vstack([*placed, core]),
-            "point_patch": owner.astype(np.int64)}
+            "piece_patch": np.array(owners, dtype=np.int64), "points": placed, "point_patch": owner}
+
+
+def _placed_points(points: list[np.ndarray], placements: np.ndarray,
+                   core: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every patch's points (m_k, 3) moved by its placement (U, 4, 4), then the core's, written into one array
+    (the one object holds tens of millions of points: no list of copies). -> (P, 3) float64, (P,) int32 owner
+    (patch index, -1 for the core)."""
+    sizes = np.array([len(p) for p in points] + [len(core)], dtype=np.int64)
+    out = np.empty((int(sizes.sum()), 3))
+    owner = np.repeat(np.append(np.arange(len(points)), -1).astype(np.int32), sizes)
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    for k, p in enumerate(points):
+        out[starts[k]:starts[k + 1]] = transform_points(p, placements[k])
+    out[starts[-2]:] = core
+    return out, owner

@@ -12,13 +12,25 @@ class PointGrid:
     def __init__(self, points: np.ndarray, cell: float):
         self.points = np.asarray(points)
         self.cell = float(cell)
-        keys = np.floor(self.points / self.cell).astype(np.int32) if len(self.points) else np.zeros((0, 3), np.int32)
-        self.origin = keys.min(axis=0).astype(np.int64) if len(keys) else np.zeros(3, np.int64)
-        self.dims = (keys.max(axis=0) - self.origin + 1).astype(np.int64) if len(keys) else np.ones(3, np.int64)
-        flat = np.ravel_multi_index((keys - self.origin).T, self.dims) if len(keys) else np.zeros(0, np.int64)
-        del keys
-        self.order = np.argsort(flat, kind="stable")
-        self.sorted_cells = flat[self.order]
+        self.order, self.sorted_cells = self._sort_by_cell()
+
+    def _sort_by_cell(self) -> tuple[np.ndarray, np.ndarray]:
+        """Cell index of every point, one axis at a time (the one object holds tens of millions of points: no
+        (n, 3) temporaries); -> (order (n,) int32 or int64, sorted cell indices (n,) int64)."""
+        n = len(self.points)
+        if n == 0:
+            self.origin, self.dims = np.zeros(3, np.int64), np.ones(3, np.int64)
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        low = np.floor(self.points.min(axis=0) / self.cell).astype(np.int64)  # floor is monotonic: the lowest key
+        high = np.floor(self.points.max(axis=0) / self.cell).astype(np.int64)
+        self.origin, self.dims = low, high - low + 1
+        flat = np.zeros(n, dtype=np.int64)
+        for axis in range(3):
+            flat *= self.dims[axis]
+            flat += np.floor(self.points[:, axis] / self.cell).astype(np.int64) - low[axis]
+        order = np.argsort(flat, kind="stable")
+        flat = flat[order]  # the unsorted keys go now, not after the int32 copy below
+        return (order.astype(np.int32) if n < 2**31 else order), flat
 
     def in_box(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """(m,) int64 indices of the points with lower <= p <= upper (every coordinate)."""
@@ -33,7 +45,7 @@ class PointGrid:
         ends = np.searchsorted(self.sorted_cells, first + hi[2], side="right")
         candidates = self.order[_ranges(starts, ends)]
         inside = np.all((self.points[candidates] >= lower) & (self.points[candidates] <= upper), axis=1)
-        return candidates[inside]
+        return candidates[inside].astype(np.int64)
 
 
 def _ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:

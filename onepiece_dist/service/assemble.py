@@ -50,10 +50,11 @@ def assemble_dataset(spec: JobSpec, path: str | os.PathLike, codes: np.ndarray, 
                                      reach=float(np.ptp(layout.bounding_box, axis=0).max()) + 1.0)
     chamfer = _chamfer_to_representatives(spec, path, patches)
     report = _report(spec, grasps, codes, classes, layout, matches, intrusions, chamfer, patches)
+    points = geometry.pop("points").astype(np.float32)  # the float64 cloud goes before the patch arrays come
     arrays = {"placement": layout.placements.astype(np.float32), "plane": classes.plane,
               "areas": classes.areas, "features": classes.features, "scores": classes.scores.astype(np.float32),
               "vertices": geometry["vertices"].astype(np.float32), "faces": geometry["faces"].astype(np.int32),
-              "face_group": geometry["face_group"], "points": geometry["points"].astype(np.float32),
+              "face_group": geometry["face_group"], "points": points,
               "point_patch": geometry["point_patch"].astype(np.int32), **patches.arrays()}
     write_group(path, "assembled", arrays, {"assembly": report.model_dump(mode="json")})
     return report

@@ -44,9 +44,9 @@ class Patches:
         return {"representative": self.representative.astype(np.int64),
                 "patch_piece_count": np.array([len(p) for p in self.pieces], dtype=np.int64),
                 "piece_vertex_count": np.array([len(p) for p in piece_list], dtype=np.int64),
-                "piece_vertices": _stack(piece_list),
+                "piece_vertices": _stack(piece_list, np.float64),
                 "patch_point_count": np.array([len(p) for p in self.points], dtype=np.int64),
-                "patch_points": _stack(self.points).astype(np.float32),  # as assembled/points: codes need no more
+                "patch_points": _stack(self.points, np.float32),  # as assembled/points: codes need no more
                 "source_volume": self.source_volume.astype(np.float64)}
 
     @classmethod
@@ -59,8 +59,9 @@ class Patches:
                    np.asarray(arrays["source_volume"], dtype=np.float64))
 
 
-def _stack(rows: list[np.ndarray]) -> np.ndarray:
-    return np.vstack(rows).astype(np.float64) if rows else np.zeros((0, 3))
+def _stack(rows: list[np.ndarray], dtype) -> np.ndarray:
+    """(sum k_i, 3) rows of every (k_i, 3) array, cast while copying (no float64 copy of a float32 result)."""
+    return np.concatenate(rows, axis=0, dtype=dtype) if rows else np.zeros((0, 3), dtype=dtype)
 
 
 def _split(rows: np.ndarray, counts: np.ndarray) -> list[np.ndarray]:
