@@ -165,14 +165,21 @@ def _bold(row: dict, text: str) -> str:
 
 def end_to_end_section(r: dict) -> list[str]:
     stages, t = r["stage_seconds"], r["targets"]
-    rows = [[s, stages[s], r["peak_memory_gib_by_stage"].get(s, "")] for s in stages]
-    budget, budget_target = r["extract_dedup_assemble_seconds"], t["extract_dedup_assemble_seconds"]
+    cores = r.get("core_seconds_by_stage")
+    rows = [[s, stages[s], *([cores.get(s, "")] if cores else []), r["peak_memory_gib_by_stage"].get(s, "")]
+            for s in stages]
+    budget = r.get("budget_seconds", r.get("extract_dedup_assemble_seconds"))
+    budget_target = t.get("budget_seconds", t.get("extract_dedup_assemble_seconds"))
+    budget_stages = r.get("budget_stages", [s for s in stages if s != "ingest"])
+    trained = (f" The train stage fits the {r['train']['model']} model for {r['train']['epochs']} epochs."
+               if "train" in r and "train" in stages else "")
     lines = [f"## End to end: {provenance(r)}", "", f"{r['objects']} objects x {r['candidates_per_object']} "
              f"candidates, embedded Ray, physics on, fresh cache: {r['objects_ok']} objects accepted, "
              f"{r['grasps']:,} grasps, {r['unique_codes']:,} unique codes, {r['patches']:,} patches on the one "
-             "object.", "",
-             *table(["stage", "wall seconds", "peak memory of the process tree (GiB)"], rows), "",
-             f"{' + '.join(s for s in stages if s != 'ingest')}: {budget} s (target {budget_target} s: "
+             f"object.{trained}", "",
+             *table(["stage", "wall seconds", *(["core-seconds (process tree CPU)"] if cores else []),
+                     "peak memory of the process tree (GiB)"], rows), "",
+             f"{' + '.join(budget_stages)}: {budget} s (target {budget_target} s: "
              f"{met(-budget, -budget_target)}); peak memory {r['peak_memory_gib']} GiB in all, "
              f"{r['peak_above_idle_gib']} GiB above Ray's idle {r['ray_idle_memory_gib']} GiB (target "
              f"{t['peak_memory_gib']} GiB: {met(-r['peak_memory_gib'], -t['peak_memory_gib'])}). Dataset "
