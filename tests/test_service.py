@@ -117,6 +117,49 @@ class PoisonWorker:
         return self.inner.extract(ref, index)
 
 
+class _RecordedCall:
+    def __init__(self, log: list, name: str):
+        self.log, self.name = log, name
+
+    def remote(self, *args):
+        self.log.append((self.name, args))
+        return object()  # a distinct handle per call, as an ObjectRef is
+
+
+class RecordingActor:
+    """Stands in for an actor handle: every ``handle.method.remote(...)`` is recorded (no Ray)."""
+
+    def __init__(self):
+        self.log: list = []
+
+    def __getattr__(self, name: str) -> _RecordedCall:
+        return _RecordedCall(self.log, name)
+
+
+def test_the_last_items_go_only_to_idle_workers():
+    from collections import deque
+
+    from onepiece_dist.service.ray_runner import IN_FLIGHT_PER_WORKER, WorkerPool
+
+    actors = [RecordingActor(), RecordingActor()]
+    pool = WorkerPool(actors, registry=None, status=None, on_result=lambda result: None)
+    pool.ready = {0, 1}
+    todo = deque(enumerate("abcdef"))
+    pool._fill(todo)  # plenty left: each worker gets IN_FLIGHT_PER_WORKER, the last two wait here
+    assert len(pool.pending) == 2 * IN_FLIGHT_PER_WORKER and [i for i, _ in todo] == [4, 5]
+
+    def finish_one_of(position: int) -> None:
+        handle = next(h for h, (_, _, p, _) in pool.pending.items() if p == position)
+        del pool.pending[handle]
+
+    finish_one_of(0)
+    pool._fill(todo)  # worker 0 still runs one: no second item queued behind it while worker 1 may free up
+    assert [i for i, _ in todo] == [4, 5]
+    finish_one_of(0)
+    pool._fill(todo)
+    assert [i for i, _ in todo] == [5] and actors[0].log[-1] == ("extract", ("e", 4))
+
+
 def run_poison_pool(ray, spec, job_id: str, **poison) -> tuple[list, JobStatus]:
     from onepiece_dist.service.crashes import crash_folder
     from onepiece_dist.service.ray_runner import WorkerPool

@@ -41,12 +41,14 @@ class Central(Protocol):
 @dataclass(frozen=True)
 class Runtime:
     """extract(refs, on_result) -> results in object order; the central actor; label(tasks) -> shard results in
-    task order (the workers simulate, not the central actor); train(spec) -> report."""
+    task order (the workers simulate, not the central actor); train(spec) -> report; prepare(stage): start what
+    ``stage`` will need (its workers) while the central actor is still busy with the stage before it."""
 
     extract: Callable[[list[ObjectRef], Callable[[ObjectResult], None]], list[ObjectResult]]
     central: Central
     label: Callable[[list[LabelTask]], list[LabelShardResult]]
     train: Callable[[JobSpec], TrainingReport]
+    prepare: Callable[[str], None] = lambda stage: None
 
 
 def new_status(spec: JobSpec, job_id: str) -> JobStatus:
@@ -116,6 +118,8 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
     shapes = summary.exact_unique_codes if summary is not None else 0
     if spec.runs("assemble") and shapes:
         with stage(status, "assemble", report):
+            if spec.runs("label"):
+                runtime.prepare("label")  # label workers start up (imports, pybullet) while the one object is built
             status.assembly = runtime.central.assemble()
     if spec.runs("label") and shapes:
         with stage(status, "label", report):

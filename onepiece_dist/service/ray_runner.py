@@ -80,11 +80,13 @@ def _node_id() -> str:
         return ""
 
 
-def worker_count(spec_workers: int | None, objects: int) -> int:
+def worker_count(spec_workers: int | None, items: int | None) -> int:
+    """Workers for a stage of ``items`` tasks (None: not known yet): as asked, else one per CPU of the cluster;
+    never more than there are tasks."""
     import ray
 
-    cpus = int(ray.cluster_resources().get("CPU", 1))
-    return max(1, min(spec_workers or cpus, objects or 1))
+    limit = spec_workers or int(ray.cluster_resources().get("CPU", 1))
+    return max(1, limit if items is None else min(limit, items or 1))
 
 
 def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress: ProgressFn | None = None,
@@ -110,12 +112,24 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         if progress:
             progress(current)
 
+    prepared: dict[str, list] = {}
+
+    def start_workers(stage: str, count: int) -> list:
+        return [restartable_actor(SimWorker, f"{stage}-{job_id}-{k}", num_cpus=1,
+                                  scheduling_strategy="SPREAD").remote(spec, central_name(job_id), str(crashes))
+                for k in range(count)]
+
+    def prepare(stage: str) -> None:
+        prepared[stage] = start_workers(stage, worker_count(workers, None))
+
     def on_pool(stage: str, items: list, on_result, method: str, quarantined) -> list:
         import ray
 
-        actors = [restartable_actor(SimWorker, f"{stage}-{job_id}-{k}", num_cpus=1,
-                                    scheduling_strategy="SPREAD").remote(spec, central_name(job_id), str(crashes))
-                  for k in range(worker_count(workers, len(items)))]
+        wanted = worker_count(workers, len(items))
+        actors = prepared.pop(stage, [])
+        for actor in actors[wanted:]:
+            ray.kill(actor)
+        actors = actors[:wanted] or start_workers(stage, wanted)
         try:
             return WorkerPool(actors, registry, status, on_result, method, quarantined, crashes).run(items)
         finally:
@@ -133,8 +147,8 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         return clients[-1].fit(train_spec)
 
     try:
-        return run_pipeline(spec, status, Runtime(extract=extract, central=central, label=label, train=train), report,
-                            refs)
+        return run_pipeline(spec, status, Runtime(extract=extract, central=central, label=label, train=train,
+                                                  prepare=prepare), report, refs)
     except JobError as err:
         if isinstance(err, RuntimeLost) or isinstance(err.__cause__, RuntimeLost | RaySystemError):
             lost = err if isinstance(err, RuntimeLost) else err.__cause__
@@ -146,6 +160,11 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         for client in clients:
             with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
                 client.kill()
+        for actor in [a for started in prepared.values() for a in started]:  # prepared for a stage that never ran
+            with contextlib.suppress(Exception):
+                import ray
+
+                ray.kill(actor)
         shutil.rmtree(crashes, ignore_errors=True)
 
 
@@ -191,7 +210,8 @@ class WorkerPool:
                 raise JobCancelled(f"cancelled after {len(results)} of {len(items)} {self.method} tasks")
             self._note_started()
             self._fill(todo)
-            ready, _ = ray.wait(list(self.pending) or list(self.starting), num_returns=1, timeout=POLL_SECONDS)
+            # an actor that finishes starting wakes the loop too, so it gets work at once, not at the next result
+            ready, _ = ray.wait([*self.pending, *self.starting], num_returns=1, timeout=POLL_SECONDS)
             ready = [ref for ref in ready if ref in self.pending]
             for ref in ready:
                 result = self._collect(ref, todo)
@@ -222,12 +242,16 @@ class WorkerPool:
         return load
 
     def _fill(self, todo: deque) -> None:
+        """Hand out items: up to IN_FLIGHT_PER_WORKER queued per actor (no idle gap between its tasks) while there
+        is plenty left; once no more items remain than actors, only to idle actors, so the last items never wait
+        in one actor's queue while another actor idles."""
         deferred = deque()
         while todo:
+            limit = IN_FLIGHT_PER_WORKER if len(todo) > len(self.actors) else 1
             index, ref = todo.popleft()
             load = self._load()
             alone = index in self.suspects
-            free = [k for k, n in enumerate(load) if (n == 0 if alone else n < IN_FLIGHT_PER_WORKER)]
+            free = [k for k, n in enumerate(load) if (n == 0 if alone else n < limit)]
             if not free:
                 deferred.append((index, ref))
                 if not alone:
