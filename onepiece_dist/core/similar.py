@@ -40,7 +40,10 @@ def candidate_pairs(codes: np.ndarray, nbits: int, radius: int) -> np.ndarray:
         _, bucket = np.unique(packed, axis=0, return_inverse=True)
         pairs.append(_pairs_in_buckets(bucket.ravel()))
     pairs = np.vstack(pairs) if pairs else np.zeros((0, 2), dtype=np.int64)
-    return np.unique(pairs, axis=0) if len(pairs) else pairs
+    if not len(pairs):
+        return pairs
+    keys = np.unique(pairs[:, 0] * len(codes) + pairs[:, 1])  # one int64 per pair: sorted as (i, j) rows would be
+    return np.stack([keys // len(codes), keys % len(codes)], axis=1)
 
 
 def _pairs_in_buckets(bucket: np.ndarray) -> np.ndarray:
@@ -55,6 +58,16 @@ def _pairs_in_buckets(bucket: np.ndarray) -> np.ndarray:
         a, b = order[first], order[first + offset]
         out.append(np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1))
     return np.vstack(out) if out else np.zeros((0, 2), dtype=np.int64)
+
+
+PAIR_CHUNK = 1 << 20  # pairs compared at a time: gathering both codes of every candidate pair at once can take GBs
+
+
+def _within(codes: np.ndarray, pairs: np.ndarray, radius: int) -> np.ndarray:
+    """The (k, 2) ``pairs`` whose codes differ in at most ``radius`` bits, compared PAIR_CHUNK at a time."""
+    keep = [chunk[hamming(codes[chunk[:, 0]], codes[chunk[:, 1]]) <= radius]
+            for chunk in (pairs[i:i + PAIR_CHUNK] for i in range(0, len(pairs), PAIR_CHUNK))]
+    return np.vstack(keep) if keep else np.zeros((0, 2), dtype=np.int64)
 
 
 def connected_components(count: int, edges: np.ndarray) -> np.ndarray:
@@ -81,7 +94,7 @@ def similar_clusters(codes: np.ndarray, counts: np.ndarray, nbits: int, radius: 
         edges = np.zeros((0, 2), dtype=np.int64)
     else:
         pairs = candidate_pairs(codes, nbits, radius) if pairs is None else pairs
-        edges = pairs[hamming(codes[pairs[:, 0]], codes[pairs[:, 1]]) <= radius] if len(pairs) else pairs
+        edges = _within(codes, pairs, radius)
     labels = connected_components(len(codes), edges)
     roots, cluster = np.unique(labels, return_inverse=True)
     # representative: highest count, then the smallest code in byte order (independent of input order)
