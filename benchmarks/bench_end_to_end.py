@@ -48,6 +48,7 @@ class TreeMemory:
 
     def __init__(self, period: float = 0.2):
         self.period, self.samples, self.cpu = period, [], []
+        self._last_cpu: dict[int, float] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
 
@@ -62,27 +63,27 @@ class TreeMemory:
     def _run(self) -> None:
         me = psutil.Process()
         while not self._stop.is_set():
-            total, cpu = 0, 0.0
+            total = 0
             for proc in [me, *me.children(recursive=True)]:
                 try:
                     total += proc.memory_info().rss
                     times = proc.cpu_times()
-                    cpu += times.user + times.system
+                    self._last_cpu[proc.pid] = times.user + times.system
                 except psutil.Error:
                     pass
             now = time.perf_counter()
             self.samples.append((now, total))
-            self.cpu.append((now, cpu))
+            self.cpu.append((now, sum(self._last_cpu.values())))  # exited processes keep their last CPU time
             self._stop.wait(self.period)
 
     def peak(self, since: float = 0.0, until: float = float("inf")) -> int:
         return max((rss for t, rss in self.samples if since <= t <= until), default=0)
 
     def core_seconds(self, since: float, until: float) -> float:
-        """CPU seconds the tree spent between two times (the samples nearest them; never negative, although a
-        process that exits takes its CPU time out of the sum)."""
+        """CPU seconds the tree spent between two times (the samples nearest them; a process that exits counts
+        with its CPU time at its last sample, so the sum never drops)."""
         inside = [cpu for t, cpu in self.cpu if since <= t <= until]
-        return max(0.0, inside[-1] - inside[0]) if len(inside) > 1 else 0.0
+        return inside[-1] - inside[0] if len(inside) > 1 else 0.0
 
 
 def stage_windows(start: float, timings: dict[str, float]) -> dict[str, tuple[float, float]]:
