@@ -77,12 +77,11 @@ def run_job(name: str, spec_json: str) -> dict:
     whose dataset is already there, made from the same spec (its status file says so), is not run again: its
     figures are read from that status (``--folder``: a run cut short goes on from what it finished)."""
     from onepiece_dist.service.local import run_local
-    from onepiece_dist.service.status import JobStatus
     from onepiece_dist.store.dataset import disk_bytes
 
     spec = JobSpec.model_validate_json(spec_json)
     start = time.perf_counter()
-    reused = _finished(spec, JobStatus)
+    reused = _finished(spec)
     status = reused or run_local(spec, job_id=name.replace(" ", "-"))
     out = {"name": name, "wall_seconds": round(time.perf_counter() - start, 1), "reused": reused is not None,
            "stages": {k: round(v, 1) for k, v in status.timings.items()}, "grasps": int(status.progress.grasps),
@@ -95,12 +94,14 @@ def run_job(name: str, spec_json: str) -> dict:
     return out
 
 
-def _finished(spec: JobSpec, status_model):
+def _finished(spec: JobSpec):
     """The status of a finished job that made ``spec.output`` from this very spec, or None."""
+    from onepiece_dist.service.status import JobStatus
+
     path = Path(f"{spec.output}.status.json")
     if not path.exists():
         return None
-    status = status_model.model_validate_json(path.read_text())
+    status = JobStatus.model_validate_json(path.read_text())
     same = JobSpec.model_validate(status.spec) == spec
     return status if same and status.state == "succeeded" else None
 

@@ -160,10 +160,10 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         for client in clients:
             with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
                 client.kill()
+        import ray
+
         for actor in [a for started in prepared.values() for a in started]:  # prepared for a stage that never ran
             with contextlib.suppress(Exception):
-                import ray
-
                 ray.kill(actor)
         shutil.rmtree(crashes, ignore_errors=True)
 
