@@ -54,7 +54,7 @@ def main() -> dict:
     spec = JobSpec(grasps_per_object=GRASPS)
     world = process_world(spec.gripper)
     timings = {"extract": 0.0, "label": 0.0, "baseline": 0.0}
-    trials = held = 0
+    trials = held = closing_steps = 0
     loaded = []
     with tempfile.TemporaryDirectory() as cache:
         for ref in resolve_source(OBJECTS):
@@ -75,14 +75,18 @@ def main() -> dict:
                 timings[name] += time.perf_counter() - start
                 if name == "extract":
                     held += int(np.sum(batch.outcome == 0))
+                    closing_steps += int(np.sum(batch.steps))
             trials += len(poses)
     rates = {f"{k}_trials_per_s_per_core": round(trials / v, 1) for k, v in timings.items()}
     out = {"benchmark": "sim", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {os.cpu_count()} cores (one used)", "objects": OBJECTS,
-           "trials": trials, "extract_held_fraction": round(held / max(trials, 1), 3), **rates,
+           "trials": trials, "extract_held_fraction": round(held / max(trials, 1), 3),
+           "extract_closing_steps_per_trial": round(closing_steps / max(trials, 1), 1), **rates,
            "extract_speedup_vs_baseline": round(timings["baseline"] / timings["extract"], 2),
            "label_speedup_vs_baseline": round(timings["baseline"] / timings["label"], 2),
            "physics": asdict(PhysicsSettings()),
+           "physical_defaults": {"pad_friction": spec.gripper.friction, "closing_force_n": spec.gripper.closing_force,
+                                 "density_kg_m3": spec.sim.density},
            "targets": {"extract_trials_per_s_per_core": 300, "label_trials_per_s_per_core": 150},
            "label_fidelity": fidelity(spec, loaded),
            "command": "python benchmarks/bench_sim.py"}

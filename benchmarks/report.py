@@ -77,7 +77,19 @@ def sim_section(r: dict) -> list[str]:
                  ["label (extract + lift + shakes, early drop exit)", r["label_trials_per_s_per_core"],
                   f"{r['label_speedup_vs_baseline']}x", _target(r, t, "label_trials_per_s_per_core")],
                  ["baseline: fixed 120-step close and lift", r["baseline_trials_per_s_per_core"], "1x", ""]]),
-            *_fidelity_lines(r)]
+            *_physics_lines(r), *_fidelity_lines(r)]
+
+
+def _physics_lines(r: dict) -> list[str]:
+    phys = r.get("physical_defaults")
+    if not phys:
+        return []
+    return ["", f"Physical defaults of this run (docs/trials.md): pad friction {phys['pad_friction']}, closing force "
+            f"{phys['closing_force_n']} N per finger, density {phys['density_kg_m3']} kg/m^3; an extract trial "
+            f"closes in {r['extract_closing_steps_per_trial']} steps on average and "
+            f"{r['extract_held_fraction']:.1%} of the candidates hold. These rates are the ceiling of the stages "
+            "built on them: the extract stage cannot run more candidates per second per core than the extract "
+            "protocol does."]
 
 
 def _target(r: dict, targets: dict, name: str) -> str:
