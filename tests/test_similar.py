@@ -66,3 +66,22 @@ def test_a_job_with_a_radius_maps_every_grasp_to_its_cluster_representative(spec
     assert np.array_equal(ds["exact/code"][ds["grasps/exact_index"]], codes)
     assert np.array_equal(ds["exact/cluster"][ds["grasps/exact_index"]], ds["grasps/code_index"])
     assert ds["unique/count"].sum() == len(codes)
+
+
+def test_sparse_codes_sharing_a_block_of_zeros_get_few_candidate_pairs_and_the_same_clusters():
+    rng = np.random.default_rng(3)
+    bits = np.zeros((1500, 64), dtype=np.uint8)
+    for row in bits:  # every code empty in its first half, a few voxels set in the second
+        row[32 + rng.choice(32, rng.integers(1, 6), replace=False)] = 1
+    codes = unique_codes(np.packbits(bits, axis=1)).unique
+    every = brute_force_pairs(len(codes))
+    counts = rng.integers(1, 5, len(codes))
+    for radius in (1, 2):
+        near = every[hamming(codes[every[:, 0]], codes[every[:, 1]]) <= radius]
+        found = candidate_pairs(codes, 64, radius)
+        assert {tuple(p) for p in near} <= {tuple(p) for p in found}
+        assert len(found) < len(every) / 4  # one block index alone would propose every pair (all share the zeros)
+        indexed = similar_clusters(codes, counts, 64, radius)
+        reference = similar_clusters(codes, counts, 64, radius, pairs=every)
+        assert np.array_equal(indexed.cluster, reference.cluster)
+        assert np.array_equal(indexed.representative, reference.representative)
