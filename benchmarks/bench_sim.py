@@ -5,7 +5,10 @@ Measures the extract protocol (early stall exit), the label protocol (extract + 
 fixed-step baseline (close then lift, 240 steps of 1/240 s, no early exit) on the same candidates. Then label
 fidelity: the same candidates labelled with a converged reference (1/480 s steps, 100 solver iterations, cone
 friction) and with cheaper or other settings; each row says how many success labels agree with the reference,
-beside the noise floor (the default settings with every candidate moved by 10 micrometres).
+beside the noise floor (the default settings with every candidate moved by 10 micrometres). And extract
+fidelity: the same for the extract protocol, whose result is a settled pose and its code (the dedup key): how
+often cheaper settings hold the same candidates and give the same code. Protocol rates are the median of REPEATS
+timings (their range is recorded); the fidelity rows are timed once.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import pybullet as pb
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from onepiece_dist.core.mesh import enclosed_volume, sample_surface  # noqa: E402
 from onepiece_dist.core.sampling import object_rng, sample_candidates  # noqa: E402
+from onepiece_dist.core.voxel import crop_codes  # noqa: E402
 from onepiece_dist.objects import load_object, resolve_source  # noqa: E402
 from onepiece_dist.sim.collision import convex_pieces  # noqa: E402
 from onepiece_dist.sim.trials import place, run_trials  # noqa: E402
@@ -50,45 +54,69 @@ def baseline(world, poses: np.ndarray) -> None:
             pb.stepSimulation(physicsClientId=c)
 
 
-def main() -> dict:
-    spec = JobSpec(grasps_per_object=GRASPS)
-    world = process_world(spec.gripper)
-    timings = {"extract": 0.0, "label": 0.0, "baseline": 0.0}
-    trials = held = closing_steps = 0
+REPEATS = 3  # each protocol is timed this many times over all objects; the median counts (runs here vary by ~30%)
+
+
+def load_all(spec: JobSpec, cache: Path) -> list:
+    """(convex pieces, enclosed volume, candidate poses (n, 4, 4), surface points (m, 3)) of every object."""
     loaded = []
-    with tempfile.TemporaryDirectory() as cache:
-        for ref in resolve_source(OBJECTS):
-            try:
-                mesh = load_object(ref, spec).mesh
-            except ValueError:
-                continue
-            rng = object_rng(mesh.content_id, spec.seed)
-            points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
-            poses = sample_candidates(mesh, points, normals, GRASPS, spec.gripper, spec.sampler, rng).poses
-            loaded.append((convex_pieces(mesh, Path(cache), "vhacd"), enclosed_volume(mesh), poses))
-            world.load_object(*loaded[-1][:2], spec.sim.density)
+    for ref in resolve_source(OBJECTS):
+        try:
+            mesh = load_object(ref, spec).mesh
+        except ValueError:
+            continue
+        rng = object_rng(mesh.content_id, spec.seed)
+        points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
+        poses = sample_candidates(mesh, points, normals, GRASPS, spec.gripper, spec.sampler, rng).poses
+        loaded.append((convex_pieces(mesh, cache, "vhacd"), enclosed_volume(mesh), poses, points))
+    return loaded
+
+
+def time_protocols(spec: JobSpec, loaded: list) -> tuple[dict[str, list[float]], np.ndarray]:
+    """Seconds of each protocol over all objects, REPEATS times; and the extract trials' outcomes and closing
+    steps (2, n) of the first repeat."""
+    world = process_world(spec.gripper)
+    seconds, first = {"extract": [], "label": [], "baseline": []}, None
+    for _ in range(REPEATS):
+        spent, extracted = dict.fromkeys(seconds, 0.0), []
+        for pieces, volume, poses, _ in loaded:
+            world.load_object(pieces, volume, spec.sim.density)
             for name, run in (("extract", lambda p: run_trials(world, p)),
                               ("label", lambda p: run_trials(world, p, label=True)),
                               ("baseline", lambda p: baseline(world, p))):
                 start = time.perf_counter()
                 batch = run(poses)
-                timings[name] += time.perf_counter() - start
+                spent[name] += time.perf_counter() - start
                 if name == "extract":
-                    held += int(np.sum(batch.outcome == 0))
-                    closing_steps += int(np.sum(batch.steps))
-            trials += len(poses)
+                    extracted.append(np.stack([batch.outcome, batch.steps]))
+        for name in seconds:
+            seconds[name].append(spent[name])
+        first = np.concatenate(extracted, axis=1) if first is None else first
+    return seconds, first
+
+
+def main() -> dict:
+    spec = JobSpec(grasps_per_object=GRASPS)
+    with tempfile.TemporaryDirectory() as cache:
+        loaded = load_all(spec, Path(cache))
+        seconds, extracted = time_protocols(spec, loaded)
+    trials = extracted.shape[1]
+    timings = {name: float(np.median(values)) for name, values in seconds.items()}
     rates = {f"{k}_trials_per_s_per_core": round(trials / v, 1) for k, v in timings.items()}
+    spread = {k: [round(trials / max(v), 1), round(trials / min(v), 1)] for k, v in seconds.items()}
+    held, closing_steps = int(np.sum(extracted[0] == 0)), int(np.sum(extracted[1]))
     out = {"benchmark": "sim", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {os.cpu_count()} cores (one used)", "objects": OBJECTS,
            "trials": trials, "extract_held_fraction": round(held / max(trials, 1), 3),
            "extract_closing_steps_per_trial": round(closing_steps / max(trials, 1), 1), **rates,
+           "repeats": REPEATS, "rate_range_over_repeats": spread,
            "extract_speedup_vs_baseline": round(timings["baseline"] / timings["extract"], 2),
            "label_speedup_vs_baseline": round(timings["baseline"] / timings["label"], 2),
            "physics": asdict(PhysicsSettings()),
            "physical_defaults": {"pad_friction": spec.gripper.friction, "closing_force_n": spec.gripper.closing_force,
                                  "density_kg_m3": spec.sim.density},
            "targets": {"extract_trials_per_s_per_core": 300, "label_trials_per_s_per_core": 150},
-           "label_fidelity": fidelity(spec, loaded),
+           "label_fidelity": fidelity(spec, loaded), "extract_fidelity": extract_fidelity(spec, loaded),
            "command": "python benchmarks/bench_sim.py"}
     (Path(__file__).parent / "results" / "sim.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
@@ -109,7 +137,7 @@ def label_all(spec: JobSpec, loaded: list, physics: PhysicsSettings,
     world = SimWorld(spec.gripper, physics)
     rng = np.random.default_rng(7)
     seconds, success = 0.0, []
-    for pieces, volume, poses in loaded:
+    for pieces, volume, poses, _ in loaded:
         world.load_object(pieces, volume, spec.sim.density)
         moved = poses.copy()
         moved[:, :3, 3] += rng.normal(0, jitter, (len(poses), 3)) if jitter else 0.0
@@ -136,6 +164,48 @@ def fidelity(spec: JobSpec, loaded: list) -> dict:
              "agreement_with_reference": round(float(np.mean(moved == reference)), 3)}
     return {"reference": {**asdict(REFERENCE), "label_trials_per_s_per_core": round(reference_rate, 1),
                           "success_rate": round(float(reference.mean()), 3)}, "noise_floor": floor, "rows": rows}
+
+
+def extract_all(spec: JobSpec, loaded: list, physics: PhysicsSettings,
+                jitter: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
+    """The extract protocol on every candidate: held (n,) bool, the code of the settled crop (n, B) uint8 (as
+    extraction keys it) and extract trials/s/core (the trials alone)."""
+    world = SimWorld(spec.gripper, physics)
+    rng = np.random.default_rng(7)
+    grid = spec.voxel.grid_shape(spec.gripper)
+    seconds, held, codes = 0.0, [], []
+    for pieces, volume, poses, points in loaded:
+        world.load_object(pieces, volume, spec.sim.density)
+        moved = poses.copy()
+        moved[:, :3, 3] += rng.normal(0, jitter, (len(poses), 3)) if jitter else 0.0
+        start = time.perf_counter()
+        batch = run_trials(world, moved)
+        seconds += time.perf_counter() - start
+        held.append(batch.outcome == 0)
+        codes.append(crop_codes(points, batch.settled_pose, grid, spec.voxel.resolution)[0])
+    world.close()
+    held = np.concatenate(held)
+    return held, np.concatenate(codes), len(held) / seconds
+
+
+def extract_fidelity(spec: JobSpec, loaded: list) -> dict:
+    """Cheaper extraction settings against the default: same held outcome, and among candidates held under both,
+    the same code (the dedup key); beside the default's own noise floor (candidates moved by JITTER)."""
+    held, codes, _ = extract_all(spec, loaded, VARIANTS["default"])
+
+    def compare(other_held: np.ndarray, other_codes: np.ndarray) -> dict:
+        both = held & other_held
+        same = np.all(codes[both] == other_codes[both], axis=1)
+        return {"held_agreement": round(float(np.mean(held == other_held)), 3),
+                "code_agreement": round(float(same.mean()), 3) if both.any() else None}
+
+    rows = []
+    for name, physics in VARIANTS.items():
+        other_held, other_codes, rate = extract_all(spec, loaded, physics)
+        rows.append({"settings": name, **asdict(physics), "extract_trials_per_s_per_core": round(rate, 1),
+                     "held_fraction": round(float(other_held.mean()), 3), **compare(other_held, other_codes)})
+    moved_held, moved_codes, _ = extract_all(spec, loaded, VARIANTS["default"], JITTER)
+    return {"rows": rows, "noise_floor": {"jitter_m": JITTER, **compare(moved_held, moved_codes)}}
 
 
 if __name__ == "__main__":

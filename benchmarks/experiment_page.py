@@ -56,18 +56,21 @@ def verdict(out: dict) -> list[str]:
              f"dedup), and each unique shape then costs {per['patch'] * 1000:.1f} ms to assemble and label on the "
              f"one object. Even with every candidate a duplicate, B cannot be cheaper than its extraction: the "
              f"ratio is capped at {out['cost_curve']['cap']}x by label cost / extract cost."
-             + (" B static (crops at the candidate pose, no physics in extraction) lowers the extraction cost; see "
-                "its row." if "B static r0" in {a["arm"] for a in out["arms"]} else "")]
+             + (" The B static arms (crops at the candidate pose, no physics in extraction) do not pay the settling "
+                "trial: see their rows." if any("static" in a["arm"] for a in out["arms"]) else "")]
     return lines
 
 
 def _two_hours(out: dict) -> str:
     size = "the full size" if _full(out) else "not the full size: see Scale below"
-    reused = out.get("reused_jobs")
-    if reused:
-        return (f"- **Whole experiment within 2 hours here:** not measured in one go: the generation jobs "
-                f"({', '.join(reused)}) were reused from an earlier run of the same specs that was cut short after "
-                f"them; this run trained and analysed in {out['wall_seconds'] / 60:.1f} minutes ({size}).")
+    reused, trained = out.get("reused_jobs"), out.get("reused_training_runs", 0)
+    if reused or trained:
+        what = [f"the generation jobs {', '.join(reused)}" if reused else "",
+                f"{trained} training runs" if trained else ""]
+        what = " and ".join(filter(None, what))
+        return (f"- **Whole experiment within 2 hours here:** not measured in one go: {what} were reused "
+                f"from an earlier run of the same specs in the same work folder; this run took "
+                f"{out['wall_seconds'] / 60:.1f} minutes ({size}).")
     return (f"- **Whole experiment within 2 hours here:** {out['wall_seconds'] / 60:.1f} minutes at the size run "
             f"({size}).")
 
@@ -101,20 +104,14 @@ def analysis(out: dict) -> list[str]:
              f"is one grasp per object, so its 95% intervals span about {_mean_ci_width(arms):.0%}. AP ranks "
              "every candidate and separates the arms more finely: "
              + ", ".join(f"{name} {row['heldout']['ap']['mean']:.3f}" for name, row in arms.items()) + "."]
-    pairs = [(name, "R" + name[1:]) for name in arms if name.startswith("B r") and "R" + name[1:] in arms]
+    pairs = [(name, "R" + name[1:]) for name in arms if name.startswith("B") and "R" + name[1:] in arms]
     if pairs:
         lines.append("- **B against R, same number of labels.** " + "; ".join(
             f"{b}: AP {arms[b]['heldout']['ap']['mean']:.3f} in {arms[b]['core_seconds']:,.0f} core-s, {r}: AP "
             f"{arms[r]['heldout']['ap']['mean']:.3f} in {arms[r]['core_seconds']:,.0f} core-s" for b, r in pairs)
             + ". Labelling a random subset on the objects themselves needs no extraction and no assembly.")
-    static, b0 = arms.get("B static r0"), arms.get("B r0")
-    if static and b0:
-        lines.append(f"- **Static crops.** Without physics in extraction the extract stage costs "
-                     f"{static['stages']['extract']:,.0f} core-s instead of {b0['stages']['extract']:,.0f}, but its "
-                     f"codes are less redundant ({static['unique_codes']:,} unique of {static['extracted_grasps']:,} "
-                     f"candidates, against {b0['unique_codes']:,} of {b0['extracted_grasps']:,} settled grasps: "
-                     "closing the fingers moves the object into a few typical poses), so it labels more shapes and "
-                     f"costs more in all ({static['core_seconds']:,.0f} core-s).")
+    lines += _static_lines(arms)
+    b0 = arms.get("B r0")
     if b0:
         lines.append(f"- **Whole dataset.** B r0's dataset is {b0['dataset_bytes'] / 1e6:,.1f} MB against A's "
                      f"{a['dataset_bytes'] / 1e6:,.1f} MB: the one object is stored as its dense point cloud twice "
@@ -125,6 +122,26 @@ def analysis(out: dict) -> list[str]:
                  "steps, a cheaper closing model), raise it; more candidates per object and coarser codes or larger "
                  "radii bring B towards it (see the curve), at the price in label agreement the trade-off shows.")
     return lines
+
+
+def _static_lines(arms: dict) -> list[str]:
+    """Each B static arm against the settled B arm of the same radius: extraction saved, shapes added."""
+    rows = []
+    for name in [n for n in arms if n.startswith("B static")]:
+        static, settled = arms[name], arms.get("B " + name.rsplit(" ", 1)[1])
+        if not settled:
+            continue
+        rows.append(f"{name}: extract {static['stages']['extract']:,.0f} core-s against {settled['arm']}'s "
+                    f"{settled['stages']['extract']:,.0f}; {static['unique_codes']:,} shapes of "
+                    f"{static['extracted_grasps']:,} candidates against {settled['unique_codes']:,} of "
+                    f"{settled['extracted_grasps']:,} settled grasps; {static['core_seconds']:,.0f} core-s in all "
+                    f"against {settled['core_seconds']:,.0f}, top-1 {static['heldout']['top1']['mean']:.1%} against "
+                    f"{settled['heldout']['top1']['mean']:.1%}, AP {static['heldout']['ap']['mean']:.3f} against "
+                    f"{settled['heldout']['ap']['mean']:.3f}")
+    if not rows:
+        return []
+    return ["- **Static crops (no physics in extraction).** Every candidate is kept (none is dropped for failing to "
+            "close) and cropped where it was sampled. " + "; ".join(rows) + "."]
 
 
 def _mean_ci_width(arms: dict) -> float:

@@ -7,9 +7,10 @@ Arms, all on the same train objects, candidates, seed, label protocol (K trials 
   A  label every candidate of every train object on its own object;
   B  extract (physics on every candidate), dedup (exact at r = 0, similar shapes within Hamming radius r),
      assemble the unique shapes into ONE object and label only there; one arm per radius;
-  B static r0  the same with the crop taken at the candidate pose (no physics in the extract stage);
-  R  the control the paper lacks: label as many random candidates as a B arm labels, on their own objects (a
-     seeded subset of A's labelled candidates: same protocol, same outcomes; its cost is A's per candidate).
+  B static rN  (--static-radii) the same with the crop taken at the candidate pose (no physics in extraction);
+  R  the control the paper lacks: one per B arm, label as many random candidates as that arm labels, on their own
+     objects (a seeded subset of A's labelled candidates: same protocol, same outcomes; its cost is A's per
+     candidate).
 Every arm trains the same network for the same number of gradient steps, 3 seeds; held-out: unseen objects whose
 every candidate is labelled with the same protocol. Generation runs as single-process jobs, two at a time on the two
 cores, so a stage's wall seconds are its core-seconds. Also: the cost ratios as a function of candidates per object
@@ -47,7 +48,7 @@ from onepiece_dist.spec import JobSpec  # noqa: E402
 HELDOUT_START = 500  # random_urdfs from here on are never train objects
 QUICK = {"objects": 4, "grasps": 24, "heldout": 3, "heldout_grasps": 16, "label_trials": 2, "steps": 20,
          "seeds": 2, "radii": "0,1", "curve": "12,24", "tradeoff": "10", "tradeoff_grasps": 16, "model": "pointnet",
-         "static": True}
+         "static_radii": "0"}
 
 
 def objects_source(count: int) -> str:
@@ -127,9 +128,13 @@ def generation_specs(args, folder: Path) -> dict:
             "similar_radius": r, "stages": ("ingest", "extract", "dedup", "assemble", "label"),
             "sim": base.sim.model_copy(update={"physics": physics})}).model_dump_json() for r in radii]
 
-    radii = [int(r) for r in args.radii.split(",")]
+    radii = _radii(args.radii)
     return {"A": a, "heldout": heldout, "B": b_specs("settled", True, radii),
-            "B static": b_specs("static", False, [0]) if args.static else []}
+            "B static": b_specs("static", False, _radii(args.static_radii))}
+
+
+def _radii(text: str) -> list[int]:
+    return [int(r) for r in text.split(",") if r.strip()]
 
 
 def generate(args, folder: Path) -> dict:
@@ -167,7 +172,7 @@ def arm_costs(gen: dict) -> list[dict]:
                          "labelled_grasps": job.get("labelled_grasps", 0), "unique_codes": job["unique_codes"],
                          "extracted_grasps": job["grasps"], "stages": stages,
                          "labelled_bytes": job["labelled_bytes"], "dataset_bytes": job["dataset_bytes"]})
-    for b in [r for r in rows if r["arm"].startswith("B r")]:
+    for b in [r for r in rows if r["arm"].startswith("B")]:
         share = b["labelled_grasps"] / max(a["grasps"], 1)
         rows.append({"arm": "R" + b["arm"][1:], "label_trials": b["labelled_grasps"] * gen["label_trials"],
                      "labelled_grasps": b["labelled_grasps"], "matches": b["arm"],
@@ -202,9 +207,48 @@ def _arm_data(row: dict, a_rows: np.ndarray, folder: Path, seed: int):
     return str(folder / f"B-{tag}-{arm.rsplit('r', 1)[1]}.zarr"), "assembled/grasps", None
 
 
-def train_all(jobs: list[TrainJob]) -> list[dict]:
+def train_all(jobs: list[TrainJob], cache: Path | None) -> list[dict]:
+    """Every job's training result, two at a time; with a kept work folder (``cache``), a job trained before on
+    the very same data and settings is read back instead (``_train_key``)."""
+    found = [_cached_run(job, cache) for job in jobs]
+    todo = [job for job, run in zip(jobs, found, strict=True) if run is None]
     with ProcessPoolExecutor(2, mp_context=_spawn()) as pool:
-        return list(pool.map(fit_and_score, jobs))
+        fresh = iter(pool.map(fit_and_score, todo))
+        runs = [run if run is not None else next(fresh) for run in found]
+    for job, run, old in zip(jobs, runs, found, strict=True):
+        if cache is not None and old is None:
+            _store_run(job, run, cache)
+    return runs
+
+
+def _train_key(job: TrainJob) -> str:
+    """A digest of everything a training result depends on: the job's settings and rows, the status files of its
+    train and held-out datasets (they change whenever a dataset is made again) and the training code."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    for name, value in sorted(vars(job).items()):
+        digest.update(f"{name}={value.tobytes().hex() if isinstance(value, np.ndarray) else value};".encode())
+    for path in (Path(f"{job.path}.status.json"), Path(f"{job.heldout_path}.status.json"),
+                 ROOT / "benchmarks" / "experiment_learn.py"):
+        digest.update(path.read_bytes() if path.exists() else b"-")
+    return digest.hexdigest()[:24]
+
+
+def _cached_run(job: TrainJob, cache: Path | None) -> dict | None:
+    if cache is None or not (cache / f"{_train_key(job)}.json").exists():
+        return None
+    key = _train_key(job)
+    run = json.loads((cache / f"{key}.json").read_text())
+    run["scores"] = np.load(cache / f"{key}.npy", allow_pickle=False)
+    return {**run, "reused": True}
+
+
+def _store_run(job: TrainJob, run: dict, cache: Path) -> None:
+    cache.mkdir(parents=True, exist_ok=True)
+    key = _train_key(job)
+    np.save(cache / f"{key}.npy", run["scores"], allow_pickle=False)
+    (cache / f"{key}.json").write_text(json.dumps({k: v for k, v in run.items() if k != "scores"}))
 
 
 def cost_curves(gen: dict, costs: list[dict], folder: Path, counts: list[int], radii: list[int]) -> dict:
@@ -344,8 +388,9 @@ def parse_args(argv=None):
                         help="the trade-off uses each object's first N labelled grasps of arm A")
     parser.add_argument("--success", choices=("nominal", "every_trial"), default="every_trial",
                         help="binary label: the nominal trial held, or all K trials held (docs/trials.md)")
-    parser.add_argument("--static", action="store_true",
-                        help="also run B static (crops at the candidate pose, no extraction physics)")
+    parser.add_argument("--static-radii", default="",
+                        help="radii of the B static arms (crops at the candidate pose, no extraction physics), "
+                             "each with its R control; none by default")
     parser.add_argument("--model", choices=("pointnet", "voxel"), default="pointnet")
     parser.add_argument("--crop", choices=("full", "partial"), default="full",
                         help="crop grasp points from the full surface or from depth views (docs/views.md)")
@@ -374,7 +419,8 @@ def main(argv=None) -> dict:
             shutil.rmtree(folder, ignore_errors=True)
     out["wall_seconds"] = round(time.perf_counter() - start, 1)
     # at the size run (the page says which); not measured when generation was reused from an earlier run
-    out["decision"]["within_two_hours"] = None if out["reused_jobs"] else out["wall_seconds"] <= 7200
+    reused = out["reused_jobs"] or out["reused_training_runs"]
+    out["decision"]["within_two_hours"] = None if reused else out["wall_seconds"] <= 7200
     (args.out / "benchmarks" / "results").mkdir(parents=True, exist_ok=True)
     (args.out / "docs").mkdir(parents=True, exist_ok=True)
     (args.out / "benchmarks" / "results" / "paper_experiment.json").write_text(json.dumps(out, indent=2) + "\n")
@@ -392,7 +438,7 @@ def run_experiment(args, folder: Path) -> dict:
     generation_wall = time.perf_counter() - timer
     costs = arm_costs(gen)
     timer = time.perf_counter()
-    runs = train_all(train_jobs(args, costs, folder))
+    runs = train_all(train_jobs(args, costs, folder), folder / "trained" if args.folder else None)
     training_wall = time.perf_counter() - timer
     from onepiece_dist.store import open_dataset
 
@@ -401,7 +447,7 @@ def run_experiment(args, folder: Path) -> dict:
     for row in costs:
         row["heldout"] = arm_summary([r for r in runs if r["arm"] == row["arm"]], labels, groups)
         row["train_seconds"] = round(float(np.mean([s["train_seconds"] for s in row["heldout"]["seeds"]])), 1)
-    radii = [int(r) for r in args.radii.split(",")]
+    radii = _radii(args.radii)
     timer = time.perf_counter()
     curve = cost_curves(gen, costs, folder, [int(n) for n in args.curve.split(",") if int(n) <= args.grasps], radii)
     trade = tradeoff(gen["specs"]["A"], folder, [float(x) for x in args.tradeoff.split(",")], radii,
@@ -417,7 +463,8 @@ def run_experiment(args, folder: Path) -> dict:
            "heldout_job": gen["heldout"], "train_objects_ok": gen["A"]["objects_ok"], "arms": costs,
            "cost_curve": curve, "tradeoff": trade, "label_transfer": transfer,
            "reused_jobs": [job["name"] for job in [gen["A"], gen["heldout"], *gen["B"], *gen["B static"]]
-                           if job.get("reused")]}
+                           if job.get("reused")],
+           "reused_training_runs": sum(bool(run.get("reused")) for run in runs)}
     out["decision"] = decide(out)
     return out
 
@@ -436,7 +483,7 @@ def decide(out: dict) -> dict:
         row["top1_within_a"] = bool(round(row["heldout"]["top1"]["mean"], 4) >= low)  # in A's interval or above
     eligible = [r for r in out["arms"] if r["arm"].startswith("B") and r["top1_within_a"]]
     best = max(eligible, key=lambda r: r["time_ratio"]) if eligible else None
-    control = arms.get("R" + best["arm"][1:]) if best and best["arm"].startswith("B r") else None
+    control = arms.get("R" + best["arm"][1:]) if best else None
     return {"best_b": best["arm"] if best else None,
             "time_ratio": best["time_ratio"] if best else None, "time_target": 8.0,
             "time_met": bool(best and best["time_ratio"] >= 8.0),
