@@ -1,6 +1,7 @@
 """benchmarks/paper_experiment.py: its statistics, its page rendered from the committed results, and `--quick` as a
 smoke test of the whole script (every arm generated, trained and scored for real)."""
 
+import dataclasses
 import importlib
 import json
 import subprocess
@@ -52,6 +53,23 @@ def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
     page.write_page(result, tmp_path / "page.md")
     assert (ROOT / "docs" / "paper_experiment.md").read_text() == (tmp_path / "page.md").read_text(), \
         "docs/paper_experiment.md is stale: rerun benchmarks/paper_experiment.py (or render its results)"
+
+
+def test_a_training_result_is_reused_only_for_the_same_job_on_the_same_datasets(tmp_path):
+    experiment = importlib.import_module("paper_experiment")
+    status, cache = tmp_path / "A.zarr.status.json", tmp_path / "trained"
+    status.write_text('{"state": "succeeded"}')
+    job = learn.TrainJob("A", 0, str(tmp_path / "A.zarr"), "grasps", np.arange(5), str(tmp_path / "heldout.zarr"),
+                         "pointnet", 10, 8, 1e-3, 0.2)
+    run = {"arm": "A", "seed": 0, "train_seconds": 1.5, "scores": np.linspace(0, 1, 7, dtype=np.float32)}
+    assert experiment._cached_run(job, cache) is None
+    experiment._store_run(job, run, cache)
+    back = experiment._cached_run(job, cache)
+    assert back["reused"] and back["train_seconds"] == 1.5 and np.array_equal(back["scores"], run["scores"])
+    assert experiment._cached_run(dataclasses.replace(job, seed=1), cache) is None
+    assert experiment._cached_run(dataclasses.replace(job, rows=np.arange(6)), cache) is None
+    status.write_text('{"state": "succeeded", "made": "again"}')  # the dataset was made again
+    assert experiment._cached_run(job, cache) is None
 
 
 @pytest.mark.slow
