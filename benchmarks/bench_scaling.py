@@ -7,7 +7,8 @@ Parallel efficiency = (objects/s with 2 workers) / (2 x objects/s with 1 worker)
 object = (extract-stage wall time x workers - sum of per-object worker time) / objects: time a worker slot spends
 outside extract_object (scheduling, result transfer, central dedup merge, status writes). The label stage's
 speed-up = (label stage wall time with 1 worker) / (with 2): shards on workers, plus the central actor's sharding
-and merge (label transfer is off here: it is measured in the central actor).
+and merge (label transfer is off here: it is measured in the central actor). Each figure is the median over
+REPEATS pairs of runs (every pair's value is recorded); the table shows the pair with the median efficiency.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ import sys
 import tempfile
 from datetime import date
 from pathlib import Path
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from onepiece_dist.service.ray_env import connect  # noqa: E402
@@ -57,14 +60,21 @@ def _worker_seconds(status_file: Path) -> float:
     return float(json.loads(status_file.read_text())["worker_seconds"])
 
 
+REPEATS = 3  # pairs of runs (1 worker, then 2); the median pair counts: one pair's efficiency varied 83-91% here
+
+
 def main() -> dict:
-    one, two = measure(1), measure(2)
-    efficiency = two["objects_per_second"] / (2 * one["objects_per_second"])
+    pairs = [(measure(1), measure(2)) for _ in range(REPEATS)]
+    efficiency = [two["objects_per_second"] / (2 * one["objects_per_second"]) for one, two in pairs]
+    speedup = [one["label_seconds"] / two["label_seconds"] for one, two in pairs]
+    one, two = pairs[int(np.argsort(efficiency)[len(pairs) // 2])]  # the pair with the median efficiency
     out = {"benchmark": "scaling", "date": date.today().isoformat(), "machine": f"{platform.machine()}, "
            f"{os.cpu_count()} cores", "objects": OBJECTS, "grasps_per_object": GRASPS, "runs": [one, two],
-           "parallel_efficiency_2_workers": round(efficiency, 3), "target_efficiency": 0.9,
-           "label_speedup_2_workers": round(one["label_seconds"] / two["label_seconds"], 3),
+           "parallel_efficiency_2_workers": round(float(np.median(efficiency)), 3), "target_efficiency": 0.9,
+           "label_speedup_2_workers": round(float(np.median(speedup)), 3),
            "target_label_speedup": 1.8,  # issue 16: 90% efficiency at 2 workers, extraction and labelling
+           "repeats": REPEATS, "efficiency_per_pair": [round(e, 3) for e in efficiency],
+           "label_speedup_per_pair": [round(x, 3) for x in speedup],
            "command": "python benchmarks/bench_scaling.py"}
     (Path(__file__).parent / "results" / "scaling.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
