@@ -492,10 +492,17 @@ def render_reliability_page() -> str:
 
 
 def main() -> None:
+    from scaling_page import PAGE as SCALING_PAGE
+    from scaling_page import render_scaling_page
+    from trials_page import PAGE as TRIALS_PAGE
+    from trials_page import render_trials_page
+
     PAGE.write_text(render())
     ASSEMBLY_PAGE.write_text(render_assembly_page())
     RELIABILITY_PAGE.write_text(render_reliability_page())
-    print(PAGE, ASSEMBLY_PAGE, RELIABILITY_PAGE)
+    SCALING_PAGE.write_text(render_scaling_page())
+    TRIALS_PAGE.write_text(render_trials_page())
+    print(PAGE, ASSEMBLY_PAGE, RELIABILITY_PAGE, SCALING_PAGE, TRIALS_PAGE)
 
 
 if __name__ == "__main__":

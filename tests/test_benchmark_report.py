@@ -1,6 +1,7 @@
 """docs/performance.md is rendered from the committed benchmark results."""
 
 import importlib.util
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -30,6 +31,20 @@ def test_the_committed_page_is_the_rendered_one():
 def test_the_assembly_figures_are_the_rendered_ones():
     assert (ROOT / "docs" / "assembly.md").read_text() == load_report().render_assembly_page(), \
         "docs/assembly.md figures are stale: run `python benchmarks/report.py`"
+
+
+def test_the_scaling_plan_is_the_rendered_one():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from scaling_page import PAGE, render_scaling_page
+
+    assert PAGE.read_text() == render_scaling_page(), "docs/scaling.md plan is stale: run `python benchmarks/report.py`"
+
+
+def test_the_label_rule_figures_are_the_rendered_ones():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from trials_page import PAGE, render_trials_page
+
+    assert PAGE.read_text() == render_trials_page(), "docs/trials.md is stale: run `python benchmarks/report.py`"
 
 
 def test_the_reliability_figures_are_the_rendered_ones():
