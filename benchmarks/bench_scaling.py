@@ -18,10 +18,13 @@ import os
 import platform
 import sys
 import tempfile
+import threading
+import time
 from datetime import date
 from pathlib import Path
 
 import numpy as np
+import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from onepiece_dist.service.ray_env import connect  # noqa: E402
@@ -29,6 +32,57 @@ from onepiece_dist.spec import JobSpec  # noqa: E402
 
 OBJECTS = os.environ.get("BENCH_SCALING_OBJECTS", "pybullet:random_urdfs[0:16]")
 GRASPS = int(os.environ.get("BENCH_SCALING_GRASPS", 128))
+
+
+class CpuByProcess:
+    """CPU seconds of this process and its descendants, summed per kind of process (see ``kind``), sampled every
+    ``period`` seconds with timestamps, so that a stage's window can be cut out afterwards."""
+
+    def __init__(self, period: float = 0.2):
+        self.period, self.samples, self._stop = period, [], threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def __enter__(self) -> CpuByProcess:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def _run(self) -> None:
+        me, last = psutil.Process(), {}
+        while not self._stop.is_set():
+            for proc in [me, *me.children(recursive=True)]:
+                try:
+                    times = proc.cpu_times()
+                    last[proc.pid] = (kind(proc, me.pid), times.user + times.system)
+                except psutil.Error:
+                    pass  # gone: it keeps its last sample
+            totals: dict[str, float] = {}
+            for name, cpu in last.values():
+                totals[name] = totals.get(name, 0.0) + cpu
+            self.samples.append((time.perf_counter(), totals))
+            self._stop.wait(self.period)
+
+    def window(self, since: float, until: float) -> dict[str, float]:
+        inside = [totals for t, totals in self.samples if since <= t <= until]
+        if len(inside) < 2:
+            return {}
+        return {name: round(cpu - inside[0].get(name, 0.0), 2) for name, cpu in inside[-1].items()
+                if cpu - inside[0].get(name, 0.0) > 0.005}
+
+
+def kind(proc, driver: int) -> str:
+    """What a process of the job is: the driver, a Ray actor (by class), VHACD's child process, Ray's daemons."""
+    if proc.pid == driver:
+        return "driver"
+    title = " ".join(proc.cmdline())
+    if title.startswith("ray::"):
+        return title.split()[0].split(".")[0]
+    if "vhacd" in title:
+        return "VHACD child processes"
+    return "Ray daemons and other processes"
 
 
 def measure(workers: int) -> dict:
@@ -41,10 +95,14 @@ def measure(workers: int) -> dict:
                        stages=("ingest", "extract", "dedup", "assemble", "label"), sim={"transfer_codes": 0})
         connect(None, num_cpus=2)
         try:
-            status = run_on_ray(spec, f"bench-{workers}", workers=workers)
+            with CpuByProcess() as cpu:
+                start = time.perf_counter()
+                status = run_on_ray(spec, f"bench-{workers}", workers=workers)
         finally:
             ray.shutdown()
         worker_seconds = _worker_seconds(Path(f"{folder}/ds.zarr.status.json"))
+    begin = start + status.timings.get("ingest", 0.0)
+    extract_cpu = cpu.window(begin, begin + status.timings["extract"])
     wall = status.timings["extract"]
     objects = status.progress.objects_done
     label_trials = status.labels.label_trials
@@ -53,7 +111,8 @@ def measure(workers: int) -> dict:
             "orchestration_overhead_per_object_s": round((wall * workers - worker_seconds) / objects, 4),
             "patches": status.assembly.unique_codes, "label_trials": label_trials,
             "label_seconds": round(status.timings["label"], 2),
-            "label_trials_per_second": round(label_trials / status.timings["label"], 1)}
+            "label_trials_per_second": round(label_trials / status.timings["label"], 1),
+            "extract_cpu_seconds_by_process": extract_cpu}
 
 
 def _worker_seconds(status_file: Path) -> float:

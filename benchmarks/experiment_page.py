@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import table
+from report import provenance, table
 
 PAPER = {"time_ratio": "8x", "storage_ratio": "6.3x", "success": "89% = 89% (real robot)"}
 STAGES = ("ingest", "extract", "dedup", "assemble", "label")
@@ -191,6 +191,24 @@ def _transfer_row(r: dict) -> list:
             every["quality_correlation"], _pct(floor["success_agreement"]),
             _pct(r.get("independent_floor")) if "independent_floor" in r else "not recorded",
             f"{every['pairs']:,} ({r.get('unmatched_grasps', 0)})"]
+
+
+def static_section(r: dict) -> list[str]:
+    """Static crops against settled ones: extraction saved, shapes added, the projected time ratio."""
+    rows = [[row["radius"], f"{row['shapes']:,}", f"{row['projected_core_seconds']:,.0f}",
+             f"{row['projected_time_ratio']:.2f}x",
+             *([f"{row['settled']['shapes']:,}", f"{row['settled']['core_seconds']:,.0f}",
+                f"{row['settled']['time_ratio']:.2f}x"] if row["settled"] else ["-", "-", "-"])] for row in r["rows"]]
+    return [f"## Extraction without physics (static crops): {provenance(r)}", "",
+            f"The paper experiment's train objects ({r['objects']} x {r['candidates_per_object']} candidates), "
+            f"cropped where each candidate was sampled: extraction {r['extraction_core_seconds']:,.0f} core-s for "
+            f"{r['grasps']:,} grasps (every candidate kept), against {r['settled_extraction_core_seconds']:,.0f} "
+            f"core-s for {r['settled_grasps']:,} settled grasps in the experiment (`{r['experiment']}`). Projected "
+            f"cost of a B static arm = its extraction + shapes x {r['patch_seconds'] * 1000:.1f} ms (the "
+            f"experiment's assemble + label cost per shape); time ratio = A's {r['a_core_seconds']:,.0f} core-s "
+            "over it. Not labelled or trained: a projection from measured parts.", "",
+            *table(["radius", "static shapes", "projected core-s", "projected time ratio", "settled shapes",
+                    "settled core-s (measured)", "settled time ratio"], rows)]
 
 
 def write_page(out: dict, path: Path) -> None:

@@ -141,50 +141,6 @@ def met(value: float, target: float) -> str:
     return "met" if value >= target else "not met"
 
 
-def scaling_section(r: dict) -> list[str]:
-    labels = "label_seconds" in r["runs"][0]
-    rows = [[run["workers"], run["extract_seconds"], run["objects_per_second"],
-             f"{run['orchestration_overhead_per_object_s']} s",
-             *([run["label_seconds"], run["label_trials_per_second"]] if labels else [])] for run in r["runs"]]
-    header = ["workers", "extract stage (s)", "objects/s", "orchestration overhead per object",
-              *(["label stage (s)", "label trials/s"] if labels else [])]
-    lines = [f"## Service scaling: {provenance(r)}", "", f"{r['objects']}, {r['grasps_per_object']} candidates "
-             "each, embedded Ray, fresh parts.", "", *table(header, rows), "",
-             f"Parallel efficiency of extraction at 2 workers: {r['parallel_efficiency_2_workers']:.1%} (target "
-             f"{r['target_efficiency']:.0%}: {met(r['parallel_efficiency_2_workers'], r['target_efficiency'])})."]
-    if labels:
-        lines[-1] += (f" Label stage with 2 workers: {r['label_speedup_2_workers']:.2f}x as fast as with 1 "
-                      f"({r['runs'][0]['patches']:,} patches; target {r['target_label_speedup']}x: "
-                      f"{met(r['label_speedup_2_workers'], r['target_label_speedup'])}).")
-    if "repeats" in r:
-        lines += ["", f"Medians over {r['repeats']} pairs of runs (the table shows the pair with the median "
-                  f"efficiency). Extraction efficiency per pair: {_percents(r['efficiency_per_pair'])}; label "
-                  f"speed-up per pair: {', '.join(f'{x:.2f}x' for x in r['label_speedup_per_pair'])}."]
-    return lines
-
-
-def _percents(values: list[float]) -> str:
-    return ", ".join(f"{v:.1%}" for v in values)
-
-
-def static_section(r: dict) -> list[str]:
-    """Static crops against settled ones: extraction saved, shapes added, the projected time ratio."""
-    rows = [[row["radius"], f"{row['shapes']:,}", f"{row['projected_core_seconds']:,.0f}",
-             f"{row['projected_time_ratio']:.2f}x",
-             *([f"{row['settled']['shapes']:,}", f"{row['settled']['core_seconds']:,.0f}",
-                f"{row['settled']['time_ratio']:.2f}x"] if row["settled"] else ["-", "-", "-"])] for row in r["rows"]]
-    return [f"## Extraction without physics (static crops): {provenance(r)}", "",
-            f"The paper experiment's train objects ({r['objects']} x {r['candidates_per_object']} candidates), "
-            f"cropped where each candidate was sampled: extraction {r['extraction_core_seconds']:,.0f} core-s for "
-            f"{r['grasps']:,} grasps (every candidate kept), against {r['settled_extraction_core_seconds']:,.0f} "
-            f"core-s for {r['settled_grasps']:,} settled grasps in the experiment (`{r['experiment']}`). Projected "
-            f"cost of a B static arm = its extraction + shapes x {r['patch_seconds'] * 1000:.1f} ms (the "
-            f"experiment's assemble + label cost per shape); time ratio = A's {r['a_core_seconds']:,.0f} core-s "
-            "over it. Not labelled or trained: a projection from measured parts.", "",
-            *table(["radius", "static shapes", "projected core-s", "projected time ratio", "settled shapes",
-                    "settled core-s (measured)", "settled time ratio"], rows)]
-
-
 def similar_section(r: dict) -> list[str]:
     return [f"## Similar-shape filter: {provenance(r)}", "", *table(
         ["codes", "bits", "radius", "clusters", "seconds (1 core)", "all-pairs baseline (est.)", "speedup"],
@@ -335,6 +291,9 @@ def train_section(r: dict) -> list[str]:
 
 
 def render() -> str:
+    from experiment_page import static_section
+    from scaling_page import scaling_section
+
     sections = [("bench_end_to_end", lambda r: end_to_end_section(r, load("sim"))),
                 ("candidates", candidates_section),
                 ("dedup", dedup_section), ("bench_merge", merge_section), ("sim", sim_section),

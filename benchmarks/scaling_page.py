@@ -1,4 +1,5 @@
-"""The measured building blocks and the capacity plan of docs/scaling.md, rendered from benchmarks/results/*.json
+"""The Service scaling section of docs/performance.md, and the measured building blocks and the capacity plan of
+docs/scaling.md, rendered from benchmarks/results/*.json
 (bench_end_to_end, sim, scaling, bench_merge) by benchmarks/report.py: the plan is arithmetic on measured figures,
 never typed."""
 
@@ -6,13 +7,57 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import load, table
+from report import load, met, provenance, table
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "scaling.md"
 START = "<!-- plan: rendered by benchmarks/report.py from benchmarks/results/*.json -->"
 END = "<!-- end of plan -->"
 OBJECTS, CANDIDATES = 9_000, 2_000  # an ACRONYM-size corpus
 CORES = (16, 64, 128)
+
+
+def scaling_section(r: dict) -> list[str]:
+    labels = "label_seconds" in r["runs"][0]
+    rows = [[run["workers"], run["extract_seconds"], run["objects_per_second"],
+             f"{run['orchestration_overhead_per_object_s']} s",
+             *([run["label_seconds"], run["label_trials_per_second"]] if labels else [])] for run in r["runs"]]
+    header = ["workers", "extract stage (s)", "objects/s", "orchestration overhead per object",
+              *(["label stage (s)", "label trials/s"] if labels else [])]
+    lines = [f"## Service scaling: {provenance(r)}", "", f"{r['objects']}, {r['grasps_per_object']} candidates "
+             "each, embedded Ray, fresh parts.", "", *table(header, rows), "",
+             f"Parallel efficiency of extraction at 2 workers: {r['parallel_efficiency_2_workers']:.1%} (target "
+             f"{r['target_efficiency']:.0%}: {met(r['parallel_efficiency_2_workers'], r['target_efficiency'])})."]
+    if labels:
+        lines[-1] += (f" Label stage with 2 workers: {r['label_speedup_2_workers']:.2f}x as fast as with 1 "
+                      f"({r['runs'][0]['patches']:,} patches; target {r['target_label_speedup']}x: "
+                      f"{met(r['label_speedup_2_workers'], r['target_label_speedup'])}).")
+    lines += _cpu_lines(r)
+    if "repeats" in r:
+        lines += ["", f"Medians over {r['repeats']} pairs of runs (the table shows the pair with the median "
+                  f"efficiency). Extraction efficiency per pair: {_percents(r['efficiency_per_pair'])}; label "
+                  f"speed-up per pair: {', '.join(f'{x:.2f}x' for x in r['label_speedup_per_pair'])}."]
+    return lines
+
+
+def _cpu_lines(r: dict) -> list[str]:
+    """Where the CPU of the 2-worker extract stage went: the workers (and their VHACD children) against the rest."""
+    run = r["runs"][-1]
+    cpu = run.get("extract_cpu_seconds_by_process")
+    if not cpu:
+        return []
+    work = ("ray::SimWorker", "VHACD child processes")
+    rest = sum(v for k, v in cpu.items() if k not in work)
+    capacity = run["extract_seconds"] * run["workers"]
+    return ["", f"CPU of the {run['workers']}-worker extract stage by process (core-seconds over "
+            f"{run['extract_seconds']} s x {run['workers']} cores = {capacity:.1f}): "
+            + ", ".join(f"{k} {v}" for k, v in sorted(cpu.items(), key=lambda kv: -kv[1]))
+            + f". Everything but the workers and their VHACD children takes {rest:.1f} core-s, {rest / capacity:.1%} "
+            "of the two cores the workers need: on this machine the service's own processes share the workers' "
+            "cores, which caps the efficiency at 2 workers below 100% before start-up and the last object's tail."]
+
+
+def _percents(values: list[float]) -> str:
+    return ", ".join(f"{v:.1%}" for v in values)
 
 
 def building_blocks(e2e: dict, sim: dict, scaling: dict, merge: dict) -> dict:
