@@ -25,7 +25,6 @@ import platform
 import shutil
 import sys
 import tempfile
-import threading
 import time
 from datetime import date
 from pathlib import Path
@@ -33,6 +32,9 @@ from pathlib import Path
 import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from process_tree import ProcessTree  # noqa: E402
+
 from onepiece_dist.api import run_job  # noqa: E402
 from onepiece_dist.objects import resolve_source  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
@@ -42,49 +44,6 @@ from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
 HERE = Path(__file__).resolve().parent
 GIB = 2**30
 WORKERS = os.cpu_count() or 1  # one extraction worker per core (the job's default)
-
-
-class TreeMemory:
-    """Samples the summed RSS of this process and its descendants every ``period`` seconds."""
-
-    def __init__(self, period: float = 0.2):
-        self.period, self.samples, self.cpu = period, [], []
-        self._last_cpu: dict[int, float] = {}
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def __enter__(self) -> TreeMemory:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self._stop.set()
-        self._thread.join()
-
-    def _run(self) -> None:
-        me = psutil.Process()
-        while not self._stop.is_set():
-            total = 0
-            for proc in [me, *me.children(recursive=True)]:
-                try:
-                    total += proc.memory_info().rss
-                    times = proc.cpu_times()
-                    self._last_cpu[proc.pid] = times.user + times.system
-                except psutil.Error:
-                    pass
-            now = time.perf_counter()
-            self.samples.append((now, total))
-            self.cpu.append((now, sum(self._last_cpu.values())))  # exited processes keep their last CPU time
-            self._stop.wait(self.period)
-
-    def peak(self, since: float = 0.0, until: float = float("inf")) -> int:
-        return max((rss for t, rss in self.samples if since <= t <= until), default=0)
-
-    def core_seconds(self, since: float, until: float) -> float:
-        """CPU seconds the tree spent between two times (the samples nearest them; a process that exits counts
-        with its CPU time at its last sample, so the sum never drops)."""
-        inside = [cpu for t, cpu in self.cpu if since <= t <= until]
-        return inside[-1] - inside[0] if len(inside) > 1 else 0.0
 
 
 def stage_windows(start: float, timings: dict[str, float]) -> dict[str, tuple[float, float]]:
@@ -120,7 +79,7 @@ def main() -> dict:
 
     connect(None)
     try:
-        with TreeMemory() as memory:
+        with ProcessTree() as memory:
             time.sleep(1.0)
             idle = memory.peak()
             start = time.perf_counter()

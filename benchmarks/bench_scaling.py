@@ -18,71 +18,21 @@ import os
 import platform
 import sys
 import tempfile
-import threading
 import time
 from datetime import date
 from pathlib import Path
 
 import numpy as np
-import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from process_tree import ProcessTree, process_kind  # noqa: E402
+
 from onepiece_dist.service.ray_env import connect  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
 
 OBJECTS = os.environ.get("BENCH_SCALING_OBJECTS", "pybullet:random_urdfs[0:16]")
 GRASPS = int(os.environ.get("BENCH_SCALING_GRASPS", 128))
-
-
-class CpuByProcess:
-    """CPU seconds of this process and its descendants, summed per kind of process (see ``kind``), sampled every
-    ``period`` seconds with timestamps, so that a stage's window can be cut out afterwards."""
-
-    def __init__(self, period: float = 0.2):
-        self.period, self.samples, self._stop = period, [], threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def __enter__(self) -> CpuByProcess:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self._stop.set()
-        self._thread.join()
-
-    def _run(self) -> None:
-        me, last = psutil.Process(), {}
-        while not self._stop.is_set():
-            for proc in [me, *me.children(recursive=True)]:
-                try:
-                    times = proc.cpu_times()
-                    last[proc.pid] = (kind(proc, me.pid), times.user + times.system)
-                except psutil.Error:
-                    pass  # gone: it keeps its last sample
-            totals: dict[str, float] = {}
-            for name, cpu in last.values():
-                totals[name] = totals.get(name, 0.0) + cpu
-            self.samples.append((time.perf_counter(), totals))
-            self._stop.wait(self.period)
-
-    def window(self, since: float, until: float) -> dict[str, float]:
-        inside = [totals for t, totals in self.samples if since <= t <= until]
-        if len(inside) < 2:
-            return {}
-        return {name: round(cpu - inside[0].get(name, 0.0), 2) for name, cpu in inside[-1].items()
-                if cpu - inside[0].get(name, 0.0) > 0.005}
-
-
-def kind(proc, driver: int) -> str:
-    """What a process of the job is: the driver, a Ray actor (by class), VHACD's child process, Ray's daemons."""
-    if proc.pid == driver:
-        return "driver"
-    title = " ".join(proc.cmdline())
-    if title.startswith("ray::"):
-        return title.split()[0].split(".")[0]
-    if "vhacd" in title:
-        return "VHACD child processes"
-    return "Ray daemons and other processes"
 
 
 def measure(workers: int) -> dict:
@@ -95,14 +45,15 @@ def measure(workers: int) -> dict:
                        stages=("ingest", "extract", "dedup", "assemble", "label"), sim={"transfer_codes": 0})
         connect(None, num_cpus=2)
         try:
-            with CpuByProcess() as cpu:
+            with ProcessTree(kind=process_kind) as cpu:
                 start = time.perf_counter()
                 status = run_on_ray(spec, f"bench-{workers}", workers=workers)
         finally:
             ray.shutdown()
         worker_seconds = _worker_seconds(Path(f"{folder}/ds.zarr.status.json"))
     begin = start + status.timings.get("ingest", 0.0)
-    extract_cpu = cpu.window(begin, begin + status.timings["extract"])
+    by_kind = cpu.cpu_by_kind(begin, begin + status.timings["extract"])
+    extract_cpu = {name: round(seconds, 2) for name, seconds in by_kind.items() if seconds > 0.005}
     wall = status.timings["extract"]
     objects = status.progress.objects_done
     label_trials = status.labels.label_trials
