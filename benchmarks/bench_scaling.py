@@ -51,9 +51,9 @@ def measure(workers: int) -> dict:
         finally:
             ray.shutdown()
         worker_seconds = _worker_seconds(Path(f"{folder}/ds.zarr.status.json"))
-    begin = start + status.timings.get("ingest", 0.0)
-    by_kind = cpu.cpu_by_kind(begin, begin + status.timings["extract"])
-    extract_cpu = {name: round(seconds, 2) for name, seconds in by_kind.items() if seconds > 0.005}
+    begins = dict(zip(status.timings, np.cumsum([0.0, *status.timings.values()]) + start, strict=False))
+    extract_cpu, label_cpu = (_rounded(cpu.cpu_by_kind(begins[s], begins[s] + status.timings[s]))
+                              for s in ("extract", "label"))
     wall = status.timings["extract"]
     objects = status.progress.objects_done
     label_trials = status.labels.label_trials
@@ -63,7 +63,11 @@ def measure(workers: int) -> dict:
             "patches": status.assembly.unique_codes, "label_trials": label_trials,
             "label_seconds": round(status.timings["label"], 2),
             "label_trials_per_second": round(label_trials / status.timings["label"], 1),
-            "extract_cpu_seconds_by_process": extract_cpu}
+            "extract_cpu_seconds_by_process": extract_cpu, "label_cpu_seconds_by_process": label_cpu}
+
+
+def _rounded(seconds: dict[str, float]) -> dict[str, float]:
+    return {name: round(value, 2) for name, value in seconds.items() if value > 0.005}
 
 
 def _worker_seconds(status_file: Path) -> float:

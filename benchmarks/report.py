@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:  # the page modules (scaling_page, experiment_page) sit beside this file
+    sys.path.insert(0, str(HERE))
 RESULTS = HERE / "results"
 PAGE = HERE.parent / "docs" / "performance.md"
 
