@@ -131,23 +131,29 @@ VARIANTS = {"default": PhysicsSettings(), "cone friction": PhysicsSettings(cone_
 JITTER = 1e-5  # m: the noise floor moves every candidate by this much
 
 
-def label_all(spec: JobSpec, loaded: list, physics: PhysicsSettings,
-              jitter: float = 0.0) -> tuple[np.ndarray, float]:
-    """Success labels (n,) bool of every candidate (False when not held) and label trials/s/core."""
+def trials_all(spec: JobSpec, loaded: list, physics: PhysicsSettings, jitter: float = 0.0,
+               label: bool = False) -> tuple[list, float]:
+    """Every object's TrialBatch under ``physics`` (candidates moved by ``jitter`` m, seeded), paired with the
+    object's surface points, and trials/s/core (the trials alone)."""
     world = SimWorld(spec.gripper, physics)
     rng = np.random.default_rng(7)
-    seconds, success = 0.0, []
-    for pieces, volume, poses, _ in loaded:
+    seconds, batches = 0.0, []
+    for pieces, volume, poses, points in loaded:
         world.load_object(pieces, volume, spec.sim.density)
         moved = poses.copy()
         moved[:, :3, 3] += rng.normal(0, jitter, (len(poses), 3)) if jitter else 0.0
         start = time.perf_counter()
-        batch = run_trials(world, moved, label=True)
+        batches.append((run_trials(world, moved, label=label), points))
         seconds += time.perf_counter() - start
-        success.append(np.where(batch.outcome == 0, batch.success, False))
     world.close()
-    success = np.concatenate(success)
-    return success, len(success) / seconds
+    return batches, sum(len(batch.outcome) for batch, _ in batches) / seconds
+
+
+def label_all(spec: JobSpec, loaded: list, physics: PhysicsSettings,
+              jitter: float = 0.0) -> tuple[np.ndarray, float]:
+    """Success labels (n,) bool of every candidate (False when not held) and label trials/s/core."""
+    batches, rate = trials_all(spec, loaded, physics, jitter, label=True)
+    return np.concatenate([np.where(b.outcome == 0, b.success, False) for b, _ in batches]), rate
 
 
 def fidelity(spec: JobSpec, loaded: list) -> dict:
@@ -170,22 +176,12 @@ def extract_all(spec: JobSpec, loaded: list, physics: PhysicsSettings,
                 jitter: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
     """The extract protocol on every candidate: held (n,) bool, the code of the settled crop (n, B) uint8 (as
     extraction keys it) and extract trials/s/core (the trials alone)."""
-    world = SimWorld(spec.gripper, physics)
-    rng = np.random.default_rng(7)
+    batches, rate = trials_all(spec, loaded, physics, jitter)
     grid = spec.voxel.grid_shape(spec.gripper)
-    seconds, held, codes = 0.0, [], []
-    for pieces, volume, poses, points in loaded:
-        world.load_object(pieces, volume, spec.sim.density)
-        moved = poses.copy()
-        moved[:, :3, 3] += rng.normal(0, jitter, (len(poses), 3)) if jitter else 0.0
-        start = time.perf_counter()
-        batch = run_trials(world, moved)
-        seconds += time.perf_counter() - start
-        held.append(batch.outcome == 0)
-        codes.append(crop_codes(points, batch.settled_pose, grid, spec.voxel.resolution)[0])
-    world.close()
-    held = np.concatenate(held)
-    return held, np.concatenate(codes), len(held) / seconds
+    held = np.concatenate([b.outcome == 0 for b, _ in batches])
+    codes = np.concatenate([crop_codes(points, b.settled_pose, grid, spec.voxel.resolution)[0]
+                            for b, points in batches])
+    return held, codes, rate
 
 
 def extract_fidelity(spec: JobSpec, loaded: list) -> dict:

@@ -5,14 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import provenance, table
+from report import pct, provenance, table
 
 PAPER = {"time_ratio": "8x", "storage_ratio": "6.3x", "success": "89% = 89% (real robot)"}
 STAGES = ("ingest", "extract", "dedup", "assemble", "label")
-
-
-def _pct(value: float | None) -> str:
-    return "-" if value is None else f"{value:.1%}"
 
 
 def _met(flag: bool) -> str:
@@ -172,8 +168,8 @@ def tradeoff_table(out: dict) -> list[str]:
     return table(["resolution (mm)", "radius", "unique fraction", "same-code success agreement",
                   "same-code quality correlation", "random-pair agreement", "random-pair correlation", "pairs"],
                  [[f"{r['resolution_mm']:g}", r["radius"], f"{r['unique_fraction']:.3f}",
-                   _pct(r["same_code"]["success_agreement"]), r["same_code"]["quality_correlation"],
-                   _pct(r["random_pairs"]["success_agreement"]), r["random_pairs"]["quality_correlation"],
+                   pct(r["same_code"]["success_agreement"]), r["same_code"]["quality_correlation"],
+                   pct(r["random_pairs"]["success_agreement"]), r["random_pairs"]["quality_correlation"],
                    f"{r['same_code']['pairs']:,}"] for r in out["tradeoff"]])
 
 
@@ -187,9 +183,9 @@ def _transfer_row(r: dict) -> list:
     if not r["aligned"]:
         return [r["radius"], "A's and B's grasps differ: not measured", "", "", "", "", ""]
     rep, every, floor = r["patch_vs_representative"], r["patch_vs_every_grasp"], r["shuffled_patches"]
-    return [r["radius"], _pct(rep["success_agreement"]), _pct(every["success_agreement"]),
-            every["quality_correlation"], _pct(floor["success_agreement"]),
-            _pct(r.get("independent_floor")) if "independent_floor" in r else "not recorded",
+    return [r["radius"], pct(rep["success_agreement"]), pct(every["success_agreement"]),
+            every["quality_correlation"], pct(floor["success_agreement"]),
+            pct(r.get("independent_floor")) if "independent_floor" in r else "not recorded",
             f"{every['pairs']:,} ({r.get('unmatched_grasps', 0)})"]
 
 

@@ -236,9 +236,9 @@ def _train_key(job: TrainJob) -> str:
 
 
 def _cached_run(job: TrainJob, cache: Path | None) -> dict | None:
-    if cache is None or not (cache / f"{_train_key(job)}.json").exists():
+    key = _train_key(job) if cache is not None else None
+    if key is None or not (cache / f"{key}.json").exists():
         return None
-    key = _train_key(job)
     run = json.loads((cache / f"{key}.json").read_text())
     run["scores"] = np.load(cache / f"{key}.npy", allow_pickle=False)
     return {**run, "reused": True}

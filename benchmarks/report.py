@@ -98,10 +98,10 @@ def _extract_fidelity_lines(r: dict) -> list[str]:
             "for how much one timing varies).", "", *table(
                 ["settings", "extract trials/s/core (once)", "held fraction", "same outcome", "same code"],
                 [[row["settings"], row["extract_trials_per_s_per_core"], f"{row['held_fraction']:.3f}",
-                  f"{row['held_agreement']:.1%}", _pct(row["code_agreement"])] for row in fid["rows"]])]
+                  f"{row['held_agreement']:.1%}", pct(row["code_agreement"])] for row in fid["rows"]])]
 
 
-def _pct(value: float | None) -> str:
+def pct(value: float | None) -> str:
     return "-" if value is None else f"{value:.1%}"
 
 
@@ -378,15 +378,15 @@ def _or_dash(value) -> str:
     return "-" if value is None else str(value)
 
 
-def render_block(page: Path, start_mark: str, end_mark: str, name: str, section) -> str:
-    """``page``'s text with the block between the two marks rendered by ``section`` from result ``name`` (kept
-    as it is when that result is missing)."""
+def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[str, ...], section) -> str:
+    """``page``'s text with the block between the two marks rendered by ``section`` from the result(s) ``names``
+    (one argument each; the block is kept as it is when any of them is missing)."""
     text = page.read_text()
-    result = load(name)
-    if result is None:
+    results = [load(name) for name in ((names,) if isinstance(names, str) else names)]
+    if any(result is None for result in results):
         return text
     start, end = text.index(start_mark), text.index(end_mark) + len(end_mark)
-    return text[:start] + section(result) + text[end:]
+    return text[:start] + section(*results) + text[end:]
 
 
 def render_assembly_page() -> str:
