@@ -78,6 +78,18 @@ def _label_rule(out: dict) -> str:
     return f"positive = the nominal trial held, of {k}"
 
 
+def _optimiser(out: dict) -> str:
+    """The learning rate of the arms: fixed, or each arm's pick of the search on its validation split."""
+    search = out.get("learning_rate_search")
+    if not search:
+        rates = out["args"].get("learning_rates", out["args"].get("learning_rate"))
+        return f"Adam {rates} (no search)"
+    picks = ", ".join(f"{arm} {row['chosen']:g}" for arm, row in search.items())
+    probed = ", ".join(f"{p['learning_rate']:g}" for p in next(iter(search.values()))["probes"])
+    return (f"Adam at the learning rate each arm's validation split picked among {probed} (lowest validation loss "
+            f"of its seed-0 run; {picks})")
+
+
 def _phases(out: dict) -> str:
     if "training_wall_seconds" not in out:
         return ""
@@ -221,7 +233,7 @@ def write_page(out: dict, path: Path) -> None:
              f"{args['label_trials']} trials per label (the nominal lift-and-shake plus perturbed ones; "
              f"{_label_rule(out)}). Physics: the defaults (docs/trials.md, Physical defaults). Network: "
              f"{args['model']} on {args['points']} gripper-frame points per grasp, {args['steps']} gradient steps of "
-             f"{args['batch_size']} for every arm, Adam {args['learning_rate']}, the checkpoint with the lowest loss "
+             f"{args['batch_size']} for every arm, {_optimiser(out)}, the checkpoint with the lowest loss "
              f"on the arm's own validation split (20% of its objects, or of its patches for B), {args['seeds']} "
              "seeds. The full size is `--objects 64 --grasps 2000 --heldout 64 --heldout-grasps 200`." + _phases(out),
              "", "## Cost per stage (core-seconds; each job ran in one process on one core)", "", *cost_table(out),

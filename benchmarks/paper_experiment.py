@@ -1,7 +1,8 @@
 """The ONE PIECE paper's experiment, in simulation, powerful enough to decide (issue 17), as one command.
 
     .venv/bin/python benchmarks/paper_experiment.py [--quick] [--objects 64] [--grasps 2000] [--heldout 64]
-        [--heldout-grasps 200] [--label-trials 4] [--steps 300] [--seeds 3] [--radii 0,1,2] [--crop partial]
+        [--heldout-grasps 200] [--label-trials 4] [--steps 500] [--seeds 3] [--radii 0,1,2] [--crop partial]
+        [--learning-rates 0.0003,0.001,0.003]
 
 Arms, all on the same train objects, candidates, seed, label protocol (K trials per label) and network:
   A  label every candidate of every train object on its own object;
@@ -11,7 +12,8 @@ Arms, all on the same train objects, candidates, seed, label protocol (K trials 
   R  the control the paper lacks: one per B arm, label as many random candidates as that arm labels, on their own
      objects (a seeded subset of A's labelled candidates: same protocol, same outcomes; its cost is A's per
      candidate).
-Every arm trains the same network for the same number of gradient steps, 3 seeds; held-out: unseen objects whose
+Every arm trains the same network for the same number of gradient steps, 3 seeds, at the learning rate its own
+validation split picks (benchmarks/experiment_train.py); held-out: unseen objects whose
 every candidate is labelled with the same protocol. Generation runs as single-process jobs, two at a time on the two
 cores, so a stage's wall seconds are its core-seconds. Also: the cost ratios as a function of candidates per object
 and radius (a model from the measured per-candidate and per-patch costs and the measured unique counts), and the
@@ -38,8 +40,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from experiment_learn import TrainJob, arm_summary, baselines, fit_and_score, label_agreement, pair_agreement  # noqa: E402
+from experiment_learn import TrainJob, arm_summary, baselines, label_agreement, pair_agreement  # noqa: E402
 from experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
+from experiment_train import parse_rates, spawn_context, train_all, train_with_search  # noqa: E402
 
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.similar import similar_clusters  # noqa: E402
@@ -48,7 +51,7 @@ from onepiece_dist.spec import JobSpec  # noqa: E402
 HELDOUT_START = 500  # random_urdfs from here on are never train objects
 QUICK = {"objects": 4, "grasps": 24, "heldout": 3, "heldout_grasps": 16, "label_trials": 2, "steps": 20,
          "seeds": 2, "radii": "0,1", "curve": "12,24", "tradeoff": "10", "tradeoff_grasps": 16, "model": "pointnet",
-         "static_radii": "0"}
+         "static_radii": "0", "learning_rates": "0.001,0.003"}
 
 
 def objects_source(count: int) -> str:
@@ -140,20 +143,13 @@ def _radii(text: str) -> list[int]:
 def generate(args, folder: Path) -> dict:
     """All labelled data, two single-process jobs at a time (longest first)."""
     specs = generation_specs(args, folder)
-    with ProcessPoolExecutor(2, mp_context=_spawn()) as pool:
+    with ProcessPoolExecutor(2, mp_context=spawn_context()) as pool:
         b = pool.submit(b_chain, "B", specs["B"])
         a = pool.submit(run_job, "A", specs["A"].model_dump_json())
         static = pool.submit(b_chain, "B static", specs["B static"])
         heldout = pool.submit(run_job, "heldout", specs["heldout"].model_dump_json())
         return {"A": a.result(), "B": b.result(), "B static": static.result(), "heldout": heldout.result(),
                 "specs": specs}
-
-
-def _spawn():
-    import multiprocessing
-
-    os.environ["OMP_NUM_THREADS"] = "1"  # inherited by the spawned workers: one core each
-    return multiprocessing.get_context("spawn")
 
 
 def arm_costs(gen: dict) -> list[dict]:
@@ -192,7 +188,7 @@ def train_jobs(args, costs: list[dict], folder: Path) -> list[TrainJob]:
         for seed in range(args.seeds):
             path, group, rows = _arm_data(row, a_rows, folder, args.seed)
             jobs.append(TrainJob(row["arm"], seed, path, group, rows, str(folder / "heldout.zarr"), args.model,
-                                 args.steps, args.batch_size, args.learning_rate, 0.2))
+                                 args.steps, args.batch_size, parse_rates(args.learning_rates)[0], 0.2))
     return jobs
 
 
@@ -207,48 +203,18 @@ def _arm_data(row: dict, a_rows: np.ndarray, folder: Path, seed: int):
     return str(folder / f"B-{tag}-{arm.rsplit('r', 1)[1]}.zarr"), "assembled/grasps", None
 
 
-def train_all(jobs: list[TrainJob], cache: Path | None) -> list[dict]:
-    """Every job's training result, two at a time; with a kept work folder (``cache``), a job trained before on
-    the very same data and settings is read back instead (``_train_key``)."""
-    found = [_cached_run(job, cache) for job in jobs]
-    todo = [job for job, run in zip(jobs, found, strict=True) if run is None]
-    with ProcessPoolExecutor(2, mp_context=_spawn()) as pool:
-        fresh = iter(pool.map(fit_and_score, todo))
-        runs = [run if run is not None else next(fresh) for run in found]
-    for job, run, old in zip(jobs, runs, found, strict=True):
-        if cache is not None and old is None:
-            _store_run(job, run, cache)
-    return runs
+def train_arms(args, costs: list[dict], folder: Path) -> tuple[list[dict], dict, list[dict]]:
+    """Every arm's runs (3 seeds) at the learning rate its validation split picks (experiment_train.py), the
+    search's record, and every run trained or read back, the search's probes included."""
+    cache, trained = (folder / "trained" if args.folder else None), []
 
+    def train(jobs: list[TrainJob]) -> list[dict]:
+        runs = train_all(jobs, cache)
+        trained.extend(runs)
+        return runs
 
-def _train_key(job: TrainJob) -> str:
-    """A digest of everything a training result depends on: the job's settings and rows, the status files of its
-    train and held-out datasets (they change whenever a dataset is made again) and the training code."""
-    import hashlib
-
-    digest = hashlib.sha256()
-    for name, value in sorted(vars(job).items()):
-        digest.update(f"{name}={value.tobytes().hex() if isinstance(value, np.ndarray) else value};".encode())
-    for path in (Path(f"{job.path}.status.json"), Path(f"{job.heldout_path}.status.json"),
-                 ROOT / "benchmarks" / "experiment_learn.py"):
-        digest.update(path.read_bytes() if path.exists() else b"-")
-    return digest.hexdigest()[:24]
-
-
-def _cached_run(job: TrainJob, cache: Path | None) -> dict | None:
-    key = _train_key(job) if cache is not None else None
-    if key is None or not (cache / f"{key}.json").exists():
-        return None
-    run = json.loads((cache / f"{key}.json").read_text())
-    run["scores"] = np.load(cache / f"{key}.npy", allow_pickle=False)
-    return {**run, "reused": True}
-
-
-def _store_run(job: TrainJob, run: dict, cache: Path) -> None:
-    cache.mkdir(parents=True, exist_ok=True)
-    key = _train_key(job)
-    np.save(cache / f"{key}.npy", run["scores"], allow_pickle=False)
-    (cache / f"{key}.json").write_text(json.dumps({k: v for k, v in run.items() if k != "scores"}))
+    runs, search = train_with_search(train_jobs(args, costs, folder), parse_rates(args.learning_rates), train)
+    return runs, search, trained
 
 
 def cost_curves(gen: dict, costs: list[dict], folder: Path, counts: list[int], radii: list[int]) -> dict:
@@ -380,7 +346,9 @@ def parse_args(argv=None):
                           ("label-trials", 4), ("steps", 500), ("seeds", 3), ("seed", 0), ("points", 256),
                           ("batch-size", 64)):
         parser.add_argument(f"--{name}", type=int, default=default)
-    parser.add_argument("--learning-rate", type=float, default=1e-3)
+    parser.add_argument("--learning-rates", default="0.0003,0.001,0.003",
+                        help="Adam learning rates; each arm keeps the one its validation split picks "
+                             "(benchmarks/experiment_search.py)")
     parser.add_argument("--radii", default="0,1,2", help="similar-shape radii of the B arms")
     parser.add_argument("--curve", default="250,500,1000,2000", help="candidates per object of the cost curve")
     parser.add_argument("--tradeoff", default="20,10,5", help="voxel resolutions (mm) of the trade-off")
@@ -438,7 +406,7 @@ def run_experiment(args, folder: Path) -> dict:
     generation_wall = time.perf_counter() - timer
     costs = arm_costs(gen)
     timer = time.perf_counter()
-    runs = train_all(train_jobs(args, costs, folder), folder / "trained" if args.folder else None)
+    runs, search, trained = train_arms(args, costs, folder)
     training_wall = time.perf_counter() - timer
     from onepiece_dist.store import open_dataset
 
@@ -447,6 +415,7 @@ def run_experiment(args, folder: Path) -> dict:
     for row in costs:
         row["heldout"] = arm_summary([r for r in runs if r["arm"] == row["arm"]], labels, groups)
         row["train_seconds"] = round(float(np.mean([s["train_seconds"] for s in row["heldout"]["seeds"]])), 1)
+        row["learning_rate"] = search[row["arm"]]["chosen"] if search else parse_rates(args.learning_rates)[0]
     radii = _radii(args.radii)
     timer = time.perf_counter()
     curve = cost_curves(gen, costs, folder, [int(n) for n in args.curve.split(",") if int(n) <= args.grasps], radii)
@@ -464,7 +433,8 @@ def run_experiment(args, folder: Path) -> dict:
            "cost_curve": curve, "tradeoff": trade, "label_transfer": transfer,
            "reused_jobs": [job["name"] for job in [gen["A"], gen["heldout"], *gen["B"], *gen["B static"]]
                            if job.get("reused")],
-           "reused_training_runs": sum(bool(run.get("reused")) for run in runs)}
+           "learning_rate_search": search, "training_runs": len(trained),
+           "reused_training_runs": sum(bool(run.get("reused")) for run in trained)}
     out["decision"] = decide(out)
     return out
 

@@ -122,8 +122,9 @@ def synthetic(tmp_path_factory):
     return synthetic_labelled_dataset(tmp_path_factory.mktemp("reader") / "s.zarr", rows=1500, points=750)
 
 
-def test_a_batch_read_equals_the_items_read_one_by_one(synthetic):
-    ds = GraspDataset(synthetic)
+@pytest.mark.parametrize("memory_bytes", [0, 2**26])  # every array read per batch from the store / held in memory
+def test_a_batch_read_equals_the_items_read_one_by_one(synthetic, memory_bytes):
+    ds = GraspDataset(synthetic, memory_bytes=memory_bytes)
     assert ds.chunk_rows == 512
     positions = [900, 3, 1499, 3, 512, 700, 701, 0]  # unsorted, repeated, across chunks
     batch = ds.__getitems__(positions)
@@ -133,6 +134,7 @@ def test_a_batch_read_equals_the_items_read_one_by_one(synthetic):
             assert torch.equal(batch[name][k], item[name]), (name, position)
     root = zarr.open_group(str(synthetic), mode="r")
     assert np.array_equal(batch["points"][2].numpy(), root["assembled/grasps/points"][1499].astype(np.float32))
+    assert ("points" in ds._small) == (memory_bytes > 0)  # 13.5 MB of points: in memory only when allowed
 
 
 def test_a_loader_with_two_workers_gives_the_batches_of_one_without(synthetic):

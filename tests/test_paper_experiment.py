@@ -15,6 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 learn = importlib.import_module("experiment_learn")
 page = importlib.import_module("experiment_page")
+training = importlib.import_module("experiment_train")
 
 
 def test_the_bootstrap_interval_holds_the_mean_and_narrows_with_more_objects():
@@ -56,7 +57,7 @@ def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
 
 
 def test_a_training_result_is_reused_only_for_the_same_job_on_the_same_datasets(tmp_path):
-    experiment = importlib.import_module("paper_experiment")
+    experiment = training
     status, cache = tmp_path / "A.zarr.status.json", tmp_path / "trained"
     status.write_text('{"state": "succeeded"}')
     job = learn.TrainJob("A", 0, str(tmp_path / "A.zarr"), "grasps", np.arange(5), str(tmp_path / "heldout.zarr"),
@@ -70,6 +71,34 @@ def test_a_training_result_is_reused_only_for_the_same_job_on_the_same_datasets(
     assert experiment._cached_run(dataclasses.replace(job, rows=np.arange(6)), cache) is None
     status.write_text('{"state": "succeeded", "made": "again"}')  # the dataset was made again
     assert experiment._cached_run(job, cache) is None
+
+
+def _job(arm: str, seed: int) -> "learn.TrainJob":
+    return learn.TrainJob(arm, seed, f"{arm}.zarr", "grasps", None, "heldout.zarr", "pointnet", 10, 8, 1.0, 0.2)
+
+
+def test_each_arm_keeps_the_learning_rate_its_validation_loss_picks_and_trains_its_other_seeds_at_it():
+    best = {"A": 0.01, "B r0": 0.001}  # a trainer whose validation loss is lowest at each arm's own rate
+    calls = []
+
+    def train(jobs):
+        calls.append([(job.arm, job.seed, job.learning_rate) for job in jobs])
+        return [{"arm": job.arm, "seed": job.seed, "rate": job.learning_rate,
+                 "curve": [{"step": 5, "val_loss": 1 + abs(np.log10(job.learning_rate / best[job.arm]))},
+                           {"step": 10, "val_loss": 0.5 + abs(np.log10(job.learning_rate / best[job.arm]))}]}
+                for job in jobs]
+
+    jobs = [_job(arm, seed) for arm in ("A", "B r0") for seed in (0, 1, 2)]
+    runs, search = training.train_with_search(jobs, training.parse_rates("0.01,0.001,0.003"), train)
+    assert {arm: row["chosen"] for arm, row in search.items()} == best
+    assert search["A"]["probes"][0] == {"learning_rate": 0.001, "val_loss": 1.5}  # the lowest of its curve
+    assert len(calls[0]) == 6 and {seed for _, seed, _ in calls[0]} == {0}  # probes: seed 0 at every rate
+    assert sorted(calls[1]) == [("A", 1, 0.01), ("A", 2, 0.01), ("B r0", 1, 0.001), ("B r0", 2, 0.001)]
+    assert [(r["arm"], r["seed"], r["rate"]) for r in runs] == [(j.arm, j.seed, best[j.arm]) for j in jobs]
+    runs, search = training.train_with_search(jobs, [0.002], train)  # one rate: no search
+    assert search == {} and {r["rate"] for r in runs} == {0.002}
+    with pytest.raises(ValueError, match="--learning-rates"):
+        training.parse_rates("0.001,-1")
 
 
 @pytest.mark.slow
@@ -99,3 +128,9 @@ def test_the_quick_experiment_runs_every_arm_and_renders_a_page_that_decides(tmp
     assert "| paper (ONE PIECE) |" in text and "**Time, 8x:**" in text
     assert ("not met" in text) == (not (out["decision"]["time_met"] and out["decision"]["storage_met"]))
     assert (tmp_path / "docs" / "paper_experiment_cost.png").stat().st_size > 1000
+    search = out["learning_rate_search"]  # --quick probes 0.001 and 0.003 on each arm's validation split
+    assert set(search) == set(arms) and out["training_runs"] == len(arms) * 3  # 2 probes + 1 more seed per arm
+    for arm, row in search.items():
+        assert row["chosen"] == min(row["probes"], key=lambda p: p["val_loss"])["learning_rate"]
+        assert arms[arm]["learning_rate"] == row["chosen"]
+    assert "validation split picked among 0.001, 0.003" in text

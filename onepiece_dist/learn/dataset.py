@@ -37,11 +37,14 @@ class GraspDataset(Dataset):
     rows : indices of the rows to use (a split); default all
     inputs : which of "points", "code" and "quality" to read (default: all the dataset holds); e.g.
              ``("code",)`` for a voxel model reads no points at all
+    memory_bytes : arrays up to this size are read whole on first use (per process), then indexed in memory;
+                   larger ones are read per batch. Raise it where the arrays fit in memory and batches are drawn
+                   uniformly at random (each such batch decodes about one chunk per row from the store)
     """
 
     def __init__(self, path: str | os.PathLike, group: str = "assembled/grasps", rows: np.ndarray | None = None,
-                 inputs: tuple[str, ...] | None = None):
-        self.path, self.group = str(path), group
+                 inputs: tuple[str, ...] | None = None, memory_bytes: int = SMALL_ARRAY_BYTES):
+        self.path, self.group, self.memory_bytes = str(path), group, memory_bytes
         root = zarr.open_group(self.path, mode="r")
         attrs = root.attrs.asdict()
         problem = format_problem(attrs)
@@ -71,12 +74,12 @@ class GraspDataset(Dataset):
         return self._root
 
     def _read(self, name: str, rows: np.ndarray) -> np.ndarray:
-        """Rows (sorted, unique) of ``group/name``: from memory for a small array (read whole on first use in
-        this process), else from the store."""
+        """Rows (sorted, unique) of ``group/name``: from memory for an array up to ``memory_bytes`` (read whole
+        on first use in this process), else from the store."""
         if name in self._small:
             return self._small[name][rows]
         array = self._arrays()[f"{self.group}/{name}"]
-        if array.nbytes <= SMALL_ARRAY_BYTES:
+        if array.nbytes <= self.memory_bytes:
             self._small[name] = array[...]
             return self._small[name][rows]
         return _rows(array, rows)
