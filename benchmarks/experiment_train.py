@@ -22,7 +22,7 @@ from experiment_learn import TrainJob, fit_and_score
 
 ROOT = Path(__file__).resolve().parents[1]
 
-Train = Callable[[list[TrainJob]], list[dict]]  # jobs -> their runs, in order (train_all)
+Train = Callable[[list[TrainJob]], list[dict]]  # jobs -> their runs, in order (train_all on a pool)
 
 
 def parse_rates(text: str) -> list[float]:
@@ -63,14 +63,13 @@ def spawn_context():
     return multiprocessing.get_context("spawn")
 
 
-def train_all(jobs: list[TrainJob], cache: Path | None) -> list[dict]:
-    """Every job's training result, two at a time; with a kept work folder (``cache``), a job trained before on
-    the very same data and settings is read back instead (``_train_key``)."""
+def train_all(jobs: list[TrainJob], cache: Path | None, pool: ProcessPoolExecutor) -> list[dict]:
+    """Every job's training result, on the ``pool``'s processes (two, one core each); with a kept work folder
+    (``cache``), a job trained before on the very same data and settings is read back instead (``_train_key``)."""
     found = [_cached_run(job, cache) for job in jobs]
     todo = [job for job, run in zip(jobs, found, strict=True) if run is None]
-    with ProcessPoolExecutor(2, mp_context=spawn_context()) as pool:
-        fresh = iter(pool.map(fit_and_score, todo))
-        runs = [run if run is not None else next(fresh) for run in found]
+    fresh = iter(pool.map(fit_and_score, todo))
+    runs = [run if run is not None else next(fresh) for run in found]
     for job, run, old in zip(jobs, runs, found, strict=True):
         if cache is not None and old is None:
             _store_run(job, run, cache)

@@ -207,13 +207,14 @@ def train_arms(args, costs: list[dict], folder: Path) -> tuple[list[dict], dict,
     """Every arm's runs (3 seeds) at the learning rate its validation split picks (experiment_train.py), the
     search's record, and every run trained or read back, the search's probes included."""
     cache, trained = (folder / "trained" if args.folder else None), []
+    with ProcessPoolExecutor(2, mp_context=spawn_context()) as pool:  # started once for the search and the rest
 
-    def train(jobs: list[TrainJob]) -> list[dict]:
-        runs = train_all(jobs, cache)
-        trained.extend(runs)
-        return runs
+        def train(jobs: list[TrainJob]) -> list[dict]:
+            runs = train_all(jobs, cache, pool)
+            trained.extend(runs)
+            return runs
 
-    runs, search = train_with_search(train_jobs(args, costs, folder), parse_rates(args.learning_rates), train)
+        runs, search = train_with_search(train_jobs(args, costs, folder), parse_rates(args.learning_rates), train)
     return runs, search, trained
 
 

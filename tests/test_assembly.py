@@ -360,3 +360,14 @@ def test_point_grid_box_queries_equal_brute_force(count, cell, seed):
         upper = lower + rng.uniform(0, 0.4, 3)
         expected = np.flatnonzero(np.all((points >= lower) & (points <= upper), axis=1))
         assert np.array_equal(np.sort(grid.in_box(lower, upper)), expected)
+
+
+@pytest.mark.parametrize("rows", [1, 7, 256])
+def test_the_chamfer_distance_taken_in_row_blocks_is_the_brute_force_one(rows):
+    from onepiece_dist.service.assemble import chamfer_distance
+
+    rng = np.random.default_rng(rows)
+    a, b = rng.normal(size=(300, 3)), rng.normal(size=(41, 3)) + 0.5
+    d = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2))
+    assert chamfer_distance(a, b, rows) == (d.min(axis=1).mean() + d.min(axis=0).mean()) / 2  # to the last bit
+    assert chamfer_distance(a, a, rows) == 0.0

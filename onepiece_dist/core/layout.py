@@ -146,7 +146,7 @@ def corridor_intrusions(points: np.ndarray, owner: np.ndarray, placements: np.nd
     """(U,) int64: points not of patch k (other patches, or the core with owner -1) inside the corridor of each
     placement k (:func:`corridor_boxes`)."""
     boxes = corridor_boxes(gripper, reach)
-    index = PointGrid(points, gripper.max_opening)
+    index = PointGrid(points, float(np.min(boxes[:, 1] - boxes[:, 0])))  # cells no wider than the thinnest box
     counts = np.zeros(len(placements), dtype=np.int64)
     for k, pose in enumerate(placements):
         for lower, upper in boxes:

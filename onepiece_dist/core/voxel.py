@@ -121,7 +121,7 @@ def _points_near_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tupl
     index, so each pose costs what is near it): (k, 3) float64 per pose, in pose order."""
     a, b, c = grid_shape
     lower, upper = closing_region_bounds(a * resolution, b * resolution, c * resolution)
-    index = PointGrid(points, float(np.max(upper - lower)))
+    index = PointGrid(points, float(np.min(upper - lower)))  # cells no wider than the region is thin
     for pose in poses:
         near = points[np.sort(index.in_box(*posed_box_bounds(lower, upper, pose)))]  # in point order
         yield to_gripper_frame(near, pose[None])[0]

@@ -76,10 +76,15 @@ def _chamfer_to_representatives(spec: JobSpec, path, patches: Patches) -> np.nda
     return np.array(out)
 
 
-def chamfer_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """Symmetric mean nearest-neighbour distance between point sets (n, 3) and (m, 3) (brute force)."""
-    d = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2))
-    return float((d.min(axis=1).mean() + d.min(axis=0).mean()) / 2)
+def chamfer_distance(a: np.ndarray, b: np.ndarray, rows: int = 256) -> float:
+    """Symmetric mean nearest-neighbour distance between point sets (n, 3) and (m, 3) (brute force, ``rows``
+    points of ``a`` at a time: the same distances without an (n, m, 3) temporary)."""
+    to_b, to_a = np.empty(len(a)), np.full(len(b), np.inf)
+    for start in range(0, len(a), rows):
+        d = np.sqrt(((a[start:start + rows, None, :] - b[None, :, :]) ** 2).sum(axis=2))
+        to_b[start:start + rows] = d.min(axis=1)
+        np.minimum(to_a, d.min(axis=0), out=to_a)
+    return float((to_b.mean() + to_a.mean()) / 2)
 
 
 def _report(spec: JobSpec, grasps: int, codes, classes, layout, matches, intrusions, chamfer,
