@@ -85,3 +85,18 @@ def test_the_2d_hull_skips_inner_points_and_gives_the_same_vertices(seed):
     if seed % 2:
         points = np.round(points, 3)  # a grid: many collinear points on the hull
     assert np.array_equal(_hull_2d(points), reference_hull_2d(points))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_pieces_whose_bounds_miss_the_box_are_skipped_with_the_result_the_cuts_give(seed, monkeypatch):
+    import onepiece_dist.core.clip as clip
+
+    rng = np.random.default_rng(seed)
+    lower, upper = np.array([-0.01, -0.015, -0.02]), np.array([0.02, 0.01, 0.005])
+    pieces = [rng.normal(rng.uniform(-0.06, 0.06, 3), 0.01, (24, 3)) for _ in range(40)]
+    fast = [clip_to_box(piece, lower, upper) for piece in pieces]
+    monkeypatch.setattr(clip, "MISS", np.inf)  # no bounds check: every piece through all six cuts
+    for piece, quick in zip(pieces, fast, strict=True):
+        assert np.array_equal(clip_to_box(piece, lower, upper), quick)
+    missed = sum(np.any(p.min(0) > upper + 1e-9) or np.any(p.max(0) < lower - 1e-9) for p in pieces)
+    assert 0 < missed < len(pieces)  # both kinds were drawn

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 EPS = 1e-12
+MISS = 1e-9  # a piece whose bounds lie further than this outside the box is cut away whole, without cutting
 
 
 def clip_to_box(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -19,6 +20,8 @@ def clip_to_box(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.
     hull it is: the piece's points inside the box and the vertices of each cut face, without duplicates; (0, 3)
     when the piece misses the box or only touches it (no volume)."""
     out = np.asarray(points, dtype=np.float64)
+    if len(out) == 0 or np.any(out.min(axis=0) > upper + MISS) or np.any(out.max(axis=0) < lower - MISS):
+        return np.zeros((0, 3))  # the piece's bounds miss the box: the cuts below would leave nothing either
     for axis in range(3):
         out = _cut(out, axis, float(lower[axis]), keep_above=True)
         out = _cut(out, axis, float(upper[axis]), keep_above=False)
