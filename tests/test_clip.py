@@ -100,3 +100,16 @@ def test_pieces_whose_bounds_miss_the_box_are_skipped_with_the_result_the_cuts_g
         assert np.array_equal(clip_to_box(piece, lower, upper), quick)
     missed = sum(np.any(p.min(0) > upper + 1e-9) or np.any(p.max(0) < lower - 1e-9) for p in pieces)
     assert 0 < missed < len(pieces)  # both kinds were drawn
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_first_of_equal_rows_are_the_rows_numpy_unique_picks(seed):
+    from onepiece_dist.core.clip import first_of_equal_rows
+
+    rng = np.random.default_rng(seed)
+    for d in (2, 3):
+        rows = np.round(rng.normal(size=(rng.integers(0, 300), d)), 1)  # coarse: many equal rows
+        rows[rng.random(rows.shape) < 0.1] = -0.0  # signed zeros are equal to zeros, as for np.unique
+        rows[rng.random(rows.shape) < 0.1] = 0.0
+        expected = np.sort(np.unique(rows, axis=0, return_index=True)[1]) if len(rows) else np.zeros(0, int)
+        assert np.array_equal(first_of_equal_rows(rows), expected)

@@ -27,8 +27,7 @@ def clip_to_box(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.
         out = _cut(out, axis, float(upper[axis]), keep_above=False)
         if len(out) < 4:
             return np.zeros((0, 3))
-    _, first = np.unique(np.round(out, 12), axis=0, return_index=True)
-    out = out[np.sort(first)]
+    out = out[first_of_equal_rows(np.round(out, 12))]
     return out if len(out) >= 4 and np.ptp(out, axis=0).min() > 1e-9 else np.zeros((0, 3))
 
 
@@ -52,8 +51,7 @@ def _hull_2d(points: np.ndarray) -> np.ndarray:
     """Indices of the vertices of the 2D convex hull of (n, 2) points (Andrew's monotone chain)."""
     if len(points) < 3:
         return np.arange(len(points))
-    rounded = np.round(points, 12)
-    _, unique = np.unique(rounded, axis=0, return_index=True)
+    unique = first_of_equal_rows(np.round(points, 12))
     order = unique[np.lexsort((points[unique, 1], points[unique, 0]))]
     if len(order) < 3:
         return order
@@ -76,6 +74,19 @@ def _hull_2d(points: np.ndarray) -> np.ndarray:
     ordered = order.tolist()
     lower, upper = chain(ordered), chain(ordered[::-1])
     return np.array(lower[:-1] + upper[:-1], dtype=np.int64)
+
+
+def first_of_equal_rows(rows: np.ndarray) -> np.ndarray:
+    """(k,) int64 ascending indices of the first of each group of equal rows of (n, d) ``rows``: the indices
+    ``np.unique(rows, axis=0, return_index=True)`` gives, sorted, at a quarter of its cost on small arrays (a
+    stable lexsort of the columns instead of a sort of the rows as structured items)."""
+    if len(rows) == 0:
+        return np.zeros(0, dtype=np.int64)
+    order = np.lexsort(rows.T[::-1])  # stable: each group of equal rows keeps its first row first
+    ordered = rows[order]
+    starts = np.ones(len(rows), dtype=bool)
+    starts[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    return np.sort(order[starts]).astype(np.int64)
 
 
 def _inside_extremes(points: np.ndarray, margin: float = 1e-12) -> np.ndarray:
