@@ -41,7 +41,8 @@ def verdict(out: dict) -> list[str]:
              f"interval or above it is **{best}**, at {d['time_ratio']}x A's core-seconds.",
              f"- **Labelled storage, 6.3x:** {_met(d['storage_met'])}: {best} at {d['storage_ratio']}x.",
              f"- **B at least as good as R with the same label budget:** "
-             f"{'holds' if d['b_at_least_r'] else 'does not hold'} ({best} against {d['control'] or 'no control'}).",
+             f"{'holds' if d['b_at_least_r'] else 'does not hold'} ({best} against {d['control'] or 'no control'}"
+             f"{_against(d)}).",
              f"- **Held-out positive rate in 30-70%:** {_met(d['positive_rate_met'])} "
              f"({d['heldout_positive_rate']:.1%}, {_label_rule(out)}; docs/trials.md, Physical defaults and the "
              "label rule).",
@@ -55,6 +56,15 @@ def verdict(out: dict) -> list[str]:
              + (" The B static arms (crops at the candidate pose, no physics in extraction) do not pay the settling "
                 "trial: see their rows." if any("static" in a["arm"] for a in out["arms"]) else "")]
     return lines
+
+
+def _against(d: dict) -> str:
+    """B's held-out top-1 and AP beside R's; both must be at least R's (results before 2026-11-27 compared
+    top-1 alone and carry no figures here)."""
+    if not d.get("b_against_r"):
+        return ""
+    (b1, r1), (bap, rap) = d["b_against_r"]["top1"], d["b_against_r"]["ap"]
+    return f": top-1 {b1:.1%} against {r1:.1%}, AP {bap:.3f} against {rap:.3f}; both must be at least R's"
 
 
 def _two_hours(out: dict) -> str:

@@ -134,3 +134,19 @@ def test_the_quick_experiment_runs_every_arm_and_renders_a_page_that_decides(tmp
         assert row["chosen"] == min(row["probes"], key=lambda p: p["val_loss"])["learning_rate"]
         assert arms[arm]["learning_rate"] == row["chosen"]
     assert "validation split picked among 0.001, 0.003" in text
+
+
+def _arm(name: str, core_seconds: float, top1: float, ap: float) -> dict:
+    return {"arm": name, "core_seconds": core_seconds, "labelled_bytes": core_seconds, "dataset_bytes": 1.0,
+            "heldout": {"top1": {"mean": top1, "ci95": [top1 - 0.07, top1 + 0.07]}, "ap": {"mean": ap}}}
+
+
+@pytest.mark.parametrize("b_ap, holds", [(0.70, True), (0.66, False)])
+def test_b_is_as_good_as_r_only_when_its_top1_and_its_ap_both_are(b_ap, holds):
+    experiment = importlib.import_module("paper_experiment")
+    out = {"arms": [_arm("A", 1000.0, 0.85, 0.72), _arm("B r2", 150.0, 0.83, b_ap), _arm("R r2", 20.0, 0.80, 0.70)],
+           "heldout": {"positive_rate": 0.44}}
+    d = experiment.decide(out)
+    assert d["best_b"] == "B r2" and d["control"] == "R r2" and d["time_ratio"] == pytest.approx(6.667, abs=1e-3)
+    assert d["b_at_least_r"] is holds and d["b_against_r"] == {"top1": [0.83, 0.8], "ap": [b_ap, 0.7]}
+    assert page._against(d) == f": top-1 83.0% against 80.0%, AP {b_ap:.3f} against 0.700; both must be at least R's"
