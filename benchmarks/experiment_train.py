@@ -64,8 +64,9 @@ def spawn_context():
 
 
 def train_all(jobs: list[TrainJob], cache: Path | None, pool: ProcessPoolExecutor) -> list[dict]:
-    """Every job's training result, on the ``pool``'s processes (two, one core each); with a kept work folder
-    (``cache``), a job trained before on the very same data and settings is read back instead (``_train_key``)."""
+    """Every job's training result (with the job's ``learning_rate``), on the ``pool``'s processes (two, one core
+    each); with a kept work folder (``cache``), a job trained before on the very same data and settings is read
+    back instead (``_train_key``)."""
     found = [_cached_run(job, cache) for job in jobs]
     todo = [job for job, run in zip(jobs, found, strict=True) if run is None]
     fresh = iter(pool.map(fit_and_score, todo))
@@ -73,7 +74,7 @@ def train_all(jobs: list[TrainJob], cache: Path | None, pool: ProcessPoolExecuto
     for job, run, old in zip(jobs, runs, found, strict=True):
         if cache is not None and old is None:
             _store_run(job, run, cache)
-    return runs
+    return [{**run, "learning_rate": job.learning_rate} for job, run in zip(jobs, runs, strict=True)]
 
 
 def _train_key(job: TrainJob) -> str:

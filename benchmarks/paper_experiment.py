@@ -181,14 +181,14 @@ def arm_costs(gen: dict) -> list[dict]:
     return rows
 
 
-def train_jobs(args, costs: list[dict], folder: Path) -> list[TrainJob]:
+def train_jobs(args, costs: list[dict], folder: Path, rate: float) -> list[TrainJob]:
     a_rows = np.arange(costs[0]["labelled_grasps"])
     jobs = []
     for row in costs:
         for seed in range(args.seeds):
             path, group, rows = _arm_data(row, a_rows, folder, args.seed)
             jobs.append(TrainJob(row["arm"], seed, path, group, rows, str(folder / "heldout.zarr"), args.model,
-                                 args.steps, args.batch_size, parse_rates(args.learning_rates)[0], 0.2))
+                                 args.steps, args.batch_size, rate, 0.2))
     return jobs
 
 
@@ -214,7 +214,8 @@ def train_arms(args, costs: list[dict], folder: Path) -> tuple[list[dict], dict,
             trained.extend(runs)
             return runs
 
-        runs, search = train_with_search(train_jobs(args, costs, folder), parse_rates(args.learning_rates), train)
+        rates = parse_rates(args.learning_rates)
+        runs, search = train_with_search(train_jobs(args, costs, folder, rates[0]), rates, train)
     return runs, search, trained
 
 
@@ -349,7 +350,7 @@ def parse_args(argv=None):
         parser.add_argument(f"--{name}", type=int, default=default)
     parser.add_argument("--learning-rates", default="0.0003,0.001,0.003",
                         help="Adam learning rates; each arm keeps the one its validation split picks "
-                             "(benchmarks/experiment_search.py)")
+                             "(benchmarks/experiment_train.py)")
     parser.add_argument("--radii", default="0,1,2", help="similar-shape radii of the B arms")
     parser.add_argument("--curve", default="250,500,1000,2000", help="candidates per object of the cost curve")
     parser.add_argument("--tradeoff", default="20,10,5", help="voxel resolutions (mm) of the trade-off")
@@ -416,7 +417,7 @@ def run_experiment(args, folder: Path) -> dict:
     for row in costs:
         row["heldout"] = arm_summary([r for r in runs if r["arm"] == row["arm"]], labels, groups)
         row["train_seconds"] = round(float(np.mean([s["train_seconds"] for s in row["heldout"]["seeds"]])), 1)
-        row["learning_rate"] = search[row["arm"]]["chosen"] if search else parse_rates(args.learning_rates)[0]
+        row["learning_rate"] = next(r["learning_rate"] for r in runs if r["arm"] == row["arm"])
     radii = _radii(args.radii)
     timer = time.perf_counter()
     curve = cost_curves(gen, costs, folder, [int(n) for n in args.curve.split(",") if int(n) <= args.grasps], radii)
