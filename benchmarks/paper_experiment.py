@@ -49,8 +49,9 @@ from onepiece_dist.core.similar import similar_clusters  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
 
 HELDOUT_START = 500  # random_urdfs from here on are never train objects
+# --quick trains the voxel CNN: a smoke test of the script (PointNet is the same code path, tested in test_learn)
 QUICK = {"objects": 4, "grasps": 24, "heldout": 3, "heldout_grasps": 16, "label_trials": 2, "steps": 20,
-         "seeds": 2, "radii": "0,1", "curve": "12,24", "tradeoff": "10", "tradeoff_grasps": 16, "model": "pointnet",
+         "seeds": 2, "radii": "0,1", "curve": "12,24", "tradeoff": "10", "tradeoff_grasps": 16, "model": "voxel",
          "static_radii": "0", "learning_rates": "0.001,0.003"}
 
 

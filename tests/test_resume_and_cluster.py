@@ -111,8 +111,10 @@ def test_a_job_on_the_local_multi_node_cluster_is_followed_from_another_folder(l
     out, elsewhere, job = tmp_path / "cluster.zarr", tmp_path / "elsewhere", "cluster-follow"
     elsewhere.mkdir()
     address = ["--address", local_cluster]
-    submitted = onepiece("submit", *address, "--objects", "primitives[0:4]", "--grasps", "16", "--out", str(out),
-                         "--job-id", job, "--wait", "--timeout", "300", cwd=elsewhere, background=True)
+    spec = elsewhere / "job.yaml"  # every stage; the voxel network (PointNet's 10 epochs cost ~30 s on one CPU)
+    spec.write_text("train:\n  model: voxel\n  epochs: 2\n")
+    submitted = onepiece("submit", str(spec), *address, "--objects", "primitives[0:4]", "--grasps", "16", "--out",
+                         str(out), "--job-id", job, "--wait", "--timeout", "300", cwd=elsewhere, background=True)
     watched = wait_for(lambda: _running_status(job, address, elsewhere), 180, "the job's status from the registry")
     follow = onepiece("logs", job, *address, "--follow", cwd=elsewhere, background=True)
     stdout, stderr = submitted.communicate(timeout=360)
