@@ -12,8 +12,10 @@ over the stage's window. The train stage runs the model and epochs given (PointN
 165 samples/s on 2 cores, so the default is the voxel CNN for 2 epochs; both are recorded). Targets (issue 16):
 extract + dedup + assemble + label under 10 minutes, peak memory under 4 GiB, the extract stage at >= 400
 candidates/s/core (candidates / (extract seconds x cores)) on 2 cores, and the label stage at >= 0.8 x the label
-protocol's trials/s/core (label trials / the stage's core-seconds, against bench_sim's results/sim.json).
-Writes benchmarks/results/bench_end_to_end.json.
+protocol's trials/s/core (label trials / the stage's core-seconds). The protocols (bench_sim's extract and label
+trials, one core, nothing else running) are timed in the same run, on every eighth of the job's objects, before
+and after the job: this machine's speed drifts by a fifth between runs, so a rate measured on another day is no
+yardstick. Writes benchmarks/results/bench_end_to_end.json.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_sim import load_all, protocol_rates, time_protocols  # noqa: E402
 from process_tree import ProcessTree  # noqa: E402
 
 from onepiece_dist.api import run_job  # noqa: E402
@@ -44,6 +47,7 @@ from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
 HERE = Path(__file__).resolve().parent
 GIB = 2**30
 WORKERS = os.cpu_count() or 1  # one extraction worker per core (the job's default)
+PROTOCOL_EVERY, PROTOCOL_GRASPS, PROTOCOL_REPEATS = 8, 64, 2  # objects, candidates each, timings before and after
 
 
 def stage_windows(start: float, timings: dict[str, float]) -> dict[str, tuple[float, float]]:
@@ -77,6 +81,8 @@ def main() -> dict:
 
     from onepiece_dist.service.ray_env import connect
 
+    protocols = ProtocolClock(spec, folder)
+    protocols.time()  # before Ray starts: one core, nothing else running
     connect(None)
     try:
         with ProcessTree() as memory:
@@ -91,8 +97,14 @@ def main() -> dict:
         summary = open_dataset(spec.output).summary()
         result = _result(args, spec, status, wall, memory.peak(), idle, by_stage, summary)
         result["core_seconds_by_stage"] = {stage: round(value, 1) for stage, value in cores.items()}
+        ray.shutdown()
+        protocols.time()
+        result["protocol"] = protocols.summary()
+        result["extract_over_protocol"] = round(result["extract_candidates_per_s_per_core"]
+                                                / result["protocol"]["extract_trials_per_s_per_core"], 3)
         if status.labels is not None and cores.get("label"):
-            result["label"] = label_rate(status.labels, cores["label"])
+            result["label"] = label_rate(status.labels, cores["label"],
+                                         result["protocol"]["label_trials_per_s_per_core"])
     finally:
         ray.shutdown()
         shutil.rmtree(folder, ignore_errors=True)
@@ -101,12 +113,37 @@ def main() -> dict:
     return result
 
 
-def label_rate(labels, core_seconds: float) -> dict:
+class ProtocolClock:
+    """Times bench_sim's extract and label protocols on every PROTOCOL_EVERY-th object of ``spec``'s source
+    (PROTOCOL_GRASPS candidates each, one core), PROTOCOL_REPEATS times per call of :meth:`time`."""
+
+    def __init__(self, spec: JobSpec, folder: Path):
+        self.spec = spec.model_copy(update={"grasps_per_object": PROTOCOL_GRASPS})
+        self.refs = resolve_source(spec.objects)[::PROTOCOL_EVERY]
+        (folder / "protocol-cache").mkdir(parents=True, exist_ok=True)
+        self.loaded = load_all(self.spec, folder / "protocol-cache", self.refs, PROTOCOL_GRASPS)
+        self.rounds: list[dict[str, list[float]]] = []
+        self.trials = 0
+
+    def time(self) -> None:
+        seconds, extracted = time_protocols(self.spec, self.loaded, PROTOCOL_REPEATS, ("extract", "label"))
+        self.rounds.append(seconds)
+        self.trials = extracted.shape[1]
+
+    def summary(self) -> dict:
+        """Rates from the median of every timing, and per round (before the job, after it)."""
+        every = {name: [s for seconds in self.rounds for s in seconds[name]] for name in self.rounds[0]}
+        return {"objects": [ref.name for ref in self.refs], "objects_loaded": len(self.loaded),
+                "trials": self.trials, "repeats": PROTOCOL_REPEATS,
+                **protocol_rates(every, self.trials),
+                "rounds": [protocol_rates(seconds, self.trials) for seconds in self.rounds]}
+
+
+def label_rate(labels, core_seconds: float, protocol: float) -> dict:
     """Label trials of the label stage (on the one object, plus the label-transfer measure's trials on source
-    objects) per core-second of the stage, against the label protocol's rate from bench_sim (results/sim.json)."""
+    objects) per core-second of the stage, against the label protocol's trials/s/core ``protocol``."""
     transfer = labels.transfer.label_trials if labels.transfer is not None else 0
     rate = (labels.label_trials + transfer) / core_seconds
-    protocol = json.loads((HERE / "results" / "sim.json").read_text())["label_trials_per_s_per_core"]
     return {"trials_one_object": labels.label_trials, "trials_transfer": transfer,
             "labelled_grasps": labels.labelled_grasps, "trials_per_s_per_core": round(rate, 1),
             "protocol_trials_per_s_per_core": protocol, "rate_over_protocol": round(rate / protocol, 3),

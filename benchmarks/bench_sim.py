@@ -57,35 +57,40 @@ def baseline(world, poses: np.ndarray) -> None:
 REPEATS = 3  # each protocol is timed this many times over all objects; the median counts (runs here vary by ~30%)
 
 
-def load_all(spec: JobSpec, cache: Path) -> list:
-    """(convex pieces, enclosed volume, candidate poses (n, 4, 4), surface points (m, 3)) of every object."""
+def load_all(spec: JobSpec, cache: Path, refs: list | None = None, grasps: int = GRASPS) -> list:
+    """(convex pieces, enclosed volume, candidate poses (n, 4, 4), surface points (m, 3)) of every object of
+    ``refs`` (default: OBJECTS), ``grasps`` candidates each."""
     loaded = []
-    for ref in resolve_source(OBJECTS):
+    for ref in resolve_source(OBJECTS) if refs is None else refs:
         try:
             mesh = load_object(ref, spec).mesh
         except ValueError:
             continue
         rng = object_rng(mesh.content_id, spec.seed)
         points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
-        poses = sample_candidates(mesh, points, normals, GRASPS, spec.gripper, spec.sampler, rng).poses
+        poses = sample_candidates(mesh, points, normals, grasps, spec.gripper, spec.sampler, rng).poses
         loaded.append((convex_pieces(mesh, cache, "vhacd"), enclosed_volume(mesh), poses, points))
     return loaded
 
 
-def time_protocols(spec: JobSpec, loaded: list) -> tuple[dict[str, list[float]], np.ndarray]:
-    """Seconds of each protocol over all objects, REPEATS times; and the extract trials' outcomes and closing
-    steps (2, n) of the first repeat."""
+PROTOCOLS = ("extract", "label", "baseline")
+
+
+def time_protocols(spec: JobSpec, loaded: list, repeats: int = REPEATS,
+                   names: tuple[str, ...] = PROTOCOLS) -> tuple[dict[str, list[float]], np.ndarray]:
+    """Seconds of each protocol of ``names`` (extract among them) over all objects, ``repeats`` times; and the
+    extract trials' outcomes and closing steps (2, n) of the first repeat."""
     world = process_world(spec.gripper)
-    seconds, first = {"extract": [], "label": [], "baseline": []}, None
-    for _ in range(REPEATS):
+    seconds, first = {name: [] for name in names}, None
+    protocols = {"extract": lambda p: run_trials(world, p), "label": lambda p: run_trials(world, p, label=True),
+                 "baseline": lambda p: baseline(world, p)}
+    for _ in range(repeats):
         spent, extracted = dict.fromkeys(seconds, 0.0), []
         for pieces, volume, poses, _ in loaded:
             world.load_object(pieces, volume, spec.sim.density)
-            for name, run in (("extract", lambda p: run_trials(world, p)),
-                              ("label", lambda p: run_trials(world, p, label=True)),
-                              ("baseline", lambda p: baseline(world, p))):
+            for name in names:
                 start = time.perf_counter()
-                batch = run(poses)
+                batch = protocols[name](poses)
                 spent[name] += time.perf_counter() - start
                 if name == "extract":
                     extracted.append(np.stack([batch.outcome, batch.steps]))
@@ -95,6 +100,12 @@ def time_protocols(spec: JobSpec, loaded: list) -> tuple[dict[str, list[float]],
     return seconds, first
 
 
+def protocol_rates(seconds: dict[str, list[float]], trials: int) -> dict[str, float]:
+    """Trials/s/core of each protocol: ``trials`` over the median of its timings."""
+    return {f"{name}_trials_per_s_per_core": round(trials / float(np.median(values)), 1)
+            for name, values in seconds.items()}
+
+
 def main() -> dict:
     spec = JobSpec(grasps_per_object=GRASPS)
     with tempfile.TemporaryDirectory() as cache:
@@ -102,7 +113,7 @@ def main() -> dict:
         seconds, extracted = time_protocols(spec, loaded)
     trials = extracted.shape[1]
     timings = {name: float(np.median(values)) for name, values in seconds.items()}
-    rates = {f"{k}_trials_per_s_per_core": round(trials / v, 1) for k, v in timings.items()}
+    rates = protocol_rates(seconds, trials)
     spread = {k: [round(trials / max(v), 1), round(trials / min(v), 1)] for k, v in seconds.items()}
     held, closing_steps = int(np.sum(extracted[0] == 0)), int(np.sum(extracted[1]))
     out = {"benchmark": "sim", "date": date.today().isoformat(),
