@@ -109,6 +109,20 @@ def test_the_one_object_is_made_of_the_real_geometry_and_reproduces_every_unique
     assert report["chamfer_patches"] > 0 and report["chamfer_max_mm"] < 1.0  # 750 stored points per grasp
 
 
+def test_a_range_of_patches_read_alone_equals_that_range_of_the_whole(small_dataset):
+    ds = open_dataset(small_dataset[1])
+    whole = read_patches(ds)
+    for start, stop in ((0, 1), (3, 11), (len(whole) - 5, len(whole)), (0, len(whole))):
+        part = read_patches(ds, start, stop)
+        assert len(part) == stop - start
+        assert np.array_equal(part.representative, whole.representative[start:stop])
+        assert np.array_equal(part.source_volume, whole.source_volume[start:stop])
+        for k in range(start, stop):
+            assert np.array_equal(part.points[k - start], whole.points[k])
+            assert len(part.pieces[k - start]) == len(whole.pieces[k])
+            assert all(np.array_equal(a, b) for a, b in zip(part.pieces[k - start], whole.pieces[k], strict=True))
+
+
 def source_surface(spec, out, obj: int) -> np.ndarray:
     from onepiece_dist.service.results import part_key
     from onepiece_dist.store import PartStore

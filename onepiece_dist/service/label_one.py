@@ -10,7 +10,6 @@ points come from the patch's real surface points. Results go to ``assembled/gras
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import json
 import os
@@ -93,31 +92,26 @@ def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) ->
     return LabelShardResult(index, "ok", task.part_key, grasps, reused=reused, seconds=time.perf_counter() - start)
 
 
-@functools.lru_cache(maxsize=1)
-def one_object(path: str, label_key: str) -> tuple[np.ndarray, Patches]:
-    """Placements (U, 4, 4) and patches of the one object at ``path``, read once per worker process for all the
-    shards it labels (``label_key`` names the assembly, so a new one is read anew)."""
-    reader = DatasetReader(path)
-    return reader["assembled/placement"].astype(np.float64), read_patches(reader)
-
-
 def label_patches(spec: JobSpec, task: LabelTask) -> dict[str, np.ndarray]:
     """The label protocol around each patch of ``task`` (``spec.sim.perturbations_per_patch`` perturbed poses
-    besides the placement): their labelled grasps in the layout of ``assembled/grasps/``."""
+    besides the placement): their labelled grasps in the layout of ``assembled/grasps/``. Reads only the task's
+    patches and placements."""
     from onepiece_dist.sim.trials import LabelNoise, run_trials
     from onepiece_dist.sim.world import process_world
 
-    placements, patch_set = one_object(task.dataset, task.label_key)
+    reader = DatasetReader(task.dataset)
+    placements = reader.array("assembled/placement")[task.start:task.stop].astype(np.float64)
+    patch_set = read_patches(reader, task.start, task.stop)
     world, noise = process_world(spec.gripper), LabelNoise.from_spec(spec.sim)
     rows: dict[str, list] = {k: [] for k in GRASP_ROWS}
-    for k in range(task.start, task.stop):
-        if not patch_set.pieces[k]:
+    for local, k in enumerate(range(task.start, task.stop)):
+        if not patch_set.pieces[local]:
             continue  # nothing of the source object in the patch box: nothing to grasp
-        world.load_object(patch_set.pieces[k], float(patch_set.source_volume[k]), spec.sim.density)
+        world.load_object(patch_set.pieces[local], float(patch_set.source_volume[local]), spec.sim.density)
         rng = object_rng(f"{k:032x}", spec.seed, stream=2)
         poses = perturbed_poses(spec.sim.perturbations_per_patch, rng)
         batch = run_trials(world, poses, label=True, noise=noise, rng=rng)
-        _collect(rows, k, placements[k], patch_cloud(patch_set, k, spec), poses, batch, spec, rng)
+        _collect(rows, k, placements[local], patch_cloud(patch_set, local, spec), poses, batch, spec, rng)
     return grasp_arrays({name: np.concatenate(values) if values else _empty(name, spec)
                          for name, values in rows.items()})
 
