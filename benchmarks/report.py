@@ -221,7 +221,20 @@ def end_to_end_section(r: dict, sim: dict | None = None) -> list[str]:
                   f"protocol's {lab['protocol_trials_per_s_per_core']} trials/s/core "
                   + (f"timed in this run ({_rounds(r['protocol'], 'label')})" if "protocol" in r else "from bench_sim")
                   + f" (target {target}: {met(ratio, target)})."]
+    if "protocol" in r and lab:
+        lines += ["", _physics_floor(r, lab, budget_target)]
     return lines
+
+
+def _physics_floor(r: dict, lab: dict, budget_target: float) -> str:
+    """The extract and label stages' seconds on the job's cores if they ran at the protocol rates of this run."""
+    p, cores = r["protocol"], r["workers"]
+    extract = r["objects"] * r["candidates_per_object"] / (cores * p["extract_trials_per_s_per_core"])
+    label = (lab["trials_one_object"] + lab["trials_transfer"]) / (cores * p["label_trials_per_s_per_core"])
+    return (f"The physics alone, at this run's protocol rates on {cores} cores, takes {extract:.0f} s to extract "
+            f"and {label:.0f} s to label: {extract + label:.0f} s before dedup and assembly, against the target of "
+            f"{budget_target} s for all four stages ({'within' if extract + label < budget_target else 'above'} "
+            "it).")
 
 
 def _rounds(protocol: dict, name: str) -> str:

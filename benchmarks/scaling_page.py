@@ -36,13 +36,24 @@ def scaling_section(r: dict) -> list[str]:
                       f"{speedup}).")
     lines += _cpu_lines(r)
     if "repeats" in r:
+        adjusted = "speed-adjusted " if r.get("speed_adjusted") else ""
         lines += ["", f"Medians over {r['repeats']} pairs of runs (the table shows the pair with the median "
-                  f"efficiency). Extraction efficiency per pair: {_percents(r['efficiency_per_pair'])}; label "
-                  f"speed-up per pair: {', '.join(f'{x:.2f}x' for x in r['label_speedup_per_pair'])}."]
+                  f"efficiency). {adjusted.capitalize()}extraction efficiency per pair: "
+                  f"{_percents(r['efficiency_per_pair'])}; {adjusted}label speed-up per pair: "
+                  f"{', '.join(f'{x:.2f}x' for x in r['label_speedup_per_pair'])}."]
+        if r.get("speed_adjusted"):
+            lines[-1] += (f" Each run is bracketed by a speed probe (the extract protocol on {r['probe']['objects']}, "
+                          "one core, nothing else running); a pair's ratio is adjusted by (probe speed during the "
+                          "1-worker run) / (during the 2-worker run): "
+                          f"{', '.join(f'{d:.3f}' for d in r['speed_ratio_per_pair'])}. Unadjusted: efficiency "
+                          f"{_percents(r['raw_efficiency_per_pair'])}, label speed-up "
+                          f"{', '.join(f'{x:.2f}x' for x in r['raw_label_speedup_per_pair'])}.")
         if max(r["efficiency_per_pair"]) > 1 or max(r["label_speedup_per_pair"]) > 2:
             lines[-1] += (" A pair above 100% efficiency (or 2x) is not possible for the service alone: this "
-                          "machine's CPU speed changed between the two runs of that pair, so one run is not a "
-                          "measurement of the service, and neither is a median that depends on such pairs.")
+                          "machine's CPU speed changed between the two runs of that pair"
+                          + (" in a way the probes did not see" if r.get("speed_adjusted") else "")
+                          + ", so one run is not a measurement of the service, and neither is a median that depends "
+                          "on such pairs.")
     return lines
 
 

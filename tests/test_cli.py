@@ -24,7 +24,8 @@ def test_run_writes_a_dataset_and_prints_its_path(tmp_path):
     spec = tmp_path / "job.yaml"
     spec.write_text("grasps_per_object: 12\nsampler:\n  surface_points: 2000\nstages: [ingest, extract, dedup]\n")
     out_path = tmp_path / "d.zarr"
-    result = runner.invoke(app, ["run", str(spec), "--objects", "primitives[0:2]", "--out", str(out_path)])
+    result = runner.invoke(app, ["run", str(spec), "--objects", "primitives[0:2]", "--out", str(out_path),
+                                 "--in-process"])  # runs on an embedded Ray: test_service, and the test below
     assert result.exit_code == 0, result.output
     assert result.stdout.strip().splitlines()[-1] == str(out_path)
     summary = json.loads(runner.invoke(app, ["inspect", str(out_path), "--json"]).stdout)
