@@ -35,6 +35,12 @@ def scaling_section(r: dict) -> list[str]:
                       f"({r['runs'][0]['patches']:,} patches; target {r['target_label_speedup']}x: "
                       f"{speedup}).")
     lines += _cpu_lines(r)
+    one, two = r["runs"][0], r["runs"][-1]
+    lines += ["", "Time inside extract_object, summed over the workers, for the same objects: "
+              f"{one['worker_seconds']} s with {one['workers']} worker, "
+              f"{two['worker_seconds']} s with {two['workers']} "
+              f"({two['worker_seconds'] / one['worker_seconds'] - 1:+.0%}: the work itself slows when every core is "
+              "busy, beside the service's own processes and the other worker's VHACD children)."]
     if "repeats" in r:
         adjusted = "speed-adjusted " if r.get("speed_adjusted") else ""
         lines += ["", f"Medians over {r['repeats']} pairs of runs (the table shows the pair with the median "
