@@ -222,6 +222,24 @@ def test_every_socket_of_our_ray_is_on_loopback(ray_session, record_figure):
     record_figure(f"{len(listening)} listening sockets, {len(exposed)} beyond loopback")
 
 
+@pytest.mark.ray
+def test_an_embedded_ray_starts_in_a_process_that_first_talked_to_a_cluster(tmp_path):
+    """Ray reads its auth mode once per process: a cluster call (which sets token auth) before an embedded run
+    used to leave a GCS that asks for tokens and a driver that sends none (InvalidAuthToken, then a failed start)."""
+    import subprocess
+    import sys
+
+    script = ("import ray\nfrom typer.testing import CliRunner\nfrom onepiece_dist.cli import app\n"
+              "from onepiece_dist.service.ray_env import connect\n"
+              f"out = {str(tmp_path / 'x.zarr')!r}\n"
+              "first = CliRunner().invoke(app, ['run', '--address', '127.0.0.1:9', '--out', out])\n"
+              "assert first.exit_code == 3, first.output\n"
+              "connect(None, num_cpus=1)\nprint(ray.get(ray.remote(lambda: 7).remote()))\nray.shutdown()\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("RAY_AUTH_MODE", "RAY_ADDRESS")}
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0 and done.stdout.strip() == "7", done.stderr[-2000:]
+
+
 def test_each_later_stage_runs_on_its_own_on_a_committed_dataset(spec_factory, tmp_path):
     spec = job_spec(spec_factory, tmp_path, "stages", objects="primitives[0:2]", grasps=8)
     run_local(spec)  # ingest, extract, dedup

@@ -3,8 +3,11 @@
 * Every Ray we start binds to loopback: with ``RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0`` Ray takes 127.0.0.1 as the
   node address, and its GCS, raylet, agents and workers listen there only (Ray 2.60 otherwise resolves the
   machine's address and binds some servers to all interfaces, even when told 127.0.0.1).
-* Auth: token authentication: Ray turns it on for an embedded Ray by itself; the cluster script and our cluster
-  clients set ``RAY_AUTH_MODE=token`` explicitly. The token file is made readable by its owner only.
+* Auth: token authentication, decided here, not left to ``ray.init``: the embedded Ray, the cluster script and our
+  cluster clients all run with ``RAY_AUTH_MODE=token`` (unless the user set it), and :func:`connect` makes the
+  process's cached Ray config read it again before starting or joining (Ray reads it once per process: a process
+  that first talked to a cluster and then started an embedded Ray got a GCS asking for tokens and a driver sending
+  none). The token file is made readable by its owner only.
 * The dashboard is off for the embedded Ray; a cluster head started by ``cluster/local_cluster.sh`` serves it on
   127.0.0.1 for the Jobs API.
 * Embedded means embedded: without an address we start a fresh Ray of our own (``address="local"``), never
@@ -21,6 +24,7 @@ from pathlib import Path
 NAMESPACE = "onepiece"
 LOOPBACK_ENV = {"RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_USAGE_STATS_ENABLED": "0"}
 CLUSTER_ENV = {"RAY_AUTH_MODE": "token"}  # clients of a cluster: its nodes run with token auth
+EMBEDDED_ENV = {"RAY_AUTH_MODE": "token"}  # what ray.init would turn on by itself, decided here instead
 TOKEN_FILE = Path.home() / ".ray" / "auth_token"
 REACH_TIMEOUT_S = 3.0
 
@@ -43,11 +47,14 @@ def secure_token_file(path: Path = TOKEN_FILE) -> None:
 
 def connect(address: str | None = None, num_cpus: int | None = None) -> None:
     """Join the cluster at ``address`` ('auto' inside a Ray job), or start an embedded loopback-only Ray."""
-    loopback_environment(cluster_client=bool(address))
     import ray
 
     if ray.is_initialized():
         return
+    loopback_environment(cluster_client=bool(address))
+    for key, value in EMBEDDED_ENV.items():
+        os.environ.setdefault(key, value)
+    refresh_ray_config()
     if address:
         check_reachable(address)
         ray.init(address=address, namespace=NAMESPACE, log_to_driver=False, configure_logging=False)
@@ -55,6 +62,14 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> None:
         ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, namespace=NAMESPACE,
                  log_to_driver=False, configure_logging=False)
     secure_token_file()
+
+
+def refresh_ray_config() -> None:
+    """Make this process's cached Ray config read the environment again (``RAY_AUTH_MODE`` above all), as
+    ``ray.init`` does when it turns token auth on by itself; only before this process starts or joins a Ray."""
+    from ray._raylet import Config
+
+    Config.initialize("")
 
 
 def check_reachable(address: str, timeout: float = REACH_TIMEOUT_S) -> None:
