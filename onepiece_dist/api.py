@@ -167,7 +167,7 @@ class Client:
         if self._jobs_api is None:
             from onepiece_dist.service.ray_env import loopback_environment
 
-            loopback_environment(cluster_client=True)  # token auth, set before Ray reads it
+            loopback_environment()  # token auth, set before Ray reads it
             from ray.exceptions import AuthenticationError
             from ray.job_submission import JobSubmissionClient
 

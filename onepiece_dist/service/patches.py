@@ -52,7 +52,7 @@ class Patches:
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray]) -> Patches:
         pieces = _split(arrays["piece_vertices"], arrays["piece_vertex_count"])
-        starts = np.concatenate([[0], np.cumsum(arrays["patch_piece_count"])]).astype(np.int64)
+        starts = _offsets(arrays["patch_piece_count"])
         return cls(np.asarray(arrays["representative"], dtype=np.int64),
                    [pieces[a:b] for a, b in zip(starts[:-1], starts[1:], strict=True)],
                    _split(arrays["patch_points"], arrays["patch_point_count"]),
@@ -66,10 +66,6 @@ def _stack(rows: list[np.ndarray], dtype) -> np.ndarray:
 
 def _split(rows: np.ndarray, counts: np.ndarray) -> list[np.ndarray]:
     return np.split(np.asarray(rows, dtype=np.float64), np.cumsum(counts)[:-1]) if len(counts) else []
-
-
-PATCH_ARRAYS = ("representative", "patch_piece_count", "piece_vertex_count", "piece_vertices", "patch_point_count",
-                "patch_points", "source_volume")
 
 
 def read_patches(reader: DatasetReader, start: int = 0, stop: int | None = None) -> Patches:

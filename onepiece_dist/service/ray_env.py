@@ -23,16 +23,15 @@ from pathlib import Path
 
 NAMESPACE = "onepiece"
 LOOPBACK_ENV = {"RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_USAGE_STATS_ENABLED": "0"}
-CLUSTER_ENV = {"RAY_AUTH_MODE": "token"}  # clients of a cluster: its nodes run with token auth
-EMBEDDED_ENV = {"RAY_AUTH_MODE": "token"}  # what ray.init would turn on by itself, decided here instead
+AUTH_ENV = {"RAY_AUTH_MODE": "token"}  # every Ray we start or join: decided here, not left to ray.init
 TOKEN_FILE = Path.home() / ".ray" / "auth_token"
 REACH_TIMEOUT_S = 3.0
 
 
-def loopback_environment(cluster_client: bool = False) -> None:
-    """Make Ray processes started from here (and their children) take 127.0.0.1 as the node address; as the
-    client of a cluster, also use token auth."""
-    for key, value in {**LOOPBACK_ENV, **(CLUSTER_ENV if cluster_client else {})}.items():
+def loopback_environment() -> None:
+    """Make Ray processes started from here (and their children) take 127.0.0.1 as the node address, and use
+    token auth (unless the environment already says otherwise)."""
+    for key, value in {**LOOPBACK_ENV, **AUTH_ENV}.items():
         os.environ.setdefault(key, value)
     import ray._private.ray_constants as constants
 
@@ -51,9 +50,7 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> None:
 
     if ray.is_initialized():
         return
-    loopback_environment(cluster_client=bool(address))
-    for key, value in EMBEDDED_ENV.items():
-        os.environ.setdefault(key, value)
+    loopback_environment()
     refresh_ray_config()
     if address:
         check_reachable(address)
