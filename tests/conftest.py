@@ -51,6 +51,25 @@ def spec_factory(tmp_path):
     return make
 
 
+@pytest.fixture(scope="session")
+def fault_free(tmp_path_factory):
+    """``fault_free(spec)``: the folder of ``spec``'s dataset run in-process, without faults, once per test session
+    for each spec (its output left out); the reference that the faulted runs of that spec must equal."""
+    from onepiece_dist.service.local import run_local
+
+    made: dict[str, str] = {}
+
+    def reference(spec) -> str:
+        key = spec.model_dump_json(exclude={"output"})
+        if key not in made:
+            output = tmp_path_factory.mktemp("fault-free") / "reference.zarr"
+            run_local(spec.model_copy(update={"output": str(output)}))
+            made[key] = str(output)
+        return made[key]
+
+    return reference
+
+
 @pytest.fixture(scope="module")
 def ray_session():
     """An embedded, loopback-only Ray shared by a test module."""

@@ -31,7 +31,7 @@ def spec_at(spec_factory, tmp_path, name, objects="primitives[0:6]"):
 
 
 def test_disk_full_fails_clearly_commits_nothing_partial_and_resume_gives_the_same_dataset(
-        spec_factory, tmp_path, monkeypatch, record_figure):
+        spec_factory, tmp_path, monkeypatch, fault_free, record_figure):
     spec = spec_at(spec_factory, tmp_path, "full")
     original, writes = parts_module.write_array, {"n": 0}
 
@@ -51,16 +51,14 @@ def test_disk_full_fails_clearly_commits_nothing_partial_and_resume_gives_the_sa
     monkeypatch.setattr(parts_module, "write_array", original)  # space freed
     resumed = run_local(spec)
     assert resumed.progress.objects_reused == 2
-    clean = spec_at(spec_factory, tmp_path, "clean")
-    run_local(clean)
-    assert same(spec.output, clean.output)
+    assert same(spec.output, fault_free(spec))
     record_figure(f"{committed_before} parts committed before ENOSPC, 0 temporaries, "
                   f"{resumed.progress.objects_reused} reused on resume, identical dataset")
 
 
 @pytest.mark.ray
 def test_killing_the_central_actor_mid_job_rebuilds_it_from_the_store(ray_session, spec_factory, tmp_path,
-                                                                      record_figure):
+                                                                      fault_free, record_figure):
     ray = ray_session
     spec = spec_at(spec_factory, tmp_path, "dedupkill", objects="primitives[0:8]")
     job_id = default_job_id(spec)
@@ -70,9 +68,7 @@ def test_killing_the_central_actor_mid_job_rebuilds_it_from_the_store(ray_sessio
     ray.kill(ray.get_actor(central_name(job_id), namespace="onepiece"), no_restart=False)
     final = handle.wait(timeout=300)
     assert final.state == "succeeded", handle.error
-    clean = spec_at(spec_factory, tmp_path, "dedupclean", objects="primitives[0:8]")
-    run_local(clean)
-    assert same(spec.output, clean.output)
+    assert same(spec.output, fault_free(spec))
     record_figure(f"central actor killed after >= 2 objects; {final.retries} re-runs, identical dataset")
 
 
@@ -191,7 +187,7 @@ def test_two_different_jobs_at_once_equal_their_serial_runs(ray_session, spec_fa
 
 @pytest.mark.ray
 def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_session, spec_factory, tmp_path,
-                                                                      record_figure):
+                                                                      fault_free, record_figure):
     ray = ray_session
     spec = spec_at(spec_factory, tmp_path, "killed3", objects="primitives[0:8]")
     job_id = default_job_id(spec)
@@ -210,9 +206,7 @@ def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_sessio
     final = handle.wait(timeout=300)
     assert final.state == "succeeded" and len(recoveries) >= 2 and final.retries >= len(recoveries)
     assert max(recoveries) < 60  # bounded recovery: the next object lands within a minute of each kill
-    clean = spec_at(spec_factory, tmp_path, "clean3", objects="primitives[0:8]")
-    run_local(clean)
-    assert same(spec.output, clean.output)
+    assert same(spec.output, fault_free(spec))
     print(f"kills={len(recoveries)} re-executions={final.retries} recovery_s={[round(r, 2) for r in recoveries]}")
     record_figure(f"{len(recoveries)} kills, {final.retries} re-runs, next object "
                   f"{min(recoveries):.2f}-{max(recoveries):.2f} s after each kill, identical dataset")

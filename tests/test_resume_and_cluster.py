@@ -13,7 +13,6 @@ import psutil
 import pytest
 
 from onepiece_dist.api import Client, read_status
-from onepiece_dist.service.local import run_local
 from onepiece_dist.service.status import status_path
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
@@ -21,6 +20,7 @@ from onepiece_dist.store import PartStore, open_dataset
 ROOT = Path(__file__).resolve().parents[1]
 ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
 SMALL = ["--objects", "primitives[0:8]", "--grasps", "64", "--stages", "ingest,extract,dedup"]
+SMALL_SPEC = JobSpec(objects="primitives[0:8]", grasps_per_object=64, stages=("ingest", "extract", "dedup"))
 
 
 def wait_for(predicate, timeout: float, what: str):
@@ -46,7 +46,7 @@ def objects_done(output: Path) -> int:
 
 @pytest.mark.ray
 @pytest.mark.slow
-def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, record_figure):
+def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, fault_free, record_figure):
     out = tmp_path / "ds.zarr"
     before = ray_daemons()
     driver = subprocess.Popen([*ONEPIECE, "run", *SMALL, "--out", str(out)], cwd=tmp_path, start_new_session=True,
@@ -63,10 +63,7 @@ def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, r
     status = read_status(out)
     assert status.state == "succeeded" and status.progress.objects_reused >= committed
     assert not list(parts.folder.glob(".tmp-*"))  # no stray temporaries
-    reference = JobSpec(objects="primitives[0:8]", grasps_per_object=64, output=str(tmp_path / "ref.zarr"),
-                        stages=("ingest", "extract", "dedup"))
-    run_local(reference)
-    a, b = open_dataset(out), open_dataset(reference.output)
+    a, b = open_dataset(out), open_dataset(fault_free(SMALL_SPEC))
     for name in ("grasps/code", "grasps/pose", "unique/code", "unique/count"):
         assert np.array_equal(a[name], b[name]), name
     assert ray_daemons() <= before  # the killed driver's embedded Ray left no orphan daemons
@@ -221,7 +218,7 @@ def worker_node_raylet(agent_port: int) -> psutil.Process:
 
 @pytest.mark.cluster
 @pytest.mark.slow
-def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, record_figure):
+def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, fault_free, record_figure):
     out = tmp_path / "lost_node.zarr"
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}:{os.environ.get('PATH', '')}"}
     submitted = subprocess.run([*ONEPIECE, "submit", "--address", local_cluster, *SMALL, "--out", str(out)],
@@ -235,11 +232,8 @@ def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, 
     assert waited.returncode == 0, waited.stderr[-2000:]
     status = json.loads(waited.stdout)
     assert status["state"] == "succeeded" and status["progress"]["objects_done"] == 8 and done_at_kill < 8
-    reference = JobSpec(objects="primitives[0:8]", grasps_per_object=64, output=str(tmp_path / "ref.zarr"),
-                        stages=("ingest", "extract", "dedup"))
-    run_local(reference)
     for name in ("grasps/code", "unique/code", "unique/count"):
-        assert np.array_equal(open_dataset(out)[name], open_dataset(reference.output)[name]), name
+        assert np.array_equal(open_dataset(out)[name], open_dataset(fault_free(SMALL_SPEC))[name]), name
     record_figure(f"raylet of 1 of 2 worker nodes SIGKILLed after {done_at_kill} of 8 objects; job succeeded, "
                   f"{status['retries']} re-runs, identical codes")
 
@@ -248,7 +242,7 @@ def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, 
 @pytest.mark.slow
 def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_path, record_figure):
     out = tmp_path / "lost.zarr"
-    slow = ["--objects", "primitives[0:8]", "--grasps", "1500", "--stages", "ingest,extract,dedup"]  # ~30 s of work
+    slow = ["--objects", "primitives[0:8]", "--grasps", "1000", "--stages", "ingest,extract,dedup"]  # ~25 s of work
     job = subprocess.Popen([*ONEPIECE, "run", *slow, "--out", str(out)], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
     try:
