@@ -138,7 +138,7 @@ def label_profile() -> dict:
     prof.disable()
     total = time.perf_counter() - start
     patches = sum(task.stop - task.start for task in tasks[1:4])
-    trials = patches * (1 + spec.sim.perturbations_per_patch) * spec.sim.label_trials
+    trials = patches * spec.sim.label_trials_per_patch()
     physics = _own_time(pstats.Stats(prof).stats, "sim/trials.py")
     protocol = json.loads((HERE / "results" / "sim.json").read_text())["label_trials_per_s_per_core"]
     return {"patches": patches, "trials_per_patch": trials // patches, "seconds": round(total, 3),

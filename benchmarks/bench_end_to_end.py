@@ -33,6 +33,7 @@ from concurrent.futures import ProcessPoolExecutor
 from datetime import date
 from pathlib import Path
 
+import numpy as np
 import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -50,6 +51,7 @@ HERE = Path(__file__).resolve().parent
 GIB = 2**30
 WORKERS = os.cpu_count() or 1  # one extraction worker per core (the job's default)
 PROTOCOL_EVERY, PROTOCOL_GRASPS, PROTOCOL_REPEATS = 8, 64, 2  # objects, candidates each, timings before and after
+PATCH_RANGES, PATCHES_PER_RANGE = 8, 16  # the label protocol on the job's own patches: ranges spread over them
 
 
 def stage_windows(start: float, timings: dict[str, float]) -> dict[str, tuple[float, float]]:
@@ -107,6 +109,10 @@ def main() -> dict:
         if status.labels is not None and cores.get("label"):
             result["label"] = label_rate(status.labels, cores["label"],
                                          result["protocol"]["label_trials_per_s_per_core"])
+            patches = protocols.time_patches(spec.output, result["patches"])
+            result["label"]["patch_protocol"] = patches
+            result["label"]["rate_over_patch_protocol"] = round(
+                result["label"]["trials_per_s_per_core"] / patches["label_trials_per_s_per_core"], 3)
     finally:
         ray.shutdown()
         shutil.rmtree(folder, ignore_errors=True)
@@ -134,6 +140,20 @@ class ProtocolClock:
                 timed_protocols, self.spec.model_dump_json(), self.refs, str(self.cache)).result()
         self.rounds.append(seconds)
 
+    def time_patches(self, dataset: str, patches: int) -> dict:
+        """The label protocol on the finished job's own patches (PATCH_RANGES ranges of PATCHES_PER_RANGE spread
+        over its ``patches``), one core, PROTOCOL_REPEATS times; compared with the whole-object label protocol of
+        the last round (timed just before)."""
+        ranges = patch_ranges(patches)
+        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+            seconds = pool.submit(timed_patch_protocol, self.spec.model_dump_json(), dataset, ranges).result()
+        trials = sum(stop - start for start, stop in ranges) * self.spec.sim.label_trials_per_patch()
+        rate = trials / sorted(seconds)[len(seconds) // 2]
+        beside = protocol_rates(self.rounds[-1], self.trials)["label_trials_per_s_per_core"]
+        return {"patches": sum(stop - start for start, stop in ranges), "trials": trials,
+                "repeats": PROTOCOL_REPEATS, "label_trials_per_s_per_core": round(rate, 1),
+                "whole_object_label_trials_per_s_per_core": beside, "over_whole_objects": round(rate / beside, 3)}
+
     def summary(self) -> dict:
         """Rates from the median of every timing, and per round (before the job, after it)."""
         every = {name: [s for seconds in self.rounds for s in seconds[name]] for name in self.rounds[0]}
@@ -148,6 +168,28 @@ def timed_protocols(spec_json: str, refs: list, cache: str) -> tuple[dict[str, l
     loaded = load_all(spec, Path(cache), refs, PROTOCOL_GRASPS)
     seconds, extracted = time_protocols(spec, loaded, PROTOCOL_REPEATS, ("extract", "label"))
     return seconds, int(extracted.shape[1]), len(loaded)
+
+
+def patch_ranges(patches: int) -> list[tuple[int, int]]:
+    """PATCH_RANGES [start, stop) ranges of PATCHES_PER_RANGE patches, evenly spread over ``patches``."""
+    starts = np.linspace(0, max(patches - PATCHES_PER_RANGE, 0), PATCH_RANGES).astype(int)
+    return [(int(a), int(min(a + PATCHES_PER_RANGE, patches))) for a in np.unique(starts)]
+
+
+def timed_patch_protocol(spec_json: str, dataset: str, ranges: list[tuple[int, int]]) -> list[float]:
+    """(In the child process) seconds per repeat of labelling the patches of ``ranges`` as the label stage does."""
+    from onepiece_dist.service.label_one import label_patches
+    from onepiece_dist.service.results import LabelTask
+
+    spec = JobSpec.model_validate_json(spec_json)
+    tasks = [LabelTask(start, stop, dataset, "protocol") for start, stop in ranges]
+    seconds = []
+    for _ in range(PROTOCOL_REPEATS):
+        start = time.perf_counter()
+        for task in tasks:
+            label_patches(spec, task)
+        seconds.append(time.perf_counter() - start)
+    return seconds
 
 
 def label_rate(labels, core_seconds: float, protocol: float) -> dict:

@@ -220,10 +220,24 @@ def end_to_end_section(r: dict, sim: dict | None = None) -> list[str]:
                   + f", {lab['trials_per_s_per_core']} trials per core-second of the stage: {ratio:.2f} x the label "
                   f"protocol's {lab['protocol_trials_per_s_per_core']} trials/s/core "
                   + (f"timed in this run ({_rounds(r['protocol'], 'label')})" if "protocol" in r else "from bench_sim")
-                  + f" (target {target}: {met(ratio, target)})."]
+                  + f" (target {target}: {met(ratio, target)})." + _patch_protocol(lab)]
     if "protocol" in r and lab:
         lines += ["", _physics_floor(r, lab, budget_target)]
     return lines
+
+
+def _patch_protocol(lab: dict) -> str:
+    """What the label protocol costs on the job's own patches, and the stage against that rate."""
+    p = lab.get("patch_protocol")
+    if not p:
+        return ""
+    return (f" The same protocol on the job's own patches ({p['patches']} patches spread over the one object, "
+            f"{p['trials']} trials, one core, timed after the job): {p['label_trials_per_s_per_core']} trials/s/core, "
+            f"{p['over_whole_objects']:.2f} x the whole-object protocol timed just before it "
+            f"({p['whole_object_label_trials_per_s_per_core']})"
+            + (": a trial on a patch costs more physics than one on a whole object" if p["over_whole_objects"] < 1
+               else "") + f". The stage runs at {lab['rate_over_patch_protocol']:.2f} x the patch rate: what the "
+            "pipeline around the trials and the service's other processes on the same cores cost.")
 
 
 def _physics_floor(r: dict, lab: dict, budget_target: float) -> str:

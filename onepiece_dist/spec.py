@@ -134,6 +134,10 @@ class SimSpec(_Frozen):
     transfer_grasps: int = Field(5, ge=2, le=64, description="Source grasps labelled per sampled code (its "
                                  "representative and the first others).")
 
+    def label_trials_per_patch(self) -> int:
+        """Label trials around one patch of the one object: its placement and each perturbed pose, K each."""
+        return (1 + self.perturbations_per_patch) * self.label_trials
+
 
 class ViewSpec(_Frozen):
     """Depth views rendered in pybullet and partial-view crops (docs/views.md)."""

@@ -96,7 +96,7 @@ def _report(spec: JobSpec, grasps: int, codes, classes, layout, matches, intrusi
             patches: Patches) -> AssemblyReport:
     size = np.ptp(layout.bounding_box, axis=0)
     face_area = sum(float(np.prod(size[[i for i in range(3) if i != f]])) for f in range(3))
-    trials_per_patch = (1 + spec.sim.perturbations_per_patch) * spec.sim.label_trials
+    trials_per_patch = spec.sim.label_trials_per_patch()
     finite = chamfer[np.isfinite(chamfer)]
     return AssemblyReport(
         unique_codes=int(len(codes)),

@@ -131,7 +131,7 @@ def write_labels(spec: JobSpec, path: str | os.PathLike, tasks: list[LabelTask],
     arrays = {name: np.concatenate([shard[name] for shard in shards]) if shards else _empty(name, spec)
               for name in GRASP_ROWS}
     patches = tasks[-1].stop if tasks else 0
-    summary = LabelReport(label_trials=int(patches * (1 + spec.sim.perturbations_per_patch) * spec.sim.label_trials),
+    summary = LabelReport(label_trials=int(patches * spec.sim.label_trials_per_patch()),
                           labelled_grasps=int(len(arrays["patch"])),
                           success_rate=float(np.mean(arrays["success"])) if len(arrays["patch"]) else 0.0)
     write_group(path, "assembled/grasps", grasp_arrays(arrays), {"assembly_labels": summary.model_dump(mode="json")})
