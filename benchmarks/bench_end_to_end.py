@@ -15,7 +15,9 @@ candidates/s/core (candidates / (extract seconds x cores)) on 2 cores, and the l
 protocol's trials/s/core (label trials / the stage's core-seconds). The protocols (bench_sim's extract and label
 trials, one core, nothing else running) are timed in the same run, on every eighth of the job's objects, before
 and after the job: this machine's speed drifts by a fifth between runs, so a rate measured on another day is no
-yardstick. Writes benchmarks/results/bench_end_to_end.json.
+yardstick. After the job, the label protocol is also timed on the job's own patches (ranges spread over the one
+object, one core): a trial on a patch (a compound of clipped convex pieces) costs more physics than one on a whole
+object, so the stage's rate is given against both. Writes benchmarks/results/bench_end_to_end.json.
 """
 
 from __future__ import annotations
