@@ -54,6 +54,7 @@ GIB = 2**30
 WORKERS = os.cpu_count() or 1  # one extraction worker per core (the job's default)
 PROTOCOL_EVERY, PROTOCOL_GRASPS, PROTOCOL_REPEATS = 8, 64, 2  # objects, candidates each, timings before and after
 PATCH_RANGES, PATCHES_PER_RANGE = 8, 16  # the label protocol on the job's own patches: ranges spread over them
+CHILD_START_S = 20.0  # two protocol children start timing together this long after they are started
 
 
 def stage_windows(start: float, timings: dict[str, float]) -> dict[str, tuple[float, float]]:
@@ -106,6 +107,10 @@ def main() -> dict:
         ray.shutdown()
         protocols.time()
         result["protocol"] = protocols.summary()
+        result["protocol"]["two_at_once"] = protocols.time_two_at_once()
+        result["extract_over_protocol_two_at_once"] = round(
+            result["extract_candidates_per_s_per_core"]
+            / result["protocol"]["two_at_once"]["extract_trials_per_s_per_core"], 3)
         result["extract_over_protocol"] = round(result["extract_candidates_per_s_per_core"]
                                                 / result["protocol"]["extract_trials_per_s_per_core"], 3)
         if status.labels is not None and cores.get("label"):
@@ -113,8 +118,10 @@ def main() -> dict:
                                          result["protocol"]["label_trials_per_s_per_core"])
             patches = protocols.time_patches(spec.output, result["patches"])
             result["label"]["patch_protocol"] = patches
-            result["label"]["rate_over_patch_protocol"] = round(
-                result["label"]["trials_per_s_per_core"] / patches["label_trials_per_s_per_core"], 3)
+            rate = result["label"]["trials_per_s_per_core"]
+            result["label"]["rate_over_patch_protocol"] = round(rate / patches["label_trials_per_s_per_core"], 3)
+            result["label"]["rate_over_patch_protocol_two_at_once"] = round(
+                rate / patches["two_at_once_label_trials_per_s_per_core"], 3)
     finally:
         ray.shutdown()
         shutil.rmtree(folder, ignore_errors=True)
@@ -137,23 +144,31 @@ class ProtocolClock:
         self.trials = self.loaded = 0
 
     def time(self) -> None:
-        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
-            seconds, self.trials, self.loaded = pool.submit(
-                timed_protocols, self.spec.model_dump_json(), self.refs, str(self.cache)).result()
+        (seconds, self.trials, self.loaded), = in_children(1, timed_protocols, self.spec.model_dump_json(),
+                                                           self.refs, str(self.cache))
         self.rounds.append(seconds)
+
+    def time_two_at_once(self) -> dict:
+        """The protocols in two child processes at once (one per core, as the job's two workers run): trials/s
+        of each core while the other is busy too, and that over the last round's (one core, the other idle)."""
+        copies = in_children(2, timed_protocols, self.spec.model_dump_json(), self.refs, str(self.cache))
+        both = {name: [s for seconds, _, _ in copies for s in seconds[name]] for name in copies[0][0]}
+        rates, alone = protocol_rates(both, self.trials), protocol_rates(self.rounds[-1], self.trials)
+        return {**rates, "over_alone": {name: round(rates[name] / alone[name], 3) for name in rates}}
 
     def time_patches(self, dataset: str, patches: int) -> dict:
         """The label protocol on the finished job's own patches (PATCH_RANGES ranges of PATCHES_PER_RANGE spread
-        over its ``patches``), one core, PROTOCOL_REPEATS times; compared with the whole-object label protocol of
-        the last round (timed just before)."""
-        ranges = patch_ranges(patches)
-        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
-            seconds = pool.submit(timed_patch_protocol, self.spec.model_dump_json(), dataset, ranges).result()
+        over its ``patches``), PROTOCOL_REPEATS times on one core, then in two child processes at once; compared
+        with the whole-object label protocol of the last round (timed just before)."""
+        ranges, spec_json = patch_ranges(patches), self.spec.model_dump_json()
+        alone = in_children(1, timed_patch_protocol, spec_json, dataset, ranges)[0]
+        together = [s for seconds in in_children(2, timed_patch_protocol, spec_json, dataset, ranges) for s in seconds]
         trials = sum(stop - start for start, stop in ranges) * self.spec.sim.label_trials_per_patch()
-        rate = trials / sorted(seconds)[len(seconds) // 2]
+        rate, both = trials / float(np.median(alone)), trials / float(np.median(together))
         beside = protocol_rates(self.rounds[-1], self.trials)["label_trials_per_s_per_core"]
         return {"patches": sum(stop - start for start, stop in ranges), "trials": trials,
                 "repeats": PROTOCOL_REPEATS, "label_trials_per_s_per_core": round(rate, 1),
+                "two_at_once_label_trials_per_s_per_core": round(both, 1),
                 "whole_object_label_trials_per_s_per_core": beside, "over_whole_objects": round(rate / beside, 3)}
 
     def summary(self) -> dict:
@@ -164,10 +179,24 @@ class ProtocolClock:
                 "rounds": [protocol_rates(seconds, self.trials) for seconds in self.rounds]}
 
 
-def timed_protocols(spec_json: str, refs: list, cache: str) -> tuple[dict[str, list[float]], int, int]:
+def in_children(copies: int, timed, *args) -> list:
+    """``timed(*args, start_at)`` in ``copies`` spawned processes at once; each times its work from ``start_at``
+    (wall clock, after its imports and loading), so that the copies overlap. Their results, in order."""
+    with ProcessPoolExecutor(copies, mp_context=multiprocessing.get_context("spawn")) as pool:
+        start_at = time.time() + (CHILD_START_S if copies > 1 else 0.0)
+        return [job.result() for job in [pool.submit(timed, *args, start_at) for _ in range(copies)]]
+
+
+def wait_until(start_at: float) -> None:
+    time.sleep(max(start_at - time.time(), 0.0))
+
+
+def timed_protocols(spec_json: str, refs: list, cache: str, start_at: float) -> tuple[dict[str, list[float]], int,
+                                                                                        int]:
     """(In the child process) seconds of each protocol per repeat, trials per repeat, objects loaded."""
     spec = JobSpec.model_validate_json(spec_json)
     loaded = load_all(spec, Path(cache), refs, PROTOCOL_GRASPS)
+    wait_until(start_at)
     seconds, extracted = time_protocols(spec, loaded, PROTOCOL_REPEATS, ("extract", "label"))
     return seconds, int(extracted.shape[1]), len(loaded)
 
@@ -178,13 +207,14 @@ def patch_ranges(patches: int) -> list[tuple[int, int]]:
     return [(int(a), int(min(a + PATCHES_PER_RANGE, patches))) for a in np.unique(starts)]
 
 
-def timed_patch_protocol(spec_json: str, dataset: str, ranges: list[tuple[int, int]]) -> list[float]:
+def timed_patch_protocol(spec_json: str, dataset: str, ranges: list[tuple[int, int]], start_at: float) -> list[float]:
     """(In the child process) seconds per repeat of labelling the patches of ``ranges`` as the label stage does."""
     from onepiece_dist.service.label_one import label_patches
     from onepiece_dist.service.results import LabelTask
 
     spec = JobSpec.model_validate_json(spec_json)
     tasks = [LabelTask(start, stop, dataset, "protocol") for start, stop in ranges]
+    wait_until(start_at)
     seconds = []
     for _ in range(PROTOCOL_REPEATS):
         start = time.perf_counter()

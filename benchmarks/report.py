@@ -235,9 +235,13 @@ def _patch_protocol(lab: dict) -> str:
             f"{p['trials']} trials, one core, timed after the job): {p['label_trials_per_s_per_core']} trials/s/core, "
             f"{p['over_whole_objects']:.2f} x the whole-object protocol timed just before it "
             f"({p['whole_object_label_trials_per_s_per_core']})"
-            + (": a trial on a patch costs more physics than one on a whole object" if p["over_whole_objects"] < 1
-               else "") + f". The stage runs at {lab['rate_over_patch_protocol']:.2f} x the patch rate: what the "
-            "pipeline around the trials and the service's other processes on the same cores cost.")
+            + (f": a trial on a patch costs {1 / p['over_whole_objects'] - 1:.0%} more physics than one on a whole "
+               "object" if p["over_whole_objects"] < 1 else "")
+            + f". The stage runs at {lab['rate_over_patch_protocol']:.2f} x that patch rate"
+            + (f", and at {lab['rate_over_patch_protocol_two_at_once']:.2f} x the patch rate of two copies at once "
+               f"({p['two_at_once_label_trials_per_s_per_core']} trials/s/core, both cores busy): the rest is what "
+               "the pipeline around the trials and the service's other processes cost"
+               if "rate_over_patch_protocol_two_at_once" in lab else "") + ".")
 
 
 def _physics_floor(r: dict, lab: dict, budget_target: float) -> str:
@@ -264,7 +268,20 @@ def _in_run_ceiling(protocol: dict, rate: float, target: float) -> str:
             f"stage runs at {rate / extract:.0%} of it."
             + (f" The target {target} is above the protocol itself, the physics alone: no overhead cut can reach it "
                "on this machine; cheaper physics would, and changes the codes (bench_sim's extract fidelity below)."
-               if extract < target else ""))
+               if extract < target else "") + _two_at_once(protocol, rate))
+
+
+def _two_at_once(protocol: dict, rate: float) -> str:
+    """The protocols with both cores busy (two copies at once), as the job's two workers run."""
+    both = protocol.get("two_at_once")
+    if not both:
+        return ""
+    return (f" Two copies of the protocols at once, one per core (as the job's two workers run), after the job: "
+            f"extract {both['extract_trials_per_s_per_core']} and label {both['label_trials_per_s_per_core']} "
+            f"trials/s/core, {both['over_alone']['extract_trials_per_s_per_core']:.2f} and "
+            f"{both['over_alone']['label_trials_per_s_per_core']:.2f} x one copy with the other core idle: what "
+            f"this machine gives two busy cores. This stage runs at {rate / both['extract_trials_per_s_per_core']:.0%} "
+            "of the two-at-once extract rate.")
 
 
 def _ceiling(sim: dict | None, rate: float) -> str:
