@@ -214,16 +214,31 @@ def end_to_end_section(r: dict, sim: dict | None = None) -> list[str]:
     lab = r.get("label")
     if lab:
         ratio, target = lab["rate_over_protocol"], lab["target_rate_over_protocol"]
+        verdict = _drift_verdict(lab["trials_per_s_per_core"], r.get("protocol"), "label", target)
         lines += ["", f"Label stage: {lab['trials_one_object']:,} label trials on the one object"
                   + (f" and {lab['trials_transfer']:,} for the label-transfer measure on source objects"
                      if lab["trials_transfer"] else "")
                   + f", {lab['trials_per_s_per_core']} trials per core-second of the stage: {ratio:.2f} x the label "
                   f"protocol's {lab['protocol_trials_per_s_per_core']} trials/s/core "
                   + (f"timed in this run ({_rounds(r['protocol'], 'label')})" if "protocol" in r else "from bench_sim")
-                  + f" (target {target}: {met(ratio, target)})." + _patch_protocol(lab)]
+                  + f" (target {target}: {verdict or met(ratio, target)})." + _patch_protocol(lab)]
     if "protocol" in r and lab:
         lines += ["", _physics_floor(r, lab, budget_target)]
     return lines
+
+
+def _drift_verdict(rate: float, protocol: dict | None, name: str, target: float) -> str:
+    """Met only against the fastest timing of the protocol in the run (the machine at its speed); "not
+    established" when the median timing says met and the fastest does not (the machine slowed within the run)."""
+    if not protocol or not protocol.get("rounds"):
+        return ""
+    fastest = max(round_[f"{name}_trials_per_s_per_core"] for round_ in protocol["rounds"])
+    if rate / fastest >= target:
+        return "met"
+    if rate / protocol[f"{name}_trials_per_s_per_core"] >= target:
+        return (f"not established: {rate / fastest:.2f} x the protocol's fastest timing ({fastest}); the machine's "
+                "speed moved within the run")
+    return "not met"
 
 
 def _patch_protocol(lab: dict) -> str:

@@ -70,3 +70,13 @@ def test_every_guarantee_names_tests_that_exist_and_each_recorded_its_figure():
 def test_test_ids_follow_the_file_named_before():
     ids = load_report().test_ids("`a.py::test_x`, `::test_y`, `b.py::test_z`")
     assert ids == ["a.py::test_x", "a.py::test_y", "b.py::test_z"]
+
+
+def test_a_stage_rate_is_met_only_against_the_fastest_protocol_timing_of_its_run():
+    verdict = load_report()._drift_verdict
+    protocol = {"label_trials_per_s_per_core": 80.0,
+                "rounds": [{"label_trials_per_s_per_core": 60.0}, {"label_trials_per_s_per_core": 100.0}]}
+    assert verdict(85.0, protocol, "label", 0.8) == "met"
+    assert verdict(70.0, protocol, "label", 0.8).startswith("not established: 0.70 x")  # 0.88 of the median
+    assert verdict(60.0, protocol, "label", 0.8) == "not met"
+    assert verdict(60.0, None, "label", 0.8) == ""
