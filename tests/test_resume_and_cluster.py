@@ -119,9 +119,11 @@ def test_a_job_on_the_local_multi_node_cluster_is_followed_from_another_folder(l
     followed, _ = follow.communicate(timeout=120)
     assert follow.returncode == 0 and "extract 4/4 objects" in followed and f"job {job} succeeded" in followed
     status_path(out).rename(tmp_path / "moved.status.json")  # what the client reads next is the cluster's
-    final = json.loads(onepiece("status", job, *address, "--json", cwd=elsewhere).stdout)
+    shown, listing = (onepiece(*command, *address, "--json", cwd=elsewhere, background=True)
+                      for command in (("status", job), ("list",)))  # two clients at once
+    final = json.loads(shown.communicate(timeout=120)[0])
     assert final["state"] == "succeeded" and final["progress"]["objects_done"] == 4 and len(final["nodes"]) >= 2
-    listed = {row["job_id"]: row for row in json.loads(onepiece("list", *address, "--json", cwd=elsewhere).stdout)}
+    listed = {row["job_id"]: row for row in json.loads(listing.communicate(timeout=120)[0])}
     assert listed[job]["state"] == "succeeded" and listed[job]["objects_done"] == 4
     assert open_dataset(out).summary()["objects"] == 4
     assert cluster_exposed_sockets() == []
