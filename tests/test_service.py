@@ -221,6 +221,17 @@ def test_every_socket_of_our_ray_is_on_loopback(ray_session, record_figure):
 
 
 @pytest.mark.ray
+def test_our_ray_declares_a_dead_node_dead_within_seconds(ray_session):
+    """The GCS checks each node every second (Ray's default, 3 s, took 15 s to declare a killed node dead)."""
+    from ray._raylet import Config
+
+    from onepiece_dist.service.ray_env import HEALTH_CHECK_PERIOD_MS
+
+    period_s, failures = Config.health_check_period_ms() / 1000, Config.health_check_failure_threshold()
+    assert period_s == HEALTH_CHECK_PERIOD_MS / 1000 and period_s * failures <= 5
+
+
+@pytest.mark.ray
 def test_an_embedded_ray_starts_in_a_process_that_first_talked_to_a_cluster(tmp_path):
     """Ray reads its auth mode once per process: a cluster call (which sets token auth) before an embedded run
     used to leave a GCS that asks for tokens and a driver that sends none (InvalidAuthToken, then a failed start)."""
