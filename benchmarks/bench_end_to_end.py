@@ -163,10 +163,11 @@ class ProtocolClock:
         ranges, spec_json = patch_ranges(patches), self.spec.model_dump_json()
         alone = in_children(1, timed_patch_protocol, spec_json, dataset, ranges)[0]
         together = [s for seconds in in_children(2, timed_patch_protocol, spec_json, dataset, ranges) for s in seconds]
-        trials = sum(stop - start for start, stop in ranges) * self.spec.sim.label_trials_per_patch()
+        timed = sum(stop - start for start, stop in ranges)
+        trials = timed * self.spec.sim.label_trials_per_patch()
         rate, both = trials / float(np.median(alone)), trials / float(np.median(together))
         beside = protocol_rates(self.rounds[-1], self.trials)["label_trials_per_s_per_core"]
-        return {"patches": sum(stop - start for start, stop in ranges), "trials": trials,
+        return {"patches": timed, "trials": trials,
                 "repeats": PROTOCOL_REPEATS, "label_trials_per_s_per_core": round(rate, 1),
                 "two_at_once_label_trials_per_s_per_core": round(both, 1),
                 "whole_object_label_trials_per_s_per_core": beside, "over_whole_objects": round(rate / beside, 3)}

@@ -252,11 +252,10 @@ def _patch_protocol(lab: dict) -> str:
             f"({p['whole_object_label_trials_per_s_per_core']})"
             + (f": a trial on a patch costs {1 / p['over_whole_objects'] - 1:.0%} more physics than one on a whole "
                "object" if p["over_whole_objects"] < 1 else "")
-            + f". The stage runs at {lab['rate_over_patch_protocol']:.2f} x that patch rate"
-            + (f", and at {lab['rate_over_patch_protocol_two_at_once']:.2f} x the patch rate of two copies at once "
-               f"({p['two_at_once_label_trials_per_s_per_core']} trials/s/core, both cores busy): the rest is what "
-               "the pipeline around the trials and the service's other processes cost"
-               if "rate_over_patch_protocol_two_at_once" in lab else "") + ".")
+            + f". The stage runs at {lab['rate_over_patch_protocol']:.2f} x that patch rate, and at "
+            f"{lab['rate_over_patch_protocol_two_at_once']:.2f} x the patch rate of two copies at once "
+            f"({p['two_at_once_label_trials_per_s_per_core']} trials/s/core, both cores busy): the rest is what the "
+            "pipeline around the trials and the service's other processes cost.")
 
 
 def _physics_floor(r: dict, lab: dict, budget_target: float) -> str:
