@@ -167,3 +167,18 @@ def test_the_every_trial_rule_labels_positive_only_grasps_that_held_in_all_k_tri
     np.testing.assert_array_equal(robust.quality, nominal.quality)  # same trials, only the rule differs
     np.testing.assert_array_equal(robust.success, nominal.quality == 1.0)
     assert np.all(robust.success <= nominal.success) and robust.success.sum() < nominal.success.sum()
+
+
+def test_loading_objects_leaves_no_file_in_the_temporary_folder(tmp_path, monkeypatch):
+    """pybullet reads each compound from a file we write; a world that lives as long as its Ray worker (killed
+    without clean-up) must not leave it, or a folder, behind."""
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    world = SimWorld(SPEC.gripper)
+    try:
+        for size in (0.04, 0.05):
+            mesh = box_mesh(np.array([size, 0.03, 0.03]))
+            world.load_object([mesh.vertices], enclosed_volume(mesh), SPEC.sim.density)
+        assert world.obj is not None
+        assert list(tmp_path.iterdir()) == []
+    finally:
+        world.close()

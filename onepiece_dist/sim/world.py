@@ -11,11 +11,8 @@ in the object frame) are also world poses at the start of a trial.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import os
-import shutil
 import tempfile
-import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -85,8 +82,6 @@ class SimWorld:
         self.gripper, self.constraint = self._build_gripper()
         self.obj: int | None = None
         self.com = np.zeros(3)
-        self._scratch = Path(tempfile.mkdtemp(prefix="onepiece-sim-"))
-        weakref.finalize(self, shutil.rmtree, self._scratch, True)
 
     def close(self) -> None:
         pb.disconnect(physicsClientId=self.client)
@@ -140,7 +135,7 @@ class SimWorld:
         c = self.client
         self.com = np.vstack(pieces).mean(axis=0)
         mass = float(np.clip(density * volume, MIN_MASS, MAX_MASS))
-        with _hulls_file([p - self.com for p in pieces], self._scratch) as path:
+        with _hulls_file([p - self.com for p in pieces]) as path:
             shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=path, physicsClientId=c)
             self.obj = pb.createMultiBody(baseMass=mass, baseCollisionShapeIndex=shape, basePosition=self.com.tolist(),
                                           useMaximalCoordinates=True, physicsClientId=c)
@@ -159,24 +154,25 @@ class SimWorld:
 
 
 @contextlib.contextmanager
-def _hulls_file(pieces: list[np.ndarray], scratch: Path):
+def _hulls_file(pieces: list[np.ndarray]):
     """An OBJ of convex pieces ((k, 3) vertices, k >= 4) for pybullet, which builds compounds only from files:
-    one ``o`` group per hull, fan faces (a hull needs only its points). This process writes it itself in a
-    private scratch folder, named by content, and deletes it after use: no file from a dataset or a user
-    reaches pybullet this way."""
+    one ``o`` group per hull, fan faces (a hull needs only its points). This process writes it itself, in a new
+    private file (``mkstemp``: mode 0600, a name nobody else holds) in the temporary folder, and deletes it as soon
+    as pybullet has read it: no file from a dataset or a user reaches pybullet this way, and a worker killed
+    without clean-up (as Ray kills its actors) leaves nothing behind but, at most, the one file it was reading."""
     lines, first = [], 1
     for k, piece in enumerate(pieces):
         lines.append(f"o piece{k}")
         lines += [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in piece]
         lines += [f"f {first} {first + j} {first + j + 1}" for j in range(1, len(piece) - 1)]
         first += len(piece)
-    text = "\n".join(lines) + "\n"
-    path = scratch / f"{hashlib.sha1(text.encode()).hexdigest()}-{os.getpid()}.obj"
-    path.write_text(text)
+    handle, path = tempfile.mkstemp(prefix="onepiece-hulls-", suffix=".obj")
     try:
-        yield str(path)
+        with os.fdopen(handle, "w") as out:
+            out.write("\n".join(lines) + "\n")
+        yield path
     finally:
-        path.unlink(missing_ok=True)
+        Path(path).unlink(missing_ok=True)
 
 
 _WORLDS: dict[GripperSpec, SimWorld] = {}
