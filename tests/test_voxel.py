@@ -77,3 +77,18 @@ def test_the_batched_crop_equals_the_per_pose_crop_through_the_index(monkeypatch
     assert dense[1].sum() > 0 and all(np.array_equal(a, b) for a, b in zip(dense[2], indexed[2], strict=True))
     for pose, inside in zip(poses[:50], dense[2], strict=False):  # what crop_points gives, in its order
         assert np.array_equal(inside, voxel.crop_points(points, pose, (4, 8, 2), 0.01))
+
+
+def test_a_grid_index_given_by_the_caller_crops_as_the_one_built_for_it():
+    """The assembly sorts the one object's points once for both of its checks, in cells of another size."""
+    from onepiece_dist.core import voxel
+    from onepiece_dist.core.spatial import PointGrid
+
+    rng = np.random.default_rng(4)
+    points = rng.uniform(-0.05, 0.05, (6000, 3))
+    poses = random_poses(rng, 200, 0.04)
+    own = voxel.crop_regions(points, poses, (4, 8, 2), 0.01, keep_points=True)
+    for cell in (0.007, 0.035):
+        given = voxel.crop_regions(points, poses, (4, 8, 2), 0.01, keep_points=True, index=PointGrid(points, cell))
+        assert np.array_equal(own[0], given[0]) and np.array_equal(own[1], given[1]) and own[1].sum() > 0
+        assert all(np.array_equal(a, b) for a, b in zip(own[2], given[2], strict=True))

@@ -34,10 +34,10 @@ def clip_to_box(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.
 def _cut(points: np.ndarray, axis: int, level: float, keep_above: bool) -> np.ndarray:
     """Points of the hull of ``points`` on one side of the plane x[axis] = level."""
     side = points[:, axis] - level if keep_above else level - points[:, axis]
-    inner, outer = points[side >= -EPS], points[side < -EPS]
-    if len(outer) == 0 or len(inner) == 0:
-        return points if len(outer) == 0 else np.zeros((0, 3))
-    d_in, d_out = side[side >= -EPS], side[side < -EPS]
+    keep = side >= -EPS
+    if keep.all() or not keep.any():  # most cuts miss the piece or take all of it
+        return points if keep.all() else np.zeros((0, 3))
+    inner, outer, d_in, d_out = points[keep], points[~keep], side[keep], side[~keep]
     t = d_in[:, None] / (d_in[:, None] - d_out[None, :])  # (i, o) where the segment meets the plane
     cuts = inner[:, None, :] + t[..., None] * (outer[None, :, :] - inner[:, None, :])
     on_plane = d_in <= EPS
@@ -97,13 +97,12 @@ def _inside_extremes(points: np.ndarray, margin: float = 1e-12) -> np.ndarray:
     extremes = [np.argmin(x), np.argmin(x + y), np.argmin(y), np.argmax(x - y), np.argmax(x), np.argmax(x + y),
                 np.argmax(y), np.argmin(x - y)]  # counter-clockwise around the hull
     corners = [int(i) for k, i in enumerate(extremes) if i != extremes[k - 1]]
-    inside = np.zeros(len(points), dtype=bool)
     if len(set(corners)) < 3:
-        return inside
-    inside[:] = True
-    for a, b in zip(points[corners], np.roll(points[corners], -1, axis=0), strict=True):
-        inside &= (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]) > margin
-    return inside
+        return np.zeros(len(points), dtype=bool)
+    a = points[corners]
+    b = np.roll(a, -1, axis=0)  # (e, 2) each edge's start and end; every edge's test at once, the same arithmetic
+    left = (b[:, :1] - a[:, :1]) * (y - a[:, 1:]) - (b[:, 1:] - a[:, 1:]) * (x - a[:, :1])  # (e, n)
+    return np.all(left > margin, axis=0)
 
 
 def hull_mesh(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -125,10 +125,21 @@ def cube_points(centres: np.ndarray, edge: float | np.ndarray, per_side: int = 3
 
 
 def region_codes(points: np.ndarray, placements: np.ndarray, grid_shape: tuple[int, int, int],
-                 resolution: float) -> np.ndarray:
+                 resolution: float, index: PointGrid | None = None) -> np.ndarray:
     """Codes a gripper sees at each placement (U, 4, 4) in the one object's points (n, 3): the crop of
-    :func:`core.voxel.crop_codes`, which looks only at points near each closing region. -> (U, B) uint8"""
-    return crop_codes(points, placements, grid_shape, resolution)[0]
+    :func:`core.voxel.crop_codes`, which looks only at points near each closing region (through ``index``, a
+    :class:`PointGrid` of ``points``, when given). -> (U, B) uint8"""
+    return crop_codes(points, placements, grid_shape, resolution, index=index)[0]
+
+
+def placement_point_grid(points: np.ndarray, gripper: GripperSpec, grid_shape: tuple[int, int, int],
+                         resolution: float) -> PointGrid:
+    """One grid index of the one object's points (n, 3) for both checks of every placement
+    (:func:`region_codes` and :func:`corridor_intrusions`): cells no wider than the thinnest box either queries,
+    so the one sort of the points serves both."""
+    closing = np.array(grid_shape, dtype=float) * resolution
+    corridor = corridor_boxes(gripper, reach=1.0)
+    return PointGrid(points, float(min(closing.min(), np.min(corridor[:, 1] - corridor[:, 0]))))
 
 
 def corridor_boxes(gripper: GripperSpec, reach: float) -> np.ndarray:
@@ -142,11 +153,12 @@ def corridor_boxes(gripper: GripperSpec, reach: float) -> np.ndarray:
 
 
 def corridor_intrusions(points: np.ndarray, owner: np.ndarray, placements: np.ndarray, gripper: GripperSpec,
-                        reach: float) -> np.ndarray:
+                        reach: float, index: PointGrid | None = None) -> np.ndarray:
     """(U,) int64: points not of patch k (other patches, or the core with owner -1) inside the corridor of each
-    placement k (:func:`corridor_boxes`)."""
+    placement k (:func:`corridor_boxes`); ``index``: a :class:`PointGrid` of ``points`` (built here if None)."""
     boxes = corridor_boxes(gripper, reach)
-    index = PointGrid(points, float(np.min(boxes[:, 1] - boxes[:, 0])))  # cells no wider than the thinnest box
+    if index is None:
+        index = PointGrid(points, float(np.min(boxes[:, 1] - boxes[:, 0])))  # cells no wider than the thinnest box
     counts = np.zeros(len(placements), dtype=np.int64)
     for k, pose in enumerate(placements):
         for lower, upper in boxes:

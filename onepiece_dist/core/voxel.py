@@ -59,29 +59,33 @@ DENSE_POINTS = 50_000  # clouds up to this size are cropped for a whole batch of
 
 
 def crop_codes(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int],
-               resolution: float) -> tuple[np.ndarray, np.ndarray]:
+               resolution: float, index: PointGrid | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Voxel codes of an object's surface points seen from many gripper poses.
 
     points : (m, 3) float   object-frame surface points
     poses : (n, 4, 4) float gripper poses in the object frame
+    index : a :class:`PointGrid` of ``points`` already built (any cell size), or None
     returns : codes (n, B) uint8, counts (n,) int64 points inside each closing region
     """
-    codes, counts, _ = crop_regions(points, poses, grid_shape, resolution)
+    codes, counts, _ = crop_regions(points, poses, grid_shape, resolution, index=index)
     return codes, counts
 
 
 def crop_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int], resolution: float,
-                 keep_points: bool = False) -> tuple[np.ndarray, np.ndarray, list[np.ndarray] | None]:
+                 keep_points: bool = False, index: PointGrid | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray] | None]:
     """:func:`crop_codes`, and with ``keep_points`` the gripper-frame points inside each pose's closing region
     ((k_i, 3) float64 per pose, in point order, as :func:`crop_points` gives them). Clouds of up to DENSE_POINTS
-    points are transformed for a batch of poses at once; larger ones (the one object) through a grid index, so
-    each pose costs what is near it."""
+    points are transformed for a batch of poses at once; larger ones (the one object), or any cloud whose grid
+    ``index`` is given, through a grid index, so each pose costs what is near it."""
     nvox = int(np.prod(grid_shape))
     occupancy = np.zeros((len(poses), nvox), dtype=bool)
     counts = np.zeros(len(poses), dtype=np.int64)
     kept: list[np.ndarray] | None = [] if keep_points else None
-    regions = (_dense_regions if len(points) <= DENSE_POINTS else _indexed_regions)(points, poses, grid_shape,
-                                                                                   resolution)
+    if index is None and len(points) <= DENSE_POINTS:
+        regions = _dense_regions(points, poses, grid_shape, resolution)
+    else:
+        regions = _indexed_regions(points, poses, grid_shape, resolution, index)
     for rows, inside in regions:  # rows (q,) pose of each inside point, in pose then point order
         flat = voxel_indices(inside, grid_shape, resolution)
         occupancy[rows, flat] = True
@@ -108,20 +112,23 @@ def _dense_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int,
         yield start + pairs // len(points), np.stack([u[inside], v[inside], t[inside]], axis=1)
 
 
-def _indexed_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int], resolution: float):
+def _indexed_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int], resolution: float,
+                     index: PointGrid | None = None):
     """(rows, inside points) per pose, from the points near each posed closing region."""
-    for k, near in enumerate(_points_near_regions(points, poses, grid_shape, resolution)):
+    for k, near in enumerate(_points_near_regions(points, poses, grid_shape, resolution, index)):
         inside = near[voxel_indices(near, grid_shape, resolution) >= 0]
         yield np.full(len(inside), k, dtype=np.int64), inside
 
 
 def _points_near_regions(points: np.ndarray, poses: np.ndarray, grid_shape: tuple[int, int, int],
-                         resolution: float):
+                         resolution: float, index: PointGrid | None = None):
     """For each pose, the gripper-frame points that lie in the posed closing region's bounding box (a grid
-    index, so each pose costs what is near it): (k, 3) float64 per pose, in pose order."""
+    index, so each pose costs what is near it; built here unless given): (k, 3) float64 per pose, in pose
+    order."""
     a, b, c = grid_shape
     lower, upper = closing_region_bounds(a * resolution, b * resolution, c * resolution)
-    index = PointGrid(points, float(np.min(upper - lower)))  # cells no wider than the region is thin
+    if index is None:
+        index = PointGrid(points, float(np.min(upper - lower)))  # cells no wider than the region is thin
     for pose in poses:
         near = points[np.sort(index.in_box(*posed_box_bounds(lower, upper, pose)))]  # in point order
         yield to_gripper_frame(near, pose[None])[0]

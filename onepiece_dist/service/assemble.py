@@ -12,7 +12,13 @@ import numpy as np
 from onepiece_dist.core.classifier import PLANES, classify_codes
 from onepiece_dist.core.clip import hull_mesh
 from onepiece_dist.core.frames import transform_points
-from onepiece_dist.core.layout import assembly_geometry, corridor_intrusions, layout_patches, region_codes
+from onepiece_dist.core.layout import (
+    assembly_geometry,
+    corridor_intrusions,
+    layout_patches,
+    placement_point_grid,
+    region_codes,
+)
 from onepiece_dist.core.mesh import solid_properties
 from onepiece_dist.core.voxel import crop_points
 from onepiece_dist.errors import MissingAssembly
@@ -44,10 +50,12 @@ def assemble_dataset(spec: JobSpec, path: str | os.PathLike, codes: np.ndarray, 
     classes = classify_codes(codes, grid)
     layout = layout_patches(classes.plane, gripper, res)
     geometry = assembly_geometry(layout, patches.pieces, patches.points, res)
-    seen = region_codes(geometry["points"], layout.placements, grid, res)
+    index = placement_point_grid(geometry["points"], gripper, grid, res)
+    seen = region_codes(geometry["points"], layout.placements, grid, res, index=index)
     matches = np.all(seen == codes, axis=1)
     intrusions = corridor_intrusions(geometry["points"], geometry["point_patch"], layout.placements, gripper,
-                                     reach=float(np.ptp(layout.bounding_box, axis=0).max()) + 1.0)
+                                     reach=float(np.ptp(layout.bounding_box, axis=0).max()) + 1.0, index=index)
+    del index
     chamfer = _chamfer_to_representatives(spec, path, patches)
     report = _report(spec, grasps, codes, classes, layout, matches, intrusions, chamfer, patches)
     points = geometry.pop("points").astype(np.float32)  # the float64 cloud goes before the patch arrays come
