@@ -20,6 +20,10 @@ RESULTS = HERE / "results"
 PAGE = HERE.parent / "docs" / "performance.md"
 
 
+PINNED_SENTENCE = ("Speed work leaves codes and labels as they were: tests/test_pinned_job.py pins the codes, "
+                   "representatives and labels of a small labelled job (3 objects x 24 candidates, every stage "
+                   "to label), and fails when any of them changes.")
+
 def load(name: str) -> dict | None:
     path = RESULTS / f"{name}.json"
     return json.loads(path.read_text()) if path.is_file() else None
@@ -202,7 +206,8 @@ def end_to_end_section(r: dict, sim: dict | None = None) -> list[str]:
              f"{met(-budget, -budget_target)}); peak memory {r['peak_memory_gib']} GiB in all, "
              f"{r['peak_above_idle_gib']} GiB above Ray's idle {r['ray_idle_memory_gib']} GiB (target "
              f"{t['peak_memory_gib']} GiB: {met(-r['peak_memory_gib'], -t['peak_memory_gib'])}). Dataset "
-             f"{r['dataset_bytes'] / 1e6:.0f} MB, parts {r['parts_bytes'] / 1e6:.0f} MB."]
+             f"{r['dataset_bytes'] / 1e6:.0f} MB, parts {r['parts_bytes'] / 1e6:.0f} MB.", "",
+             PINNED_SENTENCE]
     if "extract_candidates_per_s_per_core" in r:
         rate, target = r["extract_candidates_per_s_per_core"], t["extract_candidates_per_s_per_core"]
         lines += ["", f"Extract stage: {rate} candidates/s/core over {r['workers']} cores (target {target}: "
