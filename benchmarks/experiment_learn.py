@@ -33,6 +33,8 @@ class TrainJob:
     validation: float
     evaluations: int = 10
     validation_cap: int = 4096  # grasps of the validation split scored at each evaluation (a seeded sample)
+    patch_weighting: str = "none"  # B only: each patch's loss weighed by its code's grasp count ("count"), its root
+    # ("sqrt"), or not ("none"; benchmarks/experiment_weighting.py)
 
 
 def fit_and_score(job: TrainJob) -> dict:
@@ -55,7 +57,8 @@ def fit_and_score(job: TrainJob) -> dict:
         val = val._subset(np.sort(np.random.default_rng([job.seed, 13]).choice(val.rows, job.validation_cap,
                                                                                  replace=False)))
     model = MODELS[job.model]()
-    step = TrainStep(model, torch.optim.Adam(model.parameters(), lr=job.learning_rate), torch.device("cpu"))
+    step = TrainStep(model, torch.optim.Adam(model.parameters(), lr=job.learning_rate), torch.device("cpu"),
+                     group_weights=patch_weights(job))
     rng = np.random.default_rng([job.seed, 11])
     best, best_state, curve, start = float("inf"), None, [], time.perf_counter()
     every = max(1, job.steps // job.evaluations)
@@ -74,6 +77,22 @@ def fit_and_score(job: TrainJob) -> dict:
     return {"arm": job.arm, "seed": job.seed, "train_grasps": len(train), "validation_grasps": len(val),
             "train_seconds": round(seconds, 1), "best_step": min(curve, key=lambda c: c["val_loss"])["step"],
             "curve": curve, "scores": scores.astype(np.float32)}
+
+
+def patch_weights(job: TrainJob):
+    """(U,) float32 tensor of loss weights per patch of a B arm's one object (mean 1): its code's grasp count
+    (``unique/count``: how many extracted grasps the patch's label stands for) or that count's square root; None
+    for "none" or a dataset of grasps on their own objects."""
+    import torch
+    import zarr
+
+    if job.patch_weighting == "none" or not job.group.startswith("assembled"):
+        return None
+    counts = zarr.open_group(job.path, mode="r")["unique/count"][:].astype(np.float64)
+    if job.patch_weighting not in ("count", "sqrt"):
+        raise ValueError(f"patch_weighting {job.patch_weighting!r}: none, sqrt or count")
+    weights = counts if job.patch_weighting == "count" else np.sqrt(counts)
+    return torch.from_numpy((weights / weights.mean()).astype(np.float32))
 
 
 def heldout_metrics(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> dict:

@@ -178,7 +178,9 @@ class TrainSpec(_Frozen):
                                                "docs/performance.md).")
     loader_workers: int = Field(0, ge=0, le=64, description="DataLoader worker processes reading the store.")
     weight_by_count: bool = Field(False, description="On the one object's grasps: weight each grasp's loss by how "
-                                  "many extracted grasps its patch's code stands for (unique/count, mean 1).")
+                                  "many extracted grasps its patch's code stands for (unique/count, mean 1). Off by "
+                                  "default: on the paper experiment it lowered held-out AP and top-1 "
+                                  "(docs/performance.md, Weighing B's patches by their code counts).")
 
 
 class JobSpec(_Frozen):

@@ -150,3 +150,18 @@ def test_b_is_as_good_as_r_only_when_its_top1_and_its_ap_both_are(b_ap, holds):
     assert d["best_b"] == "B r2" and d["control"] == "R r2" and d["time_ratio"] == pytest.approx(6.667, abs=1e-3)
     assert d["b_at_least_r"] is holds and d["b_against_r"] == {"top1": [0.83, 0.8], "ap": [b_ap, 0.7]}
     assert page._against(d) == f": top-1 83.0% against 80.0%, AP {b_ap:.3f} against 0.700; both must be at least R's"
+
+
+def test_patch_weights_follow_the_code_counts_with_mean_one_and_only_on_the_one_object(tmp_path):
+    import zarr
+
+    group = zarr.open_group(str(tmp_path / "b.zarr"), mode="w")
+    group.create_array("unique/count", data=np.array([1, 4, 9, 16], dtype=np.int64))
+    job = learn.TrainJob("B r0", 0, str(tmp_path / "b.zarr"), "assembled/grasps", None, "", "voxel", 1, 2, 1e-3, 0.2)
+    assert learn.patch_weights(job) is None  # the experiment's B: every patch weighs 1
+    count = learn.patch_weights(dataclasses.replace(job, patch_weighting="count")).numpy()
+    root = learn.patch_weights(dataclasses.replace(job, patch_weighting="sqrt")).numpy()
+    assert np.allclose(count, np.array([1, 4, 9, 16]) / 7.5) and np.allclose(root, np.array([1, 2, 3, 4]) / 2.5)
+    assert learn.patch_weights(dataclasses.replace(job, group="grasps", patch_weighting="count")) is None
+    with pytest.raises(ValueError, match="'cube'"):
+        learn.patch_weights(dataclasses.replace(job, patch_weighting="cube"))
