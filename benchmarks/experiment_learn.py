@@ -34,7 +34,7 @@ class TrainJob:
     evaluations: int = 10
     validation_cap: int = 4096  # grasps of the validation split scored at each evaluation (a seeded sample)
     patch_weighting: str = "none"  # B only: each patch's loss weighed by its code's grasp count ("count"), its root
-    # ("sqrt"), or not ("none"; benchmarks/experiment_weighting.py)
+    # ("sqrt"), or not ("none"; benchmarks/experiment_b_variants.py)
 
 
 def fit_and_score(job: TrainJob) -> dict:

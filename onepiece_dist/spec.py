@@ -180,7 +180,7 @@ class TrainSpec(_Frozen):
     weight_by_count: bool = Field(False, description="On the one object's grasps: weight each grasp's loss by how "
                                   "many extracted grasps its patch's code stands for (unique/count, mean 1). Off by "
                                   "default: on the paper experiment it lowered held-out AP and top-1 "
-                                  "(docs/performance.md, Weighing B's patches by their code counts).")
+                                  "(docs/performance.md, What would lift B to R).")
 
 
 class JobSpec(_Frozen):

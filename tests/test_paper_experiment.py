@@ -165,3 +165,25 @@ def test_patch_weights_follow_the_code_counts_with_mean_one_and_only_on_the_one_
     assert learn.patch_weights(dataclasses.replace(job, group="grasps", patch_weighting="count")) is None
     with pytest.raises(ValueError, match="'cube'"):
         learn.patch_weights(dataclasses.replace(job, patch_weighting="cube"))
+
+
+def test_the_representatives_dataset_gives_each_labelled_patch_its_representatives_crop(tmp_path):
+    import zarr
+
+    from onepiece_dist.learn.dataset import GraspDataset
+
+    variants = importlib.import_module("experiment_b_variants")
+    source = zarr.open_group(str(tmp_path / "b.zarr"), mode="w")
+    source.attrs.update({"onepiece_format": 1, "complete": True, "grid_shape": [4, 8, 2], "code_bytes": 8,
+                         "assembly": {"unique_codes": 3}})
+    crops = np.random.default_rng(0).normal(size=(3, 16, 3)).astype(np.float16)
+    source.create_array("unique/points", data=crops)
+    source.create_array("assembled/grasps/patch", data=np.array([2, 0, 2], dtype=np.int32))
+    source.create_array("assembled/grasps/success", data=np.array([1, 0, 0], dtype=np.uint8))
+    out = variants.representatives_dataset(tmp_path / "b.zarr", tmp_path / "rep.zarr")
+    data = GraspDataset(str(out), "grasps", inputs=("points",))
+    assert len(data) == 3 and np.array_equal(data.groups, [2, 0, 2])
+    batch = data.batch(np.arange(3))
+    assert np.array_equal(np.asarray(batch["points"], dtype=np.float16), crops[[2, 0, 2]])
+    assert np.array_equal(np.asarray(batch["label"]), [1, 0, 0])
+    assert "assembly" not in zarr.open_group(str(out), mode="r").attrs  # the one object's report is not its own

@@ -1,0 +1,131 @@
+"""What would lift B to R? The experiment's B arms trained again with patch weights or other inputs.
+
+    .venv/bin/python benchmarks/experiment_b_variants.py --folder /tmp/exp-full [--radii 0,2]
+        [--variants as_trained,sqrt_weights,count_weights,representatives]
+
+B labels each shape once, on its patch of the one object, and trains on the one object's crops with uniform
+batches over its patches. Two reasons it could trail R (a random subset of candidates labelled on their own
+objects) that are not its labels: a uniform batch treats a shape met once like one met a thousand times, while R's
+subset follows how often shapes occur; and the one object's crops may differ from real objects' crops. This trains
+the B arms of the committed paper experiment (benchmarks/results/paper_experiment.json; its kept work folder
+``--folder`` holds the datasets) again:
+
+  as_trained       B as the experiment trained it (a check of the rerun);
+  sqrt_weights     each patch's loss weighed by the square root of its code's grasp count;
+  count_weights    ... by the count itself (``unique/count``, the train stage's ``weight_by_count``);
+  representatives  B's labels on the representatives' own crops (``unique/points``: each code's representative
+                   grasp cropped on its source object), not the one object's.
+
+Everything else as the experiment trained B: network, steps, batch, seeds, the learning rate each arm's validation
+split chose, the checkpoint its validation split picks; held-out: the experiment's.
+Writes benchmarks/results/experiment_b_variants.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE))
+from experiment_learn import TrainJob, arm_summary  # noqa: E402
+from experiment_train import spawn_context, train_all  # noqa: E402
+
+VARIANTS = {"as_trained": "none", "sqrt_weights": "sqrt", "count_weights": "count", "representatives": "none"}
+RUN_NAMES = {"as_trained": "none", "sqrt_weights": "sqrt", "count_weights": "count",  # the runs' arm names: those
+             "representatives": "representatives"}  # of the first version, so its trained runs are read back
+
+
+def representatives_dataset(source: Path, out: Path) -> Path:
+    """A dataset whose ``grasps`` are B's labelled patches with their representatives' own crops as points:
+    points ``unique/points[patch]``, success the patch's label, object the patch (validation splits by patch)."""
+    import zarr
+
+    src = zarr.open_group(str(source), mode="r")
+    patch = src["assembled/grasps/patch"][:].astype(np.int64)
+    group = zarr.open_group(str(out), mode="w")
+    group.attrs.update({k: v for k, v in src.attrs.asdict().items() if k not in ("assembly", "labels")})
+    points = src["unique/points"]
+    group.create_array("grasps/points", data=points[:][patch], chunks=(512, *points.shape[1:]))
+    group.create_array("grasps/success", data=src["assembled/grasps/success"][:])
+    group.create_array("grasps/object", data=patch.astype(np.int32))
+    return out
+
+
+def variant_jobs(experiment: dict, folder: Path, radii: list[int], variants: list[str]) -> list[TrainJob]:
+    """Every (radius, variant, seed) training run, as the experiment trained B at that radius."""
+    args, search = experiment["args"], experiment["learning_rate_search"]
+    jobs = []
+    for radius in radii:
+        for variant in variants:
+            path, group = folder / f"B-settled-{radius}.zarr", "assembled/grasps"
+            if variant == "representatives":
+                path, group = representatives_dataset(path, folder / f"B-representatives-{radius}.zarr"), "grasps"
+            jobs += [TrainJob(f"B r{radius} {RUN_NAMES[variant]}", seed, str(path), group, None,
+                              str(folder / "heldout.zarr"),
+                              args["model"], args["steps"], args["batch_size"], search[f"B r{radius}"]["chosen"], 0.2,
+                              patch_weighting=VARIANTS[variant]) for seed in range(args["seeds"])]
+    return jobs
+
+
+def summary_rows(experiment: dict, jobs: list[TrainJob], runs: list[dict], labels: np.ndarray,
+                 groups: np.ndarray) -> list[dict]:
+    """Per (radius, variant): held-out top-1 and AP over the seeds, beside the experiment's B and R of that
+    radius."""
+    arms = {row["arm"]: row["heldout"] for row in experiment["arms"]}
+    rows = []
+    for name in dict.fromkeys(job.arm for job in jobs):
+        _, radius, run_name = name.split()
+        variant = next(v for v, n in RUN_NAMES.items() if n == run_name)
+        held = arm_summary([run for job, run in zip(jobs, runs, strict=True) if job.arm == name], labels, groups)
+        rows.append({"radius": int(radius[1:]), "variant": variant,
+                     "top1": round(held["top1"]["mean"], 4), "top1_ci95": held["top1"]["ci95"],
+                     "ap": round(held["ap"]["mean"], 4), "ap_std": round(held["ap"]["std"], 4),
+                     "ap_ci95": held["ap"]["ci95"], "seeds": len(held["seeds"]),
+                     "experiment_b_ap": round(arms[f"B {radius}"]["ap"]["mean"], 4),
+                     "experiment_r_ap": round(arms[f"R {radius}"]["ap"]["mean"], 4),
+                     "experiment_r_top1": round(arms[f"R {radius}"]["top1"]["mean"], 4)})
+    return rows
+
+
+def main(argv=None) -> dict:
+    from concurrent.futures import ProcessPoolExecutor
+
+    from onepiece_dist.store import open_dataset
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--folder", type=Path, required=True, help="the experiment's kept work folder")
+    parser.add_argument("--radii", default="0,2")
+    parser.add_argument("--variants", default=",".join(VARIANTS))
+    args = parser.parse_args(argv)
+    variants = args.variants.split(",")
+    if unknown := sorted(set(variants) - set(VARIANTS)):
+        parser.error(f"--variants: {unknown} unknown; choose from {', '.join(VARIANTS)}")
+    experiment = json.loads((HERE / "results" / "paper_experiment.json").read_text())
+    jobs = variant_jobs(experiment, args.folder, [int(r) for r in args.radii.split(",")], variants)
+    with ProcessPoolExecutor(2, mp_context=spawn_context()) as pool:
+        runs = train_all(jobs, args.folder / "trained", pool)
+    heldout = open_dataset(str(args.folder / "heldout.zarr"))
+    labels, groups = heldout["grasps/success"].astype(np.float64), heldout["grasps/object"].astype(np.int64)
+    out = {"benchmark": "experiment_b_variants", "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {os.cpu_count()} cores", "experiment": experiment["command"].strip(),
+           "experiment_date": experiment["date"], "model": experiment["args"]["model"],
+           "steps": experiment["args"]["steps"], "train_seconds": round(sum(r["train_seconds"] for r in runs), 1),
+           "heldout_random_choice": round(experiment["heldout"]["random_choice"], 4),
+           "rows": summary_rows(experiment, jobs, runs, labels, groups),
+           "command": "python benchmarks/experiment_b_variants.py " + " ".join(sys.argv[1:] if argv is None else argv)}
+    (HERE / "results" / "experiment_b_variants.json").write_text(json.dumps(out, indent=2) + "\n")
+    print(json.dumps(out["rows"], indent=2))
+    return out
+
+
+if __name__ == "__main__":
+    main()
