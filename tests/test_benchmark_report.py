@@ -80,3 +80,15 @@ def test_a_stage_rate_is_met_only_against_the_fastest_protocol_timing_of_its_run
     assert verdict(70.0, protocol, "label", 0.8).startswith("not established: 0.70 x")  # 0.88 of the median
     assert verdict(60.0, protocol, "label", 0.8) == "not met"
     assert verdict(60.0, None, "label", 0.8) == ""
+
+
+def test_the_physics_floor_is_given_at_one_copys_rates_and_at_two_at_once():
+    floor = load_report()._physics_floor
+    run = {"objects": 10, "candidates_per_object": 100, "workers": 2,
+           "protocol": {"extract_trials_per_s_per_core": 10.0, "label_trials_per_s_per_core": 5.0}}
+    label = {"trials_one_object": 900, "trials_transfer": 100}
+    alone = floor(run, label, 200)  # 1000 / 20 = 50 s to extract, 1000 / 10 = 100 s to label
+    assert "50 s to extract and 100 s to label: 150 s" in alone and "(within it)" in alone and "two copies" not in alone
+    run["protocol"]["two_at_once"] = {"extract_trials_per_s_per_core": 5.0, "label_trials_per_s_per_core": 2.5}
+    both = floor(run, label, 200)
+    assert both.startswith(alone) and "100 s and 200 s, 300 s (above the target)" in both
