@@ -182,3 +182,21 @@ def test_loading_objects_leaves_no_file_in_the_temporary_folder(tmp_path, monkey
         assert list(tmp_path.iterdir()) == []
     finally:
         world.close()
+
+
+def test_a_new_world_removes_the_hull_files_of_processes_that_no_longer_run(tmp_path, monkeypatch):
+    """A worker killed between writing a compound's file and deleting it leaves that file: the next world goes."""
+    import os
+    import subprocess
+    import sys
+
+    from onepiece_dist.sim.world import HULLS_PREFIX
+
+    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead, alive = int(ended.stdout), os.getpid()
+    files = {name: tmp_path / f"{HULLS_PREFIX}{name}.obj" for name in (f"{dead}-a1", f"{alive}-b2", "cache-c3")}
+    for path in files.values():
+        path.write_text("o piece0\n")
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    SimWorld(SPEC.gripper).close()
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(files[n].name for n in (f"{alive}-b2", "cache-c3"))

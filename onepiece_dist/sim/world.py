@@ -74,6 +74,7 @@ class SimWorld:
     def __init__(self, gripper: GripperSpec, physics: PhysicsSettings = PhysicsSettings()):
         self.spec = gripper
         self.physics = physics
+        remove_orphan_hull_files()
         self.client = pb.connect(pb.DIRECT)
         pb.setTimeStep(physics.time_step, physicsClientId=self.client)
         pb.setPhysicsEngineParameter(numSolverIterations=physics.solver_iterations, deterministicOverlappingPairs=1,
@@ -153,26 +154,52 @@ class SimWorld:
         return matrix_from_pose(pos, quat)
 
 
+HULLS_PREFIX = "onepiece-hulls-"  # then the writing process's id: onepiece-hulls-<pid>-<random>.obj
+
+
 @contextlib.contextmanager
 def _hulls_file(pieces: list[np.ndarray]):
     """An OBJ of convex pieces ((k, 3) vertices, k >= 4) for pybullet, which builds compounds only from files:
     one ``o`` group per hull, fan faces (a hull needs only its points). This process writes it itself, in a new
     private file (``mkstemp``: mode 0600, a name nobody else holds) in the temporary folder, and deletes it as soon
-    as pybullet has read it: no file from a dataset or a user reaches pybullet this way, and a worker killed
-    without clean-up (as Ray kills its actors) leaves nothing behind but, at most, the one file it was reading."""
+    as pybullet has read it: no file from a dataset or a user reaches pybullet this way. A worker killed between
+    the two (as Ray and the fault tests kill them) leaves that one file; the next world removes it
+    (:func:`remove_orphan_hull_files`)."""
     lines, first = [], 1
     for k, piece in enumerate(pieces):
         lines.append(f"o piece{k}")
         lines += [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in piece]
         lines += [f"f {first} {first + j} {first + j + 1}" for j in range(1, len(piece) - 1)]
         first += len(piece)
-    handle, path = tempfile.mkstemp(prefix="onepiece-hulls-", suffix=".obj")
+    handle, path = tempfile.mkstemp(prefix=f"{HULLS_PREFIX}{os.getpid()}-", suffix=".obj")
     try:
         with os.fdopen(handle, "w") as out:
             out.write("\n".join(lines) + "\n")
         yield path
     finally:
         Path(path).unlink(missing_ok=True)
+
+
+def remove_orphan_hull_files(folder: str | os.PathLike | None = None) -> int:
+    """Delete the hull files (:func:`_hulls_file`) in ``folder`` (default: the temporary folder) whose writing
+    process no longer runs; returns how many. A live process's file, or one whose name has no process id, stays."""
+    removed = 0
+    for path in Path(folder or tempfile.gettempdir()).glob(f"{HULLS_PREFIX}*-*.obj"):
+        pid = path.name[len(HULLS_PREFIX):].split("-", 1)[0]
+        if pid.isdigit() and not _process_runs(int(pid)):
+            path.unlink(missing_ok=True)
+            removed += 1
+    return removed
+
+
+def _process_runs(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)  # signal 0: only asks whether the process exists
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process
+    return True
 
 
 _WORLDS: dict[GripperSpec, SimWorld] = {}
