@@ -40,8 +40,6 @@ from experiment_learn import TrainJob, arm_summary  # noqa: E402
 from experiment_train import spawn_context, train_all  # noqa: E402
 
 VARIANTS = {"as_trained": "none", "sqrt_weights": "sqrt", "count_weights": "count", "representatives": "none"}
-RUN_NAMES = {"as_trained": "none", "sqrt_weights": "sqrt", "count_weights": "count",  # the runs' arm names: those
-             "representatives": "representatives"}  # of the first version, so its trained runs are read back
 
 
 def representatives_dataset(source: Path, out: Path) -> Path:
@@ -69,7 +67,7 @@ def variant_jobs(experiment: dict, folder: Path, radii: list[int], variants: lis
             path, group = folder / f"B-settled-{radius}.zarr", "assembled/grasps"
             if variant == "representatives":
                 path, group = representatives_dataset(path, folder / f"B-representatives-{radius}.zarr"), "grasps"
-            jobs += [TrainJob(f"B r{radius} {RUN_NAMES[variant]}", seed, str(path), group, None,
+            jobs += [TrainJob(f"B r{radius} {variant}", seed, str(path), group, None,
                               str(folder / "heldout.zarr"),
                               args["model"], args["steps"], args["batch_size"], search[f"B r{radius}"]["chosen"], 0.2,
                               patch_weighting=VARIANTS[variant]) for seed in range(args["seeds"])]
@@ -83,8 +81,7 @@ def summary_rows(experiment: dict, jobs: list[TrainJob], runs: list[dict], label
     arms = {row["arm"]: row["heldout"] for row in experiment["arms"]}
     rows = []
     for name in dict.fromkeys(job.arm for job in jobs):
-        _, radius, run_name = name.split()
-        variant = next(v for v, n in RUN_NAMES.items() if n == run_name)
+        _, radius, variant = name.split()
         held = arm_summary([run for job, run in zip(jobs, runs, strict=True) if job.arm == name], labels, groups)
         rows.append({"radius": int(radius[1:]), "variant": variant,
                      "top1": round(held["top1"]["mean"], 4), "top1_ci95": held["top1"]["ci95"],
