@@ -5,14 +5,20 @@ stands for which code, for one fixed spec run in process. A change of physics, s
 changes them: rerun ``python tests/test_pinned_job.py --write`` and say why in the commit. Floats that only
 describe geometry (points, poses) are not pinned: their last bits may move with a faster but equal formula.
 
-Written at c7cfa8b; the same pins hold at 3ce0724 (the code before the assembly, clip and label-shard speed work
-of 278afbc..c7cfa8b, under the same physical defaults and label rule).
+First written at c7cfa8b, where the same pins held at 3ce0724 (the code before the assembly, clip and label-shard
+speed work of 278afbc..c7cfa8b). Those pins held only on CPUs whose BLAS kernel gave the patches the same last bits:
+on another machine (AMD EPYC, AVX2) the one object's codes differed, and forcing OpenBLAS's SSE kernel changed its
+labels. Patch geometry is now rotated without BLAS (``core.frames.rotate_points``), the pins were written again,
+and the second test runs the job under another BLAS kernel and asks for the same pins.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
+import platform
+import subprocess
 import sys
 from pathlib import Path
 
@@ -60,6 +66,26 @@ def test_a_small_jobs_codes_and_labels_are_the_pinned_ones(tmp_path):
     changed = {name: (expected[name], found[name]) for name in PINNED_ARRAYS if expected[name] != found[name]}
     assert not changed, f"these arrays changed (pinned, found): {changed}; {__doc__}"
 
+
+@pytest.mark.sim
+@pytest.mark.slow
+@pytest.mark.skipif(platform.machine() != "x86_64", reason="OpenBLAS's SSE kernel (Prescott) is an x86-64 one")
+def test_the_pins_hold_under_another_blas_kernel():
+    """The same job with OpenBLAS forced to its SSE kernel (every x86-64 CPU runs it; machines pick AVX2 or
+    AVX-512 ones by themselves): what a worker produces must not depend on the CPU it ran on."""
+    env = {**os.environ, "OPENBLAS_CORETYPE": "Prescott"}
+    out = subprocess.run([sys.executable, __file__, "--print"], capture_output=True, text=True, env=env, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    expected, found = json.loads(PINS.read_text())["arrays"], json.loads(out.stdout.splitlines()[-1])
+    assert {name: found[name] for name in PINNED_ARRAYS if expected[name] != found[name]} == {}
+
+
+if __name__ == "__main__" and sys.argv[1:] == ["--print"]:
+    import tempfile
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    with tempfile.TemporaryDirectory() as scratch:
+        print(json.dumps(run_pinned_job(Path(scratch))))
 
 if __name__ == "__main__" and sys.argv[1:] == ["--write"]:
     import tempfile

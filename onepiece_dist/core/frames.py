@@ -68,6 +68,19 @@ def gripper_frame_batches(points: np.ndarray, poses: np.ndarray, pairs: int = 20
         yield start, coords
 
 
+def rotate_points(points: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """``points @ rot`` with the same bits on every CPU: (m, 3) float, rot (3, 3) float -> (m, 3) float64.
+
+    Each row's three products are summed in one fixed order, each operation rounded on its own. A matrix product
+    goes to BLAS, whose kernel (chosen per CPU: AVX-512, AVX2 with FMA, SSE) changes the last bits; geometry that
+    then decides by exact comparisons (the clip's plane and collinearity tests) changes with them, and so does the
+    physics on it. Slower than BLAS: for per-object geometry, not for the crops' millions of point-pose pairs.
+    """
+    p = np.asarray(points, dtype=np.float64)
+    r = np.asarray(rot, dtype=np.float64)
+    return p[:, 0:1] * r[0] + p[:, 1:2] * r[1] + p[:, 2:3] * r[2]
+
+
 def transform_points(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """Apply one (4, 4) transform to (m, 3) points."""
     return points @ pose[:3, :3].T + pose[:3, 3]

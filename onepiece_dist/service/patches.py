@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from onepiece_dist.core.clip import clip_to_box
+from onepiece_dist.core.frames import rotate_points
 from onepiece_dist.core.layout import patch_box
 from onepiece_dist.errors import StoreError
 from onepiece_dist.service.results import part_key
@@ -108,9 +109,9 @@ def build_patches(spec: JobSpec, reader: DatasetReader, parts: PartStore, repres
         source = source_geometry(reader, parts, int(obj))
         for k in np.flatnonzero(objects == obj):
             rot, origin = poses[k, :3, :3], poses[k, :3, 3]
-            local = [clip_to_box((piece - origin) @ rot, lower, upper) for piece in source["pieces"]]
+            local = [clip_to_box(rotate_points(piece - origin, rot), lower, upper) for piece in source["pieces"]]
             pieces[k] = [piece for piece in local if len(piece)]
-            surface = (source["surface"] - origin) @ rot
+            surface = rotate_points(source["surface"] - origin, rot)
             points[k] = surface[np.all((surface >= lower) & (surface <= upper), axis=1)]
             volume[k] = source["volume"]
     return Patches(np.asarray(representative, dtype=np.int64), pieces, points, volume)
