@@ -187,3 +187,78 @@ def test_the_representatives_dataset_gives_each_labelled_patch_its_representativ
     assert np.array_equal(np.asarray(batch["points"], dtype=np.float16), crops[[2, 0, 2]])
     assert np.array_equal(np.asarray(batch["label"]), [1, 0, 0])
     assert "assembly" not in zarr.open_group(str(out), mode="r").attrs  # the one object's report is not its own
+
+
+def _group(path, arrays: dict):
+    import zarr
+
+    group = zarr.open_group(str(path), mode="w")
+    group.attrs.update({"onepiece_format": 1, "complete": True, "grid_shape": [4, 8, 2], "code_bytes": 8})
+    for name, data in arrays.items():
+        group.create_array(name, data=data)
+    return group
+
+
+def test_the_source_labels_dataset_gives_each_patch_the_label_a_gave_its_representative(tmp_path):
+    from onepiece_dist.learn.dataset import GraspDataset
+    from onepiece_dist.store.dataset import encode_names
+
+    variants = importlib.import_module("experiment_b_variants")
+    poses = np.tile(np.eye(4), (5, 1, 1))
+    poses[:, 0, 3] = np.arange(5)  # B's grasp k: object [duck, duck, mug, mug, mug][k], candidate k
+    crops = np.random.default_rng(0).normal(size=(3, 16, 3)).astype(np.float16)
+    _group(tmp_path / "b.zarr", {"objects/name": encode_names(["duck", "mug"]),
+                                 "grasps/object": np.array([0, 0, 1, 1, 1], np.int32), "grasps/candidate_pose": poses,
+                                 "unique/points": crops, "unique/representative": np.array([4, 1, 2]),
+                                 "assembled/grasps/patch": np.array([2, 0, 2, 1], np.int32),
+                                 "assembled/grasps/success": np.array([1, 0, 1, 1], np.uint8)})
+    # A lists the objects the other way round and never labelled B's grasp 1 (patch 1's representative)
+    _group(tmp_path / "a.zarr", {"objects/name": encode_names(["mug", "duck"]),
+                                 "grasps/candidate_pose": poses[[4, 2, 0]],
+                                 "grasps/object": np.array([0, 0, 1], np.int32),
+                                 "grasps/success": np.array([1, 0, 1], np.uint8)})
+    out = variants.source_labels_dataset(tmp_path / "b.zarr", tmp_path / "a.zarr", tmp_path / "src.zarr")
+    data = GraspDataset(str(out), "grasps", inputs=("points",))
+    assert np.array_equal(data.groups, [2, 0, 2])  # patch 1's row is left out
+    batch = data.batch(np.arange(3))
+    assert np.array_equal(np.asarray(batch["points"], dtype=np.float16), crops[[2, 0, 2]])
+    assert np.array_equal(np.asarray(batch["label"]), [0, 1, 0])  # A's labels of grasps 2, 4, 2; not B's 1, 0, 1
+
+
+def test_repeat_agreement_counts_equal_labels_against_the_floor_of_independent_ones():
+    variants = importlib.import_module("experiment_b_variants")
+    first, again = np.array([1, 1, 0, 0], bool), np.array([1, 0, 0, 0], bool)
+    out = variants.repeat_agreement(first, again, np.array([1.0, 0.75, 0.5, 0.0]), np.array([1.0, 0.5, 0.25, 0.0]))
+    assert out["agreement"] == 0.75 and out["independent_floor"] == 0.5  # 0.5 * 0.25 + 0.5 * 0.75
+    assert out["positive_rate"] == 0.5 and out["positive_rate_again"] == 0.25 and out["quality_correlation"] > 0.9
+    assert variants.repeat_agreement(first, first, np.ones(4), np.ones(4))["quality_correlation"] is None
+
+
+def _variant_row(radius: int, variant: str, ap: float, top1: float) -> dict:
+    return {"radius": radius, "variant": variant, "top1": top1, "top1_ci95": [top1 - 0.05, top1 + 0.05], "ap": ap,
+            "ap_std": 0.01, "ap_ci95": [ap - 0.02, ap + 0.02], "seeds": 3, "experiment_b_ap": 0.69,
+            "experiment_r_ap": 0.71, "experiment_r_top1": 0.89}
+
+
+def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labels_repeat():
+    page = importlib.import_module("experiment_page")
+    rows = [_variant_row(radius, variant, ap, top1) for radius, variant, ap, top1 in (
+        (0, "as_trained", 0.69, 0.84), (0, "representatives", 0.692, 0.87), (0, "source_labels", 0.72, 0.90),
+        (2, "as_trained", 0.67, 0.83), (2, "representatives", 0.66, 0.82), (2, "source_labels", 0.70, 0.95))]
+    r = {"command": "python benchmarks/experiment_b_variants.py", "date": "2026-11-27", "machine": "x86_64",
+         "experiment": "python benchmarks/paper_experiment.py", "experiment_date": "2026-11-27", "model": "pointnet",
+         "steps": 500, "heldout_random_choice": 0.42, "rows": rows,
+         "label_transfer": {"0": {"patch_vs_representative": 0.66, "patch_vs_every_grasp": 0.525}},
+         "label_repeatability": {"grasps": 2560, "agreement": 0.75, "quality_correlation": 0.6,
+                                 "positive_rate": 0.44, "positive_rate_again": 0.45, "independent_floor": 0.5}}
+    text = "\n".join(page.variants_section(r))
+    assert "Lifts B to R: r0 representatives' own crops and A's labels." in text  # r2's AP 0.70 < R's 0.71
+    perfect = [line for line in text.splitlines() if line.startswith("- r")]
+    assert "reaches R" in perfect[0] and "from 0.690 to 0.692" in perfect[0] and "still trails R" in perfect[1]
+    assert "agree with A's labels 75.0%" in text and "r0: 66.0% with their representatives'" in text
+    r["label_repeatability"] = None
+    assert "repeats itself" not in "\n".join(page.variants_section(r))
+    r["dataset_counts"] = {"B r0": [11118, 11128], "heldout": [7502, 7500]}
+    assert "B r0 11,118 (11,128), heldout 7,502 (7,500)" in "\n".join(page.variants_section(r))
+    r["dataset_counts"] = {"B r0": [11128, 11128], "heldout": [7500, 7500]}
+    assert "the experiment's own (same counts)" in "\n".join(page.variants_section(r))
