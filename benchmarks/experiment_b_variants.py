@@ -57,20 +57,13 @@ def representatives_dataset(source: Path, out: Path) -> Path:
 
     src = zarr.open_group(str(source), mode="r")
     patch = src["assembled/grasps/patch"][:].astype(np.int64)
-    group = zarr.open_group(str(out), mode="w")
-    group.attrs.update({k: v for k, v in src.attrs.asdict().items() if k not in ("assembly", "labels")})
-    points = src["unique/points"]
-    group.create_array("grasps/points", data=points[:][patch], chunks=(512, *points.shape[1:]))
-    group.create_array("grasps/success", data=src["assembled/grasps/success"][:])
-    group.create_array("grasps/object", data=patch.astype(np.int32))
-    return out
+    return _crops_dataset(source, out, patch, src["assembled/grasps/success"][:])
 
 
 def source_labels_dataset(source: Path, a_path: Path, out: Path) -> Path:
     """As :func:`representatives_dataset`, but each row's success is the label arm A (``a_path``) gave its patch's
     representative grasp on its source object (found by object name and candidate pose). Rows whose representative
     A did not label are left out."""
-    import zarr
     from paper_experiment import match_rows
 
     from onepiece_dist.store import open_dataset
@@ -79,12 +72,20 @@ def source_labels_dataset(source: Path, a_path: Path, out: Path) -> Path:
     patch = b["assembled/grasps/patch"].astype(np.int64)
     in_a = match_rows(b, a)[b["unique/representative"].astype(np.int64)[patch]]
     keep = in_a >= 0
+    return _crops_dataset(source, out, patch[keep], a["grasps/success"][in_a[keep]])
+
+
+def _crops_dataset(source: Path, out: Path, patch: np.ndarray, success: np.ndarray) -> Path:
+    """Write ``out``: rows (n,) of ``patch`` with points ``unique/points[patch]`` of the B dataset ``source``, the
+    given ``success`` (n,) and the patch as object; ``source``'s attributes but its one object's reports."""
+    import zarr
+
     src, group = zarr.open_group(str(source), mode="r"), zarr.open_group(str(out), mode="w")
     group.attrs.update({k: v for k, v in src.attrs.asdict().items() if k not in ("assembly", "labels")})
     points = src["unique/points"]
-    group.create_array("grasps/points", data=points[:][patch[keep]], chunks=(512, *points.shape[1:]))
-    group.create_array("grasps/success", data=a["grasps/success"][in_a[keep]])
-    group.create_array("grasps/object", data=patch[keep].astype(np.int32))
+    group.create_array("grasps/points", data=points[:][patch], chunks=(512, *points.shape[1:]))
+    group.create_array("grasps/success", data=success)
+    group.create_array("grasps/object", data=patch.astype(np.int32))
     return out
 
 
