@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.portable import sin_cos
+
 
 def pose_from_axes(origins: np.ndarray, approach: np.ndarray, closing: np.ndarray) -> np.ndarray:
     """Build gripper poses.
@@ -35,7 +37,7 @@ def invert_poses(poses: np.ndarray) -> np.ndarray:
     rot = np.swapaxes(poses[..., :3, :3], -1, -2)
     out = np.zeros_like(poses)
     out[..., :3, :3] = rot
-    out[..., :3, 3] = -np.einsum("...ij,...j->...i", rot, poses[..., :3, 3])
+    out[..., :3, 3] = -apply_rotation(rot, poses[..., :3, 3])
     out[..., 3, 3] = 1.0
     return out
 
@@ -81,6 +83,32 @@ def rotate_points(points: np.ndarray, rot: np.ndarray) -> np.ndarray:
     return p[:, 0:1] * r[0] + p[:, 1:2] * r[1] + p[:, 2:3] * r[2]
 
 
+def compose_rotations(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a @ b`` for (..., 3, 3) float matrices with the same bits on every CPU (as rotate_points: three products
+    summed in one fixed order, not a BLAS kernel). -> (..., 3, 3) float64"""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return (a[..., :, 0, None] * b[..., None, 0, :] + a[..., :, 1, None] * b[..., None, 1, :]
+            + a[..., :, 2, None] * b[..., None, 2, :])
+
+
+def apply_rotation(rot: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """``rot @ vector`` for (..., 3, 3) ``rot`` and (..., 3) ``vectors``, summed in one fixed order (the same bits
+    on every CPU). -> (..., 3) float64"""
+    r, v = np.asarray(rot, dtype=np.float64), np.asarray(vectors, dtype=np.float64)
+    return r[..., :, 0] * v[..., 0, None] + r[..., :, 1] * v[..., 1, None] + r[..., :, 2] * v[..., 2, None]
+
+
+def compose_poses(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a @ b`` for (..., 4, 4) rigid transforms (last row 0 0 0 1), the same bits on every CPU, as
+    compose_rotations. -> (..., 4, 4) float64"""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    out = np.zeros(np.broadcast_shapes(a.shape, b.shape))
+    out[..., :3, :3] = compose_rotations(a[..., :3, :3], b[..., :3, :3])
+    out[..., :3, 3] = apply_rotation(a[..., :3, :3], b[..., :3, 3]) + a[..., :3, 3]
+    out[..., 3, 3] = 1.0
+    return out
+
+
 def transform_points(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """Apply one (4, 4) transform to (m, 3) points."""
     return points @ pose[:3, :3].T + pose[:3, 3]
@@ -101,12 +129,13 @@ def perturb_pose(pose: np.ndarray, rng: np.random.Generator, translation: float,
     and moved by Gaussian noise of std ``translation`` (m) per axis: the one perturbation of label trials and of
     the label stage's poses around a placement."""
     axis = rng.normal(size=3)
-    axis /= np.linalg.norm(axis)
+    axis /= np.sqrt(np.sum(axis * axis))
     angle = rng.normal(0, rotation)
     k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    turn = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+    sin, cos = sin_cos(angle)
+    turn = np.eye(3) + sin * k + (1 - cos) * compose_rotations(k, k)
     out = pose.copy()
-    out[:3, :3] = pose[:3, :3] @ turn
+    out[:3, :3] = compose_rotations(pose[:3, :3], turn)
     out[:3, 3] += rng.normal(0, translation, 3)
     return out
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from onepiece_dist.core.portable import sin_cos
 from onepiece_dist.errors import MeshRejected
 
 MIN_FACE_AREA = 1e-14
@@ -116,7 +117,8 @@ def box_mesh(extents: tuple[float, float, float], name: str = "box") -> Triangle
 def cylinder_mesh(radius: float, height: float, sections: int = 32, name: str = "cylinder") -> TriangleMesh:
     """Closed cylinder along z centred at the origin, outward winding."""
     ang = np.linspace(0, 2 * np.pi, sections, endpoint=False)
-    ring = np.stack([radius * np.cos(ang), radius * np.sin(ang)], axis=1)
+    sin, cos = sin_cos(ang)
+    ring = np.stack([radius * cos, radius * sin], axis=1)
     verts = np.vstack([np.c_[ring, np.full(sections, -height / 2)], np.c_[ring, np.full(sections, height / 2)],
                        [[0, 0, -height / 2], [0, 0, height / 2]]])
     i = np.arange(sections)
@@ -133,7 +135,8 @@ def sphere_mesh(radius: float, rings: int = 12, sectors: int = 24, name: str = "
     theta = np.linspace(0, np.pi, rings + 1)[1:-1]
     phi = np.linspace(0, 2 * np.pi, sectors, endpoint=False)
     th, ph = np.meshgrid(theta, phi, indexing="ij")
-    body = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], axis=-1).reshape(-1, 3)
+    (sin_th, cos_th), (sin_ph, cos_ph) = sin_cos(th), sin_cos(ph)
+    body = np.stack([sin_th * cos_ph, sin_th * sin_ph, cos_th], axis=-1).reshape(-1, 3)
     verts = np.vstack([[[0, 0, 1]], body, [[0, 0, -1]]]) * radius
     ring = lambda r: 1 + r * sectors + np.arange(sectors)  # noqa: E731
     nxt = lambda r: 1 + r * sectors + (np.arange(sectors) + 1) % sectors  # noqa: E731

@@ -10,8 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.frames import gripper_frame_batches, perpendicular, pose_from_axes
+from onepiece_dist.core.frames import compose_rotations, gripper_frame_batches, perpendicular, pose_from_axes
 from onepiece_dist.core.mesh import TriangleMesh
+from onepiece_dist.core.portable import sin_cos
 from onepiece_dist.spec import GripperSpec, SamplerSpec
 
 _RAY_START = 1e-5
@@ -64,7 +65,7 @@ def _antipodal_poses(mesh, points, normals, count, gripper, sampler, rng):
     p, n = points[seeds], normals[seeds]
     t_hit, n_q = cast_rays(mesh, p - n * _RAY_START, -n)
     width = t_hit + _RAY_START
-    cos_cone = np.cos(np.arctan(sampler.friction_cone))
+    cos_cone = 1.0 / np.sqrt(1.0 + sampler.friction_cone**2)  # cos(arctan(mu)), without a CPU-picked arctan
     ok = np.isfinite(t_hit) & (width >= sampler.min_width) & (width <= gripper.max_opening * 0.95)
     ok &= np.abs(np.sum(n_q * n, axis=1)) >= cos_cone
     p, n, width = p[ok], n[ok], width[ok]
@@ -78,7 +79,8 @@ def _poses_around_axes(centre, closing, width, gripper, sampler, rng):
     e1 = perpendicular(closing)
     e2 = np.cross(closing, e1)
     angles = rng.random(len(centre))[:, None] * 2 * np.pi + np.arange(k)[None, :] * 2 * np.pi / k
-    approach = (np.cos(angles)[..., None] * e1[:, None] + np.sin(angles)[..., None] * e2[:, None]).reshape(-1, 3)
+    sin, cos = sin_cos(angles)
+    approach = (cos[..., None] * e1[:, None] + sin[..., None] * e2[:, None]).reshape(-1, 3)
     lo, hi = sampler.depth_range
     depth = (lo + (hi - lo) * rng.random(len(approach))) * gripper.closing_depth
     origins = np.repeat(centre, k, axis=0) - approach * depth[:, None]
@@ -94,7 +96,8 @@ def _normal_poses(points, normals, count, gripper, sampler, rng):
     e1 = perpendicular(approach)
     e2 = np.cross(approach, e1)
     ang = rng.random(len(p))[:, None] * np.pi
-    closing = np.cos(ang) * e1 + np.sin(ang) * e2
+    sin, cos = sin_cos(ang)
+    closing = cos * e1 + sin * e2
     lo, hi = sampler.depth_range
     depth = (lo + (hi - lo) * rng.random(len(p))) * gripper.closing_depth
     poses = pose_from_axes(p - approach * depth[:, None], approach, closing)
@@ -108,11 +111,32 @@ def estimate_normals(points: np.ndarray, query: np.ndarray, neighbours: int = 16
 
     tree = o3d.geometry.KDTreeFlann(o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points)))
     idx = np.array([np.asarray(tree.search_knn_vector_3d(q, neighbours)[1]) for q in query])
-    local = points[idx] - points[idx].mean(axis=1, keepdims=True)
-    _, _, vt = np.linalg.svd(local, full_matrices=False)
-    normal = vt[:, -1, :]
+    normal = plane_normals(points[idx] - points[idx].mean(axis=1, keepdims=True))
     outward = np.sum(normal * (query - points.mean(axis=0)), axis=1) < 0
     return np.where(outward[:, None], -normal, normal)
+
+
+def plane_normals(local: np.ndarray) -> np.ndarray:
+    """Unit normals, sign arbitrary, of the least-squares planes of centred neighbourhoods ``local`` (k, q, 3)
+    float: each covariance's least axis. -> (k, 3) float64
+
+    The same bits on every CPU, unlike an SVD (LAPACK on the CPU's BLAS kernel): the covariance's adjugate has
+    the eigenvalues l2*l3, l1*l3, l1*l2 on the same axes, so its powers (six squarings: the 64th) turn every row
+    onto the least axis, in products and sums of one fixed order. A neighbourhood on a line or a point (adjugate
+    zero) gets an axis perpendicular to it.
+    """
+    cov = np.sum(local[:, :, :, None] * local[:, :, None, :], axis=1)  # (k, 3, 3)
+    power = np.stack([np.cross(cov[:, 1], cov[:, 2]), np.cross(cov[:, 2], cov[:, 0]),
+                      np.cross(cov[:, 0], cov[:, 1])], axis=1)
+    for _ in range(7):
+        power = power / np.maximum(np.abs(power).max(axis=(1, 2)), 1e-300)[:, None, None]
+        power = compose_rotations(power, power)
+    rows = np.sum(power * power, axis=2)
+    best = power[np.arange(len(power)), np.argmax(rows, axis=1)]
+    flat = np.max(rows, axis=1) > 0
+    spread = cov[np.arange(len(cov)), np.argmax(np.sum(cov * cov, axis=2), axis=1)]
+    fallback = perpendicular(np.where(np.any(spread != 0, axis=1, keepdims=True), spread, [[0.0, 0.0, 1.0]]))
+    return np.where(flat[:, None], best / np.sqrt(np.maximum(rows.max(axis=1), 1e-300))[:, None], fallback)
 
 
 def cast_rays(mesh: TriangleMesh, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

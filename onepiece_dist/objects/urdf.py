@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.portable import sin_cos
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.paths import package_reference, relative_reference
 
@@ -91,7 +92,7 @@ def _origin(node: ET.Element | None, source: str) -> np.ndarray:
         return pose
     xyz = _floats(node.get("xyz", "0 0 0"), 3, "origin xyz", source)
     roll, pitch, yaw = _floats(node.get("rpy", "0 0 0"), 3, "origin rpy", source)
-    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    (sr, sp, sy), (cr, cp, cy) = sin_cos(np.array([roll, pitch, yaw]))
     pose[:3, :3] = [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
                     [-sp, cp * sr, cp * cr]]

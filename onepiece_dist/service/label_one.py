@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from onepiece_dist.core.frames import perturb_pose
+from onepiece_dist.core.frames import compose_poses, perturb_pose
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_regions
@@ -145,8 +145,8 @@ def _collect(rows, k, placement, points, poses, batch, spec, rng) -> None:
     settled = batch.settled_pose[ok]
     grid, res = spec.grid_shape(), spec.voxel.resolution
     rows["patch"].append(np.full(int(ok.sum()), k))
-    rows["pose"].append(placement @ settled)
-    rows["candidate_pose"].append(placement @ poses[ok])
+    rows["pose"].append(compose_poses(placement, settled))
+    rows["candidate_pose"].append(compose_poses(placement, poses[ok]))
     for name in ("width", "shift", "quality", "slip", "success"):
         rows[name].append(getattr(batch, name)[ok])
     codes, _, inside = crop_regions(points, settled, grid, res, keep_points=True)

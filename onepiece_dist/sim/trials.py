@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as pb
 
-from onepiece_dist.core.frames import invert_poses, perturb_pose
+from onepiece_dist.core import portable
+from onepiece_dist.core.frames import compose_poses, invert_poses, perturb_pose
 from onepiece_dist.sim.world import SimWorld, quat_from_matrix
 from onepiece_dist.spec import SimSpec
 
@@ -123,7 +124,7 @@ def extract_trial(world: SimWorld, pose: np.ndarray) -> tuple[int, np.ndarray, f
     if not all(finger_contacts(world)):
         return 2, pose, np.nan, shift, steps
     q = [s[0] for s in pb.getJointStates(world.gripper, [0, 1], physicsClientId=world.client)]
-    settled = invert_poses(obj) @ world.gripper_pose()
+    settled = compose_poses(invert_poses(obj), world.gripper_pose())
     return 0, settled, world.spec.max_opening - q[0] - q[1], shift, steps
 
 
@@ -187,13 +188,14 @@ def _trajectory(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     lift = np.zeros((lift_steps, 3))
     lift[:, 2] = np.linspace(0, LIFT_HEIGHT, lift_steps)
     t = np.arange(int(round(SHAKES * SHAKE_PERIOD / dt))) * dt
-    wave = np.sin(2 * np.pi * t / SHAKE_PERIOD)
+    wave = portable.sin(2 * np.pi * t / SHAKE_PERIOD)
     up = np.full_like(wave, LIFT_HEIGHT)
     zeros = np.zeros_like(wave)
     offsets = np.vstack([lift, np.c_[SHAKE_AMPLITUDE * wave, zeros, up], np.c_[zeros, SHAKE_AMPLITUDE * wave, up],
                          np.c_[zeros, zeros, up]])
     angles = np.concatenate([np.zeros(lift_steps + 2 * len(t)), ROTATION_AMPLITUDE * wave])
-    return offsets, np.cos(angles / 2), np.sin(angles / 2)
+    sin, cos = portable.sin_cos(angles / 2)
+    return offsets, cos, sin
 
 
 @dataclass(frozen=True)

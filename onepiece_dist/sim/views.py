@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from onepiece_dist.core import portable
+
 NEAR_FRACTION = 0.05  # near plane as a fraction of the camera distance
 FAR_FACTOR = 3.0  # far plane as a multiple of the camera distance
 
@@ -33,7 +35,8 @@ def sphere_directions(count: int) -> np.ndarray:
     z = 1 - 2 * k / count
     azimuth = np.pi * (1 + 5**0.5) * k
     r = np.sqrt(1 - z**2)
-    return np.stack([r * np.cos(azimuth), r * np.sin(azimuth), z], axis=1)
+    sin, cos = portable.sin_cos(azimuth)
+    return np.stack([r * cos, r * sin, z], axis=1)
 
 
 def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -58,7 +61,7 @@ def orbit_cameras(vertices: np.ndarray, count: int, size: int, fov_deg: float, m
 
 def framing_distance(radius: float, fov_deg: float, margin: float = 1.2) -> float:
     """Camera distance at which a sphere of ``radius`` fills the field of view, with ``margin``."""
-    return margin * radius / np.sin(np.radians(fov_deg) / 2)
+    return margin * radius / float(portable.sin(np.radians(fov_deg) / 2))
 
 
 def camera_at(eye: np.ndarray, target: np.ndarray, size: int, fov_deg: float) -> Camera:
@@ -100,7 +103,7 @@ def back_project(depth: np.ndarray, camera: Camera) -> np.ndarray:
     rows, cols = np.nonzero(depth < 1.0 - 1e-6)
     z_ndc = 2.0 * depth[rows, cols].astype(np.float64) - 1.0
     distance = 2.0 * near * far / (far + near - z_ndc * (far - near))
-    half = np.tan(np.radians(camera.fov_deg) / 2)
+    half = float(portable.tan(np.radians(camera.fov_deg) / 2))
     # TinyRenderer samples pixel (row, col) at the lower-left corner of the pixel with rows flipped:
     # x = col, y = size - 1 - row in window coordinates (measured: exact to 1e-6 m on a box).
     x = (2.0 * cols / size - 1.0) * half * distance

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pybullet as pb
 
+from onepiece_dist.core.frames import apply_rotation
 from onepiece_dist.spec import GripperSpec
 
 TIME_STEP = 1.0 / 240.0
@@ -146,7 +147,7 @@ class SimWorld:
         """(4, 4) world pose of the object's mesh frame."""
         pos, quat = pb.getBasePositionAndOrientation(self.obj, physicsClientId=self.client)
         pose = matrix_from_pose(pos, quat)
-        pose[:3, 3] -= pose[:3, :3] @ self.com
+        pose[:3, 3] -= apply_rotation(pose[:3, :3], self.com)
         return pose
 
     def gripper_pose(self) -> np.ndarray:
