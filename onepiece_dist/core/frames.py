@@ -78,29 +78,27 @@ def rotate_points(points: np.ndarray, rot: np.ndarray) -> np.ndarray:
     then decides by exact comparisons (the clip's plane and collinearity tests) changes with them, and so does the
     physics on it. Slower than BLAS: for per-object geometry, not for the crops' millions of point-pose pairs.
     """
-    p = np.asarray(points, dtype=np.float64)
-    r = np.asarray(rot, dtype=np.float64)
-    return p[:, 0:1] * r[0] + p[:, 1:2] * r[1] + p[:, 2:3] * r[2]
-
-
-def compose_rotations(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a @ b`` for (..., 3, 3) float matrices with the same bits on every CPU (as rotate_points: three products
-    summed in one fixed order, not a BLAS kernel). -> (..., 3, 3) float64"""
-    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    return (a[..., :, 0, None] * b[..., None, 0, :] + a[..., :, 1, None] * b[..., None, 1, :]
-            + a[..., :, 2, None] * b[..., None, 2, :])
+    return apply_rotation(np.swapaxes(rot, -1, -2), points)
 
 
 def apply_rotation(rot: np.ndarray, vectors: np.ndarray) -> np.ndarray:
-    """``rot @ vector`` for (..., 3, 3) ``rot`` and (..., 3) ``vectors``, summed in one fixed order (the same bits
-    on every CPU). -> (..., 3) float64"""
+    """``rot @ vector`` for (..., 3, 3) ``rot`` and (..., 3) ``vectors`` (broadcast), the same bits on every CPU:
+    three products summed in one fixed order, not a BLAS kernel. The one fixed-order product that rotate_points,
+    compose_rotations and compose_poses are made of. -> (..., 3) float64"""
     r, v = np.asarray(rot, dtype=np.float64), np.asarray(vectors, dtype=np.float64)
     return r[..., :, 0] * v[..., 0, None] + r[..., :, 1] * v[..., 1, None] + r[..., :, 2] * v[..., 2, None]
 
 
+def compose_rotations(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a @ b`` for (..., 3, 3) float matrices, the same bits on every CPU: ``a`` applied to each column of ``b``.
+    -> (..., 3, 3) float64"""
+    columns = apply_rotation(np.asarray(a)[..., None, :, :], np.swapaxes(b, -1, -2))  # (..., column, row)
+    return np.swapaxes(columns, -1, -2)
+
+
 def compose_poses(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a @ b`` for (..., 4, 4) rigid transforms (last row 0 0 0 1), the same bits on every CPU, as
-    compose_rotations. -> (..., 4, 4) float64"""
+    """``a @ b`` for (..., 4, 4) rigid transforms (last row 0 0 0 1), the same bits on every CPU.
+    -> (..., 4, 4) float64"""
     a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
     out = np.zeros(np.broadcast_shapes(a.shape, b.shape))
     out[..., :3, :3] = compose_rotations(a[..., :3, :3], b[..., :3, :3])

@@ -1,4 +1,4 @@
-"""Sine, cosine and tangent from IEEE-754 additions, products and one rounding: the same bits on every CPU.
+"""Sine, cosine and tangent from IEEE-754 additions and products alone: the same bits on every CPU.
 
 ``np.sin`` and ``np.cos`` are not the same function on every machine: numpy picks a SIMD implementation per CPU
 (AVX-512 machines use Intel's SVML, whose last bits differ from glibc's: numpy issue #23523), and glibc picks an

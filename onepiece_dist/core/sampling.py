@@ -121,7 +121,7 @@ def plane_normals(local: np.ndarray) -> np.ndarray:
     float: each covariance's least axis. -> (k, 3) float64
 
     The same bits on every CPU, unlike an SVD (LAPACK on the CPU's BLAS kernel): the covariance's adjugate has
-    the eigenvalues l2*l3, l1*l3, l1*l2 on the same axes, so its powers (six squarings: the 64th) turn every row
+    the eigenvalues l2*l3, l1*l3, l1*l2 on the same axes, so its powers (seven squarings: the 128th) turn every row
     onto the least axis, in products and sums of one fixed order. A neighbourhood on a line or a point (adjugate
     zero) gets an axis perpendicular to it.
     """
@@ -132,11 +132,10 @@ def plane_normals(local: np.ndarray) -> np.ndarray:
         power = power / np.maximum(np.abs(power).max(axis=(1, 2)), 1e-300)[:, None, None]
         power = compose_rotations(power, power)
     rows = np.sum(power * power, axis=2)
-    best = power[np.arange(len(power)), np.argmax(rows, axis=1)]
-    flat = np.max(rows, axis=1) > 0
+    best, largest = power[np.arange(len(power)), np.argmax(rows, axis=1)], rows.max(axis=1)
     spread = cov[np.arange(len(cov)), np.argmax(np.sum(cov * cov, axis=2), axis=1)]
     fallback = perpendicular(np.where(np.any(spread != 0, axis=1, keepdims=True), spread, [[0.0, 0.0, 1.0]]))
-    return np.where(flat[:, None], best / np.sqrt(np.maximum(rows.max(axis=1), 1e-300))[:, None], fallback)
+    return np.where(largest[:, None] > 0, best / np.sqrt(np.maximum(largest, 1e-300))[:, None], fallback)
 
 
 def cast_rays(mesh: TriangleMesh, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
