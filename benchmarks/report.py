@@ -469,10 +469,12 @@ def _or_dash(value) -> str:
     return "-" if value is None else str(value)
 
 
-def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[str, ...], section) -> str:
-    """``page``'s text with the block between the two marks rendered by ``section`` from the result(s) ``names``
-    (one argument each; the block is kept as it is when any of them is missing)."""
-    text = page.read_text()
+def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[str, ...], section,
+                 text: str | None = None) -> str:
+    """``page``'s text (or ``text``, the page as rendered so far) with the block between the two marks rendered by
+    ``section`` from the result(s) ``names`` (one argument each; the block is kept as it is when any of them is
+    missing)."""
+    text = page.read_text() if text is None else text
     results = [load(name) for name in ((names,) if isinstance(names, str) else names)]
     if any(result is None for result in results):
         return text
@@ -481,7 +483,10 @@ def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[
 
 
 def render_assembly_page() -> str:
-    return render_block(ASSEMBLY_PAGE, FIGURES_START, FIGURES_END, "default_job", default_job_figures)
+    from bench_cpu_independence import CPU_END, CPU_START, cpu_section
+
+    text = render_block(ASSEMBLY_PAGE, FIGURES_START, FIGURES_END, "default_job", default_job_figures)
+    return render_block(ASSEMBLY_PAGE, CPU_START, CPU_END, "cpu_independence", cpu_section, text=text)
 
 
 RELIABILITY_PAGE = HERE.parent / "docs" / "reliability.md"

@@ -92,3 +92,21 @@ def test_the_physics_floor_is_given_at_one_copys_rates_and_at_two_at_once():
     run["protocol"]["two_at_once"] = {"extract_trials_per_s_per_core": 5.0, "label_trials_per_s_per_core": 2.5}
     both = floor(run, label, 200)
     assert both.startswith(alone) and "100 s and 200 s, 300 s (above the target)" in both
+
+
+def test_the_cpu_block_says_met_only_when_no_array_differs():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_cpu_independence import cpu_section
+
+    result = {"command": "python benchmarks/bench_cpu_independence.py", "date": "2026-11-27", "machine": "x86_64",
+              "settings": {"SSE": {"OPENBLAS_CORETYPE": "Prescott"}}, "extract_objects": "primitives[0:1]",
+              "rows": [{"job": "pinned", "setting": "SSE", "arrays": 44, "differing": []}],
+              "numpy_sines": {"angles_with_another_sine_or_cosine": 0.06, "grasps": 100,
+                              "settled_poses_moved_over_1e-4": 2, "codes_changed": 1},
+              "blas_patches": {"labels": 230, "labels_changed": 3}}
+    assert "under every setting: met." in cpu_section(result)
+    result["rows"][0]["differing"] = ["assembled/grasps/slip"]
+    block = cpu_section(result)
+    assert "not met (assembled/grasps/slip)" in block
+    assert "| pinned (44 arrays) | SSE | `assembled/grasps/slip` |" in block
+    assert "3 of the pinned job's 230 labels" in block

@@ -1,0 +1,210 @@
+"""Does a job's dataset depend on the CPU it ran on? Jobs run with this CPU's numpy, libm and BLAS paths turned off.
+
+    .venv/bin/python benchmarks/bench_cpu_independence.py
+
+x86-64 CPUs differ in what numpy (SIMD level: SVML on AVX-512), glibc's libm (FMA or plain variants) and OpenBLAS
+(kernel per CPU) pick for them; one ULP of a pose handed to pybullet can move a trial. Two jobs, each run in a
+fresh process with and without each older-CPU setting, every array of the dataset compared by digest:
+
+  extract  the default job's extraction on 16 objects x 200 candidates (ingest, extract, dedup);
+  pinned   tests/test_pinned_job.py's job (3 objects x 24 candidates, every stage to label).
+
+And what the fixes buy, with the formulas they replaced patched back in (``--formula``):
+
+  np.sin   the samplers' sines and cosines from numpy (one ULP from core.portable's in a few % of angles):
+           how many settled poses and codes of the extract job that moves, on this CPU;
+  blas     the one object's patches rotated by a BLAS matrix product instead of core.frames.rotate_points:
+           how many of the pinned job's labels OpenBLAS's SSE kernel changes.
+
+Results: benchmarks/results/cpu_independence.json, rendered into docs/assembly.md by benchmarks/report.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+OLDER_CPU = {"OpenBLAS SSE kernel": {"OPENBLAS_CORETYPE": "Prescott"},
+             "numpy without AVX2": {"NPY_DISABLE_CPU_FEATURES": "X86_V3"},
+             "glibc without FMA": {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX"}}
+EXTRACT_OBJECTS = "pybullet:named[0:4]+pybullet:random_urdfs[0:12]"
+SAVED = ("grasps/pose", "grasps/code", "assembled/grasps/success")
+
+
+def job_spec(job: str, output: Path):
+    from onepiece_dist.spec import JobSpec
+
+    if job == "pinned":
+        from tests.test_pinned_job import pinned_spec
+
+        return pinned_spec(output)
+    return JobSpec(objects=EXTRACT_OBJECTS, grasps_per_object=200, output=str(output),
+                   stages=("ingest", "extract", "dedup"))
+
+
+def patch_formula(formula: str) -> None:
+    """Put back the formula a fix replaced, in this process only."""
+    if formula == "np.sin":
+        import onepiece_dist.core.sampling as sampling
+
+        sampling.sin_cos = lambda angle: (np.sin(angle), np.cos(angle))
+    elif formula == "blas":
+        import onepiece_dist.service.patches as patches
+
+        patches.rotate_points = lambda points, rot: np.asarray(points, dtype=np.float64) @ rot
+
+
+def run_one(job: str, formula: str, keep: Path) -> dict[str, str]:
+    """Run ``job`` in this process; save the arrays in SAVED to ``keep`` (.npz). -> {array: digest}"""
+    import zarr
+
+    from onepiece_dist.service.local import run_local
+
+    patch_formula(formula)
+    with tempfile.TemporaryDirectory() as scratch:
+        output = Path(scratch) / "job.zarr"
+        run_local(job_spec(job, output))
+        root, digests, saved = zarr.open_group(str(output), mode="r"), {}, {}
+        for name, array in _walk(root):
+            values = np.ascontiguousarray(array[...])
+            digests[name] = hashlib.blake2b(values.tobytes(), digest_size=12).hexdigest()
+            if name in SAVED:
+                saved[name.replace("/", ".")] = values
+    np.savez(keep, **saved)
+    return digests
+
+
+def _walk(group, prefix: str = ""):
+    import zarr
+
+    for name, member in group.members():
+        if isinstance(member, zarr.Group):
+            yield from _walk(member, f"{prefix}{name}/")
+        else:
+            yield f"{prefix}{name}", member
+
+
+def in_process(job: str, env: dict[str, str], formula: str, keep: Path) -> dict[str, str]:
+    """``run_one`` in a fresh Python with ``env`` added (the CPU settings take effect at library load)."""
+    command = [sys.executable, __file__, "--one", job, "--formula", formula, "--keep", str(keep)]
+    out = subprocess.run(command, capture_output=True, text=True, env={**os.environ, **env}, timeout=900, cwd=ROOT)
+    if out.returncode != 0:
+        raise RuntimeError(f"{job} ({env}, {formula}) failed: {out.stderr[-2000:]}")
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+def differing(a: dict[str, str], b: dict[str, str]) -> list[str]:
+    return sorted(name for name in a.keys() | b.keys() if a.get(name) != b.get(name))
+
+
+def settings_rows(job: str, folder: Path) -> tuple[dict, list[dict]]:
+    """The job on this CPU and under each older-CPU setting (and all of them): arrays, and those that differ."""
+    base = in_process(job, {}, "shipped", folder / f"{job}-this.npz")
+    every = {k: v for env in OLDER_CPU.values() for k, v in env.items()}
+    rows = []
+    for name, env in [*OLDER_CPU.items(), ("all three", every)]:
+        found = in_process(job, env, "shipped", folder / f"{job}-{len(rows)}.npz")
+        rows.append({"job": job, "setting": name, "arrays": len(base), "differing": differing(base, found)})
+    return base, rows
+
+
+def sine_sensitivity(folder: Path) -> dict:
+    """The extract job with numpy's sines in the samplers against core.portable's, on this CPU."""
+    from onepiece_dist.core.portable import sin_cos
+
+    angles = np.random.default_rng(0).uniform(0, 4 * np.pi, 200_000)
+    sin, cos = sin_cos(angles)
+    moved_values = float(np.mean((sin != np.sin(angles)) | (cos != np.cos(angles))))
+    in_process("extract", {}, "np.sin", folder / "extract-np-sin.npz")
+    a, b = np.load(folder / "extract-this.npz"), np.load(folder / "extract-np-sin.npz")
+    same_rows = len(a["grasps.pose"]) == len(b["grasps.pose"])
+    moved = np.abs(a["grasps.pose"] - b["grasps.pose"]).max(axis=(1, 2)) if same_rows else None
+    return {"angles_with_another_sine_or_cosine": round(moved_values, 4), "grasps": len(a["grasps.pose"]),
+            "grasps_with_numpy_sines": len(b["grasps.pose"]),
+            "settled_poses_moved_over_1e-4": int((moved > 1e-4).sum()) if same_rows else None,
+            "codes_changed": int((a["grasps.code"] != b["grasps.code"]).any(axis=1).sum()) if same_rows else None}
+
+
+def blas_patch_labels(folder: Path) -> dict:
+    """The pinned job with BLAS-rotated patches, on this CPU and under OpenBLAS's SSE kernel: labels changed."""
+    this = folder / "pinned-blas-this.npz"
+    sse = folder / "pinned-blas-sse.npz"
+    in_process("pinned", {}, "blas", this)
+    in_process("pinned", OLDER_CPU["OpenBLAS SSE kernel"], "blas", sse)
+    a, b = (np.load(p)["assembled.grasps.success"] for p in (this, sse))
+    return {"labels": len(a), "labels_under_sse": len(b),
+            "labels_changed": int(np.sum(a != b)) if len(a) == len(b) else None}
+
+
+def cpu_model() -> str:
+    lines = Path("/proc/cpuinfo").read_text().splitlines() if Path("/proc/cpuinfo").is_file() else []
+    return next((line.split(":", 1)[1].strip() for line in lines if line.startswith("model name")), "unknown CPU")
+
+
+CPU_START = "<!-- cpu: rendered by benchmarks/report.py from benchmarks/results/cpu_independence.json -->"
+CPU_END = "<!-- end of cpu -->"
+
+
+def cpu_section(r: dict) -> str:
+    """docs/assembly.md's block on the same dataset on every CPU, from this benchmark's results."""
+    def described(env: dict) -> str:
+        return ", ".join(f"`{k}={v}`" for k, v in env.items())
+
+    rows = [[f"{row['job']} ({row['arrays']} arrays)", row["setting"],
+             ", ".join(f"`{name}`" for name in row["differing"]) or "none"] for row in r["rows"]]
+    moved = sorted({name for row in r["rows"] for name in row["differing"]})
+    sines, blas = r["numpy_sines"], r["blas_patches"]
+    return "\n".join([
+        CPU_START, f"**Figures:** `{r['command']}` ({r['date']}, {r['machine']}). Each job in a fresh process on "
+        "this CPU and with its paths turned off (" + "; ".join(f"{name}: {described(env)}" for name, env in
+                                                           r["settings"].items())
+        + f"); every array of the dataset compared by digest. extract: `{r['extract_objects']}` x 200 candidates, "
+        "ingest to dedup; pinned: tests/test_pinned_job.py's job, every stage to label.", "",
+        "| job | setting | arrays that differ from this CPU's |", "| --- | --- | --- |",
+        *[f"| {' | '.join(row)} |" for row in rows], "",
+        "Target, every array the same under every setting: " + ("met." if not moved else
+                                                               f"not met ({', '.join(moved)}).")
+        + f" What the fixes buy, with the formulas they replaced put back: numpy's sines in the samplers (another "
+        f"sine or cosine for {sines['angles_with_another_sine_or_cosine']:.1%} of angles) moved "
+        f"{sines['settled_poses_moved_over_1e-4']} of {sines['grasps']:,} settled poses by more than 1e-4 and "
+        f"changed {sines['codes_changed']} codes of the extract job on this CPU; patches rotated by a BLAS product "
+        f"changed {blas['labels_changed']} of the pinned job's {blas['labels']} labels under OpenBLAS's SSE kernel.",
+        CPU_END])
+
+
+def main(argv=None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--one", choices=("extract", "pinned"), help=argparse.SUPPRESS)
+    parser.add_argument("--formula", default="shipped", choices=("shipped", "np.sin", "blas"), help=argparse.SUPPRESS)
+    parser.add_argument("--keep", type=Path, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.one:
+        sys.path.insert(0, str(ROOT))
+        print(json.dumps(run_one(args.one, args.formula, args.keep)))
+        return {}
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(scratch)
+        rows = settings_rows("extract", folder)[1] + settings_rows("pinned", folder)[1]
+        out = {"benchmark": "cpu_independence", "date": date.today().isoformat(),
+               "machine": f"{platform.machine()}, {cpu_model()}, {os.cpu_count()} cores", "settings": OLDER_CPU,
+               "extract_objects": EXTRACT_OBJECTS, "rows": rows, "numpy_sines": sine_sensitivity(folder),
+               "blas_patches": blas_patch_labels(folder), "command": "python benchmarks/bench_cpu_independence.py"}
+    (HERE / "results" / "cpu_independence.json").write_text(json.dumps(out, indent=2) + "\n")
+    print(json.dumps(out, indent=2))
+    return out
+
+
+if __name__ == "__main__":
+    main()
