@@ -83,9 +83,12 @@ def _two_hours(out: dict) -> str:
 
 def _label_rule(out: dict) -> str:
     k = out["args"]["label_trials"]
-    if out["args"].get("success", "nominal") == "every_trial":
-        return f"positive = all {k} trials held"
-    return f"positive = the nominal trial held, of {k}"
+    rule = (f"positive = all {k} trials held" if out["args"].get("success", "nominal") == "every_trial"
+            else f"positive = the nominal trial held, of {k}")
+    if out["args"].get("load", "object") == "grasp":
+        rule += (f"; every trial lifts a payload of {out['args']['load_mass']} kg at the grasp centre, not the "
+                 "object (`sim.load: grasp`, docs/trials.md)")
+    return rule
 
 
 def _optimiser(out: dict) -> str:

@@ -68,11 +68,13 @@ def objects_source(count: int) -> str:
 
 def base_spec(args, folder: Path) -> JobSpec:
     """The spec every arm shares: the paper's normal-direction sampler, the default physics, K label trials and
-    the label rule (``--success``: every_trial, a grasp is positive when all K trials hold)."""
+    the label rule (``--success``: every_trial, a grasp is positive when all K trials hold) and what the label
+    trials lift (``--load``: the object, or a payload at the grasp centre; docs/trials.md)."""
     return JobSpec(objects=objects_source(args.objects), grasps_per_object=args.grasps, seed=args.seed,
                    sampler={"method": "normal"}, output=str(folder / "unused.zarr"),
                    views={"count": args.views, "crop": "partial"} if args.crop == "partial" else {},
                    sim={"label_trials": args.label_trials, "success": args.success, "perturbations_per_patch": 0,
+                        "load": args.load, "load_mass": args.load_mass,
                         "transfer_codes": 0,
                         "points_per_grasp": args.points})
 
@@ -359,6 +361,9 @@ def parse_args(argv=None):
                         help="the trade-off uses each object's first N labelled grasps of arm A")
     parser.add_argument("--success", choices=("nominal", "every_trial"), default="every_trial",
                         help="binary label: the nominal trial held, or all K trials held (docs/trials.md)")
+    parser.add_argument("--load", choices=("object", "grasp"), default="object",
+                        help="what the label trials lift and shake: the object, or a payload at the grasp centre")
+    parser.add_argument("--load-mass", type=float, default=0.5, help="the payload (kg) with --load grasp")
     parser.add_argument("--static-radii", default="",
                         help="radii of the B static arms (crops at the candidate pose, no extraction physics), "
                              "each with its R control; none by default")

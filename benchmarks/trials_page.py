@@ -21,8 +21,18 @@ def label_rules_block(r: dict) -> str:
                       f"candidates each, K = {r['label_trials']}, the default physics) and reads each rule's positive "
                       f"rate off the same {r['held_grasps']:,} held grasps: nominal {rate['nominal']:.1%}, every "
                       f"trial {rate['every_trial']:.1%}, at least half of the trials {rate['half_the_trials']:.1%}; "
-                      f"the nominal trial with the object slipping less than 5 / 10 / 20 mm in the hand {slips}.",
-                      END])
+                      f"the nominal trial with the object slipping less than 5 / 10 / 20 mm in the hand {slips}."
+                      + payload_sentence(r), END])
+
+
+def payload_sentence(r: dict) -> str:
+    """The positive rates with a payload at the grasp centre (``sim.load: grasp``), one per payload mass."""
+    loads = r.get("grasp_load")
+    if not loads:
+        return ""
+    rates = "; ".join(f"{mass} kg: nominal {v['positive_rate']['nominal']:.1%}, every trial "
+                      f"{v['positive_rate']['every_trial']:.1%}" for mass, v in loads.items())
+    return f" With the label trials lifting a payload at the grasp centre (`sim.load: grasp`) instead: {rates}."
 
 
 def render_trials_page() -> str:

@@ -121,6 +121,11 @@ class SimSpec(_Frozen):
     success: Literal["nominal", "every_trial"] = Field("nominal", description="Binary label (grasps/success): "
         "the nominal trial held, or every one of the K trials held (a robust label, as Dex-Net thresholds robust "
         "quality; docs/trials.md). The same with K = 1.")
+    load: Literal["object", "grasp"] = Field("object", description="What the label trials lift and shake: the "
+        "object itself (its mass at its centre of mass), or a payload of load_mass kg centred at the grasp centre "
+        "(the closing region's centre), so the label depends on the contacts of the shape in the gripper and not "
+        "on mass outside it, as a contact-based label (force closure, wrench resistance) does (docs/trials.md).")
+    load_mass: float = Field(0.5, gt=0, le=10, description="Payload (kg) of the label trials with load='grasp'.")
     pose_noise: float = Field(0.003, ge=0, le=0.05, description="Translation noise of perturbed trials (m).")
     rotation_noise: float = Field(0.05, ge=0, le=1, description="Rotation noise of perturbed trials (rad).")
     friction_noise: float = Field(0.2, ge=0, le=1, description="Relative friction noise of perturbed trials.")

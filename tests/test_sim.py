@@ -200,3 +200,68 @@ def test_a_new_world_removes_the_hull_files_of_processes_that_no_longer_run(tmp_
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
     SimWorld(SPEC.gripper).close()
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(files[n].name for n in (f"{alive}-b2", "cache-c3"))
+
+
+def end_grasp(length: float) -> np.ndarray:
+    """A grasp 1.5 cm from the +x end of a 3 x 3 cm bar of ``length`` along x: approach -z, close along y."""
+    return pose_from_axes(np.array([[length / 2 - 0.015, 0, 0.035]]), np.array([[0, 0, -1.0]]),
+                          np.array([[0, 1.0, 0]]))
+
+
+def test_a_payload_at_the_grasp_centre_makes_the_label_ignore_mass_outside_the_gripper():
+    """The same grasp near the end of a short and of a long dense bar: the fingers hold the same shape. Lifting the
+    object itself, the long bar's weight far from the fingers twists it out; with ``sim.load: grasp`` both lift
+    the same payload at the grasp centre and hold."""
+    from onepiece_dist.sim.trials import LabelNoise
+    from onepiece_dist.spec import SimSpec
+
+    world, held = SimWorld(SPEC.gripper), {}
+    try:
+        for length in (0.06, 0.3):
+            mesh = box_mesh((length, 0.03, 0.03))
+            world.load_object([mesh.vertices], enclosed_volume(mesh), 2000.0)
+            for load in ("object", "grasp"):
+                noise = LabelNoise.from_spec(SimSpec(load=load, load_mass=0.5))
+                held[length, load] = bool(run_trials(world, end_grasp(length), label=True, noise=noise).success[0])
+    finally:
+        world.close()
+    assert held == {(0.06, "object"): True, (0.3, "object"): False, (0.06, "grasp"): True, (0.3, "grasp"): True}
+
+
+def test_payload_trials_restore_the_object_and_keep_its_file_only_while_it_is_loaded(tmp_path, monkeypatch):
+    """After labelling with a payload the object is itself again (same extract trial as before, same mass and
+    centre of mass); the file a payload rebuild reads goes with the object; a world that made many rebuilds
+    starts a new client at the next object and gives the same trials as a fresh one."""
+    from onepiece_dist.sim import world as sim_world
+    from onepiece_dist.sim.trials import LabelNoise
+    from onepiece_dist.spec import SimSpec
+
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    monkeypatch.setattr(sim_world, "PAYLOAD_REBUILDS_PER_CLIENT", 1)
+    mesh = box_mesh((0.16, 0.03, 0.03))
+    noise = LabelNoise.from_spec(SimSpec(load="grasp", label_trials=2))
+    poses = np.concatenate([end_grasp(0.16), end_grasp(0.12)])
+    used, fresh = SimWorld(SPEC.gripper), SimWorld(SPEC.gripper)
+    try:
+        used.load_object([mesh.vertices], enclosed_volume(mesh), 2000.0)
+        before = extract_trial(used, poses[0])
+        labelled = run_trials(used, poses, label=True, noise=noise, rng=np.random.default_rng(1))
+        after = extract_trial(used, poses[0])
+        assert np.array_equal(before[1], after[1]) and before[2:] == after[2:]
+        mass = pb.getDynamicsInfo(used.obj, -1, physicsClientId=used.client)[0]
+        assert mass == pytest.approx(0.16 * 0.03 ** 2 * 2000)
+        assert len(list(tmp_path.iterdir())) == 1  # the payload rebuilds' file, while the object is loaded
+        connects, connect = [], pb.connect
+        monkeypatch.setattr(pb, "connect", lambda *args: connects.append(args) or connect(*args))
+        used.load_object([mesh.vertices], enclosed_volume(mesh), 2000.0)  # rebuilds > 1: a new client
+        assert len(connects) == 1 and list(tmp_path.iterdir()) == []
+        fresh.load_object([mesh.vertices], enclosed_volume(mesh), 2000.0)
+        again = run_trials(used, poses, label=True, noise=noise, rng=np.random.default_rng(1))
+        first = run_trials(fresh, poses, label=True, noise=noise, rng=np.random.default_rng(1))
+        for name in ("outcome", "settled_pose", "success", "quality", "slip"):
+            assert np.array_equal(getattr(again, name), getattr(first, name), equal_nan=True), name
+            assert np.array_equal(getattr(labelled, name), getattr(first, name), equal_nan=True), name
+    finally:
+        used.close()
+        fresh.close()
+    assert list(tmp_path.iterdir()) == []

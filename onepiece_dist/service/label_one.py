@@ -3,7 +3,8 @@ around it, so the labelled data cover each unique shape's neighbourhood (docs/as
 
 A trial at one patch must not depend on the rest of the assembly, so each patch is simulated as its own body:
 its convex pieces (real geometry clipped from the source object, service/patches.py), with the source object's
-mass (the mass rule: the fingers lift and shake what they lifted and shook on the source). Crops for codes and
+mass (the mass rule: the fingers lift and shake what they lifted and shook on the source; with ``sim.load: grasp``
+every trial, here and on the sources, lifts the same payload at the grasp centre instead). Crops for codes and
 points come from the patch's real surface points. Results go to ``assembled/grasps/`` in the same layout as
 ``grasps/``.
 """

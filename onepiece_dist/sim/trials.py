@@ -17,7 +17,7 @@ import numpy as np
 import pybullet as pb
 
 from onepiece_dist.core import portable
-from onepiece_dist.core.frames import compose_poses, invert_poses, perturb_pose
+from onepiece_dist.core.frames import apply_rotation, compose_poses, invert_poses, perturb_pose
 from onepiece_dist.sim.world import SimWorld, quat_from_matrix
 from onepiece_dist.spec import SimSpec
 
@@ -209,11 +209,12 @@ class LabelNoise:
     rotation: float
     friction: float
     every_trial: bool = False
+    payload: float | None = None  # kg at the grasp centre (sim.load: grasp); None: the object's own mass
 
     @classmethod
     def from_spec(cls, sim: SimSpec) -> LabelNoise:
         return cls(sim.label_trials, sim.pose_noise, sim.rotation_noise, sim.friction_noise,
-                   sim.success == "every_trial")
+                   sim.success == "every_trial", sim.load_mass if sim.load == "grasp" else None)
 
 
 def label_quality(world: SimWorld, pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> float:
@@ -248,8 +249,24 @@ def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False, noise: L
     for i, pose in enumerate(poses):
         outcome[i], settled[i], width[i], shift[i], steps[i] = extract_trial(world, pose)
         if label and outcome[i] == 0:
-            success[i], slip[i] = lift_and_shake(world, world.gripper_pose())
-            quality[i] = (success[i] + label_quality(world, pose, rng, noise)) / noise.trials
-            if noise.every_trial:
-                success[i] = quality[i] == 1.0
+            success[i], quality[i], slip[i] = label_grasp(world, pose, rng, noise)
     return TrialBatch(outcome, settled, width, shift, steps, success, quality, slip)
+
+
+def label_grasp(world: SimWorld, pose: np.ndarray, rng: np.random.Generator,
+                noise: LabelNoise) -> tuple[bool, float, float]:
+    """The label trials of the candidate ``pose`` (4, 4), right after its extract trial held: (success, quality,
+    slip). The nominal trial lifts and shakes the grasp just closed; with a payload (``noise.payload``) the object
+    is rebuilt as a weight centred at the grasp centre (the closing region's centre at ``pose``) and closed on
+    again, and the object itself is restored afterwards."""
+    if noise.payload is not None:
+        centre = apply_rotation(pose[:3, :3], [world.spec.closing_depth / 2, 0.0, 0.0]) + pose[:3, 3]
+        world.carry_payload(centre, noise.payload)
+    try:
+        held = noise.payload is None or extract_trial(world, pose)[0] == 0
+        success, slip = lift_and_shake(world, world.gripper_pose()) if held else (False, np.nan)
+        quality = (success + label_quality(world, pose, rng, noise)) / noise.trials
+    finally:
+        if noise.payload is not None:
+            world.carry_payload(None)
+    return (quality == 1.0 if noise.every_trial else success), quality, slip

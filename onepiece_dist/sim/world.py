@@ -10,7 +10,6 @@ in the object frame) are also world poses at the start of a trial.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import tempfile
 from dataclasses import dataclass
@@ -27,6 +26,8 @@ SOLVER_ITERATIONS = 50
 CONE_FRICTION = False  # pyramid friction (two directions, each limited by mu N), as MuJoCo's default cone
 FINGER_COUPLING_FORCE = 1000.0  # N: the gear that keeps both fingers at the same opening
 MIN_MASS, MAX_MASS = 0.05, 2.0  # kg
+PAYLOAD_RADIUS = 0.02  # m: a payload's inertia is a solid sphere's of this radius
+PAYLOAD_REBUILDS_PER_CLIENT = 20_000  # about 100 MB that pybullet frees only with its client
 
 
 @dataclass(frozen=True)
@@ -76,16 +77,24 @@ class SimWorld:
         self.spec = gripper
         self.physics = physics
         remove_orphan_hull_files()
+        self.obj: int | None = None
+        self.com = np.zeros(3)
+        self._connect()
+        self._hulls: str | None = None  # the loaded object's hulls file (kept while it is loaded)
+        self._shape, self._centroid, self._mass, self._pieces = -1, np.zeros(3), 0.0, []
+
+    def _connect(self) -> None:
         self.client = pb.connect(pb.DIRECT)
+        physics = self.physics
         pb.setTimeStep(physics.time_step, physicsClientId=self.client)
         pb.setPhysicsEngineParameter(numSolverIterations=physics.solver_iterations, deterministicOverlappingPairs=1,
                                      enableConeFriction=int(physics.cone_friction), enableFileCaching=0,
                                      physicsClientId=self.client)
         self.gripper, self.constraint = self._build_gripper()
-        self.obj: int | None = None
-        self.com = np.zeros(3)
+        self.obj, self._rebuilds = None, 0
 
     def close(self) -> None:
+        self._unload()
         pb.disconnect(physicsClientId=self.client)
 
     def _build_gripper(self) -> tuple[int, int]:
@@ -132,16 +141,62 @@ class SimWorld:
         The object's own friction coefficient is 1: Bullet multiplies the two bodies' coefficients at a contact,
         so each finger contact has the pads' coefficient (``gripper.friction``), as the spec says.
         """
+        if self._rebuilds > PAYLOAD_REBUILDS_PER_CLIENT:
+            self._unload()
+            pb.disconnect(physicsClientId=self.client)
+            self._connect()
+        self._unload()
+        self._centroid = np.vstack(pieces).mean(axis=0)
+        self._mass = float(np.clip(density * volume, MIN_MASS, MAX_MASS))
+        self._pieces = [p - self._centroid for p in pieces]
+        path = _write_hulls(self._pieces)
+        try:
+            self._shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=path, physicsClientId=self.client)
+            self._make_body(self._centroid, self._mass)
+        finally:
+            Path(path).unlink(missing_ok=True)
+
+    def carry_payload(self, centre: np.ndarray | None, mass: float = 0.0) -> None:
+        """Rebuild the loaded object's body at rest: with ``centre`` None, the object itself (its mass, its centre
+        of mass at the pieces' centroid); otherwise a payload of ``mass`` kg whose centre of mass is ``centre``
+        (3,) in the mesh frame, with the inertia of a solid sphere of radius PAYLOAD_RADIUS, so gravity and shaking
+        load the contacts as a weight held at that point would (``sim.load: grasp``, docs/trials.md).
+
+        pybullet reads a mesh shape's file again for every body made from it: the first rebuild of an object
+        writes its pieces to a file that stays until the object is unloaded. A rebuild costs about 1 ms and leaves
+        about 5 kB that only a new client frees: the next object loaded after PAYLOAD_REBUILDS_PER_CLIENT rebuilds
+        gets a new client."""
+        if self._hulls is None:
+            self._hulls = _write_hulls(self._pieces)
+            self._shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=self._hulls, physicsClientId=self.client)
+        pb.removeBody(self.obj, physicsClientId=self.client)
+        self._rebuilds += 1
+        if centre is None:
+            self._make_body(self._centroid, self._mass)
+        else:
+            self._make_body(np.asarray(centre, dtype=np.float64), mass, 0.4 * mass * PAYLOAD_RADIUS ** 2)
+
+    def _make_body(self, com: np.ndarray, mass: float, inertia: float | None = None) -> None:
+        """The object's body from the loaded shape, its mesh frame at the world origin, its centre of mass at
+        ``com`` (3,) (mesh frame), with ``inertia`` (kg m^2, about every axis) or pybullet's from the shape."""
+        c = self.client
+        self.obj = pb.createMultiBody(baseMass=mass, baseCollisionShapeIndex=self._shape,
+                                      basePosition=self._centroid.tolist(),
+                                      baseInertialFramePosition=(com - self._centroid).tolist(),
+                                      useMaximalCoordinates=True, physicsClientId=c)
+        self.com = com
+        pb.changeDynamics(self.obj, -1, lateralFriction=1.0, physicsClientId=c)
+        if inertia is not None:
+            # with the mass: alone, the inertia leaves a maximal-coordinates body with mass 0 (static)
+            pb.changeDynamics(self.obj, -1, mass=mass, localInertiaDiagonal=[inertia] * 3, physicsClientId=c)
+
+    def _unload(self) -> None:
         if self.obj is not None:
             pb.removeBody(self.obj, physicsClientId=self.client)
-        c = self.client
-        self.com = np.vstack(pieces).mean(axis=0)
-        mass = float(np.clip(density * volume, MIN_MASS, MAX_MASS))
-        with _hulls_file([p - self.com for p in pieces]) as path:
-            shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=path, physicsClientId=c)
-            self.obj = pb.createMultiBody(baseMass=mass, baseCollisionShapeIndex=shape, basePosition=self.com.tolist(),
-                                          useMaximalCoordinates=True, physicsClientId=c)
-        pb.changeDynamics(self.obj, -1, lateralFriction=1.0, physicsClientId=c)
+            self.obj = None
+        if self._hulls is not None:
+            Path(self._hulls).unlink(missing_ok=True)
+            self._hulls = None
 
     def object_pose(self) -> np.ndarray:
         """(4, 4) world pose of the object's mesh frame."""
@@ -158,14 +213,14 @@ class SimWorld:
 HULLS_PREFIX = "onepiece-hulls-"  # then the writing process's id: onepiece-hulls-<pid>-<random>.obj
 
 
-@contextlib.contextmanager
-def _hulls_file(pieces: list[np.ndarray]):
+def _write_hulls(pieces: list[np.ndarray]) -> str:
     """An OBJ of convex pieces ((k, 3) vertices, k >= 4) for pybullet, which builds compounds only from files:
     one ``o`` group per hull, fan faces (a hull needs only its points). This process writes it itself, in a new
-    private file (``mkstemp``: mode 0600, a name nobody else holds) in the temporary folder, and deletes it as soon
-    as pybullet has read it: no file from a dataset or a user reaches pybullet this way. A worker killed between
-    the two (as Ray and the fault tests kill them) leaves that one file; the next world removes it
-    (:func:`remove_orphan_hull_files`)."""
+    private file (``mkstemp``: mode 0600, a name nobody else holds) in the temporary folder; the world deletes it
+    as soon as pybullet has read it (or, once payload rebuilds read it again, when the object is unloaded): no
+    file from a dataset or a user reaches pybullet this way. A worker killed meanwhile (as Ray and the fault
+    tests kill them) leaves that one file; the next world removes it (:func:`remove_orphan_hull_files`).
+    Returns its path."""
     lines, first = [], 1
     for k, piece in enumerate(pieces):
         lines.append(f"o piece{k}")
@@ -173,16 +228,13 @@ def _hulls_file(pieces: list[np.ndarray]):
         lines += [f"f {first} {first + j} {first + j + 1}" for j in range(1, len(piece) - 1)]
         first += len(piece)
     handle, path = tempfile.mkstemp(prefix=f"{HULLS_PREFIX}{os.getpid()}-", suffix=".obj")
-    try:
-        with os.fdopen(handle, "w") as out:
-            out.write("\n".join(lines) + "\n")
-        yield path
-    finally:
-        Path(path).unlink(missing_ok=True)
+    with os.fdopen(handle, "w") as out:
+        out.write("\n".join(lines) + "\n")
+    return path
 
 
 def remove_orphan_hull_files(folder: str | os.PathLike | None = None) -> int:
-    """Delete the hull files (:func:`_hulls_file`) in ``folder`` (default: the temporary folder) whose writing
+    """Delete the hull files (:func:`_write_hulls`) in ``folder`` (default: the temporary folder) whose writing
     process no longer runs; returns how many. A live process's file, or one whose name has no process id, stays."""
     removed = 0
     for path in Path(folder or tempfile.gettempdir()).glob(f"{HULLS_PREFIX}*-*.obj"):
