@@ -320,11 +320,29 @@ def _repeatability(r: dict) -> list[str]:
                "shows (Label transfer).")]
 
 
+def _name(out: dict) -> str:
+    """The run's file name (``--name``): its results are benchmarks/results/NAME.json, its page docs/NAME.md."""
+    return out["args"].get("name", "paper_experiment")
+
+
+def _label_load(out: dict) -> str:
+    """What this run's label trials lift, and where the run with the other load is."""
+    if out["args"].get("load", "object") == "grasp":
+        return (f"Labels in every arm: each trial lifts and shakes a payload of {out['args']['load_mass']} kg at the "
+                "grasp centre instead of the object (`--load grasp`, `sim.load: grasp`, docs/trials.md), so that "
+                "the contacts of the shape in the gripper decide a label, as the paper's force-closure labels; the "
+                "run lifting the objects themselves is docs/paper_experiment.md.")
+    return ("Labels in every arm: each trial lifts and shakes the object itself (`sim.load: object`); the same "
+            "experiment with a label the contacts decide (a payload at the grasp centre, `--load grasp`) is "
+            "docs/paper_experiment_grasp_load.md.")
+
+
 def write_page(out: dict, path: Path) -> None:
     args = out["args"]
     lines = ["# The paper's experiment, in simulation", "",
              f"Command: `{out['command'].strip()}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} "
-             "minutes). Rendered from benchmarks/results/paper_experiment.json by benchmarks/experiment_page.py.", "",
+             f"minutes). Rendered from benchmarks/results/{_name(out)}.json by benchmarks/experiment_page.py.", "",
+             _label_load(out), "",
              *headline(out), "", "## What holds here", "", *verdict(out), "", "## What the figures say", "",
              *analysis(out), "", "## Scale and protocol", "",
              f"Train: {args['objects']} objects (pybullet named + random_urdfs; {out['train_objects_ok']} passed "
@@ -342,7 +360,7 @@ def write_page(out: dict, path: Path) -> None:
              "R's cost is A's per labelled candidate times the grasps it labels (a seeded subset of A's labelled "
              "candidates: same protocol, same outcomes), plus A's ingest.", "",
              "## Cost ratios against candidates per object and radius", "",
-             "![time and storage ratios](paper_experiment_cost.png)", "", *curve_table(out), "",
+             f"![time and storage ratios]({_name(out)}_cost.png)", "", *curve_table(out), "",
              "Unique counts measured on the first n extracted candidates of each train object; costs per candidate "
              "and per patch are this run's.", "", "## Label transfer: the premise, measured", "",
              *transfer_table(out), "",
@@ -356,7 +374,7 @@ def write_page(out: dict, path: Path) -> None:
              "has no label (its placement's trial was invalid) are left out: with a radius that can drop a large "
              "cluster, hence the smaller counts.", "",
              "## The method's trade-off: which resolution to pick", "",
-             "![unique fraction against label agreement](paper_experiment_tradeoff.png)", "", *tradeoff_table(out),
+             f"![unique fraction against label agreement]({_name(out)}_tradeoff.png)", "", *tradeoff_table(out),
              "", "Codes re-cropped from every train object's surface at A's grasp poses"
              + (f" (the first {args['tradeoff_grasps']:,} labelled candidates of each object)"
                 if "tradeoff_grasps" in args else "") + "; labels are A's (each grasp "

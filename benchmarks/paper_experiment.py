@@ -18,7 +18,8 @@ every candidate is labelled with the same protocol. Generation runs as single-pr
 cores, so a stage's wall seconds are its core-seconds. Also: the cost ratios as a function of candidates per object
 and radius (a model from the measured per-candidate and per-patch costs and the measured unique counts), and the
 method's trade-off (unique fraction against how much the code decides the label) at 20, 10 and 5 mm.
-Writes benchmarks/results/paper_experiment.json, docs/paper_experiment.md and its plots (--out elsewhere).
+Writes benchmarks/results/paper_experiment.json, docs/paper_experiment.md and its plots (--out elsewhere, --name
+another file name).
 """
 
 from __future__ import annotations
@@ -376,6 +377,8 @@ def parse_args(argv=None):
                         help="work folder, kept afterwards; jobs whose datasets it already holds (same spec, "
                              "finished) are not run again (default: a temporary folder)")
     parser.add_argument("--out", type=Path, default=ROOT, help="where results/ JSON and docs/ pages go")
+    parser.add_argument("--name", default="paper_experiment",
+                        help="file name of the results (benchmarks/results/NAME.json), the page and its plots")
     args = parser.parse_args(argv)
     if args.quick:
         for key, value in QUICK.items():
@@ -399,10 +402,10 @@ def main(argv=None) -> dict:
     out["decision"]["within_two_hours"] = None if reused else out["wall_seconds"] <= 7200
     (args.out / "benchmarks" / "results").mkdir(parents=True, exist_ok=True)
     (args.out / "docs").mkdir(parents=True, exist_ok=True)
-    (args.out / "benchmarks" / "results" / "paper_experiment.json").write_text(json.dumps(out, indent=2) + "\n")
-    plot_curves(out, args.out / "docs" / "paper_experiment_cost.png")
-    plot_tradeoff(out, args.out / "docs" / "paper_experiment_tradeoff.png")
-    write_page(out, args.out / "docs" / "paper_experiment.md")
+    (args.out / "benchmarks" / "results" / f"{args.name}.json").write_text(json.dumps(out, indent=2) + "\n")
+    plot_curves(out, args.out / "docs" / f"{args.name}_cost.png")
+    plot_tradeoff(out, args.out / "docs" / f"{args.name}_tradeoff.png")
+    write_page(out, args.out / "docs" / f"{args.name}.md")
     print(json.dumps({k: v for k, v in out.items() if k in ("decision", "wall_seconds")}, indent=2))
     return out
 

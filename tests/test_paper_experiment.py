@@ -49,11 +49,16 @@ def test_pair_agreement_is_perfect_when_the_code_decides_the_label_and_lower_for
     assert out["random_pairs"]["success_agreement"] < 0.7
 
 
-def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
-    result = json.loads((ROOT / "benchmarks" / "results" / "paper_experiment.json").read_text())
+@pytest.mark.parametrize("name", ["paper_experiment"])
+def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path, name):
+    result = json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
+    assert result["args"].get("name", "paper_experiment") == name
     page.write_page(result, tmp_path / "page.md")
-    assert (ROOT / "docs" / "paper_experiment.md").read_text() == (tmp_path / "page.md").read_text(), \
-        "docs/paper_experiment.md is stale: rerun benchmarks/paper_experiment.py (or render its results)"
+    assert (ROOT / "docs" / f"{name}.md").read_text() == (tmp_path / "page.md").read_text(), \
+        f"docs/{name}.md is stale: rerun benchmarks/paper_experiment.py (or render its results)"
+    for plot in ("cost", "tradeoff"):
+        assert f"]({name}_{plot}.png)" in (tmp_path / "page.md").read_text()
+        assert (ROOT / "docs" / f"{name}_{plot}.png").stat().st_size > 1000
 
 
 def test_a_training_result_is_reused_only_for_the_same_job_on_the_same_datasets(tmp_path):
@@ -262,3 +267,14 @@ def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labe
     assert "B r0 11,118 (11,128), heldout 7,502 (7,500)" in "\n".join(page.variants_section(r))
     r["dataset_counts"] = {"B r0": [11128, 11128], "heldout": [7500, 7500]}
     assert "the experiment's own (same counts)" in "\n".join(page.variants_section(r))
+
+
+def test_the_label_load_reaches_every_arm_spec_and_the_page_says_which_it_was(tmp_path):
+    experiment = importlib.import_module("paper_experiment")
+    args = experiment.parse_args(["--quick", "--load", "grasp", "--load-mass", "0.25", "--name", "run_b"])
+    spec = experiment.base_spec(args, tmp_path)
+    assert (spec.sim.load, spec.sim.load_mass, args.name) == ("grasp", 0.25, "run_b")
+    assert experiment.base_spec(experiment.parse_args(["--quick"]), tmp_path).sim.load == "object"
+    grasp = page._label_load({"args": vars(args)})
+    assert "payload of 0.25 kg at the grasp centre" in grasp and "docs/paper_experiment.md" in grasp
+    assert "docs/paper_experiment_grasp_load.md" in page._label_load({"args": {"load": "object"}})
