@@ -49,7 +49,7 @@ def test_pair_agreement_is_perfect_when_the_code_decides_the_label_and_lower_for
     assert out["random_pairs"]["success_agreement"] < 0.7
 
 
-@pytest.mark.parametrize("name", ["paper_experiment"])
+@pytest.mark.parametrize("name", ["paper_experiment", "paper_experiment_grasp_load"])
 def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path, name):
     result = json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
     assert result["args"].get("name", "paper_experiment") == name
