@@ -77,9 +77,8 @@ class SimWorld:
         self.spec = gripper
         self.physics = physics
         remove_orphan_hull_files()
-        self.obj: int | None = None
         self.com = np.zeros(3)
-        self._connect()
+        self._connect()  # also sets self.obj: int | None
         self._hulls: str | None = None  # the loaded object's hulls file (kept while it is loaded)
         self._shape, self._centroid, self._mass, self._pieces = -1, np.zeros(3), 0.0, []
 
@@ -141,11 +140,10 @@ class SimWorld:
         The object's own friction coefficient is 1: Bullet multiplies the two bodies' coefficients at a contact,
         so each finger contact has the pads' coefficient (``gripper.friction``), as the spec says.
         """
+        self._unload()
         if self._rebuilds > PAYLOAD_REBUILDS_PER_CLIENT:
-            self._unload()
             pb.disconnect(physicsClientId=self.client)
             self._connect()
-        self._unload()
         self._centroid = np.vstack(pieces).mean(axis=0)
         self._mass = float(np.clip(density * volume, MIN_MASS, MAX_MASS))
         self._pieces = [p - self._centroid for p in pieces]
