@@ -372,7 +372,10 @@ def write_page(out: dict, path: Path) -> None:
              f"on the arm's own validation split (20% of its objects, or of its patches for B), {args['seeds']} "
              "seeds. The full size is `--objects 64 --grasps 2000 --heldout 64 --heldout-grasps 200`." + _phases(out),
              "", "## Cost per stage (core-seconds; each job ran in one process on one core)", "", *cost_table(out),
-             "", "B arms after the first radius reuse its extracted parts; each is charged the same extraction. "
+             "", "A's job labels every candidate inside its extract stage (`sim.label: true`: the settling trial, "
+             "then the label trials of each grasp that held), so A's extract column is its labelling and its label "
+             "column is empty. B arms after the first radius reuse its extracted parts; each is charged the same "
+             "extraction. "
              "R's cost is A's per labelled candidate times the grasps it labels (a seeded subset of A's labelled "
              "candidates: same protocol, same outcomes), plus A's ingest.", "",
              "## Cost ratios against candidates per object and radius", "",
