@@ -110,7 +110,7 @@ def test_each_arm_keeps_the_learning_rate_its_validation_loss_picks_and_trains_i
 @pytest.mark.sim
 def test_the_quick_experiment_runs_every_arm_and_renders_a_page_that_decides(tmp_path):
     subprocess.run([sys.executable, str(ROOT / "benchmarks" / "paper_experiment.py"), "--quick", "--out",
-                    str(tmp_path)], check=True, capture_output=True, timeout=600)
+                    str(tmp_path), "--folder", str(tmp_path / "work")], check=True, capture_output=True, timeout=600)
     out = json.loads((tmp_path / "benchmarks" / "results" / "paper_experiment.json").read_text())
     arms = {row["arm"]: row for row in out["arms"]}
     assert set(arms) == {"A", "B r0", "B r1", "B static r0", "R r0", "R r1", "R static r0"}  # --quick: static r0
@@ -139,6 +139,28 @@ def test_the_quick_experiment_runs_every_arm_and_renders_a_page_that_decides(tmp
         assert row["chosen"] == min(row["probes"], key=lambda p: p["val_loss"])["learning_rate"]
         assert arms[arm]["learning_rate"] == row["chosen"]
     assert "validation split picked among 0.001, 0.003" in text
+    _train_longer_on_its_exported_arms(out, tmp_path)
+
+
+def _train_longer_on_its_exported_arms(out: dict, tmp_path: Path) -> None:
+    """benchmarks/experiment_longer.py on the quick run's folder: the exported rows are the ones each seed trained
+    on; three arms train again (a few steps) from the arrays alone and are scored on the same held-out grasps."""
+    longer = importlib.import_module("experiment_longer")
+    longer.export(tmp_path / "work", out, tmp_path / "arms.npz")
+    data = np.load(tmp_path / "arms.npz", allow_pickle=False)
+    trained = {(row["arm"], s["seed"]): s["train_grasps"] for row in out["arms"] for s in row["heldout"]["seeds"]}
+    plan = json.loads(str(data["plan"]))["runs"]
+    assert {(r["arm"], r["seed"]) for r in plan} == set(trained)
+    assert all(len(data[f"train_{r['key']}"]) == trained[(r["arm"], r["seed"])] for r in plan)
+    args = longer.parse_args(["train", "--data", str(tmp_path / "arms.npz"), "--out", str(tmp_path / "runs"),
+                              "--steps", "4", "--batch-size", "8", "--rates", "chosen", "--arms", "A,B r0,R r0",
+                              "--workers", "1", "--evaluations", "2", "--device", "cpu"])
+    assert len(longer.train_all(args)) == 3
+    result = longer.report(tmp_path / "arms.npz", tmp_path / "runs", out, "test")
+    assert [a["arm"] for a in result["arms"]] == ["A", "B r0", "R r0"]
+    for arm in result["arms"]:
+        assert arm["learning_rate"] == arm["cpu_learning_rate"] and len(arm["heldout"]["seeds"]) == 2
+    assert result["heldout"]["grasps"] == out["heldout"]["grasps"] and "| B r0 |" in longer.page(result)
 
 
 def _arm(name: str, core_seconds: float, top1: float, ap: float) -> dict:
