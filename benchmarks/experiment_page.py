@@ -353,6 +353,15 @@ def _label_load(out: dict) -> str:
             "docs/paper_experiment_grasp_load.md.")
 
 
+def _longer_link(out: dict) -> list[str]:
+    """A line pointing to benchmarks/experiment_longer.py's page for this run, where its results are committed."""
+    results = Path(__file__).resolve().parent / "results" / f"{_name(out)}_longer.json"
+    if not results.exists():
+        return []
+    return [f"- **A larger training budget.** docs/{_name(out)}_longer.md trains arms of this run again with more "
+            "gradient steps on the same rows and held-out grasps (benchmarks/experiment_longer.py)."]
+
+
 def write_page(out: dict, path: Path) -> None:
     args = out["args"]
     lines = ["# The paper's experiment, in simulation", "",
@@ -360,7 +369,7 @@ def write_page(out: dict, path: Path) -> None:
              f"minutes). Rendered from benchmarks/results/{_name(out)}.json by benchmarks/experiment_page.py.", "",
              _label_load(out), "",
              *headline(out), "", "## What holds here", "", *verdict(out), "", "## What the figures say", "",
-             *analysis(out), "", "## Scale and protocol", "",
+             *analysis(out), *_longer_link(out), "", "## Scale and protocol", "",
              f"Train: {args['objects']} objects (pybullet named + random_urdfs; {out['train_objects_ok']} passed "
              f"validation), {args['grasps']} candidates each from the paper's normal-direction sampler, seed "
              f"{args['seed']}. Held-out: random_urdfs from index 500 on, {args['heldout']} objects x "
