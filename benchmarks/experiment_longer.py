@@ -120,6 +120,9 @@ class ArmData:
     def batch(self, rows):
         return {"points": self.points[rows].float() * self.scale}
 
+    def heldout_batch(self, rows):
+        return {"points": self.heldout[rows].float() * self.scale}
+
 
 def fit(arm: ArmData, train, val, rate: float, seed: int, steps: int, batch: int, evaluations: int) -> dict:
     """``steps`` Adam steps on uniform draws of ``train`` rows; the checkpoint with the lowest validation loss
@@ -147,8 +150,7 @@ def fit(arm: ArmData, train, val, rate: float, seed: int, steps: int, batch: int
     return {"seed": seed, "learning_rate": rate, "best_val_loss": best, "curve": curve,
             "train_seconds": round(time.perf_counter() - start, 1), "train_grasps": len(train),
             "best_step": min(curve, key=lambda c: c["val_loss"])["step"],
-            "scores": _probabilities(model, lambda r: {"points": arm.heldout[r].float() * arm.scale},
-                                     len(arm.heldout))}
+            "scores": _probabilities(model, arm.heldout_batch, len(arm.heldout))}
 
 
 def _probabilities(model, batch_of, n: int, size: int = 4096) -> np.ndarray:
@@ -156,7 +158,8 @@ def _probabilities(model, batch_of, n: int, size: int = 4096) -> np.ndarray:
 
     model.eval()
     with torch.no_grad():
-        out = [torch.sigmoid(model(batch_of(torch.arange(i, min(i + size, n), device=model.head[0].weight.device))))
+        device = next(model.parameters()).device
+        out = [torch.sigmoid(model(batch_of(torch.arange(i, min(i + size, n), device=device))))
                for i in range(0, n, size)]
     return torch.cat(out).float().cpu().numpy()
 
@@ -209,27 +212,32 @@ def train_all(args) -> list[str]:
         def submit(run, rate):
             return pool.submit(train_run, args.data, run, rate, opts)
 
-        if all(len(_rates(args.rates, rs[0])) == 1 for rs in runs.values()):  # no search: every seed at once
-            search = {arm: [submit(r, _rates(args.rates, r)[0]) for r in rs] for arm, rs in runs.items()}
-            rest = {arm: fs[1:] for arm, fs in search.items()}
-            search = {arm: fs[:1] for arm, fs in search.items()}
-        else:
-            search = {arm: [submit(rs[0], rate) for rate in _rates(args.rates, rs[0])] for arm, rs in runs.items()}
-            firsts = {arm: _lowest(search[arm]) for arm in runs}
-            rest = {arm: [submit(r, firsts[arm]["learning_rate"]) for r in rs[1:]] for arm, rs in runs.items()}
+        search = {arm: [submit(rs[0], rate) for rate in _rates(args.rates, rs[0])] for arm, rs in runs.items()}
+        rest = {arm: [submit(r, _rest_rate(search[arm], args.rates, rs[0])) for r in rs[1:]]
+                for arm, rs in runs.items()}
         for arm, futures in rest.items():
             probes = [f.result() for f in search[arm]]
-            done = [min(probes, key=lambda d: d["best_val_loss"])] + [f.result() for f in futures]
+            done = [_lowest(probes)] + [f.result() for f in futures]
             written.append(_write_arm(Path(args.out), arm, done, probes, opts, time.perf_counter() - start))
     return written
 
 
-def _lowest(futures) -> dict:
-    return min((f.result() for f in futures), key=lambda d: d["best_val_loss"])
+def _lowest(probes: list[dict]) -> dict:
+    return min(probes, key=lambda d: d["best_val_loss"])
+
+
+def _rest_rate(futures, rates: str, first: dict) -> float:
+    """The other seeds' rate: the only one (submitted at once), or seed 0's best after its search."""
+    only = _rates(rates, first)
+    return only[0] if len(only) == 1 else _lowest([f.result() for f in futures])["learning_rate"]
 
 
 def _rates(text: str, run: dict) -> list[float]:
     return [run["cpu_learning_rate"]] if text == "chosen" else [float(r) for r in text.split(",")]
+
+
+def _arm_file(folder: Path, arm: str) -> Path:
+    return folder / f"arm_{arm.replace(' ', '_')}.npz"
 
 
 def _write_arm(out: Path, arm: str, done: list[dict], probes: list[dict], opts: dict, seconds: float) -> str:
@@ -239,7 +247,7 @@ def _write_arm(out: Path, arm: str, done: list[dict], probes: list[dict], opts: 
               "search": [{"learning_rate": p["learning_rate"], "best_val_loss": round(p["best_val_loss"], 4)}
                          for p in probes],
               "runs": [{k: v for k, v in d.items() if k not in ("scores", "device", "torch")} for d in done]}
-    target = out / f"arm_{arm.replace(' ', '_')}.npz"
+    target = _arm_file(out, arm)
     np.savez(target, scores=np.stack([d["scores"] for d in done]), record=np.array(json.dumps(record)))
     return str(target)
 
@@ -257,7 +265,7 @@ def report(data_path: Path, runs_dir: Path, results: dict, command: str) -> dict
     plan = json.loads(str(data["plan"]))
     arms = []
     for cpu in results["arms"]:
-        path = runs_dir / f"arm_{cpu['arm'].replace(' ', '_')}.npz"
+        path = _arm_file(runs_dir, cpu["arm"])
         if not path.exists():  # an arm left out (train --arms)
             continue
         saved = np.load(path, allow_pickle=False)
