@@ -29,5 +29,10 @@ constants.ENABLE_RAY_CLUSTER = True  # here only: allow `ray start --address` (a
 if __name__ == "__main__":
     from ray.scripts.scripts import main
 
+    if "--head" in sys.argv[1:] and os.environ.get("RAY_AUTH_MODE", "").lower() == "token":
+        from onepiece_dist.service.ray_env import ensure_token_file
+
+        ensure_token_file()  # atomically, before Ray would write one that a Ray starting beside it overwrites
+
     sys.argv = ["ray", "start", *sys.argv[1:]]
     main()

@@ -215,9 +215,41 @@ def test_every_socket_of_our_ray_is_on_loopback(ray_session, record_figure):
     exposed = [(c.laddr.ip, c.laddr.port) for c in listening if c.laddr.ip not in ("127.0.0.1", "::ffff:127.0.0.1",
                                                                                   "::1")]
     assert exposed == []
-    if TOKEN_FILE.exists():
-        assert TOKEN_FILE.stat().st_mode & 0o077 == 0
+    assert TOKEN_FILE.stat().st_mode & 0o077 == 0  # made before Ray started (ensure_token_file), owner-only
     record_figure(f"{len(listening)} listening sockets, {len(exposed)} beyond loopback")
+
+
+def _token_at_the_barrier(path: str, barrier) -> str:
+    """``ensure_token_file`` in a process of its own, all starting together, each slow to make its token (the
+    fault: a wide window between finding no token and having written one)."""
+    import secrets
+
+    from onepiece_dist.service.ray_env import ensure_token_file
+
+    make = secrets.token_hex
+    secrets.token_hex = lambda nbytes: (time.sleep(0.2), make(nbytes))[1]
+    barrier.wait()
+    return ensure_token_file(Path(path))
+
+
+def test_processes_making_the_token_at_once_all_get_the_one_token_that_stays(tmp_path):
+    """Ray writes a missing token non-atomically: two Rays starting at once on a fresh machine each wrote theirs,
+    and one Ray's workers read the other's. Eight processes racing for it here must agree on one."""
+    import multiprocessing
+
+    path = tmp_path / ".ray" / "auth_token"
+    context = multiprocessing.get_context("spawn")
+    barrier = context.Manager().Barrier(8)
+    with context.Pool(8) as pool:
+        tokens = pool.starmap(_token_at_the_barrier, [(str(path), barrier)] * 8)
+    assert len(set(tokens)) == 1 and path.read_text() == tokens[0]
+    assert len(tokens[0]) == 64 and int(tokens[0], 16) >= 0  # 256 bits as hex, Ray's format
+    assert path.stat().st_mode & 0o777 == 0o600
+    assert [p.name for p in path.parent.iterdir()] == ["auth_token"]  # no draft left behind
+    path.write_text("kept")
+    from onepiece_dist.service.ray_env import ensure_token_file
+
+    assert ensure_token_file(path) == "kept"  # an existing token is never replaced
 
 
 @pytest.mark.ray

@@ -7,7 +7,9 @@
   cluster clients all run with ``RAY_AUTH_MODE=token`` (unless the user set it), and :func:`connect` makes the
   process's cached Ray config read it again before starting or joining (Ray reads it once per process: a process
   that first talked to a cluster and then started an embedded Ray got a GCS asking for tokens and a driver sending
-  none). The token file is made readable by its owner only.
+  none). The token file is made readable by its owner only, and created before an embedded Ray starts: two
+  processes that start Ray at once on a machine without a token would each write their own (Ray does not create
+  it atomically) and one Ray's workers would then read the other's token.
 * The dashboard is off for the embedded Ray; a cluster head started by ``cluster/local_cluster.sh`` serves it on
   127.0.0.1 for the Jobs API.
 * Embedded means embedded: without an address we start a fresh Ray of our own (``address="local"``), never
@@ -18,6 +20,7 @@
 from __future__ import annotations
 
 import os
+import secrets
 import socket
 from pathlib import Path
 
@@ -47,6 +50,25 @@ def secure_token_file(path: Path = TOKEN_FILE) -> None:
         path.chmod(0o600)
 
 
+def ensure_token_file(path: Path = TOKEN_FILE) -> str:
+    """The auth token at ``path``, created when missing: 256 random bits as hex (Ray's own format), owner-only
+    from the start, and published atomically (hard link of a finished file), so that of several processes
+    starting at once exactly one token wins and every one of them returns it."""
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        draft = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}")
+        fd = os.open(draft, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        try:
+            with os.fdopen(fd, "w") as handle:
+                handle.write(secrets.token_hex(32))
+            os.link(draft, path)
+        except FileExistsError:
+            pass  # another process published its token first: that one holds
+        finally:
+            draft.unlink(missing_ok=True)
+    return path.read_text()
+
+
 def connect(address: str | None = None, num_cpus: int | None = None) -> None:
     """Join the cluster at ``address`` ('auto' inside a Ray job), or start an embedded loopback-only Ray."""
     import ray
@@ -59,6 +81,8 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> None:
         check_reachable(address)
         ray.init(address=address, namespace=NAMESPACE, log_to_driver=False, configure_logging=False)
     else:
+        if os.environ["RAY_AUTH_MODE"].lower() == "token":
+            ensure_token_file()
         ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, namespace=NAMESPACE,
                  log_to_driver=False, configure_logging=False,
                  _system_config={"health_check_period_ms": HEALTH_CHECK_PERIOD_MS})
