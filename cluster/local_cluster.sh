@@ -7,13 +7,16 @@
 #                                              any other Ray of this machine
 # Every node advertises 127.0.0.1 (cluster/ray_start_loopback.py keeps Ray from replacing it with the machine's
 # address), so no Ray server listens beyond loopback. Token auth stays on; the token file is made 0600.
+# Agent ports start at 52300, not at Ray's default 52365: every embedded Ray on the machine (`onepiece run`) takes
+# 52365 for its agent (ray.init has no switch for it), and a head started beside one could not bind it, so the Jobs
+# API answered "No available agent to submit job" for the cluster's whole life.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 venv=${ONEPIECE_VENV:-$here/.venv}
 ray_bin=$venv/bin/ray
 port=${ONEPIECE_RAY_PORT:-6390}
 dashboard_port=${ONEPIECE_DASHBOARD_PORT:-8265}
-agent_port=${ONEPIECE_AGENT_PORT:-52365}
+agent_port=${ONEPIECE_AGENT_PORT:-52300}
 export RAY_USAGE_STATS_ENABLED=0 RAY_AUTH_MODE=token PATH="$venv/bin:$PATH"
 # The GCS checks each node every second (Ray's default: 3 s): a dead node is found in 5 s instead of 15, a busy one
 # that answers late still has 5 x 10 s of timeouts (the embedded Ray does the same: service/ray_env.py)

@@ -1,3 +1,4 @@
+import fcntl
 import json
 import os
 import platform
@@ -35,12 +36,27 @@ def record_figure(request):
 
 
 def pytest_sessionfinish(session):
+    """Merge this process's figures into the file, under a lock: each xdist worker records its own tests'."""
     figures = session.config.recorded_figures
     if session.config.getoption("--record-figures") and figures:
-        old = json.loads(FIGURES.read_text()) if FIGURES.exists() else {"figures": {}}
-        old["command"] = "scripts/dev test --record-figures"
-        old["figures"] = dict(sorted({**old["figures"], **figures}.items()))
-        FIGURES.write_text(json.dumps(old, indent=2) + "\n")
+        folder = os.open(FIGURES.parent, os.O_RDONLY)  # the lock: the results folder, no file of its own
+        try:
+            fcntl.flock(folder, fcntl.LOCK_EX)
+            old = json.loads(FIGURES.read_text()) if FIGURES.exists() else {"figures": {}}
+            old["command"] = "scripts/dev test --record-figures"
+            old["figures"] = dict(sorted({**old["figures"], **figures}.items()))
+            FIGURES.write_text(json.dumps(old, indent=2) + "\n")
+        finally:
+            os.close(folder)  # releases the lock
+
+
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
+def pytest_collection_modifyitems(config, items):
+    """Tests that start Ray (marked ray or cluster) run one at a time, on one worker, as they would alone: run
+    beside each other on 2 cores, the cluster's Jobs API took over 120 s to start a job's driver."""
+    for item in items:
+        if item.get_closest_marker("ray") or item.get_closest_marker("cluster"):
+            item.add_marker(pytest.mark.xdist_group("ray"))
 
 
 @pytest.fixture

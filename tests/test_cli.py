@@ -56,7 +56,7 @@ def test_run_with_an_address_that_does_not_answer_fails_within_seconds_naming_it
     record_figure(f"exit 3 in {time.monotonic() - start:.1f} s, naming the address")
 
 
-@pytest.mark.ray
+@pytest.mark.cluster  # rewrites the machine's cluster record: one at a time with the cluster tests
 @pytest.mark.slow
 def test_embedded_runs_start_their_own_ray_even_with_a_dead_cluster_on_record(tmp_path, record_figure):
     """A cluster that died without `ray stop` leaves its address in Ray's temp folder; an embedded run must not

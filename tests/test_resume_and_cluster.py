@@ -20,6 +20,7 @@ from onepiece_dist.store import PartStore, open_dataset
 ROOT = Path(__file__).resolve().parents[1]
 ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
 SMALL = ["--objects", "primitives[0:8]", "--grasps", "64", "--stages", "ingest,extract,dedup"]
+AGENT_PORT = 52300  # cluster/local_cluster.sh's first agent port (the head's; worker node i: + i)
 SMALL_SPEC = JobSpec(objects="primitives[0:8]", grasps_per_object=64, stages=("ingest", "extract", "dedup"))
 
 
@@ -33,8 +34,9 @@ def wait_for(predicate, timeout: float, what: str):
     raise AssertionError(f"timed out waiting for {what}")
 
 
-def ray_daemons() -> set[int]:
-    return {p.pid for p in psutil.process_iter(["name"]) if p.info["name"] in ("raylet", "gcs_server")}
+def ray_daemons_under(pid: int) -> list[psutil.Process]:
+    """The raylets and GCS servers that process ``pid``'s embedded Ray started (its descendants)."""
+    return [p for p in psutil.Process(pid).children(recursive=True) if p.name() in ("raylet", "gcs_server")]
 
 
 def objects_done(output: Path) -> int:
@@ -48,10 +50,11 @@ def objects_done(output: Path) -> int:
 @pytest.mark.slow
 def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, fault_free, record_figure):
     out = tmp_path / "ds.zarr"
-    before = ray_daemons()
     driver = subprocess.Popen([*ONEPIECE, "run", *SMALL, "--out", str(out)], cwd=tmp_path, start_new_session=True,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     wait_for(lambda: objects_done(out) >= 3, 180, "three committed objects")
+    daemons = ray_daemons_under(driver.pid)
+    assert daemons, "no raylet or GCS under the driver's embedded Ray"
     os.killpg(driver.pid, signal.SIGKILL)
     driver.wait()
     parts = PartStore(f"{out}.parts")
@@ -66,7 +69,7 @@ def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, f
     a, b = open_dataset(out), open_dataset(fault_free(SMALL_SPEC))
     for name in ("grasps/code", "grasps/pose", "unique/code", "unique/count"):
         assert np.array_equal(a[name], b[name]), name
-    assert ray_daemons() <= before  # the killed driver's embedded Ray left no orphan daemons
+    assert not [p for p in daemons if p.is_running()]  # the killed driver's embedded Ray left no orphan daemons
     record_figure(f"driver killed after {committed} of 8 objects; {status.progress.objects_reused} reused on resume, "
                   "0 orphan daemons, 0 temporaries, identical codes")
 
@@ -228,7 +231,7 @@ def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, 
     assert submitted.returncode == 0, submitted.stderr[-2000:]
     wait_for(lambda: objects_done(out) >= 1, 180, "a first object")
     done_at_kill = objects_done(out)
-    worker_node_raylet(52367).kill()  # the node is gone, with the worker actor on it
+    worker_node_raylet(AGENT_PORT + 2).kill()  # the node is gone, with the worker actor on it
     waited = subprocess.run([*ONEPIECE, "wait", submitted.stdout.strip(), "--address", local_cluster, "--json",
                              "--timeout", "300"], capture_output=True, text=True, timeout=360, env=env)
     assert waited.returncode == 0, waited.stderr[-2000:]
