@@ -9,7 +9,6 @@ benchmark whose result file is missing is listed as not run.
 from __future__ import annotations
 
 import json
-import re
 import sys
 from pathlib import Path
 
@@ -418,57 +417,6 @@ def render() -> str:
     return "\n".join(lines)
 
 
-ASSEMBLY_PAGE = HERE.parent / "docs" / "assembly.md"
-FIGURES_START = "<!-- figures: rendered by benchmarks/report.py from benchmarks/results/default_job.json -->"
-FIGURES_END = "<!-- end of figures -->"
-
-
-def default_job_figures(r: dict) -> str:
-    """The figures section of docs/assembly.md, from the default job's results."""
-    a, labels = r["assembly"], r["labels"] or {}
-    size = " x ".join(f"{x:.2f}" for x in a["bounding_box_m"])
-    ratio = a["label_trials_one_object"] / max(a["label_trials_all_grasps"], 1)
-    cost = (f"the one object costs {ratio:.1f}x more" if ratio > 1 else f"the one object costs {1 / ratio:.1f}x less")
-    points = ", points" if r["every_grasp_points"] else "; points only for the representatives, in unique/points"
-    chamfer = (f"{a['chamfer_mm']:.2f} mm mean, {a['chamfer_max_mm']:.2f} mm at most ({a['chamfer_patches']} "
-               f"patches; target under 1 mm: {'met' if a['chamfer_max_mm'] < 1 else 'not met'})"
-               if a["chamfer_mm"] is not None else "not measured (no stored points)")
-    lines = [FIGURES_START, f"## Figures: {provenance(r)}", "",
-             f"{r['unique_codes']:,} unique codes from {r['grasps']:,} grasps on {r['objects']} objects "
-             f"(`{r['objects_source']}`); the one object is {size} m, its {a['unique_codes']:,} patches are "
-             f"{a['patch_pieces']:,} convex pieces clipped from the source objects' decompositions; fidelity "
-             f"{a['fidelity']:.1%} (target 100%: {'met' if a['fidelity'] == 1 else 'not met'}), Chamfer distance to "
-             f"the representatives' stored crops {chamfer}, corridor intrusions {a['corridor_intrusions']}.", "",
-             f"Label cost: {a['label_trials_one_object']:,} label trials on the one object against "
-             f"{a['label_trials_all_grasps']:,} for labelling every extracted grasp with the same protocol: {cost} "
-             f"({r['grasps'] / max(r['unique_codes'], 1):.2f} grasps per unique code).", "",
-             f"Storage: {r['bytes_per_extracted_grasp']:,} bytes per extracted grasp in `grasps/` (pose, candidate "
-             f"pose, width, shift, codes, indices{points}); the whole dataset {r['bytes_on_disk'] / 1e6:.1f} MB."]
-    if labels:
-        lines += ["", f"Label stage: {labels['labelled_grasps']:,} of {labels['label_trials']:,} trials held after "
-                  f"closing; {labels['success_rate']:.1%} of those succeed."]
-    transfer = labels.get("transfer")
-    if transfer:
-        rows = [[name, m["pairs"], _or_dash(m["success_agreement"]), _or_dash(m["quality_correlation"])]
-                for name, m in (
-            ("(a) patch on the one object vs its representative on the source", transfer["patch_vs_source"]),
-            ("(b) representative vs the other grasps of its code", transfer["same_code"]),
-            ("(c) random pairs of different codes (floor)", transfer["random_pairs"]))]
-        met = (transfer["patch_vs_source"]["success_agreement"] or 0) >= 0.95
-        lines += ["", f"Label transfer on {transfer['codes']} codes with two or more grasps "
-                  f"({transfer['grasps_labelled']} source grasps labelled on their own objects):", "",
-                  *table(["pairs compared", "pairs", "success agreement", "quality correlation"], rows), "",
-                  f"Target for (a): at least 95% agreement: {'met' if met else 'not met'}. A correlation is empty "
-                  "when one side is constant (one trial per label gives a quality of 0 or 1). When (c) is close to "
-                  "(b), labels barely discriminate and these pairs cannot show that the code decides the label."]
-    lines += ["", "Stage wall times (s): " + ", ".join(f"{k} {v:.1f}" for k, v in r["timings"].items()), FIGURES_END]
-    return "\n".join(lines)
-
-
-def _or_dash(value) -> str:
-    return "-" if value is None else str(value)
-
-
 def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[str, ...], section,
                  text: str | None = None) -> str:
     """``page``'s text (or ``text``, the page as rendered so far) with the block between the two marks rendered by
@@ -482,74 +430,11 @@ def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[
     return text[:start] + section(*results) + text[end:]
 
 
-def render_assembly_page() -> str:
-    from bench_cpu_independence import CPU_END, CPU_START, cpu_section
-
-    text = render_block(ASSEMBLY_PAGE, FIGURES_START, FIGURES_END, "default_job", default_job_figures)
-    return render_block(ASSEMBLY_PAGE, CPU_START, CPU_END, "cpu_independence", cpu_section, text=text)
-
-
-RELIABILITY_PAGE = HERE.parent / "docs" / "reliability.md"
-CHAOS_START = "<!-- chaos: rendered by benchmarks/report.py from benchmarks/results/chaos.json -->"
-CHAOS_END = "<!-- end of chaos -->"
-
-
-def chaos_section(r: dict) -> str:
-    rows = [[j["job"], j["state"], j["retries"], "yes" if j["identical"] else "no", j["lost_grasps"],
-             j["duplicated_grasps"]] for j in r["jobs"]]
-    lost, dup = r["lost_grasps"], r["duplicated_grasps"]
-    nodes = sum(kill.startswith("worker node") for kill in r["kills"])
-    workers = len(r["kills"]) - nodes
-    return "\n".join([CHAOS_START, f"## Chaos run: {provenance(r)}", "",
-                      f"{len(r['jobs'])} jobs at once on the local multi-node cluster (head + 2 worker nodes), "
-                      f"{workers} simulation worker processes and {nodes} worker node{'s' * (nodes != 1)} (its raylet; "
-                      "a replacement node joins) killed at seeded random times; each dataset compared with its "
-                      "fault-free run (content digest).", "",
-                      *table(["job", "state", "re-runs", "identical", "grasps lost", "grasps duplicated"], rows), "",
-                      f"Recovered jobs: {r['recoveries']}. Grasps lost: {lost} (target 0: {met(-lost, 0)}); grasps "
-                      f"duplicated: {dup} (target 0: {met(-dup, 0)}).", CHAOS_END])
-
-
-GUARANTEES_START = ("<!-- guarantees: last column rendered by benchmarks/report.py from "
-                    "benchmarks/results/reliability.json -->")
-GUARANTEES_END = "<!-- end of guarantees -->"
-TEST_ID = re.compile(r"`((?:[\w/]+\.py)?)::(\w+)`")
-
-
-def test_ids(cell: str) -> list[str]:
-    """The test ids a table cell names (`` `file.py::test` ``, or `` `::test` `` for the file named before)."""
-    ids, last = [], ""
-    for file, test in TEST_ID.findall(cell):
-        last = file or last
-        ids.append(f"{last}::{test}")
-    return ids
-
-
-def figures_cell(cell: str, figures: dict) -> str:
-    found = [f"{figures[t]['figure']} ({figures[t]['date']})" for t in test_ids(cell) if t in figures]
-    return "; ".join(found) or "not recorded"
-
-
-def guarantees_section(r: dict, page_text: str) -> str:
-    """The guarantee table with each row's last cell rendered from the figures its tests recorded."""
-    start, end = page_text.index(GUARANTEES_START), page_text.index(GUARANTEES_END)
-    lines = page_text[start:end].splitlines()[1:]
-    rows = [line for line in lines if line.startswith("| ")]
-    out = [GUARANTEES_START, rows[0], rows[1]]
-    for row in rows[2:]:
-        cells = [c.strip() for c in row.strip("|").split(" | ")]
-        out.append("| " + " | ".join([*cells[:3], figures_cell(cells[2], r["figures"])]) + " |")
-    return "\n".join([*out, GUARANTEES_END])
-
-
-def render_reliability_page() -> str:
-    text = render_block(RELIABILITY_PAGE, CHAOS_START, CHAOS_END, "chaos", chaos_section)
-    figures = load("reliability") or {"figures": {}}  # no recorded figures: every row says "not recorded"
-    start, end = text.index(GUARANTEES_START), text.index(GUARANTEES_END) + len(GUARANTEES_END)
-    return text[:start] + guarantees_section(figures, text) + text[end:]
-
-
 def main() -> None:
+    from assembly_page import PAGE as ASSEMBLY_PAGE
+    from assembly_page import render_assembly_page
+    from reliability_page import PAGE as RELIABILITY_PAGE
+    from reliability_page import render_reliability_page
     from scaling_page import PAGE as SCALING_PAGE
     from scaling_page import render_scaling_page
     from trials_page import PAGE as TRIALS_PAGE
