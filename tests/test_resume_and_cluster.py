@@ -83,11 +83,30 @@ def cluster_exposed_sockets() -> list:
             and c.laddr.ip not in ("127.0.0.1", "::ffff:127.0.0.1", "::1")]
 
 
+RAY_DEFAULT_AGENT_PORT = 52365  # what every embedded Ray's agent takes (ray.init has no switch for it)
+EMBEDDED_RAY = ("from onepiece_dist.service.ray_env import connect; connect(None, num_cpus=1); "
+                "print('up', flush=True); import sys; sys.stdin.read()")  # holds its Ray until stdin closes
+
+
+def port_taken(port: int) -> bool:
+    return any(c.laddr.port == port and c.status == psutil.CONN_LISTEN for c in psutil.net_connections("inet"))
+
+
 @pytest.fixture(scope="module")
 def local_cluster():
-    """One local multi-node cluster for the module's tests, in file order; the node-removal test comes last."""
+    """One local multi-node cluster for the module's tests, in file order; the node-removal test comes last. It
+    starts while an embedded Ray runs on the machine, as a user's `onepiece run` may: the cluster must not need the
+    agent port that Ray gives every embedded Ray (its head's Jobs API had no agent and refused every job)."""
     script = ROOT / "cluster" / "local_cluster.sh"
-    started = subprocess.run([str(script), "start", "2"], capture_output=True, text=True, timeout=240)
+    embedded = subprocess.Popen([sys.executable, "-c", EMBEDDED_RAY], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                text=True)
+    try:
+        assert embedded.stdout.readline().strip() == "up"
+        wait_for(lambda: port_taken(RAY_DEFAULT_AGENT_PORT), 60, "the embedded Ray's agent on Ray's default port")
+        started = subprocess.run([str(script), "start", "2"], capture_output=True, text=True, timeout=240)
+    finally:
+        embedded.stdin.close()
+        embedded.wait(timeout=120)
     assert started.returncode == 0, started.stderr[-3000:]
     try:
         yield started.stdout.strip().splitlines()[-1]
