@@ -237,6 +237,8 @@ def test_processes_making_the_token_at_once_all_get_the_one_token_that_stays(tmp
     and one Ray's workers read the other's. Eight processes racing for it here must agree on one."""
     import multiprocessing
 
+    from onepiece_dist.service.ray_env import ensure_token_file
+
     path = tmp_path / ".ray" / "auth_token"
     context = multiprocessing.get_context("spawn")
     barrier = context.Manager().Barrier(8)
@@ -247,8 +249,6 @@ def test_processes_making_the_token_at_once_all_get_the_one_token_that_stays(tmp
     assert path.stat().st_mode & 0o777 == 0o600
     assert [p.name for p in path.parent.iterdir()] == ["auth_token"]  # no draft left behind
     path.write_text("kept")
-    from onepiece_dist.service.ray_env import ensure_token_file
-
     assert ensure_token_file(path) == "kept"  # an existing token is never replaced
 
 
