@@ -219,6 +219,7 @@ def train_all(args) -> list[str]:
             probes = [f.result() for f in search[arm]]
             done = [_lowest(probes)] + [f.result() for f in futures]
             written.append(_write_arm(Path(args.out), arm, done, probes, opts, time.perf_counter() - start))
+            print(f"{arm}: {len(done)} runs written at {time.perf_counter() - start:.0f} s", flush=True)
     return written
 
 
@@ -255,8 +256,9 @@ def _write_arm(out: Path, arm: str, done: list[dict], probes: list[dict], opts: 
 # ---- here again: score the runs, write the results and the page ------------------------------------------------
 
 
-def report(data_path: Path, runs_dir: Path, results: dict, command: str) -> dict:
-    """Held-out statistics of the longer runs of every trained arm beside the 2-core run's (``results``)."""
+def report(data_path: Path, runs_dir: Path, results: dict, command: str, tag: str = "") -> dict:
+    """Held-out statistics of the longer runs of every trained arm beside the 2-core run's (``results``); ``tag``
+    names a second budget's files (NAME_longer_TAG) beside the first's."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from experiment_learn import arm_summary
 
@@ -275,7 +277,7 @@ def report(data_path: Path, runs_dir: Path, results: dict, command: str) -> dict
                      "learning_rate": runs[0]["learning_rate"], "search": record["search"],
                      "heldout": arm_summary(runs, labels, groups), "cpu_heldout": _brief(cpu["heldout"]),
                      "cpu_learning_rate": cpu["learning_rate"], "seconds": record["seconds"]})
-    return {"command": command, "date": time.strftime("%Y-%m-%d"), "source": plan["source"],
+    return {"command": command, "date": time.strftime("%Y-%m-%d"), "source": plan["source"], "tag": tag,
             "device": f"{record['device']}, torch {record['torch']}", "steps": record["steps"],
             "batch_size": record["batch_size"], "evaluations": record["evaluations"], "cpu_steps": plan["cpu_steps"],
             "cpu_batch": plan["cpu_batch"], "arm_seconds": {a["arm"]: a["seconds"] for a in arms},
@@ -284,6 +286,11 @@ def report(data_path: Path, runs_dir: Path, results: dict, command: str) -> dict
                                                              "grasps": int(len(labels)),
                                                              "positive_rate": round(float(labels.mean()), 6)},
             "arms": arms}
+
+
+def longer_name(out: dict) -> str:
+    """The stem of the results file and page of ``out``: NAME_longer, or NAME_longer_TAG."""
+    return f"{out['source']}_longer" + (f"_{out['tag']}" if out.get("tag") else "")
 
 
 def _brief(heldout: dict) -> dict:
@@ -326,7 +333,7 @@ def page(out: dict) -> str:
                                        f"{a['learning_rate']:g}", f"{steps[len(steps) // 2]:,}"]) + " |")
     lines = [f"# The paper experiment's arms trained {samples / cpu_samples:g}x longer", "",
              f"Command: `{out['command']}` ({out['date']}, {out['device']}). Rendered from "
-             f"benchmarks/results/{out['source']}_longer.json by benchmarks/experiment_longer.py.", "",
+             f"benchmarks/results/{longer_name(out)}.json by benchmarks/experiment_longer.py.", "",
              f"docs/{out['source']}.md trained every arm for {out['cpu_steps']} gradient steps of {out['cpu_batch']} "
              f"({cpu_samples:,} samples) on 2 cores. Here {_names(out)} train for {out['steps']:,} steps of "
              f"{out['batch_size']} ({samples:,} samples) on the same train rows, validation splits and held-out "
@@ -396,6 +403,7 @@ def parse_args(argv=None):
     rp.add_argument("--results", type=Path, required=True)
     rp.add_argument("--train-command", required=True, help="the train command as it ran, for the page")
     rp.add_argument("--out", type=Path, default=ROOT)
+    rp.add_argument("--tag", default="", help="NAME_longer_TAG: a second budget's page beside the first's")
     return parser.parse_args(argv)
 
 
@@ -406,13 +414,13 @@ def main(argv=None) -> None:
     elif args.command == "train":
         print("\n".join(train_all(args)))
     else:
-        out = report(args.data, args.runs, json.loads(args.results.read_text()), args.train_command)
+        out = report(args.data, args.runs, json.loads(args.results.read_text()), args.train_command, args.tag)
         out["decision"] = decide(out)
-        target = args.out / "benchmarks" / "results" / f"{out['source']}_longer.json"
+        target = args.out / "benchmarks" / "results" / f"{longer_name(out)}.json"
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_text(json.dumps(out, indent=2) + "\n")
         (args.out / "docs").mkdir(parents=True, exist_ok=True)
-        (args.out / "docs" / f"{out['source']}_longer.md").write_text(page(out))
+        (args.out / "docs" / f"{longer_name(out)}.md").write_text(page(out))
         print(target)
 
 

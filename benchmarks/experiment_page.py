@@ -3,6 +3,7 @@ tests/test_paper_experiment.py keeps the committed page equal to the rendering o
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from report import pct, provenance, table
@@ -354,12 +355,18 @@ def _label_load(out: dict) -> str:
 
 
 def _longer_link(out: dict) -> list[str]:
-    """A line pointing to benchmarks/experiment_longer.py's page for this run, where its results are committed."""
-    results = Path(__file__).resolve().parent / "results" / f"{_name(out)}_longer.json"
-    if not results.exists():
+    """A line pointing to benchmarks/experiment_longer.py's pages for this run, where their results are committed."""
+    found = sorted((Path(__file__).resolve().parent / "results").glob(f"{_name(out)}_longer*.json"))
+    if not found:
         return []
-    return [f"- **A larger training budget.** docs/{_name(out)}_longer.md trains arms of this run again with more "
-            "gradient steps on the same rows and held-out grasps (benchmarks/experiment_longer.py)."]
+    pages = " and ".join(f"docs/{path.stem}.md ({_budget(json.loads(path.read_text()))})" for path in found)
+    return [f"- **A larger training budget.** {pages} train arms of this run again with more gradient steps on the "
+            "same rows and held-out grasps (benchmarks/experiment_longer.py)."]
+
+
+def _budget(longer: dict) -> str:
+    return (f"{longer['steps'] * longer['batch_size'] / (longer['cpu_steps'] * longer['cpu_batch']):g}x the samples, "
+            f"{longer['device'].split(',')[0]}")
 
 
 def write_page(out: dict, path: Path) -> None:

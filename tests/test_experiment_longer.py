@@ -66,9 +66,26 @@ def test_the_verdict_names_the_b_arms_within_as_interval_and_compares_each_with_
     assert "last one):** B r2: a longer run" in text  # its median best checkpoint is the last step
 
 
-@pytest.mark.parametrize("name", ["paper_experiment_grasp_load"])
+COMMITTED = sorted(p.stem for p in (ROOT / "benchmarks" / "results").glob("*_longer*.json"))
+
+
+def test_a_tagged_budget_has_its_own_files_beside_the_first():
+    assert longer.longer_name({"source": "paper_experiment", "tag": ""}) == "paper_experiment_longer"
+    assert longer.longer_name({"source": "paper_experiment", "tag": "gpu"}) == "paper_experiment_longer_gpu"
+    assert longer.parse_args(["report", "--data", "d", "--runs", "r", "--results", "x", "--train-command", "c",
+                              "--tag", "gpu"]).tag == "gpu"
+
+
+@pytest.mark.parametrize("name", COMMITTED)
 def test_the_committed_longer_page_is_the_rendering_of_its_results(name):
-    result = json.loads((ROOT / "benchmarks" / "results" / f"{name}_longer.json").read_text())
-    assert result["source"] == name and result["decision"] == json.loads(json.dumps(longer.decide(result)))
-    assert (ROOT / "docs" / f"{name}_longer.md").read_text() == longer.page(result), \
-        f"docs/{name}_longer.md is stale: rerun benchmarks/experiment_longer.py report"
+    result = json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
+    assert longer.longer_name(result) == name and result["source"] == name.split("_longer")[0]
+    assert result["decision"] == json.loads(json.dumps(longer.decide(result)))
+    assert (ROOT / "docs" / f"{name}.md").read_text() == longer.page(result), \
+        f"docs/{name}.md is stale: rerun benchmarks/experiment_longer.py report"
+
+
+def test_both_budgets_are_committed_and_linked_from_the_experiment_page():
+    assert {"paper_experiment_grasp_load_longer", "paper_experiment_grasp_load_longer_gpu"} <= set(COMMITTED)
+    text = (ROOT / "docs" / "paper_experiment_grasp_load.md").read_text()
+    assert all(f"docs/{name}.md (" in text for name in COMMITTED if name.startswith("paper_experiment_grasp_load"))
