@@ -364,7 +364,10 @@ def _rate_rule(out: dict) -> str:
 def _verdict(out: dict) -> list[str]:
     d = decide(out)
     qualifying = ", ".join(d["qualifying_b"]) or "none"
-    lines = [f"- **B within A's interval (top-1 from {_pct(d['a_top1_low'])}):** {qualifying}."]
+    controls = ", ".join(a["arm"] for a in out["arms"] if a["arm"].startswith("R")
+                         and a["heldout"]["top1"]["mean"] >= d["a_top1_low"]) or "none"
+    lines = [f"- **B within A's interval (top-1 from {_pct(d['a_top1_low'])}):** {qualifying}.",
+             f"- **R (a random subset labelled on its own objects) within A's interval:** {controls}."]
     for name, p in d["pairs"].items():
         held = "holds" if d["b_at_least_r"][name] else "does not hold"
         lines.append(f"- **{name} at least as good as R{name[1:]} (AP):** {held}: {p['b_ap']:.3f} against "

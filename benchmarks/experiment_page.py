@@ -359,7 +359,8 @@ def _longer_link(out: dict) -> list[str]:
     found = sorted((Path(__file__).resolve().parent / "results").glob(f"{_name(out)}_longer*.json"))
     if not found:
         return []
-    pages = " and ".join(f"docs/{path.stem}.md ({_budget(json.loads(path.read_text()))})" for path in found)
+    named = [f"docs/{path.stem}.md ({_budget(json.loads(path.read_text()))})" for path in found]
+    pages = ", ".join(named[:-1]) + " and " + named[-1] if len(named) > 1 else named[0]
     return [f"- **A larger training budget.** {pages} train arms of this run again with more gradient steps on the "
             "same rows and held-out grasps (benchmarks/experiment_longer.py)."]
 

@@ -61,7 +61,8 @@ def test_the_verdict_names_the_b_arms_within_as_interval_and_compares_each_with_
     assert decision["qualifying_b"] == ["B r0"] and decision["a_top1_low"] == 0.72
     assert decision["b_at_least_r"] == {"B r0": False, "B r2": True}
     text = "\n".join(longer._verdict(out))
-    assert "72.0%):** B r0." in text and "B r2 at least as good as R r2 (AP):** holds: 0.690 against 0.680" in text
+    assert "72.0%):** B r0." in text and "own objects) within A's interval:** R r0, R r2." in text
+    assert "B r2 at least as good as R r2 (AP):** holds: 0.690 against 0.680" in text
     assert "more than 0.02 for:** A, B r0, B r2, R r0, R r2" in text
     assert "last one):** B r2: a longer run" in text  # its median best checkpoint is the last step
 
@@ -86,6 +87,7 @@ def test_the_committed_longer_page_is_the_rendering_of_its_results(name):
 
 
 def test_both_budgets_are_committed_and_linked_from_the_experiment_page():
-    assert {"paper_experiment_grasp_load_longer", "paper_experiment_grasp_load_longer_gpu"} <= set(COMMITTED)
+    assert {"paper_experiment_grasp_load_longer", "paper_experiment_grasp_load_longer_gpu32",
+            "paper_experiment_grasp_load_longer_gpu64"} <= set(COMMITTED)
     text = (ROOT / "docs" / "paper_experiment_grasp_load.md").read_text()
     assert all(f"docs/{name}.md (" in text for name in COMMITTED if name.startswith("paper_experiment_grasp_load"))
