@@ -92,6 +92,8 @@ def _priority_of_own(niceness: int) -> bool:
                 return False  # a process group leader: its group may hold the Ray group's worker too
         AUTOGROUP.write_text(str(niceness))
         return True
+    if not Path("/proc/self/task").is_dir():
+        return False  # not Linux: left as it is
     for tid in os.listdir("/proc/self/task"):
         try:
             os.setpriority(os.PRIO_PROCESS, int(tid), niceness)
