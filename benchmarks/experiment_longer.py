@@ -32,6 +32,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from report import in_words  # standard library only: runs on the GPU machine too
 
 ROOT = Path(__file__).resolve().parents[1]
 QUANT = 127  # int8 steps on each side of zero
@@ -349,8 +350,7 @@ def page(out: dict) -> str:
 
 
 def _names(out: dict) -> str:
-    names = [a["arm"] for a in out["arms"]]
-    return ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else names[0]
+    return in_words([a["arm"] for a in out["arms"]])
 
 
 def _rate_rule(out: dict) -> str:

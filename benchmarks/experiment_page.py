@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from report import pct, provenance, table
+from report import in_words, pct, provenance, table
 
 PAPER = {"time_ratio": "8x", "storage_ratio": "6.3x", "success": "89% = 89% (real robot)"}
 STAGES = ("ingest", "extract", "dedup", "assemble", "label")
@@ -359,8 +359,7 @@ def _longer_link(out: dict) -> list[str]:
     found = sorted((Path(__file__).resolve().parent / "results").glob(f"{_name(out)}_longer*.json"))
     if not found:
         return []
-    named = [f"docs/{path.stem}.md ({_budget(json.loads(path.read_text()))})" for path in found]
-    pages = ", ".join(named[:-1]) + " and " + named[-1] if len(named) > 1 else named[0]
+    pages = in_words([f"docs/{path.stem}.md ({_budget(json.loads(path.read_text()))})" for path in found])
     return [f"- **A larger training budget.** {pages} train arms of this run again with more gradient steps on the "
             "same rows and held-out grasps (benchmarks/experiment_longer.py)."]
 

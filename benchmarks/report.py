@@ -104,6 +104,11 @@ def _extract_fidelity_lines(r: dict) -> list[str]:
                   f"{row['held_agreement']:.1%}", pct(row["code_agreement"])] for row in fid["rows"]])]
 
 
+def in_words(items: list[str]) -> str:
+    """'a', 'a and b', 'a, b and c'."""
+    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else items[0]
+
+
 def pct(value: float | None) -> str:
     return "-" if value is None else f"{value:.1%}"
 

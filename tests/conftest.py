@@ -55,13 +55,21 @@ def pytest_collection_modifyitems(config, items):
     """Tests that start Ray (marked ray or cluster) run one at a time, on one worker, as they would alone: run
     beside each other on 2 cores, the cluster's Jobs API took over 120 s to start a job's driver."""
     for item in items:
-        if item.get_closest_marker("ray") or item.get_closest_marker("cluster"):
+        if starts_ray(item):
             item.add_marker(pytest.mark.xdist_group("ray"))
+
+
+def starts_ray(item) -> bool:
+    return bool(item.get_closest_marker("ray") or item.get_closest_marker("cluster"))
 
 
 BESIDE_RAY_NICENESS = 10  # CPU share of work at nice 10 against work at 0: about a tenth
 AUTOGROUP = Path("/proc/self/autogroup")  # Linux's per-session scheduling group, where sched_autogroup is on
 AUTOGROUP_ON = Path("/proc/sys/kernel/sched_autogroup_enabled")
+
+
+def autogroups_on() -> bool:
+    return AUTOGROUP_ON.exists() and AUTOGROUP_ON.read_text().strip() == "1"
 
 
 @pytest.hookimpl(hookwrapper=True)
@@ -84,7 +92,7 @@ def _priority_of_own(niceness: int) -> bool:
     worker first leaves pytest's session for its own and sets the niceness of that session's group (measured
     here: 554 and 509 s for the suite against 630 and 634 s; setting each thread's niceness within pytest's
     session instead gave 610 and 654 s); else it sets each of its threads'. False where it could not."""
-    if AUTOGROUP_ON.exists() and AUTOGROUP_ON.read_text().strip() == "1":
+    if autogroups_on():
         if os.getsid(0) != os.getpid():
             try:
                 os.setsid()
