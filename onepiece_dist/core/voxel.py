@@ -33,12 +33,19 @@ def canonical_codes(codes: np.ndarray, grid_shape: tuple[int, int, int]) -> np.n
     Of a code and its turned twin, the one whose bytes compare smaller is kept.
     codes : (n, B) uint8 -> (n, B) uint8
     """
-    turned = pack_codes(unpack_codes(codes, grid_shape)[:, :, ::-1, ::-1])
-    differs = codes != turned
+    return bytewise_smaller(codes, pack_codes(unpack_codes(codes, grid_shape)[:, :, ::-1, ::-1]))
+
+
+def bytewise_smaller(codes: np.ndarray, twins: np.ndarray) -> np.ndarray:
+    """Row by row, whichever of ``codes`` and ``twins`` compares smaller byte by byte (lexicographic order).
+
+    codes, twins : (n, B) uint8 -> (n, B) uint8
+    """
+    differs = codes != twins
     first = np.argmax(differs, axis=1)
     rows = np.arange(len(codes))
-    turned_smaller = differs.any(axis=1) & (turned[rows, first] < codes[rows, first])
-    return np.where(turned_smaller[:, None], turned, codes)
+    twin_smaller = differs.any(axis=1) & (twins[rows, first] < codes[rows, first])
+    return np.where(twin_smaller[:, None], twins, codes)
 
 
 def voxel_indices(points_g: np.ndarray, grid_shape: tuple[int, int, int], resolution: float) -> np.ndarray:
