@@ -364,6 +364,19 @@ def _longer_link(out: dict) -> list[str]:
             "same rows and held-out grasps (benchmarks/experiment_longer.py)."]
 
 
+def _key_study_link(out: dict) -> list[str]:
+    """A line naming benchmarks/key_study.py's pages (other dedup keys than the occupancy code) and what each says,
+    where their results are committed."""
+    from key_study_page import headline_sentence
+
+    found = sorted((Path(__file__).resolve().parent / "results").glob("key_study*.json"))
+    if not found:
+        return []
+    said = [f"docs/{path.stem}.md: {headline_sentence(json.loads(path.read_text()))}" for path in found]
+    return ["", "Other keys than the occupancy code, measured on unseen objects without a network "
+            f"(benchmarks/key_study.py): {'; '.join(said)}."]
+
+
 def _budget(longer: dict) -> str:
     return (f"{longer['steps'] * longer['batch_size'] / (longer['cpu_steps'] * longer['cpu_batch']):g}x the samples, "
             f"{longer['device'].split(',')[0]}")
@@ -416,7 +429,7 @@ def write_page(out: dict, path: Path) -> None:
              "labelled on its own object). Same-code pairs: the first grasp of each code (cluster, at radius r) "
              "against up to four others; random pairs: as many pairs of grasps with different codes. The code "
              "decides the label as far as same-code agreement exceeds random-pair agreement. The plot leaves out "
-             "rows with fewer than 30 same-code pairs."]
+             "rows with fewer than 30 same-code pairs.", *_key_study_link(out)]
     path.write_text("\n".join(lines) + "\n")
 
 

@@ -9,10 +9,13 @@ rate. Held-out scores of the runs not kept are never looked at.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
 import os
+import shutil
+import tempfile
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -54,6 +57,18 @@ def train_with_search(jobs: list[TrainJob], rates: list[float], train: Train) ->
 def best_validation_loss(run: dict) -> float:
     """The lowest validation loss a run reached at its evaluations (fit_and_score's ``curve``)."""
     return round(min(point["val_loss"] for point in run["curve"]), 5)
+
+
+@contextlib.contextmanager
+def work_folder(folder: Path | None, prefix: str):
+    """``folder`` (made if missing, kept afterwards), or a temporary folder removed afterwards when it is None."""
+    work = folder or Path(tempfile.mkdtemp(prefix=prefix))
+    work.mkdir(parents=True, exist_ok=True)
+    try:
+        yield work
+    finally:
+        if folder is None:
+            shutil.rmtree(work, ignore_errors=True)
 
 
 def spawn_context():

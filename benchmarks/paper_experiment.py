@@ -28,9 +28,7 @@ import argparse
 import json
 import os
 import platform
-import shutil
 import sys
-import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 from datetime import date
@@ -43,7 +41,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from experiment_learn import TrainJob, arm_summary, baselines, label_agreement, pair_agreement  # noqa: E402
 from experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
-from experiment_train import parse_rates, spawn_context, train_all, train_with_search  # noqa: E402
+from experiment_train import parse_rates, spawn_context, train_all, train_with_search, work_folder  # noqa: E402
 
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.similar import similar_clusters  # noqa: E402
@@ -389,13 +387,8 @@ def parse_args(argv=None):
 def main(argv=None) -> dict:
     args = parse_args(argv)
     start = time.perf_counter()
-    folder = args.folder or Path(tempfile.mkdtemp(prefix="onepiece-experiment-"))
-    folder.mkdir(parents=True, exist_ok=True)
-    try:
+    with work_folder(args.folder, "onepiece-experiment-") as folder:
         out = run_experiment(args, folder)
-    finally:
-        if args.folder is None:
-            shutil.rmtree(folder, ignore_errors=True)
     out["wall_seconds"] = round(time.perf_counter() - start, 1)
     # at the size run (the page says which); not measured when generation was reused from an earlier run
     reused = out["reused_jobs"] or out["reused_training_runs"]

@@ -1,0 +1,129 @@
+"""docs/key_study.md and its plot, rendered from benchmarks/results/key_study.json (benchmarks/key_study.py)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from report import in_words
+
+REFERENCE = "occupancy 10 mm"  # the code the paper experiment dedups by
+
+
+def _pct(x: float | None) -> str:
+    return "-" if x is None else f"{100 * x:.1f}%"
+
+
+def _num(x: float | None, digits: int = 3) -> str:
+    return "-" if x is None else f"{x:.{digits}f}"
+
+
+def key_table(out: dict) -> list[str]:
+    lines = ["| key | bytes | unique fraction (train) | same-key / random-pair agreement (train) | held-out coverage "
+             "| first train label: agreement (floor) | share decided | majority label: agreement (floor) "
+             "| share decided |", "| --- |" + " --- |" * 8]
+    for r in out["keys"]:
+        pairs, look = r["pairs"], r["lookup"]
+        lines.append(
+            f"| {r['key']} | {r['key_bytes']} | {_num(r['unique_fraction'])} "
+            f"| {_pct(pairs['same_code']['success_agreement'])} / {_pct(pairs['random_pairs']['success_agreement'])} "
+            f"| {_pct(look['coverage'])} | {_pct(look['first']['agreement'])} ({_pct(look['first']['floor'])}) "
+            f"| {_num(r['decided_share_first'], 2)} | {_pct(look['majority']['agreement'])} "
+            f"({_pct(look['majority']['floor'])}) | {_num(r['decided_share_majority'], 2)} |")
+    return lines
+
+
+def dominating(out: dict) -> list[dict]:
+    """Keys that repeat at least as much as the reference code (unique fraction no higher) and decide more of the
+    label on held-out objects (share decided by the first train label higher), with coverage no lower."""
+    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
+    return [r for r in out["keys"] if r["key"] != REFERENCE and r["decided_share_first"] is not None
+            and ref["decided_share_first"] is not None
+            and r["unique_fraction"] <= ref["unique_fraction"]
+            and r["lookup"]["coverage"] >= ref["lookup"]["coverage"]
+            and r["decided_share_first"] > ref["decided_share_first"]]
+
+
+def verdict(out: dict) -> list[str]:
+    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
+    better = dominating(out)
+    most = max((r for r in out["keys"] if r["decided_share_first"] is not None),
+               key=lambda r: r["decided_share_first"], default=None)
+    lines = [f"- **The experiment's code ({REFERENCE}):** {_num(ref['unique_fraction'])} of the train grasps are "
+             f"unique; a held-out grasp finds its code among the train grasps {_pct(ref['lookup']['coverage'])} of "
+             f"the time, and that code's first train label agrees with its own "
+             f"{_pct(ref['lookup']['first']['agreement'])} of the time against {_pct(ref['lookup']['first']['floor'])} "
+             f"for a label that ignores the shape: a share of {_num(ref['decided_share_first'], 2)} of what a label "
+             f"can agree beyond chance (the ceiling, A against itself: {_pct(out['ceiling']['agreement'])})."]
+    if better:
+        names = ", ".join(f"{r['key']} (unique {_num(r['unique_fraction'])}, share "
+                          f"{_num(r['decided_share_first'], 2)})" for r in better)
+        lines.append(f"- **Keys that repeat at least as much and decide more:** {names}.")
+    else:
+        lines.append("- **Keys that repeat at least as much and decide more:** none of those tried.")
+    if most is not None:
+        lines.append(f"- **Most decisive key tried:** {most['key']}: share {_num(most['decided_share_first'], 2)} "
+                     f"at unique fraction {_num(most['unique_fraction'])} and held-out coverage "
+                     f"{_pct(most['lookup']['coverage'])}.")
+    return lines
+
+
+def headline_sentence(out: dict) -> str:
+    """One sentence of what the study found, for the pages that link it."""
+    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
+    better = dominating(out)
+    load = "a payload at the grasp centre" if out["load"] == "grasp" else "the object"
+    verbs = "repeats as much and decides" if len(better) == 1 else "repeat as much and decide"
+    found = (f"{in_words([r['key'] for r in better])} {verbs} more"
+             if better else "no key tried repeats as much and decides more")
+    return (f"lifting {load}, the occupancy code carries a share of {_num(ref['decided_share_first'], 2)} of the "
+            f"decidable label at unique fraction {_num(ref['unique_fraction'])}; {found}")
+
+
+def write_page(out: dict, path: Path) -> None:
+    train, held, ceiling = out["train"], out["heldout"], out["ceiling"]
+    load = ("a payload of {:g} kg at the grasp centre".format(out["load_mass"]) if out["load"] == "grasp"
+            else "the object itself")
+    lines = [
+        "# Which dedup key decides the label", "",
+        f"Command: `{out['command']}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} minutes). "
+        f"Rendered from benchmarks/results/{out['name']}.json by benchmarks/key_study_page.py.", "",
+        "The method labels one grasp per key and lets that label stand for every grasp with the key. This measures, "
+        "without a network, how far each key's label holds on unseen objects: a held-out grasp whose key some "
+        "train grasp has takes that key's first train label (B's one label per key, as if its patch trial on the "
+        "one object gave its source's label) or the key's majority label. 'Share decided' is (agreement - floor) / "
+        "(ceiling - floor): 0 for a key that says nothing of the label, 1 for one that decides it as far as the "
+        "label repeats itself.", "",
+        f"Labels: arm A's protocol ({out['label_trials']} trials per label, positive = all held), each trial lifting "
+        f"{load}. Train: {train['objects']} objects, {train['grasps']:,} labelled grasps, positive rate "
+        f"{_pct(train['positive_rate'])}. Held-out: {held['objects']} unseen objects, {held['grasps']:,} grasps, "
+        f"positive rate {_pct(held['positive_rate'])}. Crops: each grasp's settled pose, the object's surface "
+        f"points in the closing region ({train['mean_points']:g} points on average). Ceiling: {ceiling['grasps']:,} "
+        f"of A's grasps labelled again with other perturbation draws agree with A {_pct(ceiling['agreement'])} of "
+        f"the time (floor {_pct(ceiling['independent_floor'])}).", "",
+        "## What it says", "", *verdict(out), "",
+        f"![unique fraction against share decided]({out['name']}.png)", "",
+        *key_table(out), "",
+        "Contact keys (onepiece_dist/core/contact.py): per finger and pad cell (u by t), how much farther the pad "
+        "travels before it meets surface there than where it first meets surface, quantized in relief steps up "
+        "to a last level, or 'no surface' in that cell; and the opening at first contact. Same-key pairs: the first "
+        "grasp of each key against up to four others; random pairs: as many pairs with different keys.", ""]
+    path.write_text("\n".join(lines))
+
+
+def plot_keys(out: dict, path: Path) -> None:
+    from experiment_page import _pyplot
+
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.0, 4.0), dpi=110)
+    for r in out["keys"]:
+        share = r["decided_share_first"]
+        if share is None:
+            continue
+        ax.scatter(r["unique_fraction"], share, marker={"occupancy": "s", "contact": "o", "both": "^"}[r["kind"]])
+        ax.annotate(r["key"], (r["unique_fraction"], share), fontsize=6)
+    ax.set_xlabel("unique fraction of train grasps (labels paid / grasps)")
+    ax.set_ylabel("share of the label decided (held-out lookup)")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)

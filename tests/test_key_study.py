@@ -1,0 +1,110 @@
+"""benchmarks/key_study.py: its measures on synthetic keys, its occupancy codes against core.voxel's, its page
+rendered from the committed results, and `--quick` as a smoke test of the whole script (real labelling jobs)."""
+
+import importlib
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from onepiece_dist.core.mesh import box_mesh, sample_surface
+from onepiece_dist.core.voxel import crop_regions
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+study = importlib.import_module("key_study")
+page = importlib.import_module("key_study_page")
+
+
+def keys(values) -> np.ndarray:
+    """(n, 1) uint8 keys from (n,) small integers."""
+    return np.asarray(values, dtype=np.uint8)[:, None]
+
+
+def test_a_key_that_decides_the_label_transfers_it_exactly_to_every_held_out_grasp_it_covers():
+    train = np.arange(40) % 8
+    test = np.r_[np.arange(24) % 8, [9, 9, 10]]  # three held-out grasps with keys no train grasp has
+    label = lambda k: k % 2 == 0  # noqa: E731
+    out = study.lookup_transfer(keys(train), label(train), keys(test), label(test))
+    assert out["covered"] == 24 and out["coverage"] == pytest.approx(24 / 27, abs=1e-4)
+    assert out["first"]["agreement"] == out["majority"]["agreement"] == 1.0
+    assert out["first"]["floor"] == 0.5
+
+
+def test_a_key_that_ignores_the_label_agrees_about_as_often_as_the_floor():
+    rng = np.random.default_rng(0)
+    train, test = rng.integers(0, 20, 4000), rng.integers(0, 20, 4000)
+    out = study.lookup_transfer(keys(train), rng.random(4000) < 0.4, keys(test), rng.random(4000) < 0.4)
+    assert out["coverage"] == 1.0
+    assert out["first"]["agreement"] == pytest.approx(out["first"]["floor"], abs=0.03)
+
+
+def test_the_majority_label_of_a_key_outvotes_its_first_train_grasp_and_a_tie_keeps_the_first():
+    train, success = keys([1, 1, 1, 2, 2]), np.array([False, True, True, True, False])
+    out = study.lookup_transfer(train, success, keys([1, 2]), np.array([True, True]))
+    assert out["first"]["agreement"] == 0.5  # key 1's first train label is negative, key 2's positive
+    assert out["majority"]["agreement"] == 1.0  # key 1: 2 of 3 positive; key 2: a tie, so its first (positive)
+
+
+def test_the_share_decided_runs_from_zero_at_the_floor_to_one_at_the_ceiling():
+    assert study.decided_share({"agreement": 0.5, "floor": 0.5}, 0.8) == 0.0
+    assert study.decided_share({"agreement": 0.8, "floor": 0.5}, 0.8) == 1.0
+    assert study.decided_share({"agreement": 0.65, "floor": 0.5}, 0.8) == 0.5
+    assert study.decided_share({"agreement": 0.6, "floor": 0.6}, 0.55) is None
+    assert study.decided_share({"agreement": None, "floor": None}, 0.8) is None
+
+
+def test_occupancy_codes_from_the_kept_crop_points_are_the_codes_core_voxel_gives():
+    mesh = box_mesh((0.05, 0.03, 0.04))
+    cloud = sample_surface(mesh, 3000, np.random.default_rng(1))[0]
+    poses = np.repeat(np.eye(4)[None], 3, axis=0)
+    poses[:, 0, 3] = [-0.03, -0.02, -0.035]  # palm behind the box along u; the region holds part of it
+    poses[2, :3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]  # turned about u
+    codes, counts, kept = crop_regions(cloud, poses, (4, 8, 2), 0.01, keep_points=True)
+    crops = study.Crops(np.concatenate(kept), np.repeat(np.arange(3), counts), np.zeros(3, bool), np.zeros(3),
+                        np.zeros(3, np.int64))
+    assert counts.min() > 0
+    assert np.array_equal(study.occupancy_of(crops, (4, 8, 2), 0.01), codes)
+    both = study.keys_of(crops, "both", {"resolution": 0.01, "cell": 0.02, "step": 0.004, "levels": 3,
+                                         "width_step": 0.01}, (0.04, 0.08, 0.02))
+    assert both.shape == (3, 8 + 5) and np.array_equal(both[:, :8], codes)
+
+
+def row(name: str, unique: float, coverage: float, share: float) -> dict:
+    return {"key": name, "unique_fraction": unique, "lookup": {"coverage": coverage}, "decided_share_first": share}
+
+
+@pytest.mark.parametrize("unique, coverage, share, dominates", [
+    (0.2, 0.8, 0.5, True), (0.3, 0.8, 0.5, False), (0.2, 0.6, 0.5, False), (0.2, 0.8, 0.3, False)])
+def test_a_key_beats_the_experiments_code_only_if_it_repeats_as_much_covers_as_much_and_decides_more(
+        unique, coverage, share, dominates):
+    out = {"keys": [row(page.REFERENCE, 0.25, 0.7, 0.4), row("contact", unique, coverage, share)]}
+    assert [r["key"] for r in page.dominating(out)] == (["contact"] if dominates else [])
+
+
+def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
+    for results in sorted((ROOT / "benchmarks" / "results").glob("key_study*.json")):
+        out = json.loads(results.read_text())
+        assert not out["quick"] and out["name"] == results.stem
+        page.write_page(out, tmp_path / "page.md")
+        assert (ROOT / "docs" / f"{results.stem}.md").read_text() == (tmp_path / "page.md").read_text(), \
+            f"docs/{results.stem}.md is stale: rerun benchmarks/key_study.py (or render its results)"
+        assert (ROOT / "docs" / f"{results.stem}.png").stat().st_size > 1000
+
+
+@pytest.mark.slow
+def test_the_quick_study_labels_train_and_held_out_objects_and_measures_every_key(tmp_path):
+    subprocess.run([sys.executable, str(ROOT / "benchmarks" / "key_study.py"), "--quick", "--out", str(tmp_path)],
+                   check=True, capture_output=True, timeout=300)
+    out = json.loads((tmp_path / "benchmarks" / "results" / "key_study.json").read_text())
+    assert [r["key"] for r in out["keys"]] == [name for name, _, _ in study.KEYS]
+    assert out["train"]["grasps"] > 0 and out["heldout"]["grasps"] > 0 and out["ceiling"]["grasps"] > 0
+    for r in out["keys"]:
+        assert 0 < r["unique"] <= out["train"]["grasps"]
+        assert r["lookup"]["test_grasps"] == out["heldout"]["grasps"]
+        assert 0 <= r["lookup"]["covered"] <= r["lookup"]["test_grasps"]
+    assert (tmp_path / "docs" / "key_study.png").stat().st_size > 1000
+    assert "# Which dedup key decides the label" in (tmp_path / "docs" / "key_study.md").read_text()
