@@ -141,6 +141,57 @@ def decided_share(measure: dict, ceiling: float | None) -> float | None:
     return round((measure["agreement"] - measure["floor"]) / (ceiling - measure["floor"]), 4)
 
 
+def threshold_ap(scores: np.ndarray, labels: np.ndarray) -> float:
+    """Average precision over the distinct score thresholds: grasps with equal scores count together (a lookup
+    gives every grasp of a key one score, and their order must not decide the figure). scores (n,) float, labels
+    (n,) bool; 0 when there is no positive."""
+    labels = np.asarray(labels, dtype=bool)
+    if not labels.any():
+        return 0.0
+    order = np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
+    ranked, hits = np.asarray(scores)[order], np.cumsum(labels[order])
+    ends = np.r_[np.flatnonzero(ranked[1:] != ranked[:-1]), len(ranked) - 1]  # last grasp of each tie group
+    precision, recall = hits[ends] / (ends + 1), hits[ends] / hits[-1]
+    return float(np.sum(np.diff(np.r_[0.0, recall]) * precision))
+
+
+def lookup_scores(train_keys: np.ndarray, train_success: np.ndarray, labelled: np.ndarray,
+                  test_keys: np.ndarray) -> tuple[np.ndarray, float]:
+    """Each test grasp's score: the mean label of the ``labelled`` train grasps (rows, (L,) int64) with its key, or
+    the mean of all labelled grasps where none has it. Returns scores (m,) float64 and the covered fraction."""
+    exact = unique_codes(np.concatenate([train_keys[labelled], test_keys]))
+    train, test = exact.inverse[:len(labelled)], exact.inverse[len(labelled):]
+    success = np.asarray(train_success, dtype=np.float64)[labelled]
+    positives = np.bincount(train, weights=success, minlength=len(exact.unique))
+    counts = np.bincount(train, minlength=len(exact.unique))[test]
+    scores = np.where(counts > 0, positives[test] / np.maximum(counts, 1), success.mean() if len(success) else 0.0)
+    return scores, float(np.mean(counts > 0)) if len(test) else 0.0
+
+
+def budget_lookup(train_keys: np.ndarray, train_success: np.ndarray, test_keys: np.ndarray,
+                  test_success: np.ndarray, seed: int, draws: int = 5) -> dict:
+    """B against R without a network: held-out grasps ranked by :func:`lookup_scores` from (A) every train label,
+    (B) one label per key (its first train grasp's), (R) as many labels as B of train grasps drawn at random
+    (``draws`` seeded draws: mean and spread). AP over held-out grasps; accuracy at a score above one half."""
+    truth = np.asarray(test_success, dtype=bool)
+    exact = unique_codes(train_keys)
+    first = np.full(len(exact.unique), -1, dtype=np.int64)
+    first[exact.inverse[::-1]] = np.arange(len(train_keys))[::-1]
+
+    def measure(labelled: np.ndarray) -> dict:
+        scores, covered = lookup_scores(train_keys, train_success, labelled, test_keys)
+        accuracy = float(np.mean((scores > 0.5) == truth))
+        return {"labels": int(len(labelled)), "coverage": round(covered, 4),
+                "ap": round(threshold_ap(scores, truth), 4), "accuracy": round(accuracy, 4)}
+
+    rng = np.random.default_rng([seed, 29])
+    random = [measure(rng.permutation(len(train_keys))[:len(first)]) for _ in range(draws)]
+    spread = {m: round(float(np.std([r[m] for r in random])), 4) for m in ("ap", "accuracy")}
+    mean = {m: round(float(np.mean([r[m] for r in random])), 4) for m in ("coverage", "ap", "accuracy")}
+    return {"A": measure(np.arange(len(train_keys))), "B": measure(first),
+            "R": {"labels": int(len(first)), **mean, "sd": spread, "draws": draws}}
+
+
 def key_rows(train: Crops, heldout: Crops, region: tuple[float, float, float], ceiling: float | None,
              seed: int) -> list[dict]:
     """One row of measures per key of KEYS."""
@@ -153,7 +204,9 @@ def key_rows(train: Crops, heldout: Crops, region: tuple[float, float, float], c
                      "unique": int(len(exact.unique)),
                      "unique_fraction": round(len(exact.unique) / max(train.count, 1), 4),
                      "pairs": pair_agreement(train.success.astype(np.float64), train.quality, exact.inverse, seed),
-                     "lookup": lookup, "decided_share_first": decided_share(lookup["first"], ceiling),
+                     "lookup": lookup, "budget": budget_lookup(train_keys, train.success, held_keys,
+                                                               heldout.success, seed),
+                     "decided_share_first": decided_share(lookup["first"], ceiling),
                      "decided_share_majority": decided_share(lookup["majority"], ceiling)})
     return rows
 

@@ -32,6 +32,33 @@ def key_table(out: dict) -> list[str]:
     return lines
 
 
+def budget_table(out: dict) -> list[str]:
+    lines = ["| key | labels (B = R) | A: AP, accuracy | B: AP, accuracy (coverage) | R: AP +- sd, accuracy "
+             "(coverage) | B at least R |", "| --- |" + " --- |" * 5]
+    for r in out["keys"]:
+        a, b, rand = r["budget"]["A"], r["budget"]["B"], r["budget"]["R"]
+        lines.append(f"| {r['key']} | {b['labels']:,} | {_num(a['ap'])}, {_pct(a['accuracy'])} "
+                     f"| {_num(b['ap'])}, {_pct(b['accuracy'])} ({_pct(b['coverage'])}) "
+                     f"| {_num(rand['ap'])} +- {_num(rand['sd']['ap'])}, {_pct(rand['accuracy'])} "
+                     f"({_pct(rand['coverage'])}) | {'yes' if b_holds(r) else 'no'} |")
+    return lines
+
+
+def b_holds(row: dict) -> bool:
+    """B's lookup at least as good as R's: its AP and its accuracy both no lower than R's mean."""
+    b, rand = row["budget"]["B"], row["budget"]["R"]
+    return b["ap"] >= rand["ap"] and b["accuracy"] >= rand["accuracy"]
+
+
+def budget_verdict(out: dict) -> str:
+    holds = [r["key"] for r in out["keys"] if b_holds(r)]
+    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)["budget"]
+    said = (f"for {in_words(holds)}" if holds else "for none of the keys tried")
+    return (f"- **B against R, without a network:** one label per key ranks held-out grasps at least as well as "
+            f"as many random labels {said} (the occupancy code: B AP {_num(ref['B']['ap'])} against R "
+            f"{_num(ref['R']['ap'])} +- {_num(ref['R']['sd']['ap'])}, every label {_num(ref['A']['ap'])}).")
+
+
 def dominating(out: dict) -> list[dict]:
     """Keys that repeat at least as much as the reference code (unique fraction no higher) and decide more of the
     label on held-out objects (share decided by the first train label higher), with coverage no lower."""
@@ -60,6 +87,7 @@ def verdict(out: dict) -> list[str]:
         lines.append(f"- **Keys that repeat at least as much and decide more:** {names}.")
     else:
         lines.append("- **Keys that repeat at least as much and decide more:** none of those tried.")
+    lines.append(budget_verdict(out))
     if most is not None:
         lines.append(f"- **Most decisive key tried:** {most['key']}: share {_num(most['decided_share_first'], 2)} "
                      f"at unique fraction {_num(most['unique_fraction'])} and held-out coverage "
@@ -75,8 +103,10 @@ def headline_sentence(out: dict) -> str:
     verbs = "repeats as much and decides" if len(better) == 1 else "repeat as much and decide"
     found = (f"{in_words([r['key'] for r in better])} {verbs} more"
              if better else "no key tried repeats as much and decides more")
+    holds = sum(b_holds(r) for r in out["keys"])
     return (f"lifting {load}, the occupancy code carries a share of {_num(ref['decided_share_first'], 2)} of the "
-            f"decidable label at unique fraction {_num(ref['unique_fraction'])}; {found}")
+            f"decidable label at unique fraction {_num(ref['unique_fraction'])}; {found}; one label per key ranks "
+            f"held-out grasps at least as well as as many random labels for {holds} of {len(out['keys'])} keys")
 
 
 def write_page(out: dict, path: Path) -> None:
@@ -85,8 +115,8 @@ def write_page(out: dict, path: Path) -> None:
             else "the object itself")
     lines = [
         "# Which dedup key decides the label", "",
-        f"Command: `{out['command']}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} minutes). "
-        f"Rendered from benchmarks/results/{out['name']}.json by benchmarks/key_study_page.py.", "",
+        f"Command: `{out['command']}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} minutes"
+        f"{_jobs(out)}). Rendered from benchmarks/results/{out['name']}.json by benchmarks/key_study_page.py.", "",
         "The method labels one grasp per key and lets that label stand for every grasp with the key. This measures, "
         "without a network, how far each key's label holds on unseen objects: a held-out grasp whose key some "
         "train grasp has takes that key's first train label (B's one label per key, as if its patch trial on the "
@@ -103,11 +133,27 @@ def write_page(out: dict, path: Path) -> None:
         "## What it says", "", *verdict(out), "",
         f"![unique fraction against share decided]({out['name']}.png)", "",
         *key_table(out), "",
+        "## B against R without a network", "",
+        "Each held-out grasp is scored by the mean label of the labelled train grasps with its key (the mean of "
+        "all labelled grasps where none has it), and the held-out grasps are ranked by that score (AP over "
+        "score thresholds; accuracy at a score above one half). A labels every train grasp; B one per key, its "
+        "first train grasp's (a perfect patch); R as many train grasps drawn at random "
+        f"({out['keys'][0]['budget']['R']['draws']} seeded draws). This is the paper experiment's B against R "
+        "with a lookup for the network: it needs no training, so no budget or learning rate can decide it.", "",
+        *budget_table(out), "",
         "Contact keys (onepiece_dist/core/contact.py): per finger and pad cell (u by t), how much farther the pad "
         "travels before it meets surface there than where it first meets surface, quantized in relief steps up "
         "to a last level, or 'no surface' in that cell; and the opening at first contact. Same-key pairs: the first "
         "grasp of each key against up to four others; random pairs: as many pairs with different keys.", ""]
     path.write_text("\n".join(lines))
+
+
+def _jobs(out: dict) -> str:
+    """The labelling jobs' own minutes (their stages' seconds), and whether this run reused them."""
+    parts = [f"{name} {sum(job['stages'].values()) / 60:.1f} min" for name, job in out["jobs"].items()]
+    reused = [name for name, job in out["jobs"].items() if job["reused"]]
+    said = f", reused from an earlier run of the same spec: {in_words(reused)}" if reused else ""
+    return f"; labelling jobs, one process each: {in_words(parts)}{said}"
 
 
 def plot_keys(out: dict, path: Path) -> None:

@@ -57,6 +57,39 @@ def test_the_share_decided_runs_from_zero_at_the_floor_to_one_at_the_ceiling():
     assert study.decided_share({"agreement": None, "floor": None}, 0.8) is None
 
 
+def test_the_threshold_ap_is_the_usual_ap_without_ties_and_ignores_the_order_within_ties():
+    from onepiece_dist.learn.train import average_precision
+
+    rng = np.random.default_rng(2)
+    scores, labels = rng.random(200), rng.random(200) < 0.3
+    assert study.threshold_ap(scores, labels) == pytest.approx(average_precision(scores, labels))
+    tied = np.round(scores, 1)
+    order = rng.permutation(200)
+    assert study.threshold_ap(tied, labels) == pytest.approx(study.threshold_ap(tied[order], labels[order]))
+    assert study.threshold_ap(np.zeros(200), labels) == pytest.approx(labels.mean())
+    assert study.threshold_ap(scores, np.zeros(200, bool)) == 0.0
+
+
+def test_one_label_per_key_ranks_below_as_many_random_labels_when_a_frequent_keys_first_label_is_its_minority():
+    rng = np.random.default_rng(4)
+    common = np.r_[False, rng.random(299) < 0.7]  # key 0: 300 grasps, 70% positive, its first one negative
+    train_keys = keys(np.r_[np.zeros(300, int), 1 + np.arange(30)])  # and 30 keys met once
+    train_success = np.r_[common, rng.random(30) < 0.3]
+    test_keys = keys(np.r_[np.zeros(200, int), 1 + np.arange(30)])
+    test_success = np.r_[rng.random(200) < 0.7, rng.random(30) < 0.3]
+    out = study.budget_lookup(train_keys, train_success, test_keys, test_success, seed=0)
+    assert out["B"]["labels"] == out["R"]["labels"] == 31 and out["A"]["labels"] == 330
+    assert out["B"]["coverage"] == 1.0 > out["R"]["coverage"]
+    assert out["R"]["ap"] - out["B"]["ap"] > max(0.03, 3 * out["R"]["sd"]["ap"])
+    assert out["B"]["accuracy"] < 0.5 < out["R"]["accuracy"]  # B calls the common key's grasps negative
+
+
+def test_a_key_that_decides_the_label_ranks_perfectly_from_one_label_per_key():
+    train, test = np.arange(80) % 8, np.arange(40) % 8
+    out = study.budget_lookup(keys(train), train % 2 == 0, keys(test), test % 2 == 0, seed=0)
+    assert out["A"]["ap"] == out["B"]["ap"] == 1.0 and out["B"]["accuracy"] == 1.0
+
+
 def test_occupancy_codes_from_the_kept_crop_points_are_the_codes_core_voxel_gives():
     mesh = box_mesh((0.05, 0.03, 0.04))
     cloud = sample_surface(mesh, 3000, np.random.default_rng(1))[0]
@@ -106,5 +139,6 @@ def test_the_quick_study_labels_train_and_held_out_objects_and_measures_every_ke
         assert 0 < r["unique"] <= out["train"]["grasps"]
         assert r["lookup"]["test_grasps"] == out["heldout"]["grasps"]
         assert 0 <= r["lookup"]["covered"] <= r["lookup"]["test_grasps"]
+        assert r["budget"]["B"]["labels"] == r["budget"]["R"]["labels"] == r["unique"]
     assert (tmp_path / "docs" / "key_study.png").stat().st_size > 1000
     assert "# Which dedup key decides the label" in (tmp_path / "docs" / "key_study.md").read_text()
