@@ -14,9 +14,10 @@ better at the same redundancy, without training a network or assembling anything
    in KEYS: occupancy codes (core.voxel) and contact keys (core.contact: the relief under each pad);
 3. per key: the unique fraction of the train grasps (labels the method pays for); same-key agreement against
    random pairs on the train objects; and the lookup on held-out objects, which is the method's premise with
-   perfect patches: a held-out grasp whose key some train grasp has gets the label of that key's first train grasp
-   (B's one label per key) or the key's majority label; agreement with its own label against the floor of a label
-   that ignores the shape (independent, same positive rates), and coverage (held-out grasps whose key was seen);
+   perfect patches: a held-out grasp whose key some train grasp has gets the label of one of that key's train
+   grasps (B's one label per key; expected over which grasp) or the key's majority label; agreement with its own
+   label against the floor of a label that ignores the shape (independent, same positive rates), and coverage
+   (held-out grasps whose key was seen); and B against R ranked by such lookups (budget_lookup);
 4. the ceiling: A's labels against the same grasps labelled again with other perturbation draws. The share of the
    decidable label a key carries is (agreement - floor) / (ceiling - floor).
 
@@ -106,24 +107,27 @@ def lookup_transfer(train_keys: np.ndarray, train_success: np.ndarray, test_keys
     """Held-out grasps labelled by a lookup of their key among the train grasps' keys.
 
     train_keys (n, K) uint8, train_success (n,) bool, test_keys (m, K) uint8, test_success (m,) bool. A covered
-    test grasp (its key is some train grasp's) gets the label of the key's first train grasp ("first") and the
-    key's majority label, ties to the first ("majority"); each agreement with the grasp's own label comes beside
-    the floor of labels that ignore the shape: p q + (1 - p)(1 - q) for the positive rates of the two.
+    test grasp (its key is some train grasp's) gets the label of one of the key's train grasps ("one_label": B's
+    one label per key, its representative being any grasp of the key; the agreement is the expectation over which,
+    p_k for a positive test grasp and 1 - p_k for a negative one, p_k the key's positive fraction) or the key's
+    majority label, ties positive ("majority"). Each agreement comes beside the floor of labels that ignore the
+    shape: p q + (1 - p)(1 - q) for the positive rates of the two.
     """
     exact = unique_codes(np.concatenate([train_keys, test_keys]))
     train, test = exact.inverse[:len(train_keys)], exact.inverse[len(train_keys):]
-    first = np.full(len(exact.unique), -1, dtype=np.int64)
-    first[train[::-1]] = np.arange(len(train_keys))[::-1]  # the lowest train row of each key
-    covered = first[test] >= 0
-    keys = test[covered]
+    counts = np.bincount(train, minlength=len(exact.unique))
+    positives = np.bincount(train, weights=np.asarray(train_success, dtype=np.float64), minlength=len(counts))
+    covered = counts[test] > 0
     truth = np.asarray(test_success, dtype=bool)[covered]
-    first_label = np.asarray(train_success, dtype=bool)[first[keys]]
-    positives = np.bincount(train, weights=np.asarray(train_success, dtype=np.float64), minlength=len(first))
-    share = positives[keys] / np.maximum(np.bincount(train, minlength=len(first))[keys], 1)
-    majority = np.where(share == 0.5, first_label, share > 0.5)
+    share = positives[test[covered]] / np.maximum(counts[test[covered]], 1)  # p_k of each covered test grasp
+    one_label = {"agreement": None, "floor": None}
+    if covered.any():
+        p, q = float(share.mean()), float(truth.mean())
+        one_label = {"agreement": round(float(np.mean(np.where(truth, share, 1 - share))), 4),
+                     "floor": round(p * q + (1 - p) * (1 - q), 4)}
     return {"test_grasps": int(len(test_keys)), "covered": int(covered.sum()),
             "coverage": round(float(covered.mean()), 4) if len(test_keys) else None,
-            "first": _agreement(first_label, truth), "majority": _agreement(majority, truth)}
+            "one_label": one_label, "majority": _agreement(share >= 0.5, truth)}
 
 
 def _agreement(label: np.ndarray, truth: np.ndarray) -> dict:
@@ -171,12 +175,12 @@ def lookup_scores(train_keys: np.ndarray, train_success: np.ndarray, labelled: n
 def budget_lookup(train_keys: np.ndarray, train_success: np.ndarray, test_keys: np.ndarray,
                   test_success: np.ndarray, seed: int, draws: int = 5) -> dict:
     """B against R without a network: held-out grasps ranked by :func:`lookup_scores` from (A) every train label,
-    (B) one label per key (its first train grasp's), (R) as many labels as B of train grasps drawn at random
-    (``draws`` seeded draws: mean and spread). AP over held-out grasps; accuracy at a score above one half."""
+    (B) one label per key, of a grasp of the key drawn at random, (R) as many labels as B of train grasps drawn at
+    random, (S) as many labels spread over the keys by count (:func:`grasps_by_key_count`); B, R and S over ``draws``
+    seeded draws (mean and spread). AP over held-out grasps; accuracy at a score above one half."""
     truth = np.asarray(test_success, dtype=bool)
-    exact = unique_codes(train_keys)
-    first = np.full(len(exact.unique), -1, dtype=np.int64)
-    first[exact.inverse[::-1]] = np.arange(len(train_keys))[::-1]
+    inverse = unique_codes(train_keys).inverse
+    keys = int(inverse.max()) + 1 if len(inverse) else 0
 
     def measure(labelled: np.ndarray) -> dict:
         scores, covered = lookup_scores(train_keys, train_success, labelled, test_keys)
@@ -184,12 +188,43 @@ def budget_lookup(train_keys: np.ndarray, train_success: np.ndarray, test_keys: 
         return {"labels": int(len(labelled)), "coverage": round(covered, 4),
                 "ap": round(threshold_ap(scores, truth), 4), "accuracy": round(accuracy, 4)}
 
+    def summary(runs: list[dict]) -> dict:
+        spread = {m: round(float(np.std([r[m] for r in runs])), 4) for m in ("ap", "accuracy")}
+        mean = {m: round(float(np.mean([r[m] for r in runs])), 4) for m in ("coverage", "ap", "accuracy")}
+        return {"labels": int(round(np.mean([r["labels"] for r in runs]))), **mean, "sd": spread, "draws": draws}
+
     rng = np.random.default_rng([seed, 29])
-    random = [measure(rng.permutation(len(train_keys))[:len(first)]) for _ in range(draws)]
-    spread = {m: round(float(np.std([r[m] for r in random])), 4) for m in ("ap", "accuracy")}
-    mean = {m: round(float(np.mean([r[m] for r in random])), 4) for m in ("coverage", "ap", "accuracy")}
-    return {"A": measure(np.arange(len(train_keys))), "B": measure(first),
-            "R": {"labels": int(len(first)), **mean, "sd": spread, "draws": draws}}
+    one_per_key = [measure(one_grasp_per_key(inverse, rng)) for _ in range(draws)]
+    random = [measure(rng.permutation(len(train_keys))[:keys]) for _ in range(draws)]
+    stratified = [measure(grasps_by_key_count(inverse, keys, rng)) for _ in range(draws)]
+    return {"A": measure(np.arange(len(train_keys))), "B": summary(one_per_key), "R": summary(random),
+            "S": summary(stratified)}
+
+
+def grasps_by_key_count(inverse: np.ndarray, budget: int, rng: np.random.Generator, power: float = 0.5) -> np.ndarray:
+    """``budget`` rows spread over the keys in proportion to count ** power (largest remainders; a key gives at most
+    its own rows, so a little of the budget can go unspent), drawn at random within each key: inverse (n,) int64 key
+    of each row -> (<= budget,) int64 rows. Labels go where the grasps are, several on a frequent key."""
+    counts = np.bincount(inverse)
+    weight = counts.astype(np.float64) ** power
+    quota = budget * weight / weight.sum()
+    take = np.floor(quota).astype(np.int64)
+    take[np.argsort(take - quota, kind="stable")[:budget - int(take.sum())]] += 1
+    take = np.minimum(take, counts)
+    order = rng.permutation(len(inverse))
+    grouped = order[np.argsort(inverse[order], kind="stable")]  # shuffled rows, key by key
+    starts = np.r_[0, np.cumsum(counts)[:-1]]
+    rank = np.arange(len(inverse)) - np.repeat(starts, counts)  # place of each grouped row within its key
+    return grouped[rank < np.repeat(take, counts)]
+
+
+def one_grasp_per_key(inverse: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """One row drawn at random among the rows of each key: inverse (n,) int64 key of each row -> (U,) int64 rows,
+    in key order."""
+    order = rng.permutation(len(inverse))
+    first = np.full(int(inverse.max()) + 1 if len(inverse) else 0, -1, dtype=np.int64)
+    first[inverse[order][::-1]] = np.arange(len(order))[::-1]  # each key's first place in the shuffled order
+    return order[first]
 
 
 def key_rows(train: Crops, heldout: Crops, region: tuple[float, float, float], ceiling: float | None,
@@ -206,7 +241,7 @@ def key_rows(train: Crops, heldout: Crops, region: tuple[float, float, float], c
                      "pairs": pair_agreement(train.success.astype(np.float64), train.quality, exact.inverse, seed),
                      "lookup": lookup, "budget": budget_lookup(train_keys, train.success, held_keys,
                                                                heldout.success, seed),
-                     "decided_share_first": decided_share(lookup["first"], ceiling),
+                     "decided_share_one_label": decided_share(lookup["one_label"], ceiling),
                      "decided_share_majority": decided_share(lookup["majority"], ceiling)})
     return rows
 

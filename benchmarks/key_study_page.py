@@ -19,33 +19,36 @@ def _num(x: float | None, digits: int = 3) -> str:
 
 def key_table(out: dict) -> list[str]:
     lines = ["| key | bytes | unique fraction (train) | same-key / random-pair agreement (train) | held-out coverage "
-             "| first train label: agreement (floor) | share decided | majority label: agreement (floor) "
+             "| one train label: agreement (floor) | share decided | majority label: agreement (floor) "
              "| share decided |", "| --- |" + " --- |" * 8]
     for r in out["keys"]:
         pairs, look = r["pairs"], r["lookup"]
         lines.append(
             f"| {r['key']} | {r['key_bytes']} | {_num(r['unique_fraction'])} "
             f"| {_pct(pairs['same_code']['success_agreement'])} / {_pct(pairs['random_pairs']['success_agreement'])} "
-            f"| {_pct(look['coverage'])} | {_pct(look['first']['agreement'])} ({_pct(look['first']['floor'])}) "
-            f"| {_num(r['decided_share_first'], 2)} | {_pct(look['majority']['agreement'])} "
+            f"| {_pct(look['coverage'])} | {_pct(look['one_label']['agreement'])} ({_pct(look['one_label']['floor'])}) "
+            f"| {_num(r['decided_share_one_label'], 2)} | {_pct(look['majority']['agreement'])} "
             f"({_pct(look['majority']['floor'])}) | {_num(r['decided_share_majority'], 2)} |")
     return lines
 
 
 def budget_table(out: dict) -> list[str]:
-    lines = ["| key | labels (B = R) | A: AP, accuracy | B: AP, accuracy (coverage) | R: AP +- sd, accuracy "
-             "(coverage) | B at least R |", "| --- |" + " --- |" * 5]
+    lines = ["| key | labels (B = R = S) | A: AP, accuracy | B: AP +- sd, accuracy (coverage) | R: AP +- sd, "
+             "accuracy (coverage) | S: AP +- sd, accuracy (coverage) | B at least R |", "| --- |" + " --- |" * 6]
     for r in out["keys"]:
-        a, b, rand = r["budget"]["A"], r["budget"]["B"], r["budget"]["R"]
-        lines.append(f"| {r['key']} | {b['labels']:,} | {_num(a['ap'])}, {_pct(a['accuracy'])} "
-                     f"| {_num(b['ap'])}, {_pct(b['accuracy'])} ({_pct(b['coverage'])}) "
-                     f"| {_num(rand['ap'])} +- {_num(rand['sd']['ap'])}, {_pct(rand['accuracy'])} "
-                     f"({_pct(rand['coverage'])}) | {'yes' if b_holds(r) else 'no'} |")
+        budget = r["budget"]
+        lines.append(f"| {r['key']} | {budget['B']['labels']:,} | {_num(budget['A']['ap'])}, "
+                     f"{_pct(budget['A']['accuracy'])} | {_drawn(budget['B'])} | {_drawn(budget['R'])} "
+                     f"| {_drawn(budget['S'])} | {'yes' if b_holds(r) else 'no'} |")
     return lines
 
 
+def _drawn(arm: dict) -> str:
+    return f"{_num(arm['ap'])} +- {_num(arm['sd']['ap'])}, {_pct(arm['accuracy'])} ({_pct(arm['coverage'])})"
+
+
 def b_holds(row: dict) -> bool:
-    """B's lookup at least as good as R's: its AP and its accuracy both no lower than R's mean."""
+    """B's lookup at least as good as R's: its mean AP and mean accuracy both no lower than R's."""
     b, rand = row["budget"]["B"], row["budget"]["R"]
     return b["ap"] >= rand["ap"] and b["accuracy"] >= rand["accuracy"]
 
@@ -54,42 +57,57 @@ def budget_verdict(out: dict) -> str:
     holds = [r["key"] for r in out["keys"] if b_holds(r)]
     ref = next(r for r in out["keys"] if r["key"] == REFERENCE)["budget"]
     said = (f"for {in_words(holds)}" if holds else "for none of the keys tried")
+    above = [r["key"] for r in out["keys"] if beyond_spreads(r["budget"]["S"], r["budget"]["R"])]
+    below = sum(beyond_spreads(r["budget"]["R"], r["budget"]["B"]) for r in out["keys"])
     return (f"- **B against R, without a network:** one label per key ranks held-out grasps at least as well as "
-            f"as many random labels {said} (the occupancy code: B AP {_num(ref['B']['ap'])} against R "
-            f"{_num(ref['R']['ap'])} +- {_num(ref['R']['sd']['ap'])}, every label {_num(ref['A']['ap'])}).")
+            f"as many random labels {said} (the occupancy code: B AP {_num(ref['B']['ap'])} +- "
+            f"{_num(ref['B']['sd']['ap'])} against R "
+            f"{_num(ref['R']['ap'])} +- {_num(ref['R']['sd']['ap'])}, every label {_num(ref['A']['ap'])}); its AP "
+            f"is below R's by more than both spreads for {below} of {len(out['keys'])} keys. The same "
+            f"number of labels spread over the keys by the root of their counts (S) ranks above R beyond both "
+            f"spreads for "
+            f"{in_words(above) if above else 'none of the keys'} (the occupancy code: S AP {_num(ref['S']['ap'])} "
+            f"+- {_num(ref['S']['sd']['ap'])}).")
+
+
+def beyond_spreads(high: dict, low: dict) -> bool:
+    """Mean AP of ``high`` above ``low``'s by more than their two spreads (sd over draws; 0 for one run) added."""
+    spread = high.get("sd", {}).get("ap", 0.0) + low.get("sd", {}).get("ap", 0.0)
+    return high["ap"] - low["ap"] > spread
 
 
 def dominating(out: dict) -> list[dict]:
     """Keys that repeat at least as much as the reference code (unique fraction no higher) and decide more of the
-    label on held-out objects (share decided by the first train label higher), with coverage no lower."""
+    label on held-out objects (share decided by one train label higher), with coverage no lower."""
     ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
-    return [r for r in out["keys"] if r["key"] != REFERENCE and r["decided_share_first"] is not None
-            and ref["decided_share_first"] is not None
+    return [r for r in out["keys"] if r["key"] != REFERENCE and r["decided_share_one_label"] is not None
+            and ref["decided_share_one_label"] is not None
             and r["unique_fraction"] <= ref["unique_fraction"]
             and r["lookup"]["coverage"] >= ref["lookup"]["coverage"]
-            and r["decided_share_first"] > ref["decided_share_first"]]
+            and r["decided_share_one_label"] > ref["decided_share_one_label"]]
 
 
 def verdict(out: dict) -> list[str]:
     ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
     better = dominating(out)
-    most = max((r for r in out["keys"] if r["decided_share_first"] is not None),
-               key=lambda r: r["decided_share_first"], default=None)
+    most = max((r for r in out["keys"] if r["decided_share_one_label"] is not None),
+               key=lambda r: r["decided_share_one_label"], default=None)
     lines = [f"- **The experiment's code ({REFERENCE}):** {_num(ref['unique_fraction'])} of the train grasps are "
              f"unique; a held-out grasp finds its code among the train grasps {_pct(ref['lookup']['coverage'])} of "
-             f"the time, and that code's first train label agrees with its own "
-             f"{_pct(ref['lookup']['first']['agreement'])} of the time against {_pct(ref['lookup']['first']['floor'])} "
-             f"for a label that ignores the shape: a share of {_num(ref['decided_share_first'], 2)} of what a label "
-             f"can agree beyond chance (the ceiling, A against itself: {_pct(out['ceiling']['agreement'])})."]
+             f"the time, and a train label of that code agrees with its own "
+             f"{_pct(ref['lookup']['one_label']['agreement'])} of the time against "
+             f"{_pct(ref['lookup']['one_label']['floor'])} "
+             f"for a label that ignores the shape: a share of {_num(ref['decided_share_one_label'], 2)} of what a "
+             f"label can agree beyond chance (the ceiling, A against itself: {_pct(out['ceiling']['agreement'])})."]
     if better:
         names = ", ".join(f"{r['key']} (unique {_num(r['unique_fraction'])}, share "
-                          f"{_num(r['decided_share_first'], 2)})" for r in better)
+                          f"{_num(r['decided_share_one_label'], 2)})" for r in better)
         lines.append(f"- **Keys that repeat at least as much and decide more:** {names}.")
     else:
         lines.append("- **Keys that repeat at least as much and decide more:** none of those tried.")
     lines.append(budget_verdict(out))
     if most is not None:
-        lines.append(f"- **Most decisive key tried:** {most['key']}: share {_num(most['decided_share_first'], 2)} "
+        lines.append(f"- **Most decisive key tried:** {most['key']}: share {_num(most['decided_share_one_label'], 2)} "
                      f"at unique fraction {_num(most['unique_fraction'])} and held-out coverage "
                      f"{_pct(most['lookup']['coverage'])}.")
     return lines
@@ -104,7 +122,7 @@ def headline_sentence(out: dict) -> str:
     found = (f"{in_words([r['key'] for r in better])} {verbs} more"
              if better else "no key tried repeats as much and decides more")
     holds = sum(b_holds(r) for r in out["keys"])
-    return (f"lifting {load}, the occupancy code carries a share of {_num(ref['decided_share_first'], 2)} of the "
+    return (f"lifting {load}, the occupancy code carries a share of {_num(ref['decided_share_one_label'], 2)} of the "
             f"decidable label at unique fraction {_num(ref['unique_fraction'])}; {found}; one label per key ranks "
             f"held-out grasps at least as well as as many random labels for {holds} of {len(out['keys'])} keys")
 
@@ -119,8 +137,10 @@ def write_page(out: dict, path: Path) -> None:
         f"{_jobs(out)}). Rendered from benchmarks/results/{out['name']}.json by benchmarks/key_study_page.py.", "",
         "The method labels one grasp per key and lets that label stand for every grasp with the key. This measures, "
         "without a network, how far each key's label holds on unseen objects: a held-out grasp whose key some "
-        "train grasp has takes that key's first train label (B's one label per key, as if its patch trial on the "
-        "one object gave its source's label) or the key's majority label. 'Share decided' is (agreement - floor) / "
+        "train grasp has takes the label of one of that key's train grasps (B's one label per key, as if its patch "
+        "trial on the one object gave its source's label; the agreement is the expectation over which grasp of the "
+        "key gives it, as B's representative is any of them) or the key's majority label (a tie counts positive). "
+        "'Share decided' is (agreement - floor) / "
         "(ceiling - floor): 0 for a key that says nothing of the label, 1 for one that decides it as far as the "
         "label repeats itself.", "",
         f"Labels: arm A's protocol ({out['label_trials']} trials per label, positive = all held), each trial lifting "
@@ -136,9 +156,12 @@ def write_page(out: dict, path: Path) -> None:
         "## B against R without a network", "",
         "Each held-out grasp is scored by the mean label of the labelled train grasps with its key (the mean of "
         "all labelled grasps where none has it), and the held-out grasps are ranked by that score (AP over "
-        "score thresholds; accuracy at a score above one half). A labels every train grasp; B one per key, its "
-        "first train grasp's (a perfect patch); R as many train grasps drawn at random "
-        f"({out['keys'][0]['budget']['R']['draws']} seeded draws). This is the paper experiment's B against R "
+        "score thresholds; accuracy at a score above one half). A labels every train grasp; B one grasp per key, "
+        "drawn at random among the key's grasps (a perfect patch of its representative); R as many train grasps "
+        "drawn at random; S as many spread over the keys in proportion to the root of each key's count (several "
+        "labels on a frequent key, none on some rare ones: what the dedup could still buy, labels placed where "
+        f"the grasps are) ({out['keys'][0]['budget']['R']['draws']} seeded draws each, mean and spread). This is "
+        "the paper experiment's B against R "
         "with a lookup for the network: it needs no training, so no budget or learning rate can decide it.", "",
         *budget_table(out), "",
         "Contact keys (onepiece_dist/core/contact.py): per finger and pad cell (u by t), how much farther the pad "
@@ -161,12 +184,18 @@ def plot_keys(out: dict, path: Path) -> None:
 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.0, 4.0), dpi=110)
-    for r in out["keys"]:
-        share = r["decided_share_first"]
-        if share is None:
-            continue
-        ax.scatter(r["unique_fraction"], share, marker={"occupancy": "s", "contact": "o", "both": "^"}[r["kind"]])
-        ax.annotate(r["key"], (r["unique_fraction"], share), fontsize=6)
+    for k, r in enumerate(out["keys"]):
+        share, majority = r["decided_share_one_label"], r["decided_share_majority"]
+        marker, colour = {"occupancy": "s", "contact": "o", "both": "^"}[r["kind"]], f"C{k}"
+        if majority is not None:
+            ax.scatter(r["unique_fraction"], majority, marker=marker, facecolors="none", edgecolors=colour,
+                       label="the key's majority label" if k == 0 else None)
+        if share is not None:
+            ax.scatter(r["unique_fraction"], share, marker=marker, color=colour,
+                       label="one train label of the key (B)" if k == 0 else None)
+            ax.annotate(r["key"], (r["unique_fraction"], share), fontsize=6)
+    ax.set_xlim(-0.03, 1.25)
+    ax.legend(fontsize=7, loc="lower right")
     ax.set_xlabel("unique fraction of train grasps (labels paid / grasps)")
     ax.set_ylabel("share of the label decided (held-out lookup)")
     ax.grid(alpha=0.3)
