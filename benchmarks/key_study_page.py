@@ -164,6 +164,13 @@ def write_page(out: dict, path: Path) -> None:
         "the paper experiment's B against R "
         "with a lookup for the network: it needs no training, so no budget or learning rate can decide it.", "",
         *budget_table(out), "",
+        "Why one label per key loses to as many random labels: if a key's grasps succeed at a rate p_k, B's one "
+        "label agrees with a held-out grasp of that key with probability p_k^2 + (1 - p_k)^2, while R's labels "
+        "of that key, several wherever the key is frequent, estimate p_k itself; held-out grasps fall on keys in "
+        "proportion to how often keys occur, so the frequent keys, where R has many labels and B one, carry most "
+        "of the ranking. B can match R only where keys decide their labels (p_k near 0 or 1), which the share "
+        "decided above measures, or where most held-out keys are rare (B covers more of them: the coverage "
+        "columns). S puts B's labels where R's fall; the table gives how close that comes.", "",
         "Contact keys (onepiece_dist/core/contact.py): per finger and pad cell (u by t), how much farther the pad "
         "travels before it meets surface there than where it first meets surface, quantized in relief steps up "
         "to a last level, or 'no surface' in that cell; and the opening at first contact. Same-key pairs: the first "
