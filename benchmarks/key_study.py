@@ -61,7 +61,9 @@ KEYS: tuple[tuple[str, str, dict], ...] = (
     ("occupancy 10 mm + contact 20 mm, 4 mm", "both",
      {"resolution": 0.01, "cell": 0.02, "step": 0.004, "levels": 3, "width_step": 0.01}),
 )
-QUICK = {"objects": 4, "grasps": 16, "heldout": 3, "heldout_grasps": 16, "label_trials": 2, "repeat_per_object": 4}
+REDUNDANCY_KEYS = ("occupancy 10 mm", "contact 10 mm cells, 4 mm relief")  # the experiment's code, the best contact key
+QUICK = {"objects": 4, "grasps": 16, "heldout": 3, "heldout_grasps": 16, "label_trials": 2, "repeat_per_object": 4,
+         "redundancy": "4,8"}
 
 
 @dataclass(frozen=True)
@@ -143,6 +145,33 @@ def decided_share(measure: dict, ceiling: float | None) -> float | None:
     if measure["agreement"] is None or ceiling is None or ceiling <= measure["floor"]:
         return None
     return round((measure["agreement"] - measure["floor"]) / (ceiling - measure["floor"]), 4)
+
+
+def first_per_object(crops: Crops, count: int) -> Crops:
+    """The crops of each object's first ``count`` grasps (dataset order: candidate order within an object), grasps
+    renumbered in order: as if each object had been given fewer candidates."""
+    keep = experiment._rank_within_object(crops.object) < count
+    new_row = np.cumsum(keep) - 1
+    points = keep[crops.rows]
+    return Crops(crops.points[points], new_row[crops.rows[points]], crops.success[keep], crops.quality[keep],
+                 crops.object[keep])
+
+
+def redundancy_rows(train: Crops, heldout: Crops, region: tuple[float, float, float], counts: list[int],
+                    seed: int) -> list[dict]:
+    """B against R (:func:`budget_lookup`) for each key of REDUNDANCY_KEYS, with each train object cut to its
+    first n grasps, for each n in ``counts``: how the gap moves as the grasps per object, and so the redundancy,
+    grow."""
+    rows = []
+    for name, kind, params in (key for key in KEYS if key[0] in REDUNDANCY_KEYS):
+        held_keys = keys_of(heldout, kind, params, region)
+        for n in counts:
+            cut = first_per_object(train, n)
+            train_keys = keys_of(cut, kind, params, region)
+            rows.append({"key": name, "grasps_per_object": n, "grasps": cut.count,
+                         "unique_fraction": round(len(unique_codes(train_keys).unique) / max(cut.count, 1), 4),
+                         "budget": budget_lookup(train_keys, cut.success, held_keys, heldout.success, seed)})
+    return rows
 
 
 def threshold_ap(scores: np.ndarray, labels: np.ndarray) -> float:
@@ -301,7 +330,9 @@ def run_study(args, folder: Path) -> dict:
     region = (spec.gripper.closing_depth, spec.gripper.closing_width, spec.gripper.closing_height)
     return {"jobs": {k: gen[k] for k in ("A", "heldout")}, "ceiling": ceiling,
             "train": _summary(train), "heldout": _summary(heldout),
-            "keys": key_rows(train, heldout, region, ceiling["agreement"], args.seed)}
+            "keys": key_rows(train, heldout, region, ceiling["agreement"], args.seed),
+            "redundancy": redundancy_rows(train, heldout, region, [int(n) for n in args.redundancy.split(",")],
+                                          args.seed)}
 
 
 def _summary(crops: Crops) -> dict:
@@ -318,6 +349,8 @@ def parse_args(argv=None):
     parser.add_argument("--load", choices=("object", "grasp"), default="grasp",
                         help="what the label trials lift and shake: the object, or a payload at the grasp centre")
     parser.add_argument("--load-mass", type=float, default=0.5, help="the payload (kg) with --load grasp")
+    parser.add_argument("--redundancy", default="25,50,100,200",
+                        help="B against R with each train object cut to its first n labelled grasps, for these n")
     parser.add_argument("--quick", action="store_true", help="a few objects: a smoke test of the whole script")
     parser.add_argument("--folder", type=Path, default=None, help="work folder, kept (default: a temporary one)")
     parser.add_argument("--out", type=Path, default=HERE.parent, help="where results/ JSON and docs/ pages go")

@@ -70,6 +70,30 @@ def budget_verdict(out: dict) -> str:
             f"+- {_num(ref['S']['sd']['ap'])}).")
 
 
+def redundancy_table(out: dict) -> list[str]:
+    lines = ["| key | grasps per object (first n) | train grasps | unique fraction | B: AP +- sd | R: AP +- sd "
+             "| S: AP +- sd | R - B |", "| --- |" + " --- |" * 7]
+    for r in out.get("redundancy", []):
+        b = r["budget"]
+        lines.append(f"| {r['key']} | {r['grasps_per_object']} | {r['grasps']:,} | {_num(r['unique_fraction'])} "
+                     f"| {_num(b['B']['ap'])} +- {_num(b['B']['sd']['ap'])} "
+                     f"| {_num(b['R']['ap'])} +- {_num(b['R']['sd']['ap'])} "
+                     f"| {_num(b['S']['ap'])} +- {_num(b['S']['sd']['ap'])} | {_num(b['R']['ap'] - b['B']['ap'])} |")
+    return lines
+
+
+def redundancy_verdict(out: dict) -> str:
+    """How R - B moves from the fewest to the most grasps per object, per key."""
+    said = []
+    for key in dict.fromkeys(r["key"] for r in out.get("redundancy", [])):
+        rows = sorted((r for r in out["redundancy"] if r["key"] == key), key=lambda r: r["grasps_per_object"])
+        gap = [r["budget"]["R"]["ap"] - r["budget"]["B"]["ap"] for r in rows]
+        said.append(f"{key}: R - B {_num(gap[0])} at {rows[0]['grasps_per_object']} grasps per object (unique "
+                    f"{_num(rows[0]['unique_fraction'])}), {_num(gap[-1])} at {rows[-1]['grasps_per_object']} "
+                    f"(unique {_num(rows[-1]['unique_fraction'])})")
+    return ("- **As redundancy grows:** " + "; ".join(said) + ".") if said else ""
+
+
 def beyond_spreads(high: dict, low: dict) -> bool:
     """Mean AP of ``high`` above ``low``'s by more than their two spreads (sd over draws; 0 for one run) added."""
     spread = high.get("sd", {}).get("ap", 0.0) + low.get("sd", {}).get("ap", 0.0)
@@ -106,6 +130,8 @@ def verdict(out: dict) -> list[str]:
     else:
         lines.append("- **Keys that repeat at least as much and decide more:** none of those tried.")
     lines.append(budget_verdict(out))
+    if out.get("redundancy"):
+        lines.append(redundancy_verdict(out))
     if most is not None:
         lines.append(f"- **Most decisive key tried:** {most['key']}: share {_num(most['decided_share_one_label'], 2)} "
                      f"at unique fraction {_num(most['unique_fraction'])} and held-out coverage "
@@ -171,11 +197,21 @@ def write_page(out: dict, path: Path) -> None:
         "of the ranking. B can match R only where keys decide their labels (p_k near 0 or 1), which the share "
         "decided above measures, or where most held-out keys are rare (B covers more of them: the coverage "
         "columns). S puts B's labels where R's fall; the table gives how close that comes.", "",
+        *_redundancy_section(out),
         "Contact keys (onepiece_dist/core/contact.py): per finger and pad cell (u by t), how much farther the pad "
         "travels before it meets surface there than where it first meets surface, quantized in relief steps up "
         "to a last level, or 'no surface' in that cell; and the opening at first contact. Same-key pairs: the first "
         "grasp of each key against up to four others; random pairs: as many pairs with different keys.", ""]
     path.write_text("\n".join(lines))
+
+
+def _redundancy_section(out: dict) -> list[str]:
+    if not out.get("redundancy"):
+        return []
+    return ["## As redundancy grows", "",
+            "The same lookups with each train object cut to its first n labelled grasps (as if it had been given "
+            "fewer candidates; the held-out grasps stay the same): more grasps per object repeat more keys, the "
+            "regime where the method should pay.", "", *redundancy_table(out), ""]
 
 
 def _jobs(out: dict) -> str:

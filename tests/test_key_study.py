@@ -127,6 +127,18 @@ def test_occupancy_codes_from_the_kept_crop_points_are_the_codes_core_voxel_give
     assert both.shape == (3, 8 + 5) and np.array_equal(both[:, :8], codes)
 
 
+def test_cutting_each_object_to_its_first_grasps_keeps_their_points_and_renumbers_them_in_order():
+    owner = np.array([0, 0, 0, 1, 1, 2])
+    rows = np.array([0, 0, 1, 2, 2, 2, 3, 4, 4, 5])  # points of each grasp, in grasp order
+    points = np.arange(30, dtype=np.float64).reshape(10, 3)
+    crops = study.Crops(points, rows, np.array([1, 0, 1, 1, 0, 1], bool), np.arange(6.0), owner)
+    cut = study.first_per_object(crops, 2)
+    assert cut.count == 5 and cut.object.tolist() == [0, 0, 1, 1, 2]
+    assert cut.success.tolist() == [True, False, True, False, True] and cut.quality.tolist() == [0, 1, 3, 4, 5]
+    assert cut.rows.tolist() == [0, 0, 1, 2, 3, 3, 4]  # grasp 2's points dropped, later grasps renumbered
+    assert np.array_equal(cut.points, points[[0, 1, 2, 6, 7, 8, 9]])
+
+
 def row(name: str, unique: float, coverage: float, share: float) -> dict:
     return {"key": name, "unique_fraction": unique, "lookup": {"coverage": coverage},
             "decided_share_one_label": share}
@@ -168,5 +180,10 @@ def test_the_quick_study_labels_train_and_held_out_objects_and_measures_every_ke
         assert r["lookup"]["test_grasps"] == out["heldout"]["grasps"]
         assert 0 <= r["lookup"]["covered"] <= r["lookup"]["test_grasps"]
         assert r["budget"]["B"]["labels"] == r["budget"]["R"]["labels"] == r["unique"]
+    assert [(r["key"], r["grasps_per_object"]) for r in out["redundancy"]] == [
+        (key, n) for key in study.REDUNDANCY_KEYS for n in (4, 8)]
+    for key in study.REDUNDANCY_KEYS:  # fewer grasps per object, fewer train grasps: never more
+        four, eight = (r for r in out["redundancy"] if r["key"] == key)
+        assert 0 < four["grasps"] <= eight["grasps"] <= out["train"]["grasps"]
     assert (tmp_path / "docs" / "key_study.png").stat().st_size > 1000
     assert "# Which dedup key decides the label" in (tmp_path / "docs" / "key_study.md").read_text()
