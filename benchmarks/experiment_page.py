@@ -283,7 +283,7 @@ def variants_section(r: dict) -> list[str]:
             + f" A random choice per held-out object succeeds {pct(r['heldout_random_choice'])} of the time: a top-1 "
             "below it ranks the held-out grasps worse than chance. Weighing by count puts most of the loss on a "
             "few large clusters, each with the one label of its representative.", "", *_perfect_patch(r),
-            *_repeatability(r)]
+            *_repeatability(r), *_key_study_link()]
 
 
 def _datasets_sentence(r: dict) -> str:
@@ -364,7 +364,7 @@ def _longer_link(out: dict) -> list[str]:
             "same rows and held-out grasps (benchmarks/experiment_longer.py)."]
 
 
-def _key_study_link(out: dict) -> list[str]:
+def _key_study_link() -> list[str]:
     """A line naming benchmarks/key_study.py's pages (other dedup keys than the occupancy code) and what each says,
     where their results are committed."""
     from key_study_page import headline_sentence
@@ -429,7 +429,7 @@ def write_page(out: dict, path: Path) -> None:
              "labelled on its own object). Same-code pairs: the first grasp of each code (cluster, at radius r) "
              "against up to four others; random pairs: as many pairs of grasps with different codes. The code "
              "decides the label as far as same-code agreement exceeds random-pair agreement. The plot leaves out "
-             "rows with fewer than 30 same-code pairs.", *_key_study_link(out)]
+             "rows with fewer than 30 same-code pairs.", *_key_study_link()]
     path.write_text("\n".join(lines) + "\n")
 
 
