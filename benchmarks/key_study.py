@@ -112,8 +112,9 @@ def lookup_transfer(train_keys: np.ndarray, train_success: np.ndarray, test_keys
     test grasp (its key is some train grasp's) gets the label of one of the key's train grasps ("one_label": B's
     one label per key, its representative being any grasp of the key; the agreement is the expectation over which,
     p_k for a positive test grasp and 1 - p_k for a negative one, p_k the key's positive fraction) or the key's
-    majority label, ties positive ("majority"). Each agreement comes beside the floor of labels that ignore the
-    shape: p q + (1 - p)(1 - q) for the positive rates of the two.
+    majority label, positive where p_k is above one half, as :func:`budget_lookup` scores ("majority"). Each
+    agreement comes beside the floor of labels that ignore the shape: p q + (1 - p)(1 - q) for the positive rates
+    of the two.
     """
     exact = unique_codes(np.concatenate([train_keys, test_keys]))
     train, test = exact.inverse[:len(train_keys)], exact.inverse[len(train_keys):]
@@ -129,7 +130,7 @@ def lookup_transfer(train_keys: np.ndarray, train_success: np.ndarray, test_keys
                      "floor": round(p * q + (1 - p) * (1 - q), 4)}
     return {"test_grasps": int(len(test_keys)), "covered": int(covered.sum()),
             "coverage": round(float(covered.mean()), 4) if len(test_keys) else None,
-            "one_label": one_label, "majority": _agreement(share >= 0.5, truth)}
+            "one_label": one_label, "majority": _agreement(share > 0.5, truth)}
 
 
 def _agreement(label: np.ndarray, truth: np.ndarray) -> dict:

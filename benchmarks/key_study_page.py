@@ -165,7 +165,7 @@ def write_page(out: dict, path: Path) -> None:
         "without a network, how far each key's label holds on unseen objects: a held-out grasp whose key some "
         "train grasp has takes the label of one of that key's train grasps (B's one label per key, as if its patch "
         "trial on the one object gave its source's label; the agreement is the expectation over which grasp of the "
-        "key gives it, as B's representative is any of them) or the key's majority label (a tie counts positive). "
+        "key gives it, as B's representative is any of them) or the key's majority label (a tie counts negative). "
         "'Share decided' is (agreement - floor) / "
         "(ceiling - floor): 0 for a key that says nothing of the label, 1 for one that decides it as far as the "
         "label repeats itself.", "",
