@@ -116,10 +116,8 @@ def lookup_transfer(train_keys: np.ndarray, train_success: np.ndarray, test_keys
     agreement comes beside the floor of labels that ignore the shape: p q + (1 - p)(1 - q) for the positive rates
     of the two.
     """
-    exact = unique_codes(np.concatenate([train_keys, test_keys]))
-    train, test = exact.inverse[:len(train_keys)], exact.inverse[len(train_keys):]
-    counts = np.bincount(train, minlength=len(exact.unique))
-    positives = np.bincount(train, weights=np.asarray(train_success, dtype=np.float64), minlength=len(counts))
+    train, test, keys = key_ids(train_keys, test_keys)
+    counts, positives = key_labels(train, train_success, keys)
     covered = counts[test] > 0
     truth = np.asarray(test_success, dtype=bool)[covered]
     share = positives[test[covered]] / np.maximum(counts[test[covered]], 1)  # p_k of each covered test grasp
@@ -189,17 +187,29 @@ def threshold_ap(scores: np.ndarray, labels: np.ndarray) -> float:
     return float(np.sum(np.diff(np.r_[0.0, recall]) * precision))
 
 
-def lookup_scores(train_keys: np.ndarray, train_success: np.ndarray, labelled: np.ndarray,
-                  test_keys: np.ndarray) -> tuple[np.ndarray, float]:
-    """Each test grasp's score: the mean label of the ``labelled`` train grasps (rows, (L,) int64) with its key, or
-    the mean of all labelled grasps where none has it. Returns scores (m,) float64 and the covered fraction."""
-    exact = unique_codes(np.concatenate([train_keys[labelled], test_keys]))
-    train, test = exact.inverse[:len(labelled)], exact.inverse[len(labelled):]
+def key_ids(train_keys: np.ndarray, test_keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """One id per distinct key across both sets: (n,) int64 train ids, (m,) int64 test ids, and how many ids."""
+    exact = unique_codes(np.concatenate([train_keys, test_keys]))
+    return exact.inverse[:len(train_keys)], exact.inverse[len(train_keys):], len(exact.unique)
+
+
+def key_labels(ids: np.ndarray, success: np.ndarray, keys: int) -> tuple[np.ndarray, np.ndarray]:
+    """Grasps and positive grasps of each key id: ids (n,) int64, success (n,) bool -> (keys,) int64, (keys,)
+    float64."""
+    counts = np.bincount(ids, minlength=keys)
+    return counts, np.bincount(ids, weights=np.asarray(success, dtype=np.float64), minlength=keys)
+
+
+def lookup_scores(train_ids: np.ndarray, train_success: np.ndarray, labelled: np.ndarray, test_ids: np.ndarray,
+                  keys: int) -> tuple[np.ndarray, float]:
+    """Each test grasp's score: the mean label of the ``labelled`` train grasps (rows, (L,) int64) with its key id
+    (:func:`key_ids`, ``keys`` ids in all), or the mean of all labelled grasps where none has it. Returns scores
+    (m,) float64 and the covered fraction."""
     success = np.asarray(train_success, dtype=np.float64)[labelled]
-    positives = np.bincount(train, weights=success, minlength=len(exact.unique))
-    counts = np.bincount(train, minlength=len(exact.unique))[test]
-    scores = np.where(counts > 0, positives[test] / np.maximum(counts, 1), success.mean() if len(success) else 0.0)
-    return scores, float(np.mean(counts > 0)) if len(test) else 0.0
+    counts, positives = key_labels(train_ids[labelled], success, keys)
+    counts, positives = counts[test_ids], positives[test_ids]
+    scores = np.where(counts > 0, positives / np.maximum(counts, 1), success.mean() if len(success) else 0.0)
+    return scores, float(np.mean(counts > 0)) if len(test_ids) else 0.0
 
 
 def budget_lookup(train_keys: np.ndarray, train_success: np.ndarray, test_keys: np.ndarray,
@@ -209,11 +219,12 @@ def budget_lookup(train_keys: np.ndarray, train_success: np.ndarray, test_keys: 
     random, (S) as many labels spread over the keys by count (:func:`grasps_by_key_count`); B, R and S over ``draws``
     seeded draws (mean and spread). AP over held-out grasps; accuracy at a score above one half."""
     truth = np.asarray(test_success, dtype=bool)
-    inverse = unique_codes(train_keys).inverse
+    inverse = unique_codes(train_keys).inverse  # the draws group train grasps by key
     keys = int(inverse.max()) + 1 if len(inverse) else 0
+    train_ids, test_ids, ids = key_ids(train_keys, test_keys)  # the scores look keys up across both sets
 
     def measure(labelled: np.ndarray) -> dict:
-        scores, covered = lookup_scores(train_keys, train_success, labelled, test_keys)
+        scores, covered = lookup_scores(train_ids, train_success, labelled, test_ids, ids)
         accuracy = float(np.mean((scores > 0.5) == truth))
         return {"labels": int(len(labelled)), "coverage": round(covered, 4),
                 "ap": round(threshold_ap(scores, truth), 4), "accuracy": round(accuracy, 4)}

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import in_words
+from report import in_words, pct
 
 REFERENCE = "occupancy 10 mm"  # the code the paper experiment dedups by
 
 
-def _pct(x: float | None) -> str:
-    return "-" if x is None else f"{100 * x:.1f}%"
+def _reference(out: dict) -> dict:
+    """The row of the experiment's own code."""
+    return next(r for r in out["keys"] if r["key"] == REFERENCE)
 
 
 def _num(x: float | None, digits: int = 3) -> str:
@@ -25,10 +26,10 @@ def key_table(out: dict) -> list[str]:
         pairs, look = r["pairs"], r["lookup"]
         lines.append(
             f"| {r['key']} | {r['key_bytes']} | {_num(r['unique_fraction'])} "
-            f"| {_pct(pairs['same_code']['success_agreement'])} / {_pct(pairs['random_pairs']['success_agreement'])} "
-            f"| {_pct(look['coverage'])} | {_pct(look['one_label']['agreement'])} ({_pct(look['one_label']['floor'])}) "
-            f"| {_num(r['decided_share_one_label'], 2)} | {_pct(look['majority']['agreement'])} "
-            f"({_pct(look['majority']['floor'])}) | {_num(r['decided_share_majority'], 2)} |")
+            f"| {pct(pairs['same_code']['success_agreement'])} / {pct(pairs['random_pairs']['success_agreement'])} "
+            f"| {pct(look['coverage'])} | {pct(look['one_label']['agreement'])} ({pct(look['one_label']['floor'])}) "
+            f"| {_num(r['decided_share_one_label'], 2)} | {pct(look['majority']['agreement'])} "
+            f"({pct(look['majority']['floor'])}) | {_num(r['decided_share_majority'], 2)} |")
     return lines
 
 
@@ -38,13 +39,13 @@ def budget_table(out: dict) -> list[str]:
     for r in out["keys"]:
         budget = r["budget"]
         lines.append(f"| {r['key']} | {budget['B']['labels']:,} | {_num(budget['A']['ap'])}, "
-                     f"{_pct(budget['A']['accuracy'])} | {_drawn(budget['B'])} | {_drawn(budget['R'])} "
+                     f"{pct(budget['A']['accuracy'])} | {_drawn(budget['B'])} | {_drawn(budget['R'])} "
                      f"| {_drawn(budget['S'])} | {'yes' if b_holds(r) else 'no'} |")
     return lines
 
 
 def _drawn(arm: dict) -> str:
-    return f"{_num(arm['ap'])} +- {_num(arm['sd']['ap'])}, {_pct(arm['accuracy'])} ({_pct(arm['coverage'])})"
+    return f"{_num(arm['ap'])} +- {_num(arm['sd']['ap'])}, {pct(arm['accuracy'])} ({pct(arm['coverage'])})"
 
 
 def b_holds(row: dict) -> bool:
@@ -55,7 +56,7 @@ def b_holds(row: dict) -> bool:
 
 def budget_verdict(out: dict) -> str:
     holds = [r["key"] for r in out["keys"] if b_holds(r)]
-    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)["budget"]
+    ref = _reference(out)["budget"]
     said = (f"for {in_words(holds)}" if holds else "for none of the keys tried")
     above = [r["key"] for r in out["keys"] if beyond_spreads(r["budget"]["S"], r["budget"]["R"])]
     below = sum(beyond_spreads(r["budget"]["R"], r["budget"]["B"]) for r in out["keys"])
@@ -103,7 +104,7 @@ def beyond_spreads(high: dict, low: dict) -> bool:
 def dominating(out: dict) -> list[dict]:
     """Keys that repeat at least as much as the reference code (unique fraction no higher) and decide more of the
     label on held-out objects (share decided by one train label higher), with coverage no lower."""
-    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
+    ref = _reference(out)
     return [r for r in out["keys"] if r["key"] != REFERENCE and r["decided_share_one_label"] is not None
             and ref["decided_share_one_label"] is not None
             and r["unique_fraction"] <= ref["unique_fraction"]
@@ -112,17 +113,17 @@ def dominating(out: dict) -> list[dict]:
 
 
 def verdict(out: dict) -> list[str]:
-    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
+    ref = _reference(out)
     better = dominating(out)
     most = max((r for r in out["keys"] if r["decided_share_one_label"] is not None),
                key=lambda r: r["decided_share_one_label"], default=None)
     lines = [f"- **The experiment's code ({REFERENCE}):** {_num(ref['unique_fraction'])} of the train grasps are "
-             f"unique; a held-out grasp finds its code among the train grasps {_pct(ref['lookup']['coverage'])} of "
+             f"unique; a held-out grasp finds its code among the train grasps {pct(ref['lookup']['coverage'])} of "
              f"the time, and a train label of that code agrees with its own "
-             f"{_pct(ref['lookup']['one_label']['agreement'])} of the time against "
-             f"{_pct(ref['lookup']['one_label']['floor'])} "
+             f"{pct(ref['lookup']['one_label']['agreement'])} of the time against "
+             f"{pct(ref['lookup']['one_label']['floor'])} "
              f"for a label that ignores the shape: a share of {_num(ref['decided_share_one_label'], 2)} of what a "
-             f"label can agree beyond chance (the ceiling, A against itself: {_pct(out['ceiling']['agreement'])})."]
+             f"label can agree beyond chance (the ceiling, A against itself: {pct(out['ceiling']['agreement'])})."]
     if better:
         names = ", ".join(f"{r['key']} (unique {_num(r['unique_fraction'])}, share "
                           f"{_num(r['decided_share_one_label'], 2)})" for r in better)
@@ -135,13 +136,13 @@ def verdict(out: dict) -> list[str]:
     if most is not None:
         lines.append(f"- **Most decisive key tried:** {most['key']}: share {_num(most['decided_share_one_label'], 2)} "
                      f"at unique fraction {_num(most['unique_fraction'])} and held-out coverage "
-                     f"{_pct(most['lookup']['coverage'])}.")
+                     f"{pct(most['lookup']['coverage'])}.")
     return lines
 
 
 def headline_sentence(out: dict) -> str:
     """One sentence of what the study found, for the pages that link it."""
-    ref = next(r for r in out["keys"] if r["key"] == REFERENCE)
+    ref = _reference(out)
     better = dominating(out)
     load = "a payload at the grasp centre" if out["load"] == "grasp" else "the object"
     verbs = "repeats as much and decides" if len(better) == 1 else "repeat as much and decide"
@@ -171,11 +172,11 @@ def write_page(out: dict, path: Path) -> None:
         "label repeats itself.", "",
         f"Labels: arm A's protocol ({out['label_trials']} trials per label, positive = all held), each trial lifting "
         f"{load}. Train: {train['objects']} objects, {train['grasps']:,} labelled grasps, positive rate "
-        f"{_pct(train['positive_rate'])}. Held-out: {held['objects']} unseen objects, {held['grasps']:,} grasps, "
-        f"positive rate {_pct(held['positive_rate'])}. Crops: each grasp's settled pose, the object's surface "
+        f"{pct(train['positive_rate'])}. Held-out: {held['objects']} unseen objects, {held['grasps']:,} grasps, "
+        f"positive rate {pct(held['positive_rate'])}. Crops: each grasp's settled pose, the object's surface "
         f"points in the closing region ({train['mean_points']:g} points on average). Ceiling: {ceiling['grasps']:,} "
-        f"of A's grasps labelled again with other perturbation draws agree with A {_pct(ceiling['agreement'])} of "
-        f"the time (floor {_pct(ceiling['independent_floor'])}).", "",
+        f"of A's grasps labelled again with other perturbation draws agree with A {pct(ceiling['agreement'])} of "
+        f"the time (floor {pct(ceiling['independent_floor'])}).", "",
         "## What it says", "", *verdict(out), "",
         f"![unique fraction against share decided]({out['name']}.png)", "",
         *key_table(out), "",
