@@ -1,4 +1,4 @@
-"""Grasp candidate samplers: antipodal (ray cast along the inward normal) and the paper's normal-based one.
+"""Grasp candidate samplers: antipodal (rays cast along the inward normal, core.raycast) and the paper's normal one.
 
 Both are deterministic for a given object content id and seed, vectorized, and reject poses whose palm or
 fingers (fully open) would intersect the object.
@@ -13,6 +13,7 @@ import numpy as np
 from onepiece_dist.core.frames import compose_rotations, gripper_frame_batches, perpendicular, pose_from_axes
 from onepiece_dist.core.mesh import TriangleMesh
 from onepiece_dist.core.portable import sin_cos
+from onepiece_dist.core.raycast import cast_rays
 from onepiece_dist.spec import GripperSpec, SamplerSpec
 
 _RAY_START = 1e-5
@@ -63,7 +64,8 @@ def _antipodal_poses(mesh, points, normals, count, gripper, sampler, rng):
     """Contact pairs by ray casting along -normal, friction-cone test, then K approach angles each."""
     seeds = rng.permutation(len(points))[: max(4 * count, 64)]
     p, n = points[seeds], normals[seeds]
-    t_hit, n_q = cast_rays(mesh, p - n * _RAY_START, -n)
+    hits = cast_rays(mesh.vertices, mesh.faces, p - n * _RAY_START, -n)  # the same bits on every CPU
+    t_hit, n_q = hits.t, hits.normal
     width = t_hit + _RAY_START
     cos_cone = 1.0 / np.sqrt(1.0 + sampler.friction_cone**2)  # cos(arctan(mu)), without a CPU-picked arctan
     ok = np.isfinite(t_hit) & (width >= sampler.min_width) & (width <= gripper.max_opening * 0.95)
@@ -136,22 +138,6 @@ def plane_normals(local: np.ndarray) -> np.ndarray:
     spread = cov[np.arange(len(cov)), np.argmax(np.sum(cov * cov, axis=2), axis=1)]
     fallback = perpendicular(np.where(np.any(spread != 0, axis=1, keepdims=True), spread, [[0.0, 0.0, 1.0]]))
     return np.where(largest[:, None] > 0, best / np.sqrt(np.maximum(largest, 1e-300))[:, None], fallback)
-
-
-def cast_rays(mesh: TriangleMesh, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """First hit of each ray on the mesh (open3d raycasting).
-
-    origins, directions : (k, 3) float64 (directions unit)
-    returns : t_hit (k,) float64 (inf for a miss), hit normals (k, 3) float64
-    """
-    import open3d as o3d
-
-    scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(mesh.vertices.astype(np.float32)),
-                        o3d.core.Tensor(mesh.faces.astype(np.uint32)))
-    rays = np.hstack([origins, directions]).astype(np.float32)
-    hit = scene.cast_rays(o3d.core.Tensor(rays))
-    return hit["t_hit"].numpy().astype(np.float64), hit["primitive_normals"].numpy().astype(np.float64)
 
 
 def gripper_boxes(gripper: GripperSpec, opening: float | None = None) -> np.ndarray:
