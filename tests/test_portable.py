@@ -57,10 +57,17 @@ def test_an_angle_it_cannot_reduce_is_named(bad):
 def pose_digests() -> dict[str, str]:
     """blake2b digests of the float64 arrays a job hands to the physics or computes from angles: the samplers'
     candidate poses, the label trajectory, a perturbed pose, composed and inverted poses, a URDF origin, the
-    cameras' directions, a primitive mesh."""
+    cameras' directions, a primitive mesh; and the products that crop points into gripper frames."""
     import xml.etree.ElementTree as ET
 
-    from onepiece_dist.core.frames import compose_poses, invert_poses, perturb_pose
+    from onepiece_dist.core.frames import (
+        compose_poses,
+        gripper_frame_batches,
+        invert_poses,
+        perturb_pose,
+        to_gripper_frame,
+        transform_points,
+    )
     from onepiece_dist.core.mesh import cylinder_mesh, sample_surface
     from onepiece_dist.core.sampling import object_rng, sample_candidates
     from onepiece_dist.objects.urdf import _origin
@@ -80,6 +87,11 @@ def pose_digests() -> dict[str, str]:
         found = sample_candidates(mesh, points, normals, 40, GripperSpec(), SamplerSpec(method=method), rng)
         arrays[method] = found.poses
     arrays["composed"] = compose_poses(invert_poses(arrays["normal"]), arrays["antipodal"])
+    cloud = np.random.default_rng(4).normal(size=(3000, 3)) * 0.03  # the crops' and collision probe's products
+    arrays["gripper_frame"] = np.concatenate([c for _, c in gripper_frame_batches(cloud, arrays["antipodal"], 9000)],
+                                             axis=1)
+    arrays["to_gripper_frame"] = to_gripper_frame(cloud, arrays["antipodal"])
+    arrays["transformed"] = transform_points(cloud, arrays["perturbed"])
     return {name: hashlib.blake2b(np.ascontiguousarray(a).tobytes(), digest_size=12).hexdigest()
             for name, a in arrays.items()}
 
@@ -94,6 +106,25 @@ def test_poses_and_trajectories_are_the_same_bits_without_this_cpus_kernels():
     out = subprocess.run([sys.executable, __file__], capture_output=True, text=True, env=env, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
     assert json.loads(out.stdout.splitlines()[-1]) == pose_digests()
+
+
+def test_both_crop_products_give_the_same_bits_and_a_face_on_a_voxel_boundary_one_code():
+    """The batched planes and the per-pose product are the same formula; a box face at v = -1 cm lies exactly on
+    a voxel boundary, and both crop paths (dense, and through a grid index) put it in the same voxels."""
+    from onepiece_dist.core.frames import gripper_frame_batches, pose_from_axes, to_gripper_frame
+    from onepiece_dist.core.spatial import PointGrid
+    from onepiece_dist.core.voxel import crop_codes
+
+    rng = np.random.default_rng(5)
+    poses = pose_from_axes(rng.normal(size=(30, 3)) * 0.01, rng.normal(size=(30, 3)), rng.normal(size=(30, 3)))
+    cloud = rng.normal(size=(500, 3)) * 0.03
+    batched = np.concatenate([c for _, c in gripper_frame_batches(cloud, poses, pairs=2000)], axis=1)
+    assert np.array_equal(np.moveaxis(batched, 0, -1), to_gripper_frame(cloud, poses))
+    face = np.column_stack([rng.uniform(0.001, 0.039, 400), np.full(400, -0.01), rng.uniform(-0.009, 0.009, 400)])
+    square = pose_from_axes(np.zeros((1, 3)), np.array([[1.0, 0, 0]]), np.array([[0.0, 1, 0]]))
+    dense, _ = crop_codes(face, square, (4, 8, 2), 0.01)
+    indexed, _ = crop_codes(face, square, (4, 8, 2), 0.01, index=PointGrid(face, 0.01))
+    assert np.array_equal(dense, indexed) and dense.any()
 
 
 if __name__ == "__main__":

@@ -43,30 +43,38 @@ def invert_poses(poses: np.ndarray) -> np.ndarray:
 
 
 def to_gripper_frame(points: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    """Express object-frame points in each gripper frame.
+    """Express object-frame points in each gripper frame, the same bits on every CPU (fixed-order products: a
+    point on a voxel boundary, as on a box's face, must fall on the same side on every machine).
 
     points : (m, 3) float, poses : (n, 4, 4) float -> (n, m, 3) float64
     """
-    rot = poses[:, :3, :3]
-    offset = np.einsum("nj,nji->ni", poses[:, :3, 3], rot)
-    return np.matmul(points[None, :, :], rot) - offset[:, None, :]
+    rot = np.swapaxes(np.asarray(poses, dtype=np.float64)[:, :3, :3], -1, -2)  # rows: the gripper axes
+    offset = apply_rotation(rot, poses[:, :3, 3])
+    return apply_rotation(rot[:, None], np.asarray(points, dtype=np.float64)[None]) - offset[:, None, :]
 
 
 def gripper_frame_batches(points: np.ndarray, poses: np.ndarray, pairs: int = 200_000):
     """Every point in every gripper frame, as contiguous coordinate planes, a batch of poses at a time (about
-    ``pairs`` point-pose pairs each): one matrix product per batch instead of one per pose. Batches of about 5 MB
-    stay in the cache: 3-4x faster here than batches of 100 MB (benchmarks/bench_candidates.py).
+    ``pairs`` point-pose pairs each, so a batch stays in the cache). The same bits on every CPU and as
+    :func:`to_gripper_frame`: each coordinate is ((r0 x + r1 y) + r2 z) - offset, every operation rounded on its
+    own, where a matrix product would leave the last bits (and a point on a voxel boundary) to the BLAS kernel.
 
     points : (m, 3) float, poses : (n, 4, 4) float
     yields : (start, coords) with coords (3, k, m) float64, the u, v, t of each point in poses[start:start + k]
     """
+    x, y, z = (np.ascontiguousarray(points[:, axis], dtype=np.float64) for axis in range(3))
     step = max(1, pairs // max(len(points), 1))
     for start in range(0, len(poses), step):
-        rot = poses[start:start + step, :3, :3]
-        offset = np.einsum("nj,nji->ni", poses[start:start + step, :3, 3], rot)  # (k, 3), as to_gripper_frame
-        stacked = rot.transpose(2, 0, 1).reshape(-1, 3) @ points.T  # row j * k + pose: axis j of that pose
-        coords = stacked.reshape(3, len(rot), len(points))
-        coords -= offset.T[:, :, None]
+        rot = np.asarray(poses[start:start + step, :3, :3], dtype=np.float64)  # columns: the gripper axes
+        offset = apply_rotation(np.swapaxes(rot, -1, -2), poses[start:start + step, :3, 3])  # (k, 3)
+        coords = np.empty((3, len(rot), len(points)))
+        term = np.empty((len(rot), len(points)))
+        for axis in range(3):
+            plane = coords[axis]
+            np.multiply(rot[:, 0, axis, None], x, out=plane)
+            plane += np.multiply(rot[:, 1, axis, None], y, out=term)
+            plane += np.multiply(rot[:, 2, axis, None], z, out=term)
+            plane -= offset[:, axis, None]
         yield start, coords
 
 
@@ -108,8 +116,8 @@ def compose_poses(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def transform_points(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
-    """Apply one (4, 4) transform to (m, 3) points."""
-    return points @ pose[:3, :3].T + pose[:3, 3]
+    """Apply one (4, 4) transform to (m, 3) points, the same bits on every CPU. -> (m, 3) float64"""
+    return apply_rotation(np.asarray(pose, dtype=np.float64)[:3, :3], points) + pose[:3, 3]
 
 
 def in_box(points_g: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.frames import transform_points
+
 
 class PointGrid:
     """Points (n, 3) float binned into cubic cells of edge ``cell`` (m), sorted by cell."""
@@ -66,5 +68,5 @@ def box_corners(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
 
 def posed_box_bounds(lower: np.ndarray, upper: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Axis-aligned bounds in the object frame of a box given in a frame posed by ``pose`` (4, 4)."""
-    corners = box_corners(lower, upper) @ pose[:3, :3].T + pose[:3, 3]
+    corners = transform_points(box_corners(lower, upper), pose)  # fixed-order, as the crops that use them
     return corners.min(axis=0), corners.max(axis=0)
