@@ -2,6 +2,7 @@
 
 import json
 import os
+import platform
 import signal
 import subprocess
 import sys
@@ -13,9 +14,11 @@ import psutil
 import pytest
 
 from onepiece_dist.api import Client, read_status
+from onepiece_dist.service.local import run_local
 from onepiece_dist.service.status import status_path
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
+from onepiece_dist.store.dataset import content_digest
 
 ROOT = Path(__file__).resolve().parents[1]
 ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
@@ -218,13 +221,55 @@ def test_stopping_one_local_cluster_leaves_another_running(local_cluster, record
     script = ROOT / "cluster" / "local_cluster.sh"
     other = {**os.environ, "ONEPIECE_RAY_PORT": "6395", "ONEPIECE_DASHBOARD_PORT": "8275",
              "ONEPIECE_AGENT_PORT": "52380"}
+    ours, jobs_before = gcs_processes(6390), driver_jobs(local_cluster)
     started = subprocess.run([str(script), "start", "0"], capture_output=True, text=True, timeout=240, env=other)
     assert started.returncode == 0, started.stderr[-3000:]
     stopped = subprocess.run([str(script), "stop"], capture_output=True, text=True, timeout=120, env=other)
     assert stopped.returncode == 0, stopped.stderr[-2000:]
     assert not gcs_processes(6395)
-    assert gcs_processes(6390) and driver_jobs(local_cluster) >= 0  # ours still answers
+    assert ours and gcs_processes(6390) == ours  # the same GCS process as before, not a new one
+    assert driver_jobs(local_cluster) == jobs_before  # ours still answers, with every job it had
     record_figure(f"{stopped.stderr.strip().splitlines()[-1]}; the module's cluster still answers")
+
+
+OLDEST_CPU = {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3",
+              "GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+@pytest.mark.sim
+@pytest.mark.skipif(platform.machine() != "x86_64", reason="the older CPU paths forced on one node are x86-64 ones")
+def test_a_job_whose_nodes_take_other_cpu_paths_gives_the_in_process_dataset(local_cluster, tmp_path, record_figure):
+    """A third worker node started with an older CPU's BLAS kernel, numpy SIMD level, glibc variants and one
+    thread, beside two nodes on this CPU's own: the job, every stage to label, holds the same content as in
+    process (Ray's workers inherit their node's environment)."""
+    from tests.test_pinned_job import pinned_spec
+
+    script = ROOT / "cluster" / "local_cluster.sh"
+    added = subprocess.run([str(script), "add", "3"], capture_output=True, text=True, timeout=240,
+                           env={**os.environ, **OLDEST_CPU})
+    assert added.returncode == 0, added.stderr[-3000:]
+    older = worker_node_raylet(AGENT_PORT + 3)
+    assert all(older.environ().get(k) == v for k, v in OLDEST_CPU.items())
+    older_id = next(arg.split("=", 1)[1] for arg in older.cmdline() if arg.startswith("--node_id="))
+    spec = pinned_spec(tmp_path / "local.zarr").model_copy(update={"objects": PINNED_ON_CLUSTER})
+    run_local(spec)
+    spec_file, out = tmp_path / "job.json", tmp_path / "cluster.zarr"
+    spec_file.write_text(spec.model_dump_json(exclude={"output"}))
+    submitted = onepiece("submit", str(spec_file), "--address", local_cluster, "--out", str(out), "--wait", "--json",
+                         "--timeout", "400", cwd=tmp_path, timeout=460)
+    assert submitted.returncode == 0, submitted.stderr[-3000:]
+    final = json.loads(submitted.stdout)
+    nodes = final["nodes"]
+    assert final["state"] == "succeeded", final
+    assert older_id in nodes, (older_id, nodes)  # the older-CPU node extracted some of the objects
+    assert content_digest(out, training=False) == content_digest(spec.output, training=False)
+    record_figure(f"{len(set(nodes))} worker nodes extracted, one with {', '.join(OLDEST_CPU)}: the same "
+                  f"content digest as in process ({content_digest(out, training=False)[:12]})")
+
+
+PINNED_ON_CLUSTER = "pybullet:named[3:4]+pybullet:random_urdfs[0:5]"  # enough objects for every node to get one
 
 
 def gcs_processes(port: int) -> list[psutil.Process]:
