@@ -2,9 +2,11 @@
 
     .venv/bin/python benchmarks/bench_cpu_independence.py
 
-x86-64 CPUs differ in what numpy (SIMD level: SVML on AVX-512), glibc's libm (FMA or plain variants) and OpenBLAS
-(kernel per CPU) pick for them; one ULP of a pose handed to pybullet can move a trial. Two jobs, each run in a
-fresh process with and without each older-CPU setting, every array of the dataset compared by digest:
+x86-64 CPUs differ in what numpy (SIMD level: SVML on AVX-512), glibc's libm (FMA or plain variants), OpenBLAS
+(kernel per CPU) and Embree (kernel per CPU and, on Intel, per model) pick for them, and in how many threads they
+run; one ULP of a pose handed to pybullet can move a trial. Two jobs, each run in a fresh process on this CPU and
+under each of tests/test_pinned_job.py's CPU settings (and the oldest-CPU ones at once), every array of the dataset
+compared by digest:
 
   extract  the default job's extraction on 16 objects x 200 candidates (ingest, extract, dedup);
   pinned   tests/test_pinned_job.py's job (3 objects x 24 candidates, every stage to label).
@@ -14,7 +16,10 @@ And what the fixes buy, with the formulas they replaced patched back in (``--for
   np.sin   the samplers' sines and cosines from numpy (one ULP from core.portable's in a few % of angles):
            how many settled poses and codes of the extract job that moves, on this CPU;
   blas     the one object's patches rotated by a BLAS matrix product instead of core.frames.rotate_points:
-           how many of the pinned job's labels OpenBLAS's SSE kernel changes.
+           how many of the pinned job's labels OpenBLAS's SSE kernel changes;
+  embree   the antipodal sampler's hits as Embree reports them (float32) instead of core.raycast's, and the same
+           with every distance one float32 ULP longer (what another Embree kernel may give): the pinned job's
+           arrays that move, and whether the old formula gives the pins written before core.raycast.
 
 Results: benchmarks/results/cpu_independence.json, rendered into docs/assembly.md by benchmarks/report.py.
 """
@@ -22,6 +27,7 @@ Results: benchmarks/results/cpu_independence.json, rendered into docs/assembly.m
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import json
 import os
@@ -36,11 +42,15 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-OLDER_CPU = {"OpenBLAS SSE kernel": {"OPENBLAS_CORETYPE": "Prescott"},
-             "numpy without AVX2": {"NPY_DISABLE_CPU_FEATURES": "X86_V3"},
-             "glibc without FMA": {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX"}}
 EXTRACT_OBJECTS = "pybullet:named[0:4]+pybullet:random_urdfs[0:12]"
-SAVED = ("grasps/pose", "grasps/code", "assembled/grasps/success")
+SAVED = ("grasps/pose", "grasps/code", "assembled/grasps/success", "assembled/grasps/code")
+PINS_BEFORE_RAYCAST = {  # tests/data/pinned_job.json at 4fad3b1, the pins an AVX-512 Sapphire Rapids machine missed
+    "grasps/code": "uint8 [59, 8] 6b8148ded9a9a16990907a7f",
+    "assembled/grasps/code": "uint8 [230, 8] b12972e1c132cd850ddcc4ab",
+    "assembled/grasps/success": "uint8 [230] 4a8542929f438b833825b938"}
+
+
+FORMULAS = ("shipped", "np.sin", "blas", "embree", "embree+1ulp")
 
 
 def job_spec(job: str, output: Path):
@@ -64,6 +74,28 @@ def patch_formula(formula: str) -> None:
         import onepiece_dist.service.patches as patches
 
         patches.rotate_points = lambda points, rot: np.asarray(points, dtype=np.float64) @ rot
+    elif formula in ("embree", "embree+1ulp"):
+        import onepiece_dist.core.sampling as sampling
+
+        sampling.cast_rays = functools.partial(embree_hits, ulps=int(formula == "embree+1ulp"))
+
+
+def embree_hits(vertices, faces, origins, directions, ulps: int = 0):
+    """The ray casts as they were before core.raycast: Embree's float32 distances and normals themselves, with
+    ``ulps`` float32 ULPs added to each distance (what another Embree kernel may report)."""
+    import open3d as o3d
+
+    from onepiece_dist.core.raycast import RayHits
+
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(vertices.astype(np.float32)), o3d.core.Tensor(faces.astype(np.uint32)))
+    hit = scene.cast_rays(o3d.core.Tensor(np.hstack([origins, directions]).astype(np.float32)))
+    t = hit["t_hit"].numpy()
+    for _ in range(ulps):
+        t = np.nextafter(t, np.float32(np.inf))
+    face = hit["primitive_ids"].numpy().astype(np.int64)
+    return RayHits(t.astype(np.float64), np.where(np.isfinite(t), face, -1),
+                   hit["primitive_normals"].numpy().astype(np.float64))
 
 
 def run_one(job: str, formula: str, keep: Path) -> dict[str, str]:
@@ -109,12 +141,24 @@ def differing(a: dict[str, str], b: dict[str, str]) -> list[str]:
     return sorted(name for name in a.keys() | b.keys() if a.get(name) != b.get(name))
 
 
-def settings_rows(job: str, folder: Path) -> tuple[dict, list[dict]]:
-    """The job on this CPU and under each older-CPU setting (and all of them): arrays, and those that differ."""
+def cpu_settings() -> dict[str, dict[str, str]]:
+    """tests/test_pinned_job.py's CPU settings, and the oldest-CPU ones at once."""
+    from tests.test_pinned_job import ONE_CPU
+    from tests.test_pinned_job import cpu_settings as pinned_settings
+
+    settings = pinned_settings()
+    oldest = ("one thread, one CPU", "OpenBLAS SSE kernel", "numpy without AVX2 or AVX-512",
+              "glibc without AVX, AVX2, FMA")
+    settings["the oldest at once"] = {k: v for name in oldest if name in settings for k, v in settings[name].items()}
+    assert ONE_CPU in settings["the oldest at once"]
+    return settings
+
+
+def settings_rows(job: str, folder: Path, settings: dict[str, dict[str, str]]) -> tuple[dict, list[dict]]:
+    """The job on this CPU and under each CPU setting: arrays, and those that differ."""
     base = in_process(job, {}, "shipped", folder / f"{job}-this.npz")
-    every = {k: v for env in OLDER_CPU.values() for k, v in env.items()}
     rows = []
-    for name, env in [*OLDER_CPU.items(), ("all three", every)]:
+    for name, env in settings.items():
         found = in_process(job, env, "shipped", folder / f"{job}-{len(rows)}.npz")
         rows.append({"job": job, "setting": name, "arrays": len(base), "differing": differing(base, found)})
     return base, rows
@@ -142,10 +186,28 @@ def blas_patch_labels(folder: Path) -> dict:
     this = folder / "pinned-blas-this.npz"
     sse = folder / "pinned-blas-sse.npz"
     in_process("pinned", {}, "blas", this)
-    in_process("pinned", OLDER_CPU["OpenBLAS SSE kernel"], "blas", sse)
+    in_process("pinned", {"OPENBLAS_CORETYPE": "Prescott"}, "blas", sse)
     a, b = (np.load(p)["assembled.grasps.success"] for p in (this, sse))
     return {"labels": len(a), "labels_under_sse": len(b),
             "labels_changed": int(np.sum(a != b)) if len(a) == len(b) else None}
+
+
+def embree_sensitivity(folder: Path) -> dict:
+    """The pinned job with Embree's own float32 hits in the antipodal sampler, and with each of their distances
+    one float32 ULP longer: which arrays move, and whether that formula gives the pins written before core.raycast."""
+    runs = {formula: in_process("pinned", {}, formula, folder / f"pinned-{formula}.npz")
+            for formula in ("embree", "embree+1ulp")}
+    a, b = (np.load(folder / f"pinned-{formula}.npz") for formula in runs)
+    pins = {name: "{} {} {}".format(a[name.replace("/", ".")].dtype, list(a[name.replace("/", ".")].shape),
+                                    runs["embree"][name]) for name in PINS_BEFORE_RAYCAST}
+    same_rows = a["assembled.grasps.success"].shape == b["assembled.grasps.success"].shape
+    return {"arrays": len(runs["embree"]), "differing": differing(*runs.values()),
+            "reproduces_pins_before_raycast": pins == PINS_BEFORE_RAYCAST,
+            "labels": len(a["assembled.grasps.success"]), "labels_after": len(b["assembled.grasps.success"]),
+            "labels_changed": int(np.sum(a["assembled.grasps.success"] != b["assembled.grasps.success"]))
+            if same_rows else None,
+            "extraction_codes_changed": int(np.any(a["grasps.code"] != b["grasps.code"], axis=1).sum())
+            if a["grasps.code"].shape == b["grasps.code"].shape else None}
 
 
 def cpu_model() -> str:
@@ -165,11 +227,11 @@ def cpu_section(r: dict) -> str:
     rows = [[f"{row['job']} ({row['arrays']} arrays)", row["setting"],
              ", ".join(f"`{name}`" for name in row["differing"]) or "none"] for row in r["rows"]]
     moved = sorted({name for row in r["rows"] for name in row["differing"]})
-    sines, blas = r["numpy_sines"], r["blas_patches"]
+    sines, blas, embree = r["numpy_sines"], r["blas_patches"], r["embree_hits"]
     return "\n".join([
         CPU_START, f"**Figures:** `{r['command']}` ({r['date']}, {r['machine']}). Each job in a fresh process on "
-        "this CPU and with its paths turned off (" + "; ".join(f"{name}: {described(env)}" for name, env in
-                                                           r["settings"].items())
+        "this CPU and with its paths changed (" + "; ".join(f"{name}: {described(env)}" for name, env in
+                                                            r["settings"].items())
         + f"); every array of the dataset compared by digest. extract: `{r['extract_objects']}` x 200 candidates, "
         "ingest to dedup; pinned: tests/test_pinned_job.py's job, every stage to label.", "",
         "| job | setting | arrays that differ from this CPU's |", "| --- | --- | --- |",
@@ -180,27 +242,47 @@ def cpu_section(r: dict) -> str:
         f"sine or cosine for {sines['angles_with_another_sine_or_cosine']:.1%} of angles) moved "
         f"{sines['settled_poses_moved_over_1e-4']} of {sines['grasps']:,} settled poses by more than 1e-4 and "
         f"changed {sines['codes_changed']} codes of the extract job on this CPU; patches rotated by a BLAS product "
-        f"changed {blas['labels_changed']} of the pinned job's {blas['labels']} labels under OpenBLAS's SSE kernel.",
+        f"changed {blas['labels_changed']} of the pinned job's {blas['labels']} labels under OpenBLAS's SSE kernel; "
+        f"with Embree's own float32 ray hits in the antipodal sampler (the pins before core.raycast: "
+        f"{'reproduced' if embree['reproduces_pins_before_raycast'] else 'not reproduced'}), one float32 ULP more on "
+        f"every hit distance moved {len(embree['differing'])} of the pinned job's {embree['arrays']} arrays, "
+        + _moved_codes_and_labels(embree) + ".",
         CPU_END])
+
+
+def _moved_codes_and_labels(embree: dict) -> str:
+    codes = embree["extraction_codes_changed"]
+    words = [f"{codes:,} extraction codes" if codes is not None else "the number of extracted grasps"]
+    if embree["labels_changed"] is not None:
+        words.append(f"{embree['labels_changed']} of its {embree['labels']} labels")
+    else:
+        words.append(f"the number of its labelled grasps ({embree['labels']} to {embree['labels_after']})")
+    return " and ".join(words)
 
 
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--one", choices=("extract", "pinned"), help=argparse.SUPPRESS)
-    parser.add_argument("--formula", default="shipped", choices=("shipped", "np.sin", "blas"), help=argparse.SUPPRESS)
+    parser.add_argument("--formula", default="shipped", choices=FORMULAS, help=argparse.SUPPRESS)
     parser.add_argument("--keep", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    sys.path.insert(0, str(ROOT))
     if args.one:
-        sys.path.insert(0, str(ROOT))
+        from tests.test_pinned_job import ONE_CPU
+
+        if os.environ.get(ONE_CPU):
+            os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
         print(json.dumps(run_one(args.one, args.formula, args.keep)))
         return {}
+    settings = cpu_settings()
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(scratch)
-        rows = settings_rows("extract", folder)[1] + settings_rows("pinned", folder)[1]
+        rows = settings_rows("extract", folder, settings)[1] + settings_rows("pinned", folder, settings)[1]
         out = {"benchmark": "cpu_independence", "date": date.today().isoformat(),
-               "machine": f"{platform.machine()}, {cpu_model()}, {os.cpu_count()} cores", "settings": OLDER_CPU,
+               "machine": f"{platform.machine()}, {cpu_model()}, {os.cpu_count()} cores", "settings": settings,
                "extract_objects": EXTRACT_OBJECTS, "rows": rows, "numpy_sines": sine_sensitivity(folder),
-               "blas_patches": blas_patch_labels(folder), "command": "python benchmarks/bench_cpu_independence.py"}
+               "blas_patches": blas_patch_labels(folder), "embree_hits": embree_sensitivity(folder),
+               "command": "python benchmarks/bench_cpu_independence.py"}
     (HERE / "results" / "cpu_independence.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

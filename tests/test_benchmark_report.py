@@ -114,10 +114,17 @@ def test_the_cpu_block_says_met_only_when_no_array_differs():
               "rows": [{"job": "pinned", "setting": "SSE", "arrays": 44, "differing": []}],
               "numpy_sines": {"angles_with_another_sine_or_cosine": 0.06, "grasps": 100,
                               "settled_poses_moved_over_1e-4": 2, "codes_changed": 1},
-              "blas_patches": {"labels": 230, "labels_changed": 3}}
+              "blas_patches": {"labels": 230, "labels_changed": 3},
+              "embree_hits": {"arrays": 44, "differing": ["grasps/code"] * 35, "reproduces_pins_before_raycast": True,
+                              "labels": 230, "labels_after": 231, "labels_changed": None,
+                              "extraction_codes_changed": 2}}
     assert "under every setting: met." in cpu_section(result)
     result["rows"][0]["differing"] = ["assembled/grasps/slip"]
     block = cpu_section(result)
     assert "not met (assembled/grasps/slip)" in block
     assert "| pinned (44 arrays) | SSE | `assembled/grasps/slip` |" in block
     assert "3 of the pinned job's 230 labels" in block
+    assert "moved 35 of the pinned job's 44 arrays, 2 extraction codes and the number of its labelled grasps (230 " \
+           "to 231)" in block
+    result["embree_hits"].update(labels_after=230, labels_changed=4)
+    assert "2 extraction codes and 4 of its 230 labels" in cpu_section(result)
