@@ -147,22 +147,48 @@ def inspect(
     _print_mapping(summary, as_json)
 
 
+FOLDER_FORMATS = ("acronym", "graspgen", "urdf-patches")  # these write a folder of files
+
+
 @app.command()
 def export(
     dataset: Annotated[Path, typer.Argument(help="Dataset path.")],
-    out: Annotated[Path, typer.Option(help="File to write.")],
-    fmt: Annotated[str, typer.Option("--format", help="obj, ply or urdf (the URDF's OBJ is written beside it).")]
-    = "obj",
+    out: Annotated[Path, typer.Option(help="File to write (obj, ply, urdf) or folder (acronym, graspgen, "
+                                           "urdf-patches); nothing is written outside it.")],
+    fmt: Annotated[str, typer.Option("--format", help="obj, ply or urdf: the one object (the URDF's OBJs beside "
+                                     "it); acronym: an HDF5 file per object; graspgen: a JSON file per object and "
+                                     "split lists; urdf-patches: a URDF per patch and a scene file.")] = "obj",
+    valid_fraction: Annotated[float, typer.Option(help="graspgen: share of the objects in valid.txt (seeded by "
+                                                       "the job's seed).")] = 0.2,
+    valid_objects: Annotated[str, typer.Option(help="graspgen: comma-separated object names for valid.txt "
+                                                    "instead.")] = "",
 ) -> None:
-    """Export the assembled one object as OBJ, PLY or URDF."""
+    """Export the one object (OBJ, PLY, URDF, a URDF per patch) or the labelled grasps in ACRONYM's or GraspGen's
+    format (docs/dataset_format.md, Other formats)."""
+    from onepiece_dist.errors import MeshRejected
     from onepiece_dist.service.assemble import export_assembly
 
-    if fmt not in ("obj", "ply", "urdf"):
-        _err(f"error: --format {fmt!r}: expected obj, ply or urdf")
+    formats = ("obj", "ply", "urdf", *FOLDER_FORMATS)
+    if fmt not in formats:
+        _err(f"error: --format {fmt!r}: expected one of {', '.join(formats)}")
         raise typer.Exit(EXIT_USAGE)
     try:
-        written = export_assembly(dataset, fmt, out)
-    except StoreError as err:
+        if fmt == "acronym":
+            from onepiece_dist.service.exports import export_acronym
+
+            written = export_acronym(dataset, out)
+        elif fmt == "graspgen":
+            from onepiece_dist.service.exports import export_graspgen
+
+            chosen = tuple(name.strip() for name in valid_objects.split(",") if name.strip())
+            written = export_graspgen(dataset, out, valid_fraction, chosen)
+        elif fmt == "urdf-patches":
+            from onepiece_dist.service.patch_export import export_patches
+
+            written = export_patches(dataset, out)
+        else:
+            written = export_assembly(dataset, fmt, out)
+    except (StoreError, MeshRejected) as err:
         _err(f"error: {err}")
         raise typer.Exit(EXIT_USAGE) from None
     for path in written:

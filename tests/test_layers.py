@@ -31,7 +31,8 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "store": ({"errors"}, {"numpy", "zarr", "pydantic"}),
     "learn": ({"errors", "spec", "store"}, {"numpy", "torch", "zarr"}),
     "service": (BASE | {"core", "objects", "sim", "store", "learn"},
-                {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil"}),
+                {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
+                 "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
     "api": (BASE | {"objects", "service", "store"}, {"ray"}),
     "schemas": (BASE | {"objects", "service", "store"}, {"pydantic", "yaml"}),
     "cli_common": (BASE, {"typer", "rich"}),

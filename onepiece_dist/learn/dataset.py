@@ -28,10 +28,34 @@ MODEL_INPUTS = {"pointnet": ("points",), "voxel": ("code",)}
 SMALL_ARRAY_BYTES = 64 * 2**20  # arrays up to this size are read whole once per process, then indexed in memory
 
 
+CROPS = ("gripper", "pointnetgpd")
+
+
+def pointnetgpd_crop(points: np.ndarray, width: np.ndarray, closing_depth: float) -> tuple[np.ndarray, np.ndarray]:
+    """Our gripper-frame points (..., m, 3) in PointNetGPD's training frame, and the (..., m) mask of those in its
+    box, for grasp widths ``width`` (...,).
+
+    PointNetGPD crops around the grasp centre in a frame whose rows are approach, binormal (the closing axis) and
+    minor normal = binormal x approach: our (u, v, -t), a left-handed frame. Its box is |x| < w/4, |y| < w/2,
+    |z| < w/4 for the grasp width w. We do not store where along u the contacts lie, so the centre is the closing
+    region's (closing_depth / 2, 0, 0): x' = u - closing_depth / 2, y' = v, z' = -t. Our crops hold the closing
+    region only (|t| < closing_height / 2), so for w > 2 closing_height the box's top and bottom are missing.
+    """
+    local = np.asarray(points, dtype=np.float64) * [1.0, 1.0, -1.0] - [closing_depth / 2, 0.0, 0.0]
+    w = np.asarray(width, dtype=np.float64)[..., None, None]
+    half = np.concatenate([w / 4, w / 2, w / 4], axis=-1)
+    return local, np.all(np.abs(local) < half, axis=-1)
+
+
 class GraspDataset(Dataset):
     """Items: ``label`` () float32 success and ``group`` () int64 (object or patch id, for splits), plus those
     of ``inputs``: ``points`` (P, 3) float32 gripper-frame points, ``code`` (a, b, c) float32 occupancy,
     ``quality`` () float32 robust quality.
+
+    crop : "gripper" (our closing region in our frame) or "pointnetgpd": ``points`` in PointNetGPD's training
+           frame and box (:func:`pointnetgpd_crop`), the points inside resampled with replacement to P (seeded
+           by row, as PointNetGPD resamples to its input size), and ``inside`` () int64 how many were inside
+           before resampling (PointNetGPD drops grasps with fewer than 50)
 
     group : "grasps" (every object's grasps) or "assembled/grasps" (the one object's labelled grasps)
     rows : indices of the rows to use (a split); default all
@@ -43,8 +67,10 @@ class GraspDataset(Dataset):
     """
 
     def __init__(self, path: str | os.PathLike, group: str = "assembled/grasps", rows: np.ndarray | None = None,
-                 inputs: tuple[str, ...] | None = None, memory_bytes: int = SMALL_ARRAY_BYTES):
-        self.path, self.group, self.memory_bytes = str(path), group, memory_bytes
+                 inputs: tuple[str, ...] | None = None, memory_bytes: int = SMALL_ARRAY_BYTES, crop: str = "gripper"):
+        if crop not in CROPS:
+            raise ValueError(f"crop={crop!r}: expected one of {CROPS}")
+        self.path, self.group, self.memory_bytes, self.crop = str(path), group, memory_bytes, crop
         root = zarr.open_group(self.path, mode="r")
         attrs = root.attrs.asdict()
         problem = format_problem(attrs)
@@ -58,7 +84,10 @@ class GraspDataset(Dataset):
         missing = sorted(set(self.inputs) - set(present))
         if missing:
             raise StoreError(f"{self.path}: {group} holds no {missing} (present: {list(present)})")
+        if crop == "pointnetgpd" and ("points" not in self.inputs or f"{group}/width" not in root):
+            raise StoreError(f"{self.path}: crop='pointnetgpd' needs {group}/points and {group}/width")
         self.grid_shape = tuple(attrs["grid_shape"])
+        self.closing_depth = float(attrs["gripper"]["closing_depth"]) if crop == "pointnetgpd" else None
         self.length = int(root[f"{group}/success"].shape[0])
         self.rows = np.arange(self.length) if rows is None else np.asarray(rows, dtype=np.int64)
         self.chunk_rows = min(int(root[f"{group}/{name}"].chunks[0]) for name in ("success", *self.inputs))
@@ -97,6 +126,9 @@ class GraspDataset(Dataset):
         for name in ("points", "quality"):
             if name in self.inputs:
                 out[name] = torch.from_numpy(self._read(name, wanted)[back].astype(np.float32))
+        if self.crop == "pointnetgpd" and "points" in self.inputs:
+            out["points"], out["inside"] = self._pointnetgpd(out["points"].numpy(), self._read("width", wanted)[back],
+                                                             rows)
         if "code" in self.inputs:
             a, b, c = self.grid_shape
             packed = self._read("code", wanted)[back]
@@ -105,6 +137,16 @@ class GraspDataset(Dataset):
         return out
 
     batch = __getitems__
+
+    def _pointnetgpd(self, points: np.ndarray, width: np.ndarray, rows: np.ndarray):
+        local, inside = pointnetgpd_crop(points, width, self.closing_depth)
+        out = np.zeros(points.shape, dtype=np.float32)
+        for k, row in enumerate(rows):
+            found = np.flatnonzero(inside[k])
+            if len(found):
+                pick = np.random.default_rng(int(row)).choice(found, size=points.shape[1], replace=True)
+                out[k] = local[k, pick]
+        return torch.from_numpy(out), torch.from_numpy(inside.sum(axis=1).astype(np.int64))
 
     def labels(self) -> np.ndarray:
         """(n,) success labels of this dataset's rows."""

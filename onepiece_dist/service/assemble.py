@@ -29,9 +29,9 @@ from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.dataset import DatasetReader, write_group
 
 URDF_TEMPLATE = """<?xml version="1.0"?>
-<robot name="onepiece_assembly">
-  <link name="assembly">
-    <inertial><origin xyz="{com}"/><mass value="{mass:.6g}"/>
+<robot name="{name}">
+  <link name="{link}">
+    <inertial><origin xyz="{com}"/><mass value="{mass:.9g}"/>
       <inertia ixx="{ixx:.6g}" ixy="{ixy:.6g}" ixz="{ixz:.6g}" iyy="{iyy:.6g}" iyz="{iyz:.6g}"
                izz="{izz:.6g}"/></inertial>
     <visual><geometry><mesh filename="{mesh}"/></geometry></visual>
@@ -147,7 +147,8 @@ def export_assembly(path: str | os.PathLike, fmt: str, out: str | os.PathLike) -
     density = JobSpec.model_validate(reader.attrs["job_spec"]).sim.density  # the density its labels used
     mass, com, inertia = solid_of_pieces(pieces, density)
     out.write_text(URDF_TEMPLATE.format(
-        com=" ".join(f"{x:.6g}" for x in com), mass=mass, mesh=mesh.name, pieces=collision.name,
+        name="onepiece_assembly", link="assembly", com=" ".join(f"{x:.6g}" for x in com), mass=mass, mesh=mesh.name,
+        pieces=collision.name,
         ixx=inertia[0, 0], ixy=inertia[0, 1], ixz=inertia[0, 2], iyy=inertia[1, 1], iyz=inertia[1, 2],
         izz=inertia[2, 2]))
     return [out, mesh, collision]
