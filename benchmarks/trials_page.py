@@ -1,5 +1,5 @@
-"""The label-rule figures of docs/trials.md, rendered from benchmarks/results/label_rules.json by
-benchmarks/report.py (never typed)."""
+"""The label-rule and analytic-score figures of docs/trials.md, rendered from benchmarks/results/label_rules.json
+and closure.json by benchmarks/report.py (never typed)."""
 
 from __future__ import annotations
 
@@ -35,5 +35,28 @@ def payload_sentence(r: dict) -> str:
     return f" With the label trials lifting a payload at the grasp centre (`sim.load: grasp`) instead: {rates}."
 
 
+CLOSURE_START = "<!-- closure: rendered by benchmarks/report.py from benchmarks/results/closure.json -->"
+CLOSURE_END = "<!-- end of closure -->"
+
+
+def closure_block(r: dict) -> str:
+    def verdict(name: str) -> str:
+        return "met" if r[name] >= r["targets"][name] else "not met"
+
+    return "\n".join([CLOSURE_START, (
+        f"`{r['command']}` ({r['date']}, {r['machine']}, one core): {r['grasps']:,} antipodal candidates on "
+        f"`{r['objects']}`. Force closure (pad contacts and the smallest level of graspnetAPI's sweep): "
+        f"{r['force_closure_per_s']:,.0f} grasps/s against {r['reference_force_closure_per_s']:,.0f} for the "
+        f"reference run beside it (the same contacts found and scored one grasp at a time, dex-net's test per level; "
+        f"{r['force_closure_per_s'] / r['reference_force_closure_per_s']:.1f}x), target "
+        f"{r['targets']['force_closure_per_s']:,}: {verdict('force_closure_per_s')}; the levels equal the "
+        f"reference's for {r['levels_equal_to_reference']:.1%} of grasps. Ferrari-Canny epsilon at mu 0.5 (soft "
+        f"fingers, 8 facets, one 6-D hull per grasp): {r['epsilon_per_s']:,.0f}/s "
+        f"(reference {r['reference_epsilon_per_s']:,.0f}/s). Robust epsilon ({r['robust_samples']} perturbations, "
+        f"{r['robust_grasps']} grasps): {r['robust_epsilon_per_s']:,.1f}/s, target "
+        f"{r['targets']['robust_epsilon_per_s']}: {verdict('robust_epsilon_per_s')}."), CLOSURE_END])
+
+
 def render_trials_page() -> str:
-    return render_block(PAGE, START, END, "label_rules", label_rules_block)
+    text = render_block(PAGE, START, END, "label_rules", label_rules_block)
+    return render_block(PAGE, CLOSURE_START, CLOSURE_END, "closure", closure_block, text=text)

@@ -25,7 +25,7 @@ BASE = {"errors", "spec"}
 LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "errors": (set(), set()),
     "spec": ({"errors"}, {"pydantic", "yaml"}),
-    "core": (BASE, {"numpy", "open3d"}),  # open3d: raycasting in core.sampling, imported where used
+    "core": (BASE, {"numpy", "open3d", "scipy"}),  # imported where used: open3d's ray casts, scipy's N-d qhull
     "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic"}),
     "sim": (BASE | {"core", "objects"}, {"numpy", "pybullet", "pybullet_data"}),
     "store": ({"errors"}, {"numpy", "zarr", "pydantic"}),
