@@ -162,6 +162,27 @@ class ViewSpec(_Frozen):
         return self
 
 
+class ClosureSpec(_Frozen):
+    """Analytic scores of each grasp at its settled pose (core.closure, docs/trials.md Analytic labels): force
+    closure's smallest friction level and the Ferrari-Canny epsilon, on the source meshes and on the one object's
+    patches."""
+
+    enabled: bool = Field(False, description="Score every extracted and every labelled grasp: grasps/fc_mu, "
+                          "fc_epsilon, fc_contacts (and the same in assembled/grasps/).")
+    levels: tuple[float, ...] = Field((1.2, 1.0, 0.8, 0.6, 0.4, 0.2), min_length=1, description="Friction levels "
+                                      "swept for force closure (graspnetAPI's; PointNetGPD's full sweep is 2.0, "
+                                      "1.6, 1.2, 0.8, 0.5, 0.45, 0.4); fc_mu is the smallest that holds, +inf none.")
+    epsilon_mu: float = Field(0.5, gt=0, le=5, description="Friction of the Ferrari-Canny epsilon.")
+    facets: int = Field(8, ge=3, le=64, description="Edges of each friction cone's polyhedral approximation.")
+    soft: bool = Field(True, description="Soft fingers (torsional friction); two point contacts have epsilon 0.")
+
+    @model_validator(mode="after")
+    def _positive_levels(self) -> ClosureSpec:
+        if any(not 0 < mu <= 10 for mu in self.levels):
+            raise ValueError(f"closure.levels={self.levels}: every level must lie in (0, 10]")
+        return self
+
+
 class TrainSpec(_Frozen):
     """The train stage: which network on which labelled grasps."""
 
@@ -216,6 +237,7 @@ class JobSpec(_Frozen):
     sampler: SamplerSpec = SamplerSpec()
     sim: SimSpec = SimSpec()
     views: ViewSpec = ViewSpec()
+    closure: ClosureSpec = ClosureSpec()
     train: TrainSpec = TrainSpec()
 
     @model_validator(mode="after")
@@ -246,7 +268,7 @@ class JobSpec(_Frozen):
         """Hash of every field that changes an object's extraction result (not output paths), and of
         :data:`RESULTS_REVISION`, so parts cached by older code are not reused."""
         relevant = self.model_dump(mode="json", include={"grasps_per_object", "seed", "gripper", "voxel",
-                                                         "sampler", "sim", "views"})
+                                                         "sampler", "sim", "views", "closure"})
         relevant["results_revision"] = RESULTS_REVISION
         return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
 

@@ -174,3 +174,12 @@ def robust_scores(vertices: np.ndarray, faces: np.ndarray, poses: np.ndarray, rn
         eps[s] = ferrari_canny(contacts, friction)
         closed[s] = required_friction(contacts) <= friction
     return eps.mean(axis=0), closed.mean(axis=0)
+
+
+def closure_arrays(vertices: np.ndarray, faces: np.ndarray, poses: np.ndarray, spec) -> dict[str, np.ndarray]:
+    """The dataset's closure arrays (fc_mu, fc_epsilon, fc_contacts) of grasps at ``poses`` (n, 4, 4) on the mesh,
+    for a JobSpec ``spec`` (its gripper and closure fields)."""
+    g, c = spec.gripper, spec.closure
+    contacts = pad_contacts(vertices, faces, poses, g.max_opening, g.finger_length, g.finger_height)
+    return {"fc_mu": smallest_level(required_friction(contacts), c.levels),
+            "fc_epsilon": ferrari_canny(contacts, c.epsilon_mu, c.facets, c.soft), "fc_contacts": contacts.state}

@@ -68,6 +68,10 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
     arrays = grasp_arrays({**grasps, "code": codes, "candidate_code": static})
     if spec.sim.points_per_grasp:
         arrays["points"] = _grasp_points([inside[i] for i in np.flatnonzero(keep)], spec.sim.points_per_grasp, rng)
+    if spec.closure.enabled:
+        from onepiece_dist.core.closure import closure_arrays
+
+        arrays.update(grasp_arrays(closure_arrays(mesh.vertices, mesh.faces, grasps["pose"], spec)))
     if views is not None:
         arrays.update({"view_camera": views.cameras, "view_points": views.points, "view_of_point": views.point_view})
     arrays.update({"object_surface": points, "object_piece_vertices": np.vstack(pieces),  # patches are cut from these

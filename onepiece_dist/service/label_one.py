@@ -74,7 +74,7 @@ def label_key(spec: JobSpec, reader: DatasetReader) -> str:
     for name in ("placement", "piece_vertices", "piece_vertex_count", "patch_piece_count", "patch_points",
                  "source_volume"):
         digest.update(np.ascontiguousarray(reader[f"assembled/{name}"]).tobytes())
-    relevant = spec.model_dump(mode="json", include={"seed", "gripper", "voxel", "views"})
+    relevant = spec.model_dump(mode="json", include={"seed", "gripper", "voxel", "views", "closure"})
     relevant["sim"] = spec.sim.model_dump(mode="json", exclude={"transfer_codes", "transfer_grasps"})
     digest.update(json.dumps(relevant, sort_keys=True).encode())
     return digest.hexdigest()
@@ -104,7 +104,7 @@ def label_patches(spec: JobSpec, task: LabelTask) -> dict[str, np.ndarray]:
     placements = reader.array("assembled/placement")[task.start:task.stop].astype(np.float64)
     patch_set = read_patches(reader, task.start, task.stop)
     world, noise = process_world(spec.gripper), LabelNoise.from_spec(spec.sim)
-    rows: dict[str, list] = {k: [] for k in GRASP_ROWS}
+    rows: dict[str, list] = {k: [] for k in grasp_rows(spec)}
     for local, k in enumerate(range(task.start, task.stop)):
         if not patch_set.pieces[local]:
             continue  # nothing of the source object in the patch box: nothing to grasp
@@ -113,12 +113,34 @@ def label_patches(spec: JobSpec, task: LabelTask) -> dict[str, np.ndarray]:
         poses = perturbed_poses(spec.sim.perturbations_per_patch, rng)
         batch = run_trials(world, poses, label=True, noise=noise, rng=rng)
         _collect(rows, k, placements[local], patch_cloud(patch_set, local, spec), poses, batch, spec, rng)
+        if spec.closure.enabled:
+            _score_closure(rows, patch_set.pieces[local], batch, spec)
     return grasp_arrays({name: np.concatenate(values) if values else _empty(name, spec)
                          for name, values in rows.items()})
 
 
 GRASP_ROWS = ("patch", "pose", "candidate_pose", "width", "shift", "success", "quality", "slip", "code",
               "candidate_code", "points")
+CLOSURE_ROWS = ("fc_mu", "fc_epsilon", "fc_contacts")
+
+
+def grasp_rows(spec: JobSpec) -> tuple[str, ...]:
+    """The arrays of ``assembled/grasps/`` this spec's label stage writes."""
+    return GRASP_ROWS + (CLOSURE_ROWS if spec.closure.enabled else ())
+
+
+def _score_closure(rows, pieces: list[np.ndarray], batch, spec: JobSpec) -> None:
+    """Force closure and epsilon of the held trials on the patch's real geometry (its convex pieces as one mesh,
+    in the patch frame where the settled poses are)."""
+    from onepiece_dist.core.clip import hull_mesh
+    from onepiece_dist.core.closure import closure_arrays
+    from onepiece_dist.core.mesh import merge_meshes
+
+    ok = batch.outcome == 0
+    if ok.any():
+        vertices, faces = merge_meshes([hull_mesh(piece) for piece in pieces])
+        for name, values in closure_arrays(vertices, faces, batch.settled_pose[ok], spec).items():
+            rows[name].append(values)
 
 
 def _empty(name: str, spec: JobSpec) -> np.ndarray:
@@ -130,7 +152,7 @@ def write_labels(spec: JobSpec, path: str | os.PathLike, tasks: list[LabelTask],
     """Store the shards' labelled grasps, in patch order, as ``assembled/grasps/``; return the counts."""
     shards = [parts.read(task.part_key) for task in tasks]
     arrays = {name: np.concatenate([shard[name] for shard in shards]) if shards else _empty(name, spec)
-              for name in GRASP_ROWS}
+              for name in grasp_rows(spec)}
     patches = tasks[-1].stop if tasks else 0
     summary = LabelReport(label_trials=int(patches * spec.sim.label_trials_per_patch()),
                           labelled_grasps=int(len(arrays["patch"])),

@@ -28,6 +28,12 @@ GRASP_ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("code_index", "int64", "()", "row in unique/ of each grasp's code (or its cluster)"),
     ("exact_index", "int64", "()", "with similar_radius > 0: row in exact/ of each grasp's code"),
     ("patch", "int32", "()", "assembled/grasps only: the patch (row in unique/) a labelled grasp belongs to"),
+    ("fc_mu", "float32", "()", "smallest friction of closure.levels at which the grasp is in force closure, +inf "
+     "for none (only with closure.enabled)"),
+    ("fc_epsilon", "float32", "()", "Ferrari-Canny L1 epsilon at closure.epsilon_mu, 0 without closure (only with "
+     "closure.enabled)"),
+    ("fc_contacts", "int8", "()", "pad contacts: 0 two, 1 a pad met nothing, 2 one point (only with "
+     "closure.enabled)"),
 )
 GRASP_DTYPES: dict[str, np.dtype] = {name: np.dtype(dtype) for name, dtype, _, _ in GRASP_ARRAYS}
 # What every extraction part holds, with or without physics and labels.
