@@ -64,11 +64,13 @@ def labelled_grasp_sets(path: str | os.PathLike) -> tuple[JobSpec, list[GraspSet
     return spec, sets
 
 
-def _rows(reader: DatasetReader, group: str, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
-    poses = reader[f"{group}/pose"][rows].astype(np.float64)
-    held = reader[f"{group}/success"][rows].astype(bool)
-    own = {name: reader[f"{group}/{name}"][rows] for name in OWN_ARRAYS if reader.has(f"{group}/{name}")}
-    return poses, held, own
+def _rows(reader: DatasetReader, group: str, start: int, stop: int) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Rows start to stop of the group's pose, success and our own arrays (only those rows are read)."""
+    def read(name: str) -> np.ndarray:
+        return reader.array(f"{group}/{name}")[start:stop]
+
+    own = {name: read(name) for name in OWN_ARRAYS if reader.has(f"{group}/{name}")}
+    return read("pose").astype(np.float64), read("success").astype(bool), own
 
 
 def _source_sets(reader: DatasetReader, spec: JobSpec) -> list[GraspSet]:
@@ -77,15 +79,13 @@ def _source_sets(reader: DatasetReader, spec: JobSpec) -> list[GraspSet]:
     start, count = reader["objects/grasp_start"], reader["objects/grasp_count"]
     sets = []
     for k, name in enumerate(names):
-        rows = np.arange(int(start[k]), int(start[k] + count[k]))
-        poses, held, own = _rows(reader, "grasps", rows)
+        poses, held, own = _rows(reader, "grasps", int(start[k]), int(start[k] + count[k]))
         sets.append(GraspSet(name, *meshes[ids[k]], poses, held, own))
     return sets
 
 
 def _one_object_set(reader: DatasetReader) -> GraspSet:
-    rows = np.arange(reader.array("assembled/grasps/success").shape[0])
-    poses, held, own = _rows(reader, "assembled/grasps", rows)
+    poses, held, own = _rows(reader, "assembled/grasps", 0, reader.array("assembled/grasps/success").shape[0])
     return GraspSet(ONE_OBJECT, reader["assembled/vertices"].astype(np.float64),
                     reader["assembled/faces"].astype(np.int64), poses, held, own)
 
