@@ -175,12 +175,21 @@ class ClosureSpec(_Frozen):
     epsilon_mu: float = Field(0.5, gt=0, le=5, description="Friction of the Ferrari-Canny epsilon.")
     facets: int = Field(8, ge=3, le=64, description="Edges of each friction cone's polyhedral approximation.")
     soft: bool = Field(True, description="Soft fingers (torsional friction); two point contacts have epsilon 0.")
+    label: Literal["physics", "force_closure", "both"] = Field("physics", description="What the binary label "
+        "(success, the training target) is: the physics trials' outcome, force closure at good_mu or better, or "
+        "both at once. Unless physics, the trials' outcome is kept as physics_success; with force_closure and "
+        "sim.label false, the source objects are labelled without lifting anything.")
+    good_mu: float = Field(0.4, gt=0, le=10, description="A grasp is good by force closure when fc_mu <= good_mu "
+                           "(PointNetGPD: 0.5; graspnetAPI's sweep has 0.4).")
 
     @model_validator(mode="after")
     def _positive_levels(self) -> ClosureSpec:
         if any(not 0 < mu <= 10 for mu in self.levels):
             raise ValueError(f"closure.levels={self.levels}: every level must lie in (0, 10]")
+        if self.label != "physics" and not self.enabled:
+            raise ValueError(f"closure.label={self.label!r} needs the scores: set closure.enabled: true")
         return self
+
 
 
 class TrainSpec(_Frozen):

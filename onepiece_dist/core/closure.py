@@ -183,3 +183,12 @@ def closure_arrays(vertices: np.ndarray, faces: np.ndarray, poses: np.ndarray, s
     contacts = pad_contacts(vertices, faces, poses, g.max_opening, g.finger_length, g.finger_height)
     return {"fc_mu": smallest_level(required_friction(contacts), c.levels),
             "fc_epsilon": ferrari_canny(contacts, c.epsilon_mu, c.facets, c.soft), "fc_contacts": contacts.state}
+
+
+def binary_label(closure, physics: np.ndarray | None, fc_mu: np.ndarray) -> np.ndarray:
+    """(n,) uint8 a job's binary label under ``closure.label`` (a ClosureSpec): force closure at
+    ``closure.good_mu`` or better, and with "both" the trials' outcome ``physics`` too (None: no trials ran)."""
+    good = np.asarray(fc_mu) <= closure.good_mu + 1e-9
+    if closure.label == "both" and physics is not None:
+        good &= np.asarray(physics).astype(bool)
+    return good.astype(np.uint8)

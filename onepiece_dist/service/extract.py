@@ -69,9 +69,7 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
     if spec.sim.points_per_grasp:
         arrays["points"] = _grasp_points([inside[i] for i in np.flatnonzero(keep)], spec.sim.points_per_grasp, rng)
     if spec.closure.enabled:
-        from onepiece_dist.core.closure import closure_arrays
-
-        arrays.update(grasp_arrays(closure_arrays(mesh.vertices, mesh.faces, grasps["pose"], spec)))
+        arrays.update(closure_labelled(spec, mesh.vertices, mesh.faces, grasps["pose"], arrays.get("success")))
     if views is not None:
         arrays.update({"view_camera": views.cameras, "view_points": views.points, "view_of_point": views.point_view})
     arrays.update({"object_surface": points, "object_piece_vertices": np.vstack(pieces),  # patches are cut from these
@@ -81,6 +79,20 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
                  "collisions": cands.rejected_collision,
                  "settled_code_differs": int(np.any(codes != static, axis=1).sum())})
     return arrays, meta
+
+
+def closure_labelled(spec: JobSpec, vertices: np.ndarray, faces: np.ndarray, poses: np.ndarray,
+                     physics: np.ndarray | None) -> dict[str, np.ndarray]:
+    """The closure arrays of grasps at ``poses`` on the mesh, and, when ``closure.label`` is not physics, their
+    binary label as success with the trials' outcome (if any) as physics_success."""
+    from onepiece_dist.core.closure import binary_label, closure_arrays
+
+    arrays = closure_arrays(vertices, faces, poses, spec)
+    if spec.closure.label != "physics":
+        if physics is not None:
+            arrays["physics_success"] = physics
+        arrays["success"] = binary_label(spec.closure, physics, arrays["fc_mu"])
+    return grasp_arrays(arrays)
 
 
 def _collision_pieces(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> list[np.ndarray]:

@@ -126,20 +126,24 @@ CLOSURE_ROWS = ("fc_mu", "fc_epsilon", "fc_contacts")
 
 def grasp_rows(spec: JobSpec) -> tuple[str, ...]:
     """The arrays of ``assembled/grasps/`` this spec's label stage writes."""
-    return GRASP_ROWS + (CLOSURE_ROWS if spec.closure.enabled else ())
+    closure = CLOSURE_ROWS + (("physics_success",) if spec.closure.label != "physics" else ())
+    return GRASP_ROWS + (closure if spec.closure.enabled else ())
 
 
 def _score_closure(rows, pieces: list[np.ndarray], batch, spec: JobSpec) -> None:
     """Force closure and epsilon of the held trials on the patch's real geometry (its convex pieces as one mesh,
     in the patch frame where the settled poses are)."""
     from onepiece_dist.core.clip import hull_mesh
-    from onepiece_dist.core.closure import closure_arrays
     from onepiece_dist.core.mesh import merge_meshes
+    from onepiece_dist.service.extract import closure_labelled
 
     ok = batch.outcome == 0
     if ok.any():
         vertices, faces = merge_meshes([hull_mesh(piece) for piece in pieces])
-        for name, values in closure_arrays(vertices, faces, batch.settled_pose[ok], spec).items():
+        scored = closure_labelled(spec, vertices, faces, batch.settled_pose[ok], rows["success"][-1])
+        if "physics_success" in scored:
+            rows["success"][-1] = scored.pop("success")  # the label this job's protocol asks for
+        for name, values in scored.items():
             rows[name].append(values)
 
 

@@ -9,6 +9,8 @@ Pearson correlation of quality over pairs:
     (what clipping and the patch's mass rule change);
 (b) the representative against the other grasps of its code (how much the code alone decides the label);
 (c) random pairs of the labelled grasps with different codes (the floor).
+Success is the job's label (``closure.label``): with force closure, the sources' grasps are scored at their
+settled poses on their convex pieces, as the patches are; quality stays the trials' success fraction.
 """
 
 from __future__ import annotations
@@ -80,9 +82,22 @@ def label_on_sources(spec: JobSpec, reader: DatasetReader, parts: PartStore,
         batch = run_trials(world, poses[mine], label=True, noise=noise,
                            rng=object_rng(content_ids[obj], spec.seed, stream=3))
         held = batch.outcome == 0
-        success[mine] = np.where(held, batch.success, False)
+        success[mine] = np.where(held, protocol_label(spec, source["pieces"], batch), False)
         quality[mine] = np.where(held, batch.quality, 0.0)
     return success, quality
+
+
+def protocol_label(spec: JobSpec, pieces: list[np.ndarray], batch) -> np.ndarray:
+    """The trials' binary label under ``closure.label``: their outcome, or force closure (with "both": and the
+    outcome) at the settled poses on the source's convex pieces, the geometry a patch is scored on."""
+    if spec.closure.label == "physics":
+        return batch.success
+    from onepiece_dist.core.clip import hull_mesh
+    from onepiece_dist.core.mesh import merge_meshes
+    from onepiece_dist.service.extract import closure_labelled
+
+    vertices, faces = merge_meshes([hull_mesh(piece) for piece in pieces])
+    return closure_labelled(spec, vertices, faces, batch.settled_pose, batch.success)["success"]
 
 
 def patch_labels(reader: DatasetReader) -> dict[int, tuple[float, float]]:

@@ -32,6 +32,8 @@ GRASP_ARRAYS: tuple[tuple[str, str, str, str], ...] = (
      "for none (only with closure.enabled)"),
     ("fc_epsilon", "float32", "()", "Ferrari-Canny L1 epsilon at closure.epsilon_mu, 0 without closure (only with "
      "closure.enabled)"),
+    ("physics_success", "uint8", "()", "the physics trials' outcome when closure.label makes success another "
+     "label (force closure, or both)"),
     ("fc_contacts", "int8", "()", "pad contacts: 0 two, 1 a pad met nothing, 2 one point (only with "
      "closure.enabled)"),
 )
