@@ -183,7 +183,7 @@ class ClosureSpec(_Frozen):
                            "(PointNetGPD: 0.5; graspnetAPI's sweep has 0.4).")
 
     @model_validator(mode="after")
-    def _positive_levels(self) -> ClosureSpec:
+    def _levels_and_label(self) -> ClosureSpec:
         if any(not 0 < mu <= 10 for mu in self.levels):
             raise ValueError(f"closure.levels={self.levels}: every level must lie in (0, 10]")
         if self.label != "physics" and not self.enabled:

@@ -117,3 +117,11 @@ def hull_mesh(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() < 0:
         faces = faces[:, ::-1]
     return vertices, faces
+
+
+def pieces_mesh(pieces: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """One triangle mesh (vertices, faces) of convex pieces, each the hull of its (k, 3) points: what a patch
+    or a source object is as the simulation sees it (views are rendered and contacts found on it)."""
+    from onepiece_dist.core.mesh import merge_meshes
+
+    return merge_meshes([hull_mesh(piece) for piece in pieces])

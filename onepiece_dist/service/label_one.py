@@ -36,8 +36,7 @@ def patch_cloud(patches: Patches, k: int, spec: JobSpec) -> np.ndarray:
     depth camera behind the palm, looking along the approach axis, sees of its pieces."""
     if spec.views.crop == "full":
         return patches.points[k]
-    from onepiece_dist.core.clip import hull_mesh
-    from onepiece_dist.core.mesh import merge_meshes
+    from onepiece_dist.core.clip import pieces_mesh
     from onepiece_dist.sim.views import camera_at, framing_distance, views_from
 
     g = spec.gripper
@@ -45,7 +44,7 @@ def patch_cloud(patches: Patches, k: int, spec: JobSpec) -> np.ndarray:
     target = np.array([g.closing_depth / 2, 0.0, 0.0])
     eye = target - [framing_distance(radius, spec.views.fov_deg), 0.0, 0.0]
     camera = camera_at(eye, target, spec.views.image_size, spec.views.fov_deg)
-    vertices, faces = merge_meshes([hull_mesh(piece) for piece in patches.pieces[k]])
+    vertices, faces = pieces_mesh(patches.pieces[k])
     return views_from(vertices, faces, [camera]).points.astype(np.float64)
 
 
@@ -133,13 +132,12 @@ def grasp_rows(spec: JobSpec) -> tuple[str, ...]:
 def _score_closure(rows, pieces: list[np.ndarray], batch, spec: JobSpec) -> None:
     """Force closure and epsilon of the held trials on the patch's real geometry (its convex pieces as one mesh,
     in the patch frame where the settled poses are)."""
-    from onepiece_dist.core.clip import hull_mesh
-    from onepiece_dist.core.mesh import merge_meshes
+    from onepiece_dist.core.clip import pieces_mesh
     from onepiece_dist.service.extract import closure_labelled
 
     ok = batch.outcome == 0
     if ok.any():
-        vertices, faces = merge_meshes([hull_mesh(piece) for piece in pieces])
+        vertices, faces = pieces_mesh(pieces)
         scored = closure_labelled(spec, vertices, faces, batch.settled_pose[ok], rows["success"][-1])
         if "physics_success" in scored:
             rows["success"][-1] = scored.pop("success")  # the label this job's protocol asks for

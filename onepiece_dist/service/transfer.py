@@ -92,11 +92,10 @@ def protocol_label(spec: JobSpec, pieces: list[np.ndarray], batch) -> np.ndarray
     outcome) at the settled poses on the source's convex pieces, the geometry a patch is scored on."""
     if spec.closure.label == "physics":
         return batch.success
-    from onepiece_dist.core.clip import hull_mesh
-    from onepiece_dist.core.mesh import merge_meshes
+    from onepiece_dist.core.clip import pieces_mesh
     from onepiece_dist.service.extract import closure_labelled
 
-    vertices, faces = merge_meshes([hull_mesh(piece) for piece in pieces])
+    vertices, faces = pieces_mesh(pieces)
     return closure_labelled(spec, vertices, faces, batch.settled_pose, batch.success)["success"]
 
 
