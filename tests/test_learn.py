@@ -171,10 +171,10 @@ def test_weighting_by_code_count_weighs_each_patch_by_the_grasps_it_stands_for(l
     from onepiece_dist.learn.train import patch_weights
 
     spec = TrainSpec(model="voxel", epochs=2, batch_size=16, weight_by_count=True)
-    weights = patch_weights(labelled, "assembled/grasps", spec)
+    weights = patch_weights(labelled, "assembled/grasps", "count")
     counts = zarr.open_group(str(labelled), mode="r")["unique/count"][:]
     assert torch.allclose(weights, torch.from_numpy(counts / counts.mean()).float())
-    assert patch_weights(labelled, "assembled/grasps", spec.model_copy(update={"weight_by_count": False})) is None
+    assert patch_weights(labelled, "assembled/grasps", "none") is None
     plain = train_model(labelled, spec.model_copy(update={"weight_by_count": False}), tmp_path / "a", seed=0)
     weighted = train_model(labelled, spec, tmp_path / "b", seed=0)
     assert plain.metrics[0]["train_loss"] != weighted.metrics[0]["train_loss"]

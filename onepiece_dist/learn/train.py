@@ -99,7 +99,8 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
                         collate_fn=collate, num_workers=spec.loader_workers, pin_memory=device.type == "cuda",
                         persistent_workers=spec.loader_workers > 0)
     loader.batch_sampler.epoch = state["epoch"]
-    step = TrainStep(model, optimiser, device, spec.precision, patch_weights(dataset_path, group, spec))
+    weighting = "count" if spec.weight_by_count else "none"
+    step = TrainStep(model, optimiser, device, spec.precision, patch_weights(dataset_path, group, weighting))
     for epoch in range(state["epoch"], spec.epochs):
         train_loss = _train_epoch(step, loader)
         metrics = {"epoch": epoch, "train_loss": train_loss, **{f"val_{k}": v for k, v in
@@ -111,15 +112,19 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
     return TrainResult(state["metrics"], folder / BEST, False, device.type)
 
 
-def patch_weights(dataset_path, group: str, spec: TrainSpec) -> torch.Tensor | None:
-    """(U,) loss weight per patch, unique/count scaled to mean 1, with ``weight_by_count`` on the one object's
-    grasps; else None (every grasp weighs 1)."""
-    if not (spec.weight_by_count and group == "assembled/grasps"):
+def patch_weights(dataset_path, group: str, weighting: str) -> torch.Tensor | None:
+    """(U,) float32 loss weight per patch of the one object's grasps (mean 1): its code's grasp count
+    (``unique/count``, how many extracted grasps the patch's label stands for, with "count") or that count's square
+    root ("sqrt"); None with "none" or on grasps of their own objects (every grasp weighs 1)."""
+    if weighting not in ("none", "count", "sqrt"):
+        raise ValueError(f"patch weighting {weighting!r}: none, sqrt or count")
+    if weighting == "none" or not group.startswith("assembled"):
         return None
     import zarr
 
-    counts = zarr.open_group(str(dataset_path), mode="r")["unique/count"][:].astype(np.float32)
-    return torch.from_numpy(counts / counts.mean())
+    counts = zarr.open_group(str(dataset_path), mode="r")["unique/count"][:].astype(np.float64)
+    weights = counts if weighting == "count" else np.sqrt(counts)
+    return torch.from_numpy((weights / weights.mean()).astype(np.float32))
 
 
 class TrainStep:
@@ -179,3 +184,78 @@ def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, m
     torch.save(checkpoint, tmp)
     os.replace(tmp, folder / LAST)
     return state
+
+
+@dataclass(frozen=True)
+class StepRun:
+    """A training run with a budget in gradient steps: ``rows`` of ``group`` in the dataset at ``path`` (None:
+    all), batches drawn uniformly from the train split, the checkpoint with the lowest loss on the validation split
+    (whole objects or patches) kept, then every grasp of the held-out dataset scored."""
+
+    path: str
+    group: str
+    rows: tuple[int, ...] | None
+    heldout_path: str
+    model: str
+    steps: int
+    batch_size: int
+    learning_rate: float
+    validation: float
+    seed: int
+    evaluations: int = 10
+    validation_cap: int = 4096  # grasps of the validation split scored at each evaluation (a seeded sample)
+    weighting: str = "none"  # the one object's grasps: loss per patch weighted by none, count or sqrt
+    device: str = "cpu"
+
+
+@dataclass(frozen=True)
+class StepResult:
+    scores: np.ndarray  # (n,) float32 success probability of every held-out grasp, in dataset order
+    curve: list[dict]  # {"step", "val_loss", "val_accuracy", "val_ap", "val_positives"} at each evaluation
+    best_step: int
+    train_seconds: float
+    train_grasps: int
+    validation_grasps: int
+    device: str
+
+    def best_validation_loss(self) -> float:
+        return round(min(point["val_loss"] for point in self.curve), 5)
+
+
+IN_MEMORY_BYTES = 2**31  # a train set's arrays up to this size are held in memory while it trains
+
+
+def fit_steps(run: StepRun) -> StepResult:
+    """Train ``run.steps`` gradient steps, keep the best validation checkpoint, score every held-out grasp."""
+    import time
+
+    torch.manual_seed(run.seed)
+    device = resolve_device(run.device)
+    inputs = MODEL_INPUTS[run.model]
+    # batches are uniform draws over the train rows: the arrays are held in memory, or each batch would decode
+    # about one stored chunk per row
+    rows = None if run.rows is None else np.asarray(run.rows, dtype=np.int64)
+    full = GraspDataset(run.path, run.group, rows=rows, inputs=inputs, memory_bytes=IN_MEMORY_BYTES)
+    train, val = full.split_by_group(run.validation, run.seed)
+    if len(val) > run.validation_cap:  # the same sample at every evaluation: checkpoints stay comparable
+        val = val._subset(np.sort(np.random.default_rng([run.seed, 13]).choice(val.rows, run.validation_cap,
+                                                                                 replace=False)))
+    model = MODELS[run.model]().to(device)
+    step = TrainStep(model, torch.optim.Adam(model.parameters(), lr=run.learning_rate), device,
+                     group_weights=patch_weights(run.path, run.group, run.weighting))
+    rng = np.random.default_rng([run.seed, 11])
+    best, best_state, curve, start = float("inf"), None, [], time.perf_counter()
+    every = max(1, run.steps // run.evaluations)
+    for k in range(1, run.steps + 1):
+        model.train()
+        step(collate(train.batch(np.sort(rng.choice(len(train), min(run.batch_size, len(train)), replace=False)))))
+        if k % every == 0 or k == run.steps:
+            metrics = evaluate(model, val)
+            curve.append({"step": k, **{f"val_{key}": round(value, 4) for key, value in metrics.items()}})
+            if metrics["loss"] < best:
+                best, best_state = metrics["loss"], {n: t.detach().clone() for n, t in model.state_dict().items()}
+    seconds = time.perf_counter() - start
+    model.load_state_dict(best_state)
+    scores = predict(model, GraspDataset(run.heldout_path, "grasps", inputs=inputs))
+    return StepResult(scores.astype(np.float32), curve, min(curve, key=lambda c: c["val_loss"])["step"],
+                      round(seconds, 1), len(train), len(val), device.type)
