@@ -31,11 +31,13 @@ from onepiece_dist.cli_common import (
     spec_overrides,
 )
 from onepiece_dist.cli_jobs import register as register_job_commands
+from onepiece_dist.cli_study import study_app
 from onepiece_dist.errors import JobError, JobNotFound, SourceError, SpecError, StoreError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE grasp-dataset generation.",
                   epilog=EXIT_TABLE)
 register_job_commands(app)
+app.add_typer(study_app, name="study")
 _err = err
 
 
@@ -97,8 +99,13 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
              f"{trials} label trials on it (labelling every grasp of every object: {a.label_trials_all_grasps})")
     if status.training:
         t = status.training
-        _err(f"trained {t.model} for {t.epochs} epochs: validation accuracy "
-             f"{t.final.get('val_accuracy', 0):.2f}, AP {t.final.get('val_ap', 0):.2f}")
+        _err(f"trained {t.model} for {t.epochs} epochs: on its own validation split (held-back grasps of the "
+             f"train data) accuracy {t.final.get('val_accuracy', 0):.2f}, AP {t.final.get('val_ap', 0):.2f}")
+    if status.evaluation:
+        e = status.evaluation
+        _err(f"held-out: {e.objects} unseen objects, {e.grasps} candidates (positive rate {e.positive_rate:.2f}): "
+             f"top-1 success {e.top1:.2f} against random choice {e.random_choice:.2f}, AP {e.ap:.2f} against "
+             f"{e.positive_rate:.2f} for random scores")
     typer.echo(status.model_dump_json() if as_json else status.output)
 
 

@@ -9,9 +9,12 @@ from onepiece_dist.objects.supplement import SupplementReport, SupplementSpec
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.layout import ARRAYS, DatasetAttributes
+from onepiece_dist.study.result import StudyResult
+from onepiece_dist.study.spec import StudySpec
 
 MODELS = {"job_spec": JobSpec, "job_status": JobStatus, "dataset_layout": DatasetAttributes,
-          "supplement_spec": SupplementSpec, "supplement_report": SupplementReport}
+          "supplement_spec": SupplementSpec, "supplement_report": SupplementReport, "study_spec": StudySpec,
+          "study_result": StudyResult}
 
 
 def render_schemas() -> dict[str, str]:

@@ -218,6 +218,16 @@ class TrainSpec(_Frozen):
                                   "(docs/performance.md, What would lift B to R).")
 
 
+class EvaluateSpec(_Frozen):
+    """The evaluate stage: the trained network on objects it never saw, every candidate labelled by the same
+    protocol through the worker pool (a job of its own, ``<output>.eval.zarr``)."""
+
+    objects: str = Field("pybullet:random_urdfs[500:504]", description="Held-out objects (a source as in "
+                         "'objects'); none should be a train object.")
+    grasps_per_object: int = Field(32, ge=1, le=100_000, description="Candidates sampled and labelled per held-out "
+                                   "object.")
+
+
 class JobSpec(_Frozen):
     """Everything a job needs. Workers receive exactly this object."""
 
@@ -230,9 +240,10 @@ class JobSpec(_Frozen):
     output: str = Field("onepiece-out/dataset.zarr", description="Dataset path (Zarr v3 directory).")
     cache_dir: str | None = Field(None, description="Folder of per-object results shared across jobs; "
                                   "defaults to the dataset's own parts/ folder.")
-    stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup", "assemble", "label", "train"),
+    stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"),
                                       description="Stages to run: 'assemble' builds the one object from the unique "
-                                      "codes, 'label' labels grasps on it, 'train' fits the grasp network.")
+                                      "codes, 'label' labels grasps on it, 'train' fits the grasp network, "
+                                      "'evaluate' scores it on the held-out objects of 'evaluate'.")
     similar_radius: int = Field(0, ge=0, le=64, description="Merge codes that differ in at most this many voxels "
                                 "(0 = exact dedup only); unique/ then holds one representative per cluster.")
     max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
@@ -248,6 +259,7 @@ class JobSpec(_Frozen):
     views: ViewSpec = ViewSpec()
     closure: ClosureSpec = ClosureSpec()
     train: TrainSpec = TrainSpec()
+    evaluate: EvaluateSpec = EvaluateSpec()
 
     @model_validator(mode="after")
     def _grid_is_whole(self) -> JobSpec:

@@ -159,3 +159,21 @@ def stage_reached(client, job_id: str, stage: str, timeout: float = 300.0) -> bo
     while client.status(job_id).stage != stage and time.monotonic() < deadline:
         time.sleep(0.05)
     return client.status(job_id).stage == stage
+
+
+# A study small enough for a test: 4 train objects, 3 held-out, one radius, one budget, 2 seeds.
+TINY_STUDY = {"train": "pybullet:random_urdfs[0:4]", "heldout": "pybullet:random_urdfs[500:503]",
+              "grasps_per_object": 16, "heldout_grasps": 12, "radii": [0], "budgets": [0.5], "label_trials": 2,
+              "points_per_grasp": 64, "targets": {"bootstrap_draws": 200, "ap_draws": 100},
+              "training": {"model": "voxel", "steps": 20, "batch_size": 16, "learning_rates": [1e-3, 3e-3],
+                           "seeds": 2, "evaluations": 2}}
+
+
+def comparable_study(result: dict) -> dict:
+    """What a study found, without when, how long and what was reused."""
+    arms = [{"name": a["name"], "heldout": a["heldout"] | {"seeds": [{k: v for k, v in s.items()
+                                                                      if k != "train_seconds"}
+                                                                     for s in a["heldout"]["seeds"]]},
+             "labelled": a["cost"]["labelled_grasps"], "trials": a["cost"]["label_trials"],
+             "bytes": a["cost"]["labelled_bytes"]} for a in result["arms"]]
+    return {"arms": arms, "premise": result["premise"], "heldout": result["heldout"], "digest": result["digest"]}

@@ -34,10 +34,14 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
                 {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
                  "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
     "api": (BASE | {"objects", "service", "store"}, {"ray"}),
-    "schemas": (BASE | {"objects", "service", "store"}, {"pydantic", "yaml"}),
+    # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
+    "study": (BASE | {"api", "service", "learn", "store", "core", "objects"},
+              {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
+    "schemas": (BASE | {"objects", "service", "store", "study"}, {"pydantic", "yaml"}),
     "cli_common": (BASE, {"typer", "rich"}),
     "cli_jobs": (BASE | {"api", "service", "cli_common"}, {"typer", "yaml"}),
-    "cli": (BASE | {"api", "objects", "service", "store", "schemas", "cli_common", "cli_jobs"},
+    "cli_study": (BASE | {"study", "cli_common"}, {"typer"}),
+    "cli": (BASE | {"api", "objects", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study"},
             {"typer", "rich", "yaml", "pydantic"}),
 }
 STDLIB = set(sys.stdlib_module_names)

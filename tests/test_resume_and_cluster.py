@@ -19,6 +19,8 @@ from onepiece_dist.service.status import status_path
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
+from tests.factories import TINY_STUDY as TINY
+from tests.factories import comparable_study as comparable
 
 ROOT = Path(__file__).resolve().parents[1]
 ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
@@ -283,6 +285,31 @@ def worker_node_raylet(agent_port: int) -> psutil.Process:
         if proc.info["name"] == "raylet" and f"--listen-port={agent_port}" in " ".join(proc.info["cmdline"] or []):
             return proc
     raise AssertionError(f"no raylet with agent port {agent_port}")
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+def test_a_study_on_the_local_multi_node_cluster_gives_the_in_process_result(local_cluster, tmp_path,
+                                                                             record_figure):
+    """``onepiece study run --address``: every job's workers on the cluster's two worker nodes, the training runs
+    on trainer actors there, and the same figures as the study run in process."""
+    from onepiece_dist.study.runner import Where, run_study
+    from onepiece_dist.study.spec import StudySpec
+
+    study = tmp_path / "tiny.json"
+    study.write_text(json.dumps(TINY))
+    ran = onepiece("study", "run", str(study), "--address", "127.0.0.1:6390", "--out", str(tmp_path / "cluster"),
+                   "--json", cwd=tmp_path, timeout=600)
+    assert ran.returncode == 0, ran.stderr[-3000:]
+    assert "study: A: extract" in ran.stderr and "study: training" in ran.stderr  # progress per arm and stage
+    on_cluster = json.loads(ran.stdout)
+    nodes = {node for name in ("heldout", "A", "B-r0") for node in
+             read_status(tmp_path / "cluster" / "jobs" / f"{name}.zarr").nodes}
+    assert len(nodes) >= 2, nodes  # the worker nodes shared the extraction (an earlier test may add a third)
+    here = run_study(StudySpec(**TINY), tmp_path / "here", Where(in_process=True))
+    assert comparable(on_cluster) == comparable(json.loads(here.model_dump_json()))
+    record_figure(f"study on 2 worker nodes in {on_cluster['wall_seconds']:.0f} s: {len(on_cluster['arms'])} arms, "
+                  "the in-process figures")
 
 
 @pytest.mark.cluster

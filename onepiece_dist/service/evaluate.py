@@ -1,38 +1,62 @@
-"""Evaluation of a trained grasp network on objects it never saw: (a) accuracy and AP against physics labels;
-(b) grasp success in simulation when the robot executes the model's top-ranked candidate on each object, next to
-the expected success of a random choice among the same candidates."""
+"""Evaluation of a trained grasp network on objects it never saw: every candidate of the held-out objects labelled
+in simulation by the job's protocol (a labelling job through the worker pool), then the network's scores against
+those labels: the success of each object's top-ranked candidate beside a random choice, AP and accuracy."""
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.service.local import run_local
+from onepiece_dist.service.status import EvaluationReport
 from onepiece_dist.spec import JobSpec
 
 
 def evaluation_spec(spec: JobSpec) -> JobSpec:
-    """The job that labels every candidate of the evaluation objects (no assembly, no training)."""
-    return spec.model_copy(update={"stages": ("ingest", "extract", "dedup"),
-                                   "sim": spec.sim.model_copy(update={"label": True})})
+    """The job that labels every candidate of ``spec.evaluate.objects`` (seed + 1, beside the dataset), with the
+    job's physics and label protocol; no assembly, training or evaluation of its own."""
+    return spec.model_copy(update={
+        "objects": spec.evaluate.objects, "grasps_per_object": spec.evaluate.grasps_per_object,
+        "seed": spec.seed + 1, "output": f"{Path(spec.output)}.eval.zarr", "cache_dir": None,
+        "stages": ("ingest", "extract", "dedup"), "sim": spec.sim.model_copy(update={"label": True})})
 
 
-def evaluate_model(model_path: str | os.PathLike, spec: JobSpec) -> dict:
-    """Label the candidates of ``spec.objects`` in simulation, then score the model on them."""
+def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, objects: int) -> EvaluationReport:
+    """The network at ``checkpoint`` scored on every labelled grasp of ``dataset`` (on ``device``)."""
     from onepiece_dist.learn.dataset import GraspDataset
     from onepiece_dist.learn.train import average_precision, load_model, predict, resolve_device
 
-    labelled = evaluation_spec(spec)
+    labelled = GraspDataset(dataset, "grasps")
+    scores = predict(load_model(checkpoint), labelled, device=resolve_device(device))
+    labels = labelled.labels()
+    top, random = top_ranked_success(scores, labels, labelled.groups)
+    return EvaluationReport(objects=objects, grasps=int(len(labels)),
+                            positive_rate=float(labels.mean()) if len(labels) else 0.0, top1=top,
+                            random_choice=random, ap=average_precision(scores, labels),
+                            accuracy=float(np.mean((scores > 0.5) == (labels > 0.5))) if len(labels) else 0.0,
+                            checkpoint=str(checkpoint), dataset=dataset)
+
+
+def record_evaluation(spec: JobSpec, report: EvaluationReport) -> EvaluationReport:
+    """Keep the report in the dataset's ``evaluation`` attribute."""
+    from onepiece_dist.store.dataset import update_attributes
+
+    update_attributes(spec.output, {"evaluation": report.model_dump(mode="json")})
+    return report
+
+
+def evaluate_model(model_path: str | os.PathLike, spec: JobSpec) -> dict:
+    """Label the candidates of ``spec.objects`` in simulation (in process), then score the model on them."""
+    from onepiece_dist.service.local import run_local
+
+    labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"),
+                                       "sim": spec.sim.model_copy(update={"label": True})})
     status = run_local(labelled, job_id="evaluate")
-    dataset = GraspDataset(labelled.output, "grasps")
-    scores = predict(load_model(model_path), dataset, device=resolve_device(spec.train.device))
-    labels = dataset.labels()
-    top, random = top_ranked_success(scores, labels, dataset.groups)
-    return {"objects": status.progress.objects_done - len(status.rejections), "grasps": int(len(labels)),
-            "accuracy": float(np.mean((scores > 0.5) == (labels > 0.5))) if len(labels) else 0.0,
-            "ap": average_precision(scores, labels), "label_positive_rate": float(labels.mean()) if len(labels) else 0,
-            "top_ranked_success": top, "random_choice_success": random, "dataset": labelled.output}
+    report = score_heldout(model_path, labelled.output, spec.train.device,
+                           status.progress.objects_done - len(status.rejections))
+    return {**report.model_dump(), "top_ranked_success": report.top1, "random_choice_success": report.random_choice,
+            "label_positive_rate": report.positive_rate}
 
 
 def top_ranked_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[float, float]:

@@ -40,7 +40,8 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
     except (ArithmeticError, ValueError, RuntimeError) as err:  # numerical trouble in one object stays there
         return ObjectResult(index, ref.name, "rejected", reason=f"extraction failed: {type(err).__name__}: {err}",
                             content_id=loaded.content_id, seconds=time.perf_counter() - start)
-    parts.write(key, arrays, {"name": ref.name, "content_id": loaded.content_id, **meta})
+    parts.write(key, arrays, {"name": ref.name, "content_id": loaded.content_id, **meta,
+                              "made_seconds": time.perf_counter() - start})
     return _from_meta(index, ref.name, key, parts.read_meta(key), reused=False, start=start)
 
 
@@ -172,4 +173,5 @@ def _from_meta(index: int, name: str, key: str, meta: dict, reused: bool, start:
     return ObjectResult(index, name, "ok", content_id=meta["content_id"], part_key=key, grasps=meta["grasps"],
                         empty_crops=meta["empty_crops"], candidates_tried=meta["candidates_tried"],
                         collisions=meta["collisions"], settled_code_differs=meta.get("settled_code_differs", 0),
-                        reused=reused, seconds=time.perf_counter() - start)
+                        reused=reused, seconds=time.perf_counter() - start,
+                        made_seconds=float(meta.get("made_seconds", time.perf_counter() - start)))

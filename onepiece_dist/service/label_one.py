@@ -84,12 +84,15 @@ def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) ->
     start = time.perf_counter()
     if not parts.is_committed(task.part_key):
         arrays = label_patches(spec, task)
-        parts.write(task.part_key, arrays, {"patches": [task.start, task.stop]})
+        parts.write(task.part_key, arrays, {"patches": [task.start, task.stop],
+                                            "made_seconds": time.perf_counter() - start})
         reused = False
     else:
         reused = True
     grasps = int(parts.array_shapes(task.part_key)["patch"][0][0])
-    return LabelShardResult(index, "ok", task.part_key, grasps, reused=reused, seconds=time.perf_counter() - start)
+    seconds = time.perf_counter() - start
+    made = float(parts.read_meta(task.part_key).get("made_seconds", seconds))
+    return LabelShardResult(index, "ok", task.part_key, grasps, reused=reused, seconds=seconds, made_seconds=made)
 
 
 def label_patches(spec: JobSpec, task: LabelTask) -> dict[str, np.ndarray]:

@@ -2,7 +2,7 @@
 status, times it, saves the status and reports progress.
 
 The in-process and Ray runners differ only in the :class:`Runtime` they pass in: how extraction is spread, where
-the central actor lives and who trains. Stages: ingest, extract, dedup (the commit), assemble, label, train.
+the central actor lives and who trains. Stages: ingest, extract, dedup (the commit), assemble, label, train, evaluate.
 """
 
 from __future__ import annotations
@@ -19,7 +19,14 @@ from typing import Protocol
 from onepiece_dist.errors import JobCancelled, JobError, SourceError
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult
-from onepiece_dist.service.status import AssemblyReport, JobStatus, LabelReport, Rejection, TrainingReport
+from onepiece_dist.service.status import (
+    AssemblyReport,
+    EvaluationReport,
+    JobStatus,
+    LabelReport,
+    Rejection,
+    TrainingReport,
+)
 from onepiece_dist.spec import JobSpec
 
 Report = Callable[[JobStatus], None]  # called whenever the status changes: save it, publish it, draw progress
@@ -41,13 +48,15 @@ class Central(Protocol):
 @dataclass(frozen=True)
 class Runtime:
     """extract(refs, on_result) -> results in object order; the central actor; label(tasks) -> shard results in
-    task order (the workers simulate, not the central actor); train(spec) -> report; prepare(stage): start what
+    task order (the workers simulate, not the central actor); train(spec) -> report; evaluate(spec) -> report (a
+    labelling job on the held-out objects, then the trained network scored on them); prepare(stage): start what
     ``stage`` will need (its workers) while the central actor is still busy with the stage before it."""
 
     extract: Callable[[list[ObjectRef], Callable[[ObjectResult], None]], list[ObjectResult]]
     central: Central
     label: Callable[[list[LabelTask]], list[LabelShardResult]]
     train: Callable[[JobSpec], TrainingReport]
+    evaluate: Callable[[JobSpec], EvaluationReport]
     prepare: Callable[[str], None] = lambda stage: None
 
 
@@ -124,10 +133,15 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
     if spec.runs("label") and shapes:
         with stage(status, "label", report):
             tasks = runtime.central.label_tasks()
-            status.labels = runtime.central.merge_labels(tasks, runtime.label(tasks))
+            shards = runtime.label(tasks)
+            status.label_seconds = sum(shard.made_seconds for shard in shards)
+            status.labels = runtime.central.merge_labels(tasks, shards)
     if spec.runs("train"):
         with stage(status, "train", report):
             status.training = runtime.train(spec)
+    if spec.runs("evaluate"):
+        with stage(status, "evaluate", report):
+            status.evaluation = runtime.evaluate(spec)
 
 
 def record_result(status: JobStatus, result: ObjectResult) -> None:
@@ -136,6 +150,7 @@ def record_result(status: JobStatus, result: ObjectResult) -> None:
     log.info("job %s: extract %d/%d objects (%s: %s, %d grasps)", status.job_id, status.progress.objects_done,
              status.progress.objects_total, result.name, result.status, result.grasps)
     status.worker_seconds += result.seconds
+    status.part_seconds += result.made_seconds
     if result.node and result.node not in status.nodes:
         status.nodes.append(result.node)
     status.progress.objects_reused += int(result.reused)

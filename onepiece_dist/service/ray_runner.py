@@ -24,13 +24,14 @@ from onepiece_dist.objects import ObjectRef
 from onepiece_dist.service.actors import restartable_actor
 from onepiece_dist.service.central import CentralClient, central_name
 from onepiece_dist.service.crashes import CrashLog, crash_folder, crashed_on
+from onepiece_dist.service.evaluate import evaluation_spec, record_evaluation
 from onepiece_dist.service.extract import extract_object
 from onepiece_dist.service.label_one import label_shard
 from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
 from onepiece_dist.service.registry import RegistryClient
 from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult
-from onepiece_dist.service.status import JobStatus
-from onepiece_dist.service.trainer import TrainerClient
+from onepiece_dist.service.status import EvaluationReport, JobStatus
+from onepiece_dist.service.trainer import TrainerClient, objects_scored
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 
@@ -146,9 +147,19 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         clients.append(TrainerClient.start(train_spec, job_id))
         return clients[-1].fit(train_spec)
 
+    def evaluate(job: JobSpec) -> EvaluationReport:
+        for trainer in clients[1:]:  # the labelling workers get the trainer's CPU
+            with contextlib.suppress(Exception):
+                trainer.kill()
+        del clients[1:]
+        heldout = evaluation_spec(job)
+        labelled = run_on_ray(heldout, f"{job_id}-evaluate", workers=workers)
+        clients.append(TrainerClient.start(job, f"{job_id}-evaluate"))
+        return record_evaluation(job, clients[-1].score(job, heldout.output, objects_scored(labelled)))
+
     try:
         return run_pipeline(spec, status, Runtime(extract=extract, central=central, label=label, train=train,
-                                                  prepare=prepare), report, refs)
+                                                  evaluate=evaluate, prepare=prepare), report, refs)
     except JobError as err:
         if isinstance(err, RuntimeLost) or isinstance(err.__cause__, RuntimeLost | RaySystemError):
             lost = err if isinstance(err, RuntimeLost) else err.__cause__

@@ -24,6 +24,7 @@ class ObjectResult:
     reused: bool = False
     seconds: float = 0.0
     node: str = ""
+    made_seconds: float = 0.0  # what the part cost to make when first made (a reused part: its original time)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -72,3 +73,4 @@ class LabelShardResult:
     reused: bool = False
     seconds: float = 0.0
     node: str = ""
+    made_seconds: float = 0.0  # what the part cost to make when first made (a reused part: its original time)

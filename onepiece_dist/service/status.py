@@ -103,6 +103,21 @@ class TrainingReport(_Report):
     final: dict[str, float | int] = Field(description="Metrics of the last epoch.")
 
 
+class EvaluationReport(_Report):
+    """What the evaluate stage measured: the trained network on held-out objects (also the dataset's
+    ``evaluation`` attribute)."""
+
+    objects: int = Field(description="Held-out objects scored (rejected ones left out).")
+    grasps: int = Field(description="Held-out candidates, every one labelled.")
+    positive_rate: float
+    top1: float = Field(description="Mean over objects of the success of the network's top-ranked candidate.")
+    random_choice: float = Field(description="Mean over objects of a random candidate's expected success.")
+    ap: float = Field(description="Average precision of the network's scores over every held-out candidate.")
+    accuracy: float = Field(description="Share of candidates whose score is on the label's side of one half.")
+    checkpoint: str
+    dataset: str = Field(description="The labelled held-out dataset.")
+
+
 class JobStatus(BaseModel):
     """State of one job. ``timings`` holds seconds per stage."""
 
@@ -117,10 +132,16 @@ class JobStatus(BaseModel):
     nodes: list[str] = Field(default_factory=list, description="Ray node ids that extracted objects.")
     retries: int = Field(0, description="Object tasks re-run after a worker died.")
     worker_seconds: float = Field(0.0, description="Time spent inside per-object extraction, summed over objects.")
+    part_seconds: float = Field(0.0, description="What the objects' parts cost to make, summed over objects (a part "
+                                "reused from an earlier run counts the time it took then): the extraction's "
+                                "core-seconds.")
+    label_seconds: float = Field(0.0, description="What the label stage's shards cost to make, summed over shards "
+                                 "(a reused shard counts the time it took then): the label stage's core-seconds.")
     spec: dict = Field(default_factory=dict, description="The JobSpec (so a job can be resumed from its status).")
     assembly: AssemblyReport | None = Field(None, description="Report of the assemble stage.")
     labels: LabelReport | None = Field(None, description="Report of the label stage on the one object.")
     training: TrainingReport | None = Field(None, description="Report of the train stage.")
+    evaluation: EvaluationReport | None = Field(None, description="Report of the evaluate stage.")
     error: str = ""
     driver: str = Field("", description="'host:pid' of the process that drives the job (its pipeline).")
     created: float = Field(default_factory=time.time)

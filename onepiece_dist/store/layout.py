@@ -99,3 +99,5 @@ class DatasetAttributes(BaseModel):
     assembly_labels: dict | None = Field(None, description="The label stage's report (LabelReport, with label "
                                                            "transfer), once labelled on the one object.")
     training: dict | None = Field(None, description="The train stage's report (TrainingReport), once trained.")
+    evaluation: dict | None = Field(None, description="The evaluate stage's report (EvaluationReport): the trained "
+                                    "network on held-out objects, once evaluated.")

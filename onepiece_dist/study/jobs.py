@@ -1,0 +1,79 @@
+"""The jobs of a study, run through the service (embedded Ray, a cluster, or in process) and reused when their
+dataset is already there, made from the very same spec: a study killed at any point goes on from what it finished.
+
+Jobs: the held-out set (every candidate labelled), A (every train candidate labelled on its own object) and one B
+job per radius (extraction once, in a parts cache the radii share; then dedup, the one object and its labels).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from onepiece_dist.service.status import JobStatus
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.study.spec import StudySpec
+
+Run = Callable[[JobSpec, str], JobStatus]  # (spec, job name) -> the finished job's status
+
+
+@dataclass(frozen=True)
+class StudyJobs:
+    """Every job spec of a study, outputs under its folder's ``jobs/``."""
+
+    heldout: JobSpec
+    a: JobSpec
+    b: dict[int, JobSpec]  # radius -> B job
+
+    def named(self) -> list[tuple[str, JobSpec]]:
+        return [("heldout", self.heldout), ("A", self.a), *((f"B r{r}", s) for r, s in self.b.items())]
+
+
+def study_jobs(spec: StudySpec, folder: Path) -> StudyJobs:
+    jobs = folder / "jobs"
+    labelled = {"sim": {"label": True}, "stages": ("ingest", "extract", "dedup")}
+    heldout = spec.job_spec(spec.heldout, spec.heldout_grasps, spec.seed + 1, str(jobs / "heldout.zarr"), **labelled)
+    a = spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / "A.zarr"), **labelled)
+    b = {r: spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / f"B-r{r}.zarr"),
+                          cache_dir=str(jobs / "parts-B"), similar_radius=r,
+                          stages=("ingest", "extract", "dedup", "assemble", "label"))
+         for r in spec.radii}
+    return StudyJobs(heldout, a, b)
+
+
+@dataclass(frozen=True)
+class JobRecord:
+    """A finished job of the study: its status and whether an earlier run of the study made it."""
+
+    name: str
+    spec: JobSpec
+    status: JobStatus
+    reused: bool
+
+
+def run_or_reuse(name: str, spec: JobSpec, run: Run) -> JobRecord:
+    """The job's finished status: read back when its dataset was made from this very spec, else run now (a job
+    cut short before is run again on its committed parts)."""
+    done = finished(spec)
+    if done is not None:
+        return JobRecord(name, spec, done, True)
+    return JobRecord(name, spec, run(spec, name), False)
+
+
+def finished(spec: JobSpec) -> JobStatus | None:
+    """The status of a job that succeeded in making ``spec.output`` from this spec, or None."""
+    path = Path(f"{spec.output}.status.json")
+    if not path.is_file():
+        return None
+    status = JobStatus.model_validate_json(path.read_text())
+    same = JobSpec.model_validate(status.spec) == spec
+    return status if same and status.state == "succeeded" else None
+
+
+def core_seconds(status: JobStatus) -> dict[str, float]:
+    """Core-seconds per stage of a finished job: extraction (and labels with sim.label) summed inside the workers,
+    the label stage summed over its shards, the central actor's stages (one core) at their wall time."""
+    stages = {"extract": status.worker_seconds, "dedup": status.timings.get("dedup", 0.0),
+              "assemble": status.timings.get("assemble", 0.0), "label": status.label_seconds}
+    return {k: round(v, 2) for k, v in stages.items() if v}

@@ -1,0 +1,144 @@
+"""The study's page (``study.md``) and plot (``study.png``), rendered from a :class:`StudyResult` and nothing else:
+the answer first, then the arms, the held-out set and the premise. Every figure is the result's."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from onepiece_dist.study.result import Arm, Measure, StudyResult
+
+
+def pct(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.1f}%"
+
+
+def megabytes(count: int | None) -> str:
+    return "-" if count is None else f"{count / 1e6:.2f} MB"
+
+
+def measure(m: Measure, percent: bool) -> str:
+    show = pct if percent else (lambda v: f"{v:.3f}")
+    return f"{show(m.mean)} [{show(m.interval[0])}, {show(m.interval[1])}]"
+
+
+def verdict(result: StudyResult) -> list[str]:
+    """The first lines: the cheapest plan as good as A, its cost, and whether the one object pays."""
+    d, a = result.decision, result.arms[0]
+    conf = f"{100 * result.spec.targets.confidence:.0f}%"
+    lines = [f"**Answer.** On these {result.train_objects} train objects and {result.heldout.objects} held-out "
+             f"objects, A (every candidate labelled) reaches held-out top-1 {measure(a.heldout.top1, True)} and AP "
+             f"{measure(a.heldout.ap, False)} ({conf} intervals over held-out objects)."]
+    if d.cheapest is None or d.cheapest == "A":
+        lines.append("No cheaper plan reaches A's intervals: **label everything (A)**.")
+    else:
+        t = result.spec.targets
+        lines.append(f"The cheapest plan inside A's intervals is **{d.cheapest}**: {d.cheapest_core_seconds:.1f} "
+                     f"core-seconds and {d.cheapest_label_trials:,} label trials ({d.cheapest_time_ratio:.1f}x less "
+                     f"time than A; target {t.time_ratio:g}x: {'met' if d.time_met else 'not met'}), "
+                     f"{megabytes(d.cheapest_labelled_bytes)} of labelled grasps ({d.cheapest_storage_ratio:.1f}x "
+                     f"less; target {t.storage_ratio:g}x: {'met' if d.storage_met else 'not met'}).")
+    if d.best_b is None:
+        lines.append("No one-object arm (B) reaches A's intervals.")
+    else:
+        lines.append(f"The cheapest one-object arm inside A's intervals is {d.best_b}.")
+    for name, beats in d.b_beats_random.items():
+        lines.append(f"{name} {'beats' if beats else 'does not beat'} a random subset of its size "
+                     f"(R ~{name}: {'both' if beats else 'not both'} top-1 and AP at least R's).")
+    for p in result.premise:
+        lines.append(f"Premise at radius {p.radius}: a patch's label agrees with the grasps it stands for "
+                     f"{pct(p.patch_vs_every_grasp)} (floor {pct(p.shuffled_patches)}); the code decides "
+                     f"{pct(p.share_decided)} of the label's headroom over chance.")
+    return lines
+
+
+def arm_row(arm: Arm) -> str:
+    c, h = arm.cost, arm.heldout
+    return (f"| {arm.name} | {c.labelled_grasps:,} | {c.label_trials:,} | {c.core_seconds:.1f} | "
+            f"{arm.time_ratio:.2f} | {megabytes(c.labelled_bytes)} | {arm.storage_ratio:.2f} | "
+            f"{megabytes(c.dataset_bytes)} | {measure(h.top1, True)} | {measure(h.ap, False)} | "
+            f"{h.learning_rate:g} | {'yes' if arm.within_a else 'no'} |")
+
+
+def render_page(result: StudyResult, plot: str | None = None) -> str:
+    s, h = result.spec, result.heldout
+    lines = [f"# Study {result.digest}", "", *verdict(result), ""]
+    if plot:
+        lines += [f"![held-out top-1 and AP against labelled grasps]({plot})", ""]
+    lines += ["## Arms", "",
+              "A labels every candidate on its own object; B r builds the one object at similar-shape radius r and "
+              "labels only there; R labels a random share of A's candidates (R ~B r: as many as B r labels). Every "
+              f"arm trains the {s.training.model} network {s.training.steps} steps, {s.training.seeds} seeds, at the "
+              "learning rate its own validation split picks. Core-seconds are summed inside the workers; R is "
+              "charged A's cost per candidate.", "",
+              "| arm | labelled grasps | label trials | core-s | time A/arm | labelled | storage A/arm | dataset | "
+              "held-out top-1 | held-out AP | rate | within A |",
+              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | ---: | --- |",
+              *(arm_row(arm) for arm in result.arms), "",
+              "## Held-out objects", "",
+              f"{h.objects} objects, {h.grasps:,} candidates, every one labelled; positive rate "
+              f"{pct(h.positive_rate)}; a random candidate per object succeeds {pct(h.random_choice)}, an oracle "
+              f"{pct(h.oracle)}.", ""]
+    if result.premise:
+        lines += ["## The premise", "",
+                  "B's one label per patch against A's labels of the same candidates on their own objects.", "",
+                  "| radius | matched grasps | patch vs representative | patch vs every grasp | shuffled (floor) | "
+                  "same code (A) | random pairs (A) | share decided |",
+                  "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+                  *(f"| {p.radius} | {p.matched_grasps:,} | {pct(p.patch_vs_representative)} | "
+                    f"{pct(p.patch_vs_every_grasp)} | {pct(p.shuffled_patches)} | {pct(p.same_code)} | "
+                    f"{pct(p.random_pairs)} | {pct(p.share_decided)} |" for p in result.premise), ""]
+    if result.rejected:
+        lines += ["## Rejected objects", "", *(f"- {r}" for r in result.rejected), ""]
+    lines += ["## Run", "",
+              f"{result.date}, {result.machine}, onepiece-dist {result.package_version}: {result.wall_seconds:.0f} s "
+              f"wall; reused jobs: {', '.join(result.reused_jobs) or 'none'}; reused training runs: "
+              f"{result.reused_runs}. Train `{s.train}` x {s.grasps_per_object} candidates, held-out `{s.heldout}` "
+              f"x {s.heldout_grasps}, {s.label_trials} label trials per grasp ({s.success}, lifting the {s.load}).",
+              ""]
+    return "\n".join(lines)
+
+
+def plot_curves(result: StudyResult, path: Path) -> bool:
+    """Held-out top-1 and AP against labelled grasps (R's learning curve, B's arms, A's band); False without
+    matplotlib (the optional 'plots' extra)."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    a = result.arms[0]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for ax, name, label in ((axes[0], "top1", "held-out top-1"), (axes[1], "ap", "held-out AP")):
+        band = getattr(a.heldout, name).interval
+        ax.axhspan(band[0], band[1], color="0.85", label="A's interval")
+        for kind, marker in (("R", "o"), ("B", "s")):
+            arms = sorted((arm for arm in result.arms if arm.kind == kind), key=lambda arm: arm.cost.labelled_grasps)
+            if not arms:
+                continue
+            x = [arm.cost.labelled_grasps for arm in arms]
+            m = [getattr(arm.heldout, name) for arm in arms]
+            ax.errorbar(x, [v.mean for v in m], yerr=[[v.mean - v.interval[0] for v in m],
+                                                      [v.interval[1] - v.mean for v in m]],
+                        fmt=marker + ("-" if kind == "R" else ""), capsize=3, label=kind)
+        ax.plot([a.cost.labelled_grasps], [getattr(a.heldout, name).mean], "k*", markersize=10, label="A")
+        ax.set_xscale("log")
+        ax.set_xlabel("labelled grasps")
+        ax.set_ylabel(label)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return True
+
+
+def write_pages(result: StudyResult, folder: Path) -> list[Path]:
+    """``study.md`` (and ``study.png`` where matplotlib is installed) in ``folder``."""
+    written = []
+    plotted = plot_curves(result, folder / "study.png")
+    if plotted:
+        written.append(folder / "study.png")
+    (folder / "study.md").write_text(render_page(result, "study.png" if plotted else None))
+    written.append(folder / "study.md")
+    return written

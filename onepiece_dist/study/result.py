@@ -1,0 +1,145 @@
+"""What a study found, typed and frozen: each arm's cost and held-out score, the premise figures and the decision.
+``study.json`` is a :class:`StudyResult` (its JSON Schema: schemas/study_result.schema.json); the page is rendered
+from it and nothing else.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from onepiece_dist.study.spec import StudySpec
+
+FORMAT = 1  # bump when a field changes meaning
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class Measure(_Frozen):
+    """A held-out measure over training seeds: its mean, its spread and its interval over held-out objects."""
+
+    mean: float
+    std: float = Field(description="Standard deviation over training seeds.")
+    interval: tuple[float, float] = Field(description="Bootstrap interval over held-out objects at the study's "
+                                          "confidence (top-1: seed-averaged per-object success; AP: seed-averaged "
+                                          "scores).")
+
+
+class SeedRun(_Frozen):
+    """One training run of an arm."""
+
+    seed: int
+    top1: float
+    top5: float
+    ap: float
+    accuracy: float
+    best_step: int
+    train_seconds: float
+    train_grasps: int
+
+
+class HeldoutScore(_Frozen):
+    """An arm's network on the held-out objects: the success of each object's top-ranked grasp, the mean of its 5
+    best, AP over every held-out grasp, accuracy at one half."""
+
+    top1: Measure
+    top5: Measure
+    ap: Measure
+    accuracy: Measure
+    learning_rate: float = Field(description="The rate its own validation split picked.")
+    seeds: list[SeedRun]
+
+
+class ArmCost(_Frozen):
+    """What an arm's labelled data cost to make. Core-seconds are summed inside the workers (and the central
+    actor's stages), so they do not depend on how many workers ran."""
+
+    core_seconds: float = Field(description="Extraction, dedup, assembly and labelling, in core-seconds.")
+    stages: dict[str, float] = Field(description="Core-seconds per stage.")
+    label_trials: int = Field(description="Physics trials spent on labels.")
+    labelled_grasps: int
+    labelled_bytes: int = Field(description="Bytes on disk of the labelled grasps the network trains on.")
+    dataset_bytes: int = Field(description="Bytes on disk of the arm's whole dataset (shared for R: its share).")
+
+
+class Arm(_Frozen):
+    """One arm: A (every candidate labelled on its own object), B (the one object at a similar-shape radius) or R
+    (a random subset of A's labels, of a budget's size or of a B arm's size)."""
+
+    name: str = Field(description="'A', 'B r<radius>', 'R <share>' or 'R ~B r<radius>'.")
+    kind: Literal["A", "B", "R"]
+    radius: int | None = Field(None, description="B: the similar-shape radius; R ~B: the matched B arm's.")
+    share: float | None = Field(None, description="R: share of A's labelled candidates.")
+    unique_codes: int | None = Field(None, description="B: patches on the one object.")
+    cost: ArmCost
+    heldout: HeldoutScore
+    time_ratio: float = Field(description="A's core-seconds over this arm's.")
+    storage_ratio: float = Field(description="A's labelled bytes over this arm's.")
+    within_a: bool = Field(description="Mean top-1 and mean AP both inside A's intervals or above them.")
+
+
+class Baselines(_Frozen):
+    """The held-out set and what needs no network: a random choice per object and an oracle."""
+
+    objects: int
+    grasps: int
+    positive_rate: float
+    random_choice: float = Field(description="Expected top-1 of a random candidate per object.")
+    oracle: float = Field(description="Top-1 of an oracle (1 where the object has any good candidate).")
+
+
+class Premise(_Frozen):
+    """How far a label computed once for a shape holds for the other grasps that share its code (B r<radius>
+    against A's labels of the same candidates), and how much the code decides the label."""
+
+    radius: int
+    matched_grasps: int = Field(description="B's extracted grasps found among A's (same object and candidate).")
+    patch_vs_representative: float | None = Field(description="The patch's label on the one object agrees with "
+                                                  "its representative's label on its own object.")
+    patch_vs_every_grasp: float | None = Field(description="The patch's label agrees with every grasp it stands "
+                                               "for.")
+    shuffled_patches: float | None = Field(description="The same with patch labels shuffled: the floor.")
+    same_code: float | None = Field(description="A's labels of two grasps sharing a code agree.")
+    random_pairs: float | None = Field(description="A's labels of two random grasps with different codes agree.")
+    share_decided: float | None = Field(description="(same_code - random_pairs) / (1 - random_pairs): how much of "
+                                        "the label's headroom over chance the code decides.")
+
+
+class Decision(_Frozen):
+    """The answer, first lines of the page: the cheapest plan as good as A, and whether the one object pays."""
+
+    cheapest: str | None = Field(description="The arm with the lowest core-seconds whose top-1 and AP lie within "
+                                 "A's intervals (A itself when no other does).")
+    cheapest_core_seconds: float | None
+    cheapest_label_trials: int | None
+    cheapest_labelled_bytes: int | None
+    cheapest_time_ratio: float | None
+    cheapest_storage_ratio: float | None
+    time_met: bool = Field(description="The cheapest plan's time ratio reaches targets.time_ratio.")
+    storage_met: bool = Field(description="Its storage ratio reaches targets.storage_ratio.")
+    best_b: str | None = Field(description="The cheapest B arm within A's intervals, if any.")
+    b_beats_random: dict[str, bool] = Field(description="Per B arm: its top-1 and AP are both at least those of "
+                                            "the R arm of its size.")
+
+
+class StudyResult(_Frozen):
+    """A study's result: ``study.json``."""
+
+    format: int = FORMAT
+    spec: StudySpec
+    digest: str = Field(description="The spec's digest: names the study.")
+    date: str
+    machine: str
+    package_version: str
+    wall_seconds: float = Field(description="The study's wall time (reused jobs and runs cost none).")
+    reused_jobs: list[str]
+    reused_runs: int
+    train_objects: int = Field(description="Train objects accepted (rejected ones are listed).")
+    rejected: list[str] = Field(description="'name: reason' of every object a job rejected.")
+    heldout: Baselines
+    arms: list[Arm]
+    premise: list[Premise]
+    decision: Decision

@@ -1,0 +1,326 @@
+"""Running a study: its input checked before any work, its jobs on the service (embedded Ray, a cluster, or in
+process), every arm trained through trainer actors, scored on the held-out objects, decided, and written to its
+folder as ``study.json`` (a :class:`StudyResult`), ``study.md`` and its plot.
+
+A study's folder holds one study: ``study.spec.json`` names it, and a folder holding another's is refused. Every
+job and training run is kept there, so a study killed at any point finishes when run again, reusing what it had
+finished, with the same result.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+import platform
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.errors import SourceError, SpecError
+from onepiece_dist.learn.train import StepResult, StepRun
+from onepiece_dist.service.status import JobStatus
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
+from onepiece_dist.study.jobs import JobRecord, StudyJobs, core_seconds, run_or_reuse, study_jobs
+from onepiece_dist.study.result import ArmCost, Baselines, HeldoutScore, Measure, SeedRun, StudyResult
+from onepiece_dist.study.spec import StudySpec
+from onepiece_dist.study.training import ArmRun, RunStore, train_arms
+
+Say = Callable[[str], None]  # progress lines (the CLI prints them on stderr)
+SPEC_FILE, RESULT_FILE = "study.spec.json", "study.json"
+
+
+@dataclass(frozen=True)
+class Where:
+    """Where a study's work runs: an embedded Ray on the loopback (default), the cluster at ``address``, or this
+    process without Ray (``in_process``: debugging and tests)."""
+
+    address: str | None = None
+    in_process: bool = False
+    workers: int | None = None
+
+
+def check_folder(spec: StudySpec, folder: Path) -> Path:
+    """``folder`` as an absolute path; refused when it holds another study's results or other files."""
+    folder = folder.resolve()
+    marker = folder / SPEC_FILE
+    if marker.is_file():
+        other = StudySpec.model_validate_json(marker.read_text())
+        if other != spec:
+            raise SpecError(f"{folder} holds another study's results (study {other.digest()}, not {spec.digest()}); "
+                            "give another --out, or remove that folder")
+    elif folder.is_dir() and any(folder.iterdir()):
+        raise SpecError(f"{folder} is not empty and holds no study: give an empty or new --out")
+    return folder
+
+
+def claim_folder(spec: StudySpec, folder: Path) -> None:
+    """Mark ``folder`` as this study's (``study.spec.json``)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if not (folder / SPEC_FILE).is_file():
+        tmp = folder / f".{SPEC_FILE}.tmp"
+        tmp.write_text(spec.model_dump_json(indent=2))
+        os.replace(tmp, folder / SPEC_FILE)
+
+
+def check_objects(spec: StudySpec) -> None:
+    """Before any work: both sources resolve, each has an object that loads, and no held-out object is a train
+    object (same mesh content). Raises :class:`SourceError` naming the objects."""
+    from onepiece_dist.errors import MeshRejected
+    from onepiece_dist.objects import load_object, resolve_source
+
+    job = spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, "unused.zarr")
+    ids: dict[str, dict[str, str]] = {}
+    for role, source in (("train", spec.train), ("heldout", spec.heldout)):
+        refs, ids[role], rejected = resolve_source(source), {}, []
+        for ref in refs:
+            try:
+                ids[role][load_object(ref, job).mesh.content_id] = ref.name
+            except MeshRejected as err:
+                rejected.append(f"{ref.name}: {err.reason}")
+        if not ids[role]:
+            raise SourceError(f"--{role} {source!r}: all {len(refs)} objects were rejected:\n  "
+                              + "\n  ".join(rejected))
+    shared = sorted(set(ids["train"]) & set(ids["heldout"]), key=lambda c: ids["heldout"][c])
+    if shared:
+        names = ", ".join(f"{ids['heldout'][c]} (= train {ids['train'][c]})" for c in shared)
+        raise SourceError(f"{len(shared)} held-out objects are also train objects (same mesh): {names}; a held-out "
+                          "object must be unseen")
+
+
+@contextlib.contextmanager
+def job_runner(where: Where, prefix: str, say: Say) -> Iterator[Callable[[JobSpec, str], JobStatus]]:
+    """A function that runs a job to completion where the study runs (Ray connected once for the whole study)."""
+    from onepiece_dist.api import run_job
+
+    started_here = False
+    if not where.in_process:
+        import ray
+
+        from onepiece_dist.service.ray_env import connect
+
+        started_here = not ray.is_initialized()
+        connect(where.address)
+
+    def run(spec: JobSpec, name: str) -> JobStatus:
+        job_id = f"{prefix}-{name.replace(' ', '')}-{os.urandom(3).hex()}"  # a cut-short run's id stays taken
+        shown: list[str] = []
+
+        def progress(status: JobStatus) -> None:
+            if status.stage and status.stage not in shown:
+                shown.append(status.stage)
+                say(f"study: {name}: {status.stage}")
+
+        return run_job(spec, address=where.address, in_process=where.in_process, job_id=job_id,
+                       workers=where.workers, progress=progress)
+
+    try:
+        yield run
+    finally:
+        if started_here:
+            import ray
+
+            with contextlib.suppress(Exception):
+                ray.shutdown()
+
+
+def trainer_runner(where: Where, prefix: str, device: str, limit: int):
+    """A function that trains step runs in parallel on trainer actors (or in this process)."""
+    from onepiece_dist.service.trainer import Trainer, run_step_runs, trainers_on_ray
+
+    def train(runs: list[StepRun], done) -> list[StepResult]:
+        if where.in_process:
+            return run_step_runs(runs, [Trainer().fit_steps], done)
+        clients = trainers_on_ray(f"{prefix}-trainer-{os.urandom(3).hex()}", device, min(limit, len(runs)))
+        try:
+            return run_step_runs(runs, [client.fit_steps for client in clients], done)
+        finally:
+            for client in clients:
+                with contextlib.suppress(Exception):
+                    client.kill()
+
+    return train
+
+
+def run_study(spec: StudySpec, folder: str | Path, where: Where = Where(), say: Say = lambda line: None
+              ) -> StudyResult:
+    """Run (or finish) the study in ``folder`` and write its result and pages there."""
+    start = time.perf_counter()
+    folder = check_folder(spec, Path(folder))
+    check_objects(spec)  # before anything is written
+    claim_folder(spec, folder)
+    jobs = study_jobs(spec, folder)
+    prefix = f"study-{spec.digest()[:8]}"
+    with job_runner(where, prefix, say) as run:
+        records = {name: run_or_reuse(name, job, run) for name, job in jobs.named()}
+        for name, record in records.items():
+            say(f"study: {name}: {'reused' if record.reused else 'done'} ({record.status.progress.grasps} grasps)")
+        check_jobs(records)
+        arm_runs = plan_runs(spec, jobs, records)
+        store = RunStore(folder / "runs")
+        say(f"study: training {len(arm_runs)} runs (+ learning-rate probes)")
+        trained, _search = train_arms(arm_runs, spec.training.learning_rates, store,
+                                      trainer_runner(where, prefix, spec.training.device, len(arm_runs)))
+    result = assemble_result(spec, jobs, records, trained, start, store.reused)
+    write_result(result, folder)
+    say(f"study: done in {result.wall_seconds:.0f} s: {folder / RESULT_FILE}")
+    return result
+
+
+def check_jobs(records: dict[str, JobRecord]) -> None:
+    for name in ("A", "heldout"):
+        status = records[name].status
+        if status.progress.grasps == 0:
+            reasons = "; ".join(f"{r.name}: {r.reason}" for r in status.rejections) or "no grasp found"
+            raise SourceError(f"the study's {name} job extracted no grasp: {reasons}")
+
+
+def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> list[ArmRun]:
+    """Every arm's runs: A on all its labelled grasps, B r on its one object, R on seeded random subsets of A's."""
+    t = spec.training
+    heldout = jobs.heldout.output
+
+    def runs(arm: str, path: str, group: str, rows: tuple[int, ...] | None) -> list[ArmRun]:
+        base = StepRun(path, group, rows, heldout, t.model, t.steps, t.batch_size, t.learning_rates[0],
+                       t.validation, 0, t.evaluations, device=t.device)
+        return [ArmRun(arm, seed, t.learning_rates[0], dataclasses.replace(base, seed=seed))
+                for seed in range(t.seeds)]
+
+    a_count = records["A"].status.progress.grasps
+    plan = runs("A", jobs.a.output, "grasps", None)
+    for radius, job in jobs.b.items():
+        plan += runs(f"B r{radius}", job.output, "assembled/grasps", None)
+    for name, count in random_arms(spec, records, a_count):
+        plan += runs(name, jobs.a.output, "grasps", random_rows(a_count, count, spec.seed))
+    return plan
+
+
+def random_arms(spec: StudySpec, records: dict[str, JobRecord], a_count: int) -> list[tuple[str, int]]:
+    """(name, labelled grasps) of each R arm: one per budget share, one the size of each B arm."""
+    arms = [(f"R {share:g}", max(2, min(a_count, round(share * a_count)))) for share in spec.budgets]
+    for radius in spec.radii:
+        labels = records[f"B r{radius}"].status.labels
+        arms.append((f"R ~B r{radius}", max(2, min(a_count, labels.labelled_grasps if labels else 0))))
+    return arms
+
+
+def random_rows(total: int, count: int, seed: int) -> tuple[int, ...]:
+    """A seeded random subset of ``count`` of ``total`` rows, sorted (the same for every training seed)."""
+    rng = np.random.default_rng([seed, 17, count])
+    return tuple(int(r) for r in np.sort(rng.choice(total, count, replace=False)))
+
+
+def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
+                    trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int) -> StudyResult:
+    from onepiece_dist.service.registry import package_version
+    from onepiece_dist.store import open_dataset
+    from onepiece_dist.study.premise import premise
+    from onepiece_dist.study.stats import baselines
+
+    ho = open_dataset(jobs.heldout.output)
+    labels, groups = ho["grasps/success"].astype(np.float64), ho["grasps/object"].astype(np.int64)
+    drafts = arm_drafts(spec, jobs, records, trained, labels, groups)
+    arms = finish_arms(drafts)
+    a = open_dataset(jobs.a.output)
+    premises = [premise(a, open_dataset(job.output), radius, spec.seed) for radius, job in jobs.b.items()
+                if records[f"B r{radius}"].status.labels is not None]
+    rejected = sorted({f"{r.name}: {r.reason}" for rec in records.values() for r in rec.status.rejections})
+    status = records["A"].status
+    return StudyResult(spec=spec, digest=spec.digest(), date=date.today().isoformat(),
+                       machine=f"{platform.machine()}, {os.cpu_count()} cores", package_version=package_version(),
+                       wall_seconds=round(time.perf_counter() - start, 1),
+                       reused_jobs=[name for name, rec in records.items() if rec.reused], reused_runs=reused_runs,
+                       train_objects=status.progress.objects_done - len(status.rejections), rejected=rejected,
+                       heldout=Baselines(**baselines(labels, groups)), arms=arms, premise=premises,
+                       decision=decide(arms, spec.targets))
+
+
+def arm_drafts(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
+               trained: list[tuple[ArmRun, StepResult]], labels: np.ndarray, groups: np.ndarray) -> list[ArmDraft]:
+    costs = arm_costs(spec, jobs, records)
+    drafts = []
+    for name, cost in costs.items():
+        runs = [(job, result) for job, result in trained if job.arm == name]
+        kind = name[0]
+        radius = int(name.rsplit("r", 1)[1]) if name.startswith(("B", "R ~B")) else None
+        share = float(name[2:]) if kind == "R" and radius is None else None
+        b = records.get(f"B r{radius}") if kind == "B" else None
+        drafts.append(ArmDraft(name, kind, cost, heldout_score(spec, runs, labels, groups), radius, share,
+                               b.status.progress.unique_codes if b else None))
+    return drafts
+
+
+def heldout_score(spec: StudySpec, runs: list[tuple[ArmRun, StepResult]], labels: np.ndarray,
+                  groups: np.ndarray) -> HeldoutScore:
+    from onepiece_dist.study.stats import arm_summary
+
+    t = spec.targets
+    summary = arm_summary([{"scores": r.scores, "seed": job.seed, "best_step": r.best_step,
+                            "train_seconds": r.train_seconds, "train_grasps": r.train_grasps} for job, r in runs],
+                          labels, groups, draws=t.bootstrap_draws, ap_draws=t.ap_draws, confidence=t.confidence)
+
+    def m(key: str) -> Measure:
+        interval = summary[key].get("ci95", [summary[key]["mean"]] * 2)
+        return Measure(mean=round(summary[key]["mean"], 4), std=round(summary[key]["std"], 4),
+                       interval=(interval[0], interval[1]))
+
+    return HeldoutScore(top1=m("top1"), top5=m("top5"), ap=m("ap"), accuracy=m("accuracy"),
+                        learning_rate=runs[0][0].learning_rate, seeds=[SeedRun(**s) for s in summary["seeds"]])
+
+
+def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> dict[str, ArmCost]:
+    """Each arm's cost. B's extraction (shared by the radii through the parts cache) is charged in full to each
+    radius; R labels its candidates on their own objects, at A's cost per candidate."""
+    from onepiece_dist.store.dataset import disk_bytes
+
+    k = spec.label_trials
+    a = records["A"].status
+    a_stages = core_seconds(a)
+    a_cost = ArmCost(core_seconds=round(sum(a_stages.values()), 2), stages=a_stages,
+                     label_trials=a.progress.grasps * k, labelled_grasps=a.progress.grasps,
+                     labelled_bytes=disk_bytes(Path(jobs.a.output) / "grasps"),
+                     dataset_bytes=disk_bytes(Path(jobs.a.output)))
+    costs = {"A": a_cost}
+    b_extract = max((core_seconds(records[f"B r{r}"].status).get("extract", 0.0) for r in jobs.b), default=0.0)
+    for radius, job in jobs.b.items():
+        status = records[f"B r{radius}"].status
+        stages = {**core_seconds(status), "extract": b_extract}
+        labelled = Path(job.output) / "assembled" / "grasps"
+        costs[f"B r{radius}"] = ArmCost(
+            core_seconds=round(sum(stages.values()), 2), stages=stages,
+            label_trials=status.labels.label_trials if status.labels else 0,
+            labelled_grasps=status.labels.labelled_grasps if status.labels else 0,
+            labelled_bytes=disk_bytes(labelled) if labelled.exists() else 0, dataset_bytes=disk_bytes(Path(job.output)))
+    for name, count in random_arms(spec, records, a.progress.grasps):
+        share = count / max(a.progress.grasps, 1)
+        stages = {stage: round(share * seconds, 2) for stage, seconds in a_stages.items()}
+        costs[name] = ArmCost(core_seconds=round(sum(stages.values()), 2), stages=stages, label_trials=count * k,
+                              labelled_grasps=count, labelled_bytes=int(share * a_cost.labelled_bytes),
+                              dataset_bytes=int(share * a_cost.dataset_bytes))
+    return costs
+
+
+def write_result(result: StudyResult, folder: Path) -> None:
+    from onepiece_dist.study.page import write_pages
+
+    tmp = folder / f".{RESULT_FILE}.tmp"
+    tmp.write_text(result.model_dump_json(indent=2) + "\n")
+    os.replace(tmp, folder / RESULT_FILE)
+    write_pages(result, folder)
+
+
+def report_study(folder: str | Path) -> StudyResult:
+    """Render a study's pages again from its ``study.json``."""
+    path = Path(folder) / RESULT_FILE
+    if not path.is_file():
+        raise SpecError(f"{path}: no study result here (run `onepiece study run ... --out {folder}` first)")
+    result = StudyResult.model_validate_json(path.read_text())
+    from onepiece_dist.study.page import write_pages
+
+    write_pages(result, Path(folder))
+    return result

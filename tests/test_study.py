@@ -1,0 +1,203 @@
+"""The study wing (onepiece_dist/study): its statistics, its decision, its refusals before any work, a small study
+end to end in process (the result against its published schema, the page rendered again from the JSON), a study
+killed mid-way that finishes with the same result, and the evaluate stage of a job."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from onepiece_dist.errors import SourceError, SpecError
+from onepiece_dist.study import stats
+from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
+from onepiece_dist.study.result import ArmCost, HeldoutScore, Measure
+from onepiece_dist.study.spec import StudySpec, StudyTargets, load_study_spec
+from tests.factories import TINY_STUDY as TINY
+from tests.factories import comparable_study as comparable
+
+ROOT = Path(__file__).resolve().parents[1]
+ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
+def test_ap_over_thresholds_equals_the_usual_ap_without_ties_and_ignores_order_within_ties():
+    rng = np.random.default_rng(2)
+    scores, labels = rng.random(200), rng.random(200) < 0.3
+    assert stats.threshold_ap(scores, labels) == pytest.approx(stats.average_precision(scores, labels))
+    tied = np.round(scores, 1)
+    order = rng.permutation(200)
+    assert stats.threshold_ap(tied, labels) == pytest.approx(stats.threshold_ap(tied[order], labels[order]))
+    assert stats.average_precision(tied, labels) != pytest.approx(stats.average_precision(tied[order], labels[order]))
+    assert stats.threshold_ap(np.zeros(200), labels) == pytest.approx(labels.mean())
+    assert stats.threshold_ap(scores, np.zeros(200, bool)) == 0.0
+
+
+def test_the_interval_holds_the_mean_and_narrows_with_a_lower_confidence():
+    per_object = (np.random.default_rng(1).random(40) < 0.6).astype(float)
+    wide, narrow = (stats.bootstrap_interval(per_object, confidence=c) for c in (0.95, 0.8))
+    assert wide[0] <= narrow[0] <= per_object.mean() <= narrow[1] <= wide[1] and narrow != wide
+
+
+def test_the_share_decided_is_the_lift_over_the_floor_scaled_by_the_headroom():
+    assert stats.share_decided(0.8, 0.6, 1.0) == pytest.approx(0.5)
+    assert stats.share_decided(0.6, 0.6, 1.0) == 0 and stats.share_decided(None, 0.6, 1.0) is None
+    assert stats.share_decided(0.7, 0.6, 0.6) is None  # no headroom above the floor: nothing to decide
+
+
+def score(top1: float, ap: float, spread: float = 0.05) -> HeldoutScore:
+    def m(v: float) -> Measure:
+        return Measure(mean=v, std=0.0, interval=(v - spread, v + spread))
+
+    return HeldoutScore(top1=m(top1), top5=m(top1), ap=m(ap), accuracy=m(0.7), learning_rate=1e-3, seeds=[])
+
+
+def cost(seconds: float, labelled: int) -> ArmCost:
+    return ArmCost(core_seconds=seconds, stages={"extract": seconds}, label_trials=4 * labelled,
+                   labelled_grasps=labelled, labelled_bytes=100 * labelled, dataset_bytes=200 * labelled)
+
+
+def arms(b_top1: float = 0.78):
+    return finish_arms([ArmDraft("A", "A", cost(100, 1000), score(0.8, 0.7)),
+                        ArmDraft("B r0", "B", cost(20, 100), score(b_top1, 0.69), radius=0, unique_codes=100),
+                        ArmDraft("R 0.05", "R", cost(5, 50), score(0.70, 0.60), share=0.05),
+                        ArmDraft("R 0.1", "R", cost(10, 100), score(0.79, 0.68), share=0.1),
+                        ArmDraft("R ~B r0", "R", cost(10, 100), score(0.77, 0.69), radius=0)])
+
+
+def test_the_decision_is_the_cheapest_arm_inside_a_s_intervals_with_targets_from_the_spec():
+    decided = decide(arms(), StudyTargets(time_ratio=8.0))
+    assert decided.cheapest == "R 0.1" and decided.cheapest_time_ratio == 10.0 and decided.time_met
+    assert decided.best_b == "B r0" and decided.b_beats_random == {"B r0": True}
+    assert not decide(arms(), StudyTargets(time_ratio=12.0)).time_met  # the target is the spec's, not the code's
+    assert decide(arms(b_top1=0.70), StudyTargets()).best_b is None  # below A's interval
+    assert decide(arms(b_top1=0.76), StudyTargets()).b_beats_random == {"B r0": False}  # below R of its size
+
+
+def test_a_study_spec_names_the_field_it_refuses(tmp_path):
+    with pytest.raises(SpecError, match=r"budgets"):
+        load_study_spec(None, {"budgets": [0.0]})
+    bad = tmp_path / "study.yaml"
+    bad.write_text("radii: [0, 0]\n")
+    with pytest.raises(SpecError, match=rf"{bad}: invalid study\n  radii"):
+        load_study_spec(bad, {})
+    assert load_study_spec(None, {"train": "x"}, quick=True).training.model == "voxel"
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "examples" / "studies").glob("*.yaml")), ids=lambda p: p.stem)
+def test_every_example_study_is_a_valid_study(path):
+    spec = load_study_spec(path, {})
+    assert spec.train and spec.heldout and spec.train != spec.heldout
+
+
+def test_quick_is_the_quick_example_study():
+    given = {"train": "pybullet:random_urdfs[0:8]", "heldout": "pybullet:random_urdfs[500:508]"}
+    assert load_study_spec(None, given, quick=True) == load_study_spec(ROOT / "examples/studies/quick.yaml", {})
+
+
+def test_a_stage_the_pipeline_does_not_run_is_refused_by_the_spec():
+    from onepiece_dist.service import pipeline
+    from onepiece_dist.spec import STAGES, parse_job_spec
+
+    with pytest.raises(SpecError, match=r"stages\.1 = \"report\""):
+        parse_job_spec({"stages": ["ingest", "report"]})
+    run = set(re.findall(r'stage\(status, "(\w+)"', Path(pipeline.__file__).read_text()))
+    assert run == set(STAGES)  # every name the spec takes is a stage the pipeline runs
+
+
+@pytest.mark.sim
+def test_bad_input_is_refused_before_any_work_and_names_the_objects(tmp_path):
+    from onepiece_dist.study.runner import Where, run_study
+
+    overlap = StudySpec(**{**TINY, "heldout": "pybullet:random_urdfs[2:5]"})
+    with pytest.raises(SourceError, match=r"2 held-out objects are also train objects.*random_urdfs/002"):
+        run_study(overlap, tmp_path / "a", Where(in_process=True))
+    assert not (tmp_path / "a").exists()  # nothing written
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "nan.obj").write_text("v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    rejected = StudySpec(**{**TINY, "train": str(tmp_path / "bad")})
+    with pytest.raises(SourceError, match=r"all 1 objects were rejected:\n  nan.obj: .*not finite"):
+        run_study(rejected, tmp_path / "b", Where(in_process=True))
+    (tmp_path / "c").mkdir()
+    (tmp_path / "c" / "study.spec.json").write_text(StudySpec(**{**TINY, "seed": 5}).model_dump_json())
+    with pytest.raises(SpecError, match=r"holds another study's results"):
+        run_study(StudySpec(**TINY), tmp_path / "c", Where(in_process=True))
+
+
+@pytest.fixture(scope="module")
+def tiny_study(tmp_path_factory):
+    from onepiece_dist.study.runner import Where, run_study
+
+    folder = tmp_path_factory.mktemp("study")
+    return folder, run_study(StudySpec(**TINY), folder, Where(in_process=True))
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_again(tiny_study):
+    import jsonschema
+
+    folder, result = tiny_study
+    document = json.loads((folder / "study.json").read_text())
+    jsonschema.validate(document, json.loads((ROOT / "schemas" / "study_result.schema.json").read_text()))
+    assert [a.name for a in result.arms] == ["A", "B r0", "R 0.5", "R ~B r0"]
+    a, b = result.arms[0], result.arms[1]
+    assert a.cost.labelled_grasps > b.cost.labelled_grasps > 0 and a.cost.core_seconds > 0
+    for arm in result.arms:
+        assert len(arm.heldout.seeds) == 2 and arm.heldout.top1.interval[0] <= arm.heldout.top1.interval[1]
+        assert 0 <= arm.heldout.ap.mean <= 1 and arm.cost.core_seconds > 0
+    assert result.arms[3].cost.labelled_grasps == b.cost.labelled_grasps  # R of B's size
+    assert result.decision.cheapest in {arm.name for arm in result.arms if arm.within_a}
+    page = (folder / "study.md").read_text()
+    assert page.splitlines()[2].startswith("**Answer.**") and f"{100 * a.heldout.top1.mean:.1f}%" in page
+    (folder / "study.md").unlink()
+    shown = subprocess.run([*ONEPIECE, "study", "report", str(folder)], capture_output=True, text=True, timeout=120)
+    assert shown.returncode == 0, shown.stderr[-2000:]
+    assert (folder / "study.md").read_text() == page
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_a_study_killed_mid_way_finishes_with_the_same_result(tiny_study, tmp_path):
+    folder = tmp_path / "killed"
+    study = tmp_path / "tiny.json"
+    study.write_text(json.dumps(TINY))
+    command = [*ONEPIECE, "study", "run", str(study), "--out", str(folder), "--in-process"]
+    driver = subprocess.Popen(command, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 300
+    while not (folder / "jobs" / "A.zarr.parts").is_dir() and time.monotonic() < deadline:  # held-out done, A begun
+        time.sleep(0.2)
+    os.killpg(driver.pid, signal.SIGKILL)
+    driver.wait()
+    assert not (folder / "study.json").exists()
+    finished = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert finished.returncode == 0, finished.stderr[-3000:]
+    again = json.loads((folder / "study.json").read_text())
+    assert "heldout" in again["reused_jobs"]
+    assert comparable(again) == comparable(json.loads((tiny_study[0] / "study.json").read_text()))
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_a_job_that_trains_also_evaluates_on_unseen_objects_and_says_so(tmp_path):
+    from onepiece_dist.store import open_dataset
+
+    spec = tmp_path / "job.yaml"
+    spec.write_text("objects: pybullet:random_urdfs[0:3]\ngrasps_per_object: 16\nsim: {points_per_grasp: 64}\n"
+                    "train: {model: voxel, epochs: 2}\nevaluate: {objects: 'pybullet:random_urdfs[500:502]', "
+                    "grasps_per_object: 12}\n")
+    run = subprocess.run([*ONEPIECE, "run", str(spec), "--in-process", "--out", str(tmp_path / "d.zarr")],
+                         capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-3000:]
+    last = run.stderr.strip().splitlines()[-1]
+    assert last.startswith("held-out: 2 unseen objects") and "top-1 success" in last and "random choice" in last
+    evaluation = open_dataset(tmp_path / "d.zarr").attrs["evaluation"]
+    assert evaluation["objects"] == 2 and 0 <= evaluation["top1"] <= 1 and evaluation["grasps"] > 0
+    heldout = open_dataset(evaluation["dataset"])
+    assert heldout.attrs["job_spec"]["objects"] == "pybullet:random_urdfs[500:502]"
+    assert len(heldout["grasps/success"]) == evaluation["grasps"]
