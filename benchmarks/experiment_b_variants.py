@@ -64,9 +64,8 @@ def source_labels_dataset(source: Path, a_path: Path, out: Path) -> Path:
     """As :func:`representatives_dataset`, but each row's success is the label arm A (``a_path``) gave its patch's
     representative grasp on its source object (found by object name and candidate pose). Rows whose representative
     A did not label are left out."""
-    from paper_experiment import match_rows
-
     from onepiece_dist.store import open_dataset
+    from onepiece_dist.study.premise import match_rows
 
     b, a = open_dataset(str(source)), open_dataset(str(a_path))
     patch = b["assembled/grasps/patch"].astype(np.int64)

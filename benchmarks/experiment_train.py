@@ -10,7 +10,6 @@ rate. Held-out scores of the runs not kept are never looked at.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import hashlib
 import json
 import os
@@ -22,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 from experiment_learn import TrainJob, fit_and_score
+
+from onepiece_dist.study.training import search_rates
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,21 +38,9 @@ def parse_rates(text: str) -> list[float]:
 
 
 def train_with_search(jobs: list[TrainJob], rates: list[float], train: Train) -> tuple[list[dict], dict]:
-    """Runs of ``jobs`` (in their order), each arm at the rate its validation split picks among ``rates``; and the
-    search's record: per arm the chosen rate and every probed rate's lowest validation loss. With one rate there is
-    nothing to search: every job trains at it."""
-    if len(rates) == 1:
-        return train([dataclasses.replace(job, learning_rate=rates[0]) for job in jobs]), {}
-    first = min(job.seed for job in jobs)
-    probes = [dataclasses.replace(job, learning_rate=rate) for job in jobs if job.seed == first for rate in rates]
-    probed = {(job.arm, job.learning_rate): run for job, run in zip(probes, train(probes), strict=True)}
-    search = {arm: [{"learning_rate": rate, "val_loss": best_validation_loss(probed[(arm, rate)])} for rate in rates]
-              for arm in dict.fromkeys(job.arm for job in probes)}
-    chosen = {arm: min(rows, key=lambda row: row["val_loss"])["learning_rate"] for arm, rows in search.items()}
-    rest = [dataclasses.replace(job, learning_rate=chosen[job.arm]) for job in jobs if job.seed != first]
-    trained = iter(train(rest))
-    runs = [probed[(job.arm, chosen[job.arm])] if job.seed == first else next(trained) for job in jobs]
-    return runs, {arm: {"chosen": chosen[arm], "probes": rows} for arm, rows in search.items()}
+    """Runs of ``jobs`` (in their order), each arm at the rate its validation split picks among ``rates``, and the
+    search's record (the package's ``study.training.search_rates``, on these scripts' dict runs)."""
+    return search_rates(jobs, rates, train, best_validation_loss)
 
 
 def best_validation_loss(run: dict) -> float:

@@ -48,6 +48,7 @@ from experiment_train import spawn_context, work_folder  # noqa: E402
 from onepiece_dist.core.contact import ContactKeySpec, contact_keys  # noqa: E402
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.voxel import voxel_indices  # noqa: E402
+from onepiece_dist.study.stats import threshold_ap  # noqa: E402
 
 # (name, kind, parameters): occupancy at a resolution (m); contact keys at a pad cell, relief step and levels,
 # opening step (m); "both" concatenates the 10 mm occupancy code and a contact key.
@@ -171,20 +172,6 @@ def redundancy_rows(train: Crops, heldout: Crops, region: tuple[float, float, fl
                          "unique_fraction": round(len(unique_codes(train_keys).unique) / max(cut.count, 1), 4),
                          "budget": budget_lookup(train_keys, cut.success, held_keys, heldout.success, seed)})
     return rows
-
-
-def threshold_ap(scores: np.ndarray, labels: np.ndarray) -> float:
-    """Average precision over the distinct score thresholds: grasps with equal scores count together (a lookup
-    gives every grasp of a key one score, and their order must not decide the figure). scores (n,) float, labels
-    (n,) bool; 0 when there is no positive."""
-    labels = np.asarray(labels, dtype=bool)
-    if not labels.any():
-        return 0.0
-    order = np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
-    ranked, hits = np.asarray(scores)[order], np.cumsum(labels[order])
-    ends = np.r_[np.flatnonzero(ranked[1:] != ranked[:-1]), len(ranked) - 1]  # last grasp of each tie group
-    precision, recall = hits[ends] / (ends + 1), hits[ends] / hits[-1]
-    return float(np.sum(np.diff(np.r_[0.0, recall]) * precision))
 
 
 def key_ids(train_keys: np.ndarray, test_keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:

@@ -39,13 +39,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from experiment_learn import TrainJob, arm_summary, baselines, label_agreement, pair_agreement  # noqa: E402
+from experiment_learn import TrainJob, arm_summary, baselines, pair_agreement  # noqa: E402
 from experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
 from experiment_train import parse_rates, spawn_context, train_all, train_with_search, work_folder  # noqa: E402
 
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.similar import similar_clusters  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
+from onepiece_dist.study.jobs import finished  # noqa: E402
 
 HELDOUT_START = 500  # random_urdfs from here on are never train objects
 # --quick trains the voxel CNN: a smoke test of the script (PointNet is the same code path, tested in test_learn)
@@ -87,7 +88,7 @@ def run_job(name: str, spec_json: str) -> dict:
 
     spec = JobSpec.model_validate_json(spec_json)
     start = time.perf_counter()
-    reused = _finished(spec)
+    reused = finished(spec)
     status = reused or run_local(spec, job_id=name.replace(" ", "-"))
     out = {"name": name, "wall_seconds": round(time.perf_counter() - start, 1), "reused": reused is not None,
            "stages": {k: round(v, 1) for k, v in status.timings.items()}, "grasps": int(status.progress.grasps),
@@ -98,18 +99,6 @@ def run_job(name: str, spec_json: str) -> dict:
     if status.labels:
         out["label_trials"], out["labelled_grasps"] = status.labels.label_trials, status.labels.labelled_grasps
     return out
-
-
-def _finished(spec: JobSpec):
-    """The status of a finished job that made ``spec.output`` from this very spec, or None."""
-    from onepiece_dist.service.status import JobStatus
-
-    path = Path(f"{spec.output}.status.json")
-    if not path.exists():
-        return None
-    status = JobStatus.model_validate_json(path.read_text())
-    same = JobSpec.model_validate(status.spec) == spec
-    return status if same and status.state == "succeeded" else None
 
 
 def b_chain(name: str, specs: list[str]) -> list[dict]:
@@ -299,49 +288,16 @@ def tradeoff(spec: JobSpec, folder: Path, resolutions_mm: list[float], radii: li
 
 
 def label_transfer(folder: Path, radius: int, seed: int) -> dict:
-    """How far B's label, computed once per shape on the one object, holds for the grasps that share the shape:
-    B's patch label against A's label (on its own object) of (a) the patch's representative grasp and (b) every
-    grasp of its code or cluster; (c) the floor: the same with the patch labels shuffled across patches. A and B
-    sample the same candidates (same seed): a grasp of B is matched to A's grasp with the same object and
-    candidate pose; grasps of B that A did not keep are left out (counted)."""
-    from onepiece_dist.service.transfer import patch_labels
+    """How far B's label, computed once per shape on the one object, holds for the grasps that share the shape
+    (the study's measure, ``study.premise.label_transfer``): B's patch label against A's label of the patch's
+    representative, of every grasp of its code or cluster, and the shuffled floor."""
     from onepiece_dist.store import open_dataset
+    from onepiece_dist.study.premise import label_transfer as transfer
 
-    a, b = open_dataset(str(folder / "A.zarr")), open_dataset(str(folder / f"B-settled-{radius}.zarr"))
-    in_a = match_rows(b, a)
-    code_index, representative = b["grasps/code_index"], b["unique/representative"]
-    success = np.where(in_a >= 0, a["grasps/success"][np.maximum(in_a, 0)], -1).astype(np.float64)
-    quality = np.where(in_a >= 0, a["grasps/quality"][np.maximum(in_a, 0)], np.nan).astype(np.float64)
-    patch_success = np.full(len(representative), np.nan)
-    patch_quality = np.full(len(representative), np.nan)
-    for k, (patch_s, patch_q) in patch_labels(b).items():  # each patch's label at its placement
-        patch_success[k], patch_quality[k] = patch_s, patch_q
-    shuffled = np.random.default_rng([seed, 19]).permutation(len(representative))
-
-    def agree(rows: np.ndarray, codes: np.ndarray, order: np.ndarray) -> dict:
-        keep = ~np.isnan(patch_success[order][codes]) & (in_a[rows] >= 0)
-        rows, codes = rows[keep], codes[keep]
-        return label_agreement(patch_success[order][codes], patch_quality[order][codes], success[rows],
-                               quality[rows])
-
-    codes = np.arange(len(representative))
-    every = np.arange(len(code_index))
-    kept = ~np.isnan(patch_success[code_index]) & (in_a >= 0)
-    p, q = patch_success[code_index][kept].mean(), success[kept].mean()  # labels that ignore the shape agree at:
-    return {"radius": radius, "aligned": True, "unmatched_grasps": int(np.sum(in_a < 0)),
-            "patch_vs_representative": agree(representative, codes, codes),
-            "patch_vs_every_grasp": agree(every, code_index, codes),
-            "shuffled_patches": agree(every, code_index, shuffled),
-            "independent_floor": round(float(p * q + (1 - p) * (1 - q)), 4) if kept.any() else None}
-
-
-def match_rows(b, a) -> np.ndarray:
-    """(N_b,) row in ``a`` of each grasp of ``b`` with the same object (by name) and candidate pose; -1 if none."""
-    a_names, b_names = a.object_names, b.object_names
-    a_keys = {(a_names[o], p.tobytes()): k for k, (o, p) in enumerate(zip(a["grasps/object"],
-                                                                          a["grasps/candidate_pose"], strict=True))}
-    return np.array([a_keys.get((b_names[o], p.tobytes()), -1)
-                     for o, p in zip(b["grasps/object"], b["grasps/candidate_pose"], strict=True)], dtype=np.int64)
+    out = transfer(open_dataset(str(folder / "A.zarr")), open_dataset(str(folder / f"B-settled-{radius}.zarr")), seed)
+    return {"radius": radius, "aligned": True, "unmatched_grasps": out["unmatched_grasps"],
+            **{k: out[k] for k in ("patch_vs_representative", "patch_vs_every_grasp", "shuffled_patches",
+                                   "independent_floor")}}
 
 
 def parse_args(argv=None):

@@ -66,19 +66,6 @@ def test_the_share_decided_runs_from_zero_at_the_floor_to_one_at_the_ceiling():
     assert study.decided_share({"agreement": None, "floor": None}, 0.8) is None
 
 
-def test_the_threshold_ap_is_the_usual_ap_without_ties_and_ignores_the_order_within_ties():
-    from onepiece_dist.learn.train import average_precision
-
-    rng = np.random.default_rng(2)
-    scores, labels = rng.random(200), rng.random(200) < 0.3
-    assert study.threshold_ap(scores, labels) == pytest.approx(average_precision(scores, labels))
-    tied = np.round(scores, 1)
-    order = rng.permutation(200)
-    assert study.threshold_ap(tied, labels) == pytest.approx(study.threshold_ap(tied[order], labels[order]))
-    assert study.threshold_ap(np.zeros(200), labels) == pytest.approx(labels.mean())
-    assert study.threshold_ap(scores, np.zeros(200, bool)) == 0.0
-
-
 def test_one_label_per_key_ranks_below_as_many_random_labels_where_a_frequent_key_holds_mixed_labels():
     rng = np.random.default_rng(4)
     train_keys = keys(np.r_[np.zeros(300, int), 1 + np.arange(30)])  # key 0: 300 grasps, 75% positive

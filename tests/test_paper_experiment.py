@@ -182,16 +182,18 @@ def test_b_is_as_good_as_r_only_when_its_top1_and_its_ap_both_are(b_ap, holds):
 def test_patch_weights_follow_the_code_counts_with_mean_one_and_only_on_the_one_object(tmp_path):
     import zarr
 
+    from onepiece_dist.learn.train import patch_weights
+
     group = zarr.open_group(str(tmp_path / "b.zarr"), mode="w")
     group.create_array("unique/count", data=np.array([1, 4, 9, 16], dtype=np.int64))
-    job = learn.TrainJob("B r0", 0, str(tmp_path / "b.zarr"), "assembled/grasps", None, "", "voxel", 1, 2, 1e-3, 0.2)
-    assert learn.patch_weights(job) is None  # the experiment's B: every patch weighs 1
-    count = learn.patch_weights(dataclasses.replace(job, patch_weighting="count")).numpy()
-    root = learn.patch_weights(dataclasses.replace(job, patch_weighting="sqrt")).numpy()
+    path = str(tmp_path / "b.zarr")
+    assert patch_weights(path, "assembled/grasps", "none") is None  # the experiment's B: every patch weighs 1
+    count = patch_weights(path, "assembled/grasps", "count").numpy()
+    root = patch_weights(path, "assembled/grasps", "sqrt").numpy()
     assert np.allclose(count, np.array([1, 4, 9, 16]) / 7.5) and np.allclose(root, np.array([1, 2, 3, 4]) / 2.5)
-    assert learn.patch_weights(dataclasses.replace(job, group="grasps", patch_weighting="count")) is None
+    assert patch_weights(path, "grasps", "count") is None
     with pytest.raises(ValueError, match="'cube'"):
-        learn.patch_weights(dataclasses.replace(job, patch_weighting="cube"))
+        patch_weights(path, "assembled/grasps", "cube")
 
 
 def test_the_representatives_dataset_gives_each_labelled_patch_its_representatives_crop(tmp_path):
