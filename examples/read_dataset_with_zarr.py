@@ -12,7 +12,7 @@ import zarr
 def main(path: str) -> None:
     root = zarr.open_group(path, mode="r")
     attrs = root.attrs.asdict()
-    assert attrs["onepiece_format"] == 1 and attrs["complete"], "not a complete format-1 dataset"
+    assert attrs["onepiece_format"] == 2 and attrs["complete"], "not a complete format-2 dataset"
     a, b, c = attrs["grid_shape"]
     names = [bytes(row).rstrip(b"\0").decode() for row in root["objects/name"][:]]
     codes = root["grasps/code"][:]

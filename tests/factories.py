@@ -131,7 +131,7 @@ def box_slabs(extents: tuple[float, float, float], count: int) -> list[np.ndarra
 
 def synthetic_labelled_dataset(path: Path, rows: int, points: int = 64, group: str = "assembled/grasps",
                                grid: tuple[int, int, int] = (4, 8, 2), seed: int = 0) -> Path:
-    """A complete format-1 dataset with ``rows`` labelled grasps in ``group`` (random clouds and codes; labels
+    """A complete dataset with ``rows`` labelled grasps in ``group`` (random clouds and codes; labels
     that depend on the clouds, so a network can learn them); ``points=0`` stores no clouds (a code-only set)."""
     from onepiece_dist.store.dataset import ObjectTable, write_dataset
     from onepiece_dist.store.format import grasp_arrays

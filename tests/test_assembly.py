@@ -19,6 +19,7 @@ from onepiece_dist.core.layout import (
     region_codes,
 )
 from onepiece_dist.core.spatial import PointGrid
+from onepiece_dist.service.assemble import one_object_points
 from onepiece_dist.service.local import run_local
 from onepiece_dist.service.patches import read_patches
 from onepiece_dist.spec import GripperSpec
@@ -91,8 +92,8 @@ def test_the_one_object_is_made_of_the_real_geometry_and_reproduces_every_unique
     assert report["fidelity"] == 1.0 and report["fidelity_failures"] == [] and report["corridor_intrusions"] == 0
     assert status.assembly.unique_codes == len(ds["unique/code"]) and report["patch_pieces"] >= len(ds["unique/code"])
     assert {"extract", "dedup", "assemble"} <= set(status.timings) and "label" not in status.timings
-    # recomputed here from the stored points and placements, independently of the stage's own check
-    codes = region_codes(ds["assembled/points"].astype(np.float64), ds["assembled/placement"].astype(np.float64),
+    # recomputed here from the points derived from the store and the placements, independently of the stage
+    codes = region_codes(one_object_points(ds)[0].astype(np.float64), ds["assembled/placement"].astype(np.float64),
                          spec.grid_shape(), spec.voxel.resolution)
     assert np.array_equal(codes, ds["unique/code"])
     # every patch point is a point of its source object's surface sample, seen from the representative's pose
@@ -121,6 +122,51 @@ def test_a_range_of_patches_read_alone_equals_that_range_of_the_whole(small_data
             assert np.array_equal(part.points[k - start], whole.points[k])
             assert len(part.pieces[k - start]) == len(whole.pieces[k])
             assert all(np.array_equal(a, b) for a, b in zip(part.pieces[k - start], whole.pieces[k], strict=True))
+
+
+def test_format_2_stores_each_source_once_and_derives_the_points_the_label_stage_used(small_dataset):
+    import dataclasses
+    import hashlib
+
+    from onepiece_dist.core.layout import assembly_geometry, layout_patches
+    from onepiece_dist.service.patches import build_patches
+    from onepiece_dist.store import PartStore
+
+    spec, out, _ = small_dataset
+    ds = open_dataset(out)
+    assert ds.attrs["onepiece_format"] == 2
+    assert not ds.has("assembled/points") and not ds.has("assembled/patch_points")  # no dense cloud stored
+    sources = ds["assembled/source_point_count"]
+    assert len(sources) == len(np.unique(ds["grasps/object"][ds["unique/representative"]]))  # once per object
+    # the points a label shard derives from the store are, to the bit, the ones the assembly cut and checked
+    built = build_patches(spec, ds, PartStore(spec.parts_folder()), ds["unique/representative"])
+    derived = read_patches(ds)
+
+    def digest(points: list) -> str:
+        return hashlib.blake2b(b"".join(np.ascontiguousarray(p).tobytes() for p in points)).hexdigest()
+
+    assert digest(derived.points) == digest(built.points)
+    layout = layout_patches(ds["assembled/plane"], spec.gripper, spec.voxel.resolution)
+    stored = dataclasses.replace(layout, placements=ds["assembled/placement"].astype(np.float64))  # as labelled
+    geometry = assembly_geometry(stored, built.pieces, built.points, spec.voxel.resolution)
+    points, owner = one_object_points(ds)
+    assert np.array_equal(points, geometry["points"].astype(np.float32))
+    assert np.array_equal(owner, geometry["point_patch"])
+
+
+def test_a_dataset_of_an_older_format_is_refused_with_its_version_named(small_dataset, tmp_path):
+    import shutil
+
+    import zarr
+
+    from onepiece_dist.errors import StoreError
+
+    old = tmp_path / "old.zarr"
+    shutil.copytree(small_dataset[1], old)
+    zarr.open_group(str(old), mode="a").attrs["onepiece_format"] = 1
+    with pytest.raises(StoreError, match=r"onepiece_format=1, this reader knows 2 \(format 1 stored the one "
+                                         r"object's dense point cloud twice.*run its job again"):
+        open_dataset(old)
 
 
 def source_surface(spec, out, obj: int) -> np.ndarray:
@@ -211,7 +257,7 @@ def test_the_gripper_closed_on_the_exported_object_sees_each_patch_code(small_da
     assert exported.exit_code == 0, exported.output
     ds = open_dataset(out)
     placements, codes = ds["assembled/placement"].astype(np.float64), ds["unique/code"]
-    points = ds["assembled/points"].astype(np.float64)
+    points = one_object_points(ds)[0].astype(np.float64)
     world = SimWorld(spec.gripper)
     try:
         world.obj = pb.loadURDF(str(tmp_path / "one.urdf"), useFixedBase=True, physicsClientId=world.client)

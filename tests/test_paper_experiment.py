@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from onepiece_dist.store.format import FORMAT_VERSION
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 learn = importlib.import_module("experiment_learn")
@@ -203,7 +205,7 @@ def test_the_representatives_dataset_gives_each_labelled_patch_its_representativ
 
     variants = importlib.import_module("experiment_b_variants")
     source = zarr.open_group(str(tmp_path / "b.zarr"), mode="w")
-    source.attrs.update({"onepiece_format": 1, "complete": True, "grid_shape": [4, 8, 2], "code_bytes": 8,
+    source.attrs.update({"onepiece_format": FORMAT_VERSION, "complete": True, "grid_shape": [4, 8, 2], "code_bytes": 8,
                          "assembly": {"unique_codes": 3}})
     crops = np.random.default_rng(0).normal(size=(3, 16, 3)).astype(np.float16)
     source.create_array("unique/points", data=crops)
@@ -222,7 +224,7 @@ def _group(path, arrays: dict):
     import zarr
 
     group = zarr.open_group(str(path), mode="w")
-    group.attrs.update({"onepiece_format": 1, "complete": True, "grid_shape": [4, 8, 2], "code_bytes": 8})
+    group.attrs.update({"onepiece_format": FORMAT_VERSION, "complete": True, "grid_shape": [4, 8, 2], "code_bytes": 8})
     for name, data in arrays.items():
         group.create_array(name, data=data)
     return group

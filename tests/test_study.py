@@ -59,7 +59,8 @@ def score(top1: float, ap: float, spread: float = 0.05) -> HeldoutScore:
 
 def cost(seconds: float, labelled: int) -> ArmCost:
     return ArmCost(core_seconds=seconds, stages={"extract": seconds}, label_trials=4 * labelled,
-                   labelled_grasps=labelled, labelled_bytes=100 * labelled, dataset_bytes=200 * labelled)
+                   labelled_grasps=labelled, labelled_bytes=100 * labelled, dataset_bytes=200 * labelled,
+                   delivered_bytes=120 * labelled)
 
 
 def arms(b_top1: float = 0.78):

@@ -201,12 +201,12 @@ def assembly_geometry(layout: Layout, pieces: list[list[np.ndarray]], points: li
     vertices, faces = merge_meshes(meshes)
     per_side = max(2, int(np.ceil(2 * layout.core_half.max() / resolution)))
     core = cube_points(np.zeros((1, 3)), 2 * layout.core_half, per_side)
-    placed, owner = _placed_points(points, layout.placements, core)
+    placed, owner = placed_points(points, layout.placements, core)
     return {"vertices": vertices, "faces": faces, "face_group": np.concatenate(groups),
             "piece_patch": np.array(owners, dtype=np.int64), "points": placed, "point_patch": owner}
 
 
-def _placed_points(points: list[np.ndarray], placements: np.ndarray,
+def placed_points(points: list[np.ndarray], placements: np.ndarray,
                    core: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Every patch's points (m_k, 3) moved by its placement (U, 4, 4), then the core's, written into one array
     (the one object holds tens of millions of points: no list of copies). -> (P, 3) float64, (P,) int32 owner

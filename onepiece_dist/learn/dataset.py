@@ -1,4 +1,4 @@
-"""A torch Dataset over a OnePiece-Dist Zarr dataset (format 1), for our trainer and external ones.
+"""A torch Dataset over a OnePiece-Dist Zarr dataset (format 2), for our trainer and external ones.
 
 Importable with numpy, zarr and torch alone (no ray, pybullet, open3d or pydantic): ``pip install
 onepiece-dist[reader]`` documents that set. Nothing is unpickled: the arrays are plain numbers.

@@ -114,15 +114,16 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
 
 def patch_weights(dataset_path, group: str, weighting: str) -> torch.Tensor | None:
     """(U,) float32 loss weight per patch of the one object's grasps (mean 1): its code's grasp count
-    (``unique/count``, how many extracted grasps the patch's label stands for, with "count") or that count's square
-    root ("sqrt"); None with "none" or on grasps of their own objects (every grasp weighs 1)."""
+    (``assembled/code_count``, how many extracted grasps the patch's label stands for, with "count") or that
+    count's square root ("sqrt"); None with "none" or on grasps of their own objects (every grasp weighs 1)."""
     if weighting not in ("none", "count", "sqrt"):
         raise ValueError(f"patch weighting {weighting!r}: none, sqrt or count")
     if weighting == "none" or not group.startswith("assembled"):
         return None
     import zarr
 
-    counts = zarr.open_group(str(dataset_path), mode="r")["unique/count"][:].astype(np.float64)
+    root = zarr.open_group(str(dataset_path), mode="r")
+    counts = root["assembled/code_count" if "assembled/code_count" in root else "unique/count"][:].astype(np.float64)
     weights = counts if weighting == "count" else np.sqrt(counts)
     return torch.from_numpy((weights / weights.mean()).astype(np.float32))
 

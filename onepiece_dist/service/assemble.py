@@ -58,12 +58,12 @@ def assemble_dataset(spec: JobSpec, path: str | os.PathLike, codes: np.ndarray, 
     del index
     chamfer = _chamfer_to_representatives(spec, path, patches)
     report = _report(spec, grasps, codes, classes, layout, matches, intrusions, chamfer, patches)
-    points = geometry.pop("points").astype(np.float32)  # the float64 cloud goes before the patch arrays come
+    del geometry["points"], geometry["point_patch"]  # derived again on demand (one_object_points): not stored
     arrays = {"placement": layout.placements.astype(np.float32), "plane": classes.plane,
               "areas": classes.areas, "features": classes.features, "scores": classes.scores.astype(np.float32),
               "vertices": geometry["vertices"].astype(np.float32), "faces": geometry["faces"].astype(np.int32),
-              "face_group": geometry["face_group"], "points": points,
-              "point_patch": geometry["point_patch"].astype(np.int32), **patches.arrays()}
+              "face_group": geometry["face_group"], "core_half": layout.core_half.astype(np.float64),
+              "code_count": _code_counts(path), **patches.arrays()}
     write_group(path, "assembled", arrays, {"assembly": report.model_dump(mode="json")})
     return report
 
@@ -152,6 +152,27 @@ def export_assembly(path: str | os.PathLike, fmt: str, out: str | os.PathLike) -
         ixx=inertia[0, 0], ixy=inertia[0, 1], ixz=inertia[0, 2], iyy=inertia[1, 1], iyz=inertia[1, 2],
         izz=inertia[2, 2]))
     return [out, mesh, collision]
+
+
+def _code_counts(path) -> np.ndarray:
+    """(U,) int64 extracted grasps each patch stands for (unique/count), kept with the one object so that it needs
+    none of the extraction records."""
+    return DatasetReader(path)["unique/count"].astype(np.int64)
+
+
+def one_object_points(reader: DatasetReader) -> tuple[np.ndarray, np.ndarray]:
+    """The one object's dense point cloud, derived from what the store keeps: every patch's points (cut from its
+    source at its pose) placed by its stored placement (as the label stage places them), then the core box's.
+    -> (P, 3) float32, (P,) int32 patch of each point (-1 = core)."""
+    from onepiece_dist.core.layout import cube_points, placed_points
+
+    patches = read_patches(reader)
+    core_half = reader["assembled/core_half"].astype(np.float64)
+    res = float(reader.attrs["voxel"]["resolution"])
+    per_side = max(2, int(np.ceil(2 * core_half.max() / res)))
+    core = cube_points(np.zeros((1, 3)), 2 * core_half, per_side)
+    points, owner = placed_points(patches.points, reader["assembled/placement"].astype(np.float64), core)
+    return points.astype(np.float32), owner
 
 
 def placed_pieces(reader: DatasetReader) -> list[np.ndarray]:

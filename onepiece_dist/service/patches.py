@@ -28,13 +28,21 @@ SURFACE, PIECE_VERTICES, PIECE_SIZES = "object_surface", "object_piece_vertices"
 @dataclass(frozen=True)
 class Patches:
     """U patches in their own (gripper) frames. representative (U,) int64 row in grasps/; pieces: per patch a list
-    of (k, 3) float64 convex-piece points; points: per patch (m, 3) float64 surface points in the patch box;
-    source_volume (U,) float64 volume of the source object (m^3, its mass rule: docs/assembly.md)."""
+    of (k, 3) float64 convex-piece points; points: per patch (m, 3) float64 surface points in the patch box (float32
+    values: what the store's form gives back); source_volume (U,) float64 volume of the source object (m^3, its
+    mass rule: docs/assembly.md); sources: the surface points (S_i, 3) of each source object a patch is cut from
+    (float32 values, float64 arrays), once each; source_object (U,) int64 which of them; source_pose (U, 4, 4)
+    float32 the representative's settled pose on it. The store keeps the sources, not the points: a patch's points
+    are its source's points inside the patch box at its pose (:func:`cut_points`), derived wherever they are
+    read."""
 
     representative: np.ndarray
     pieces: list[list[np.ndarray]]
     points: list[np.ndarray]
     source_volume: np.ndarray
+    sources: list[np.ndarray]
+    source_object: np.ndarray
+    source_pose: np.ndarray
 
     def __len__(self) -> int:
         return len(self.representative)
@@ -46,18 +54,20 @@ class Patches:
                 "patch_piece_count": np.array([len(p) for p in self.pieces], dtype=np.int64),
                 "piece_vertex_count": np.array([len(p) for p in piece_list], dtype=np.int64),
                 "piece_vertices": _stack(piece_list, np.float64),
-                "patch_point_count": np.array([len(p) for p in self.points], dtype=np.int64),
-                "patch_points": _stack(self.points, np.float32),  # as assembled/points: codes need no more
-                "source_volume": self.source_volume.astype(np.float64)}
+                "source_volume": self.source_volume.astype(np.float64),
+                "source_point_count": np.array([len(p) for p in self.sources], dtype=np.int64),
+                "source_points": _stack(self.sources, np.float32),
+                "source_object": self.source_object.astype(np.int64),
+                "source_pose": self.source_pose.astype(np.float32)}
 
-    @classmethod
-    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> Patches:
-        pieces = _split(arrays["piece_vertices"], arrays["piece_vertex_count"])
-        starts = _offsets(arrays["patch_piece_count"])
-        return cls(np.asarray(arrays["representative"], dtype=np.int64),
-                   [pieces[a:b] for a, b in zip(starts[:-1], starts[1:], strict=True)],
-                   _split(arrays["patch_points"], arrays["patch_point_count"]),
-                   np.asarray(arrays["source_volume"], dtype=np.float64))
+
+def cut_points(surface: np.ndarray, pose: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(m, 3) float64 holding float32 values: the object-frame ``surface`` (S, 3) float64 seen in the gripper frame
+    of ``pose`` (4, 4), inside the patch box [lower, upper]. Rounded to float32 as format 1 stored them, so the one
+    object's codes, labels and pins do not move."""
+    pose = np.asarray(pose, dtype=np.float64)
+    local = rotate_points(surface - pose[:3, 3], pose[:3, :3])
+    return local[np.all((local >= lower) & (local <= upper), axis=1)].astype(np.float32).astype(np.float64)
 
 
 def _stack(rows: list[np.ndarray], dtype) -> np.ndarray:
@@ -71,25 +81,41 @@ def _split(rows: np.ndarray, counts: np.ndarray) -> list[np.ndarray]:
 
 def read_patches(reader: DatasetReader, start: int = 0, stop: int | None = None) -> Patches:
     """Patches ``start`` to ``stop`` (default: all) of the one object, reading only their rows of the flat
-    arrays: a label shard holds its own patches, not the whole object's points (about 0.6 GB in float64 at
-    12,000 patches)."""
+    arrays and the surfaces of their own source objects: a label shard holds its own patches, not the whole
+    object."""
     piece_count = reader["assembled/patch_piece_count"].astype(np.int64)
     vertex_count = reader["assembled/piece_vertex_count"].astype(np.int64)
-    point_count = reader["assembled/patch_point_count"].astype(np.int64)
     stop = len(piece_count) if stop is None else stop
-    first_piece, first_vertex, first_point = _offsets(piece_count), _offsets(vertex_count), _offsets(point_count)
+    first_piece, first_vertex = _offsets(piece_count), _offsets(vertex_count)
     p0, p1 = first_piece[start], first_piece[stop]
 
     def rows(name: str, begin: int, end: int) -> np.ndarray:
         return reader.array(f"assembled/{name}")[int(begin):int(end)]
 
-    return Patches.from_arrays({
-        "representative": rows("representative", start, stop), "patch_piece_count": piece_count[start:stop],
-        "piece_vertex_count": vertex_count[p0:p1],
-        "piece_vertices": rows("piece_vertices", first_vertex[p0], first_vertex[p1]),
-        "patch_point_count": point_count[start:stop],
-        "patch_points": rows("patch_points", first_point[start], first_point[stop]),
-        "source_volume": rows("source_volume", start, stop)})
+    pieces = _split(rows("piece_vertices", first_vertex[p0], first_vertex[p1]), vertex_count[p0:p1])
+    starts = first_piece[start:stop + 1] - p0
+    source_object = rows("source_object", start, stop).astype(np.int64)
+    source_pose = rows("source_pose", start, stop)
+    point_starts = _offsets(reader["assembled/source_point_count"].astype(np.int64))
+    sources = {int(o): rows("source_points", point_starts[o], point_starts[o + 1]).astype(np.float64)
+               for o in np.unique(source_object)}
+    ordered = sorted(sources)
+    local = np.searchsorted(ordered, source_object)
+    return Patches(rows("representative", start, stop).astype(np.int64),
+                   [pieces[a:b] for a, b in zip(starts[:-1], starts[1:], strict=True)],
+                   patch_points([sources[o] for o in ordered], local, source_pose, reader.attrs),
+                   rows("source_volume", start, stop).astype(np.float64), [sources[o] for o in ordered], local,
+                   source_pose)
+
+
+def patch_points(sources: list[np.ndarray], source_object: np.ndarray, source_pose: np.ndarray,
+                 attrs: dict) -> list[np.ndarray]:
+    """Each patch's surface points, cut from its source at its pose (the dataset's gripper and voxel size give
+    the patch box)."""
+    from onepiece_dist.spec import GripperSpec
+
+    lower, upper = patch_box(GripperSpec.model_validate(attrs["gripper"]), float(attrs["voxel"]["resolution"]))
+    return [cut_points(sources[o], pose, lower, upper) for o, pose in zip(source_object, source_pose, strict=True)]
 
 
 def _offsets(counts: np.ndarray) -> np.ndarray:
@@ -100,21 +126,26 @@ def _offsets(counts: np.ndarray) -> np.ndarray:
 def build_patches(spec: JobSpec, reader: DatasetReader, parts: PartStore, representative: np.ndarray) -> Patches:
     """Cut the patch of every unique code from its representative's source object (read from its part)."""
     objects = reader["grasps/object"][representative].astype(np.int64)
-    poses = reader["grasps/pose"][representative].astype(np.float64)
+    poses32 = reader["grasps/pose"][representative]
+    poses = poses32.astype(np.float64)
     lower, upper = patch_box(spec.gripper, spec.voxel.resolution)
     pieces: list[list[np.ndarray]] = [[] for _ in representative]
     points: list[np.ndarray] = [np.zeros((0, 3))] * len(representative)
     volume = np.zeros(len(representative))
-    for obj in np.unique(objects):
+    used = np.unique(objects)
+    sources = []
+    for obj in used:
         source = source_geometry(reader, parts, int(obj))
+        source["surface"] = source["surface"].astype(np.float32).astype(np.float64)  # as stored: 4 bytes a value
+        sources.append(source["surface"])
         for k in np.flatnonzero(objects == obj):
             rot, origin = poses[k, :3, :3], poses[k, :3, 3]
             local = [clip_to_box(rotate_points(piece - origin, rot), lower, upper) for piece in source["pieces"]]
             pieces[k] = [piece for piece in local if len(piece)]
-            surface = rotate_points(source["surface"] - origin, rot)
-            points[k] = surface[np.all((surface >= lower) & (surface <= upper), axis=1)]
+            points[k] = cut_points(source["surface"], poses[k], lower, upper)
             volume[k] = source["volume"]
-    return Patches(np.asarray(representative, dtype=np.int64), pieces, points, volume)
+    return Patches(np.asarray(representative, dtype=np.int64), pieces, points, volume, sources,
+                   np.searchsorted(used, objects).astype(np.int64), poses32.astype(np.float32))
 
 
 def source_geometry(reader: DatasetReader, parts: PartStore, obj: int) -> dict:

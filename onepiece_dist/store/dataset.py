@@ -1,4 +1,4 @@
-"""The dataset: a Zarr v3 group in format v1 (schemas/dataset_layout.json, docs/dataset_format.md).
+"""The dataset: a Zarr v3 group in format v2 (schemas/dataset_layout.json, docs/dataset_format.md).
 
 Only one committer writes it. Root attribute ``complete`` is written last: a reader refuses a dataset
 without it, so a crash mid-commit never looks like a finished dataset.
@@ -188,13 +188,35 @@ class DatasetReader:
             "unique_fraction": unique / grasps if grasps else 0.0,
             "grid_shape": self.attrs.get("grid_shape"),
             "bytes_on_disk": disk_bytes(self.path),
+            "delivered_bytes": delivered_bytes(self.path),
         }
-        for key in ("assembly", "assembly_labels", "training"):
+        for key in ("assembly", "assembly_labels", "training", "evaluation"):
             if key in self.attrs:
                 out[key] = self.attrs[key]
         if self.has("grasps/success"):
             out["success_rate"] = float(np.mean(self["grasps/success"])) if grasps else 0.0
         return out
+
+
+EXTRACTION_RECORDS = ("grasps", "unique", "exact")  # every extracted candidate: what made the one object
+
+
+def delivered_groups(path: str | os.PathLike) -> list[str]:
+    """The top-level groups a trainer needs, the rest being records of how the dataset was made that a copy may
+    leave out: with labels on the one object (assembled/grasps), everything but the extraction records (grasps/,
+    unique/, exact/); with labels on the objects themselves (grasps/success), everything but unique/ and exact/.
+    The objects' meshes are references (objects/ names them) in both."""
+    root = zarr.open_group(str(path), mode="r")
+    on_one_object = "assembled/grasps/success" in root
+    drop = set(EXTRACTION_RECORDS) if on_one_object else set(EXTRACTION_RECORDS) - {"grasps"}
+    return sorted(name for name, _ in root.groups() if name not in drop)
+
+
+def delivered_bytes(path: str | os.PathLike) -> int:
+    """Bytes on disk of the delivered dataset (:func:`delivered_groups`, with the root's metadata)."""
+    path = Path(path)
+    groups = sum(disk_bytes(path / name) for name in delivered_groups(path))
+    return groups + sum(f.stat().st_size for f in path.iterdir() if f.is_file())
 
 
 def open_dataset(path: str | os.PathLike) -> DatasetReader:

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+FORMAT_CHANGES = {1: "format 1 stored the one object's dense point cloud twice (assembled/points, "
+                     "assembled/patch_points); format 2 keeps each source object's surface once and derives them"}
 
 # Per-grasp arrays of ``grasps/`` and ``assembled/grasps/``: (name, dtype, row shape, meaning). N rows; row shape
 # symbols: B code bytes, P points per grasp. Optional arrays are present only when the job produces them.
@@ -58,9 +60,12 @@ def grasp_row_shape(name: str, code_bytes: int, points: int) -> tuple[int, ...]:
 
 
 def format_problem(attrs: dict) -> str | None:
-    """Why root attributes ``attrs`` are not those of a complete format-v1 dataset, or None when they are."""
-    if attrs.get("onepiece_format") != FORMAT_VERSION:
-        return f"onepiece_format={attrs.get('onepiece_format')!r}, this reader knows {FORMAT_VERSION}"
+    """Why root attributes ``attrs`` are not those of a complete dataset of this format, or None when they are."""
+    found = attrs.get("onepiece_format")
+    if found != FORMAT_VERSION:
+        why = f" ({FORMAT_CHANGES[found]}): run its job again to write format {FORMAT_VERSION} (its extraction " \
+              "parts are reused)" if found in FORMAT_CHANGES else ""
+        return f"onepiece_format={found!r}, this reader knows {FORMAT_VERSION}{why}"
     if not attrs.get("complete"):
         return "dataset is incomplete (its job has not committed it)"
     return None

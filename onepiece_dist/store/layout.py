@@ -48,15 +48,18 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/vertices", "float32", "(V, 3)", "mesh of the one object"),
     ("assembled/faces", "int32", "(F, 3)", "mesh triangles"),
     ("assembled/face_group", "int8", "(F,)", "plane class of the patch a triangle belongs to, 3 = core"),
-    ("assembled/points", "float32", "(P, 3)", "dense point cloud of the one object"),
-    ("assembled/point_patch", "int32", "(P,)", "patch of each point, -1 = core"),
+    ("assembled/core_half", "float64", "(3,)", "half extents of the core box the patches are laid on (m)"),
+    ("assembled/code_count", "int64", "(U,)", "extracted grasps each patch stands for (unique/count, kept here)"),
     ("assembled/representative", "int64", "(U,)", "row in grasps/ of the grasp each patch was cut from"),
     ("assembled/patch_piece_count", "int64", "(U,)", "convex pieces of each patch (in patch order)"),
     ("assembled/piece_vertex_count", "int64", "(K,)", "points of each convex piece (in piece order)"),
     ("assembled/piece_vertices", "float64", "(W, 3)", "points of the pieces, patch (gripper) frame; each piece "
      "is their convex hull"),
-    ("assembled/patch_point_count", "int64", "(U,)", "surface points of each patch"),
-    ("assembled/patch_points", "float32", "(Q, 3)", "source surface points inside each patch box, patch frame"),
+    ("assembled/source_point_count", "int64", "(S,)", "surface points of each source object a patch is cut from"),
+    ("assembled/source_points", "float32", "(Q, 3)", "their dense surface points, object frame, once per object: a "
+     "patch's points are those inside its patch box at its source pose"),
+    ("assembled/source_object", "int64", "(U,)", "which source (row of source_point_count) each patch is cut from"),
+    ("assembled/source_pose", "float32", "(U, 4, 4)", "the representative's settled pose on its source object"),
     ("assembled/source_volume", "float64", "(U,)", "volume of each patch's source object (m^3): its mass rule"),
     *_grasp_entries("assembled/grasps", "L"),
     ("train/train_loss", "float32", "(T,)", "training loss of each epoch (T epochs run)"),
@@ -76,11 +79,12 @@ class ArraySpec(BaseModel):
 
 
 class DatasetAttributes(BaseModel):
-    """Root attributes of a dataset (Zarr v3 group, format v1). Arrays are listed under ``x-arrays``."""
+    """Root attributes of a dataset (Zarr v3 group, format v2). Arrays are listed under ``x-arrays``."""
 
     model_config = ConfigDict(extra="allow", json_schema_extra={
         "x-arrays": [ArraySpec(path=p, dtype=d, shape=s, meaning=m).model_dump() for p, d, s, m in ARRAYS]})
-    onepiece_format: int = Field(1, description="Format version of this layout.")
+    onepiece_format: int = Field(2, description="Format version of this layout (2: the one object's points are "
+                                 "derived from its sources, not stored).")
     complete: bool = Field(description="Written true last by the committer; readers refuse false.")
     job_spec: dict = Field(description="The JobSpec that made the dataset.")
     gripper: dict = Field(description="The gripper (job_spec.gripper): its frame and closing region.")

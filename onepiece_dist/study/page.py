@@ -55,7 +55,8 @@ def arm_row(arm: Arm) -> str:
     c, h = arm.cost, arm.heldout
     return (f"| {arm.name} | {c.labelled_grasps:,} | {c.label_trials:,} | {c.core_seconds:.1f} | "
             f"{arm.time_ratio:.2f} | {megabytes(c.labelled_bytes)} | {arm.storage_ratio:.2f} | "
-            f"{megabytes(c.dataset_bytes)} | {measure(h.top1, True)} | {measure(h.ap, False)} | "
+            f"{megabytes(c.delivered_bytes)} | {megabytes(c.dataset_bytes)} | {measure(h.top1, True)} | "
+            f"{measure(h.ap, False)} | "
             f"{h.learning_rate:g} | {'yes' if arm.within_a else 'no'} |")
 
 
@@ -69,10 +70,11 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
               "labels only there; R labels a random share of A's candidates (R ~B r: as many as B r labels). Every "
               f"arm trains the {s.training.model} network {s.training.steps} steps, {s.training.seeds} seeds, at the "
               "learning rate its own validation split picks. Core-seconds are summed inside the workers; R is "
-              "charged A's cost per candidate.", "",
-              "| arm | labelled grasps | label trials | core-s | time A/arm | labelled | storage A/arm | dataset | "
-              "held-out top-1 | held-out AP | rate | within A |",
-              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | ---: | --- |",
+              "charged A's cost per candidate. Delivered: what a trainer needs (the one object and its labels for B, "
+              "the labelled grasps for A; docs/dataset_format.md).", "",
+              "| arm | labelled grasps | label trials | core-s | time A/arm | labelled | storage A/arm | delivered | "
+              "whole store | held-out top-1 | held-out AP | rate | within A |",
+              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | ---: | --- |",
               *(arm_row(arm) for arm in result.arms), "",
               "## Held-out objects", "",
               f"{h.objects} objects, {h.grasps:,} candidates, every one labelled; positive rate "

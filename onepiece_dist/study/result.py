@@ -63,6 +63,8 @@ class ArmCost(_Frozen):
     labelled_grasps: int
     labelled_bytes: int = Field(description="Bytes on disk of the labelled grasps the network trains on.")
     dataset_bytes: int = Field(description="Bytes on disk of the arm's whole dataset (shared for R: its share).")
+    delivered_bytes: int = Field(description="Bytes of what a trainer needs (store.dataset.delivered_groups): B's "
+                                 "one object and labels, A's labelled grasps (R: its share of A's).")
 
 
 class Arm(_Frozen):

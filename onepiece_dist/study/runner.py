@@ -276,7 +276,7 @@ def heldout_score(spec: StudySpec, runs: list[tuple[ArmRun, StepResult]], labels
 def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> dict[str, ArmCost]:
     """Each arm's cost. B's extraction (shared by the radii through the parts cache) is charged in full to each
     radius; R labels its candidates on their own objects, at A's cost per candidate."""
-    from onepiece_dist.store.dataset import disk_bytes
+    from onepiece_dist.store.dataset import delivered_bytes, disk_bytes
 
     k = spec.label_trials
     a = records["A"].status
@@ -284,7 +284,7 @@ def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
     a_cost = ArmCost(core_seconds=round(sum(a_stages.values()), 2), stages=a_stages,
                      label_trials=a.progress.grasps * k, labelled_grasps=a.progress.grasps,
                      labelled_bytes=disk_bytes(Path(jobs.a.output) / "grasps"),
-                     dataset_bytes=disk_bytes(Path(jobs.a.output)))
+                     dataset_bytes=disk_bytes(Path(jobs.a.output)), delivered_bytes=delivered_bytes(jobs.a.output))
     costs = {"A": a_cost}
     b_extract = max((core_seconds(records[f"B r{r}"].status).get("extract", 0.0) for r in jobs.b), default=0.0)
     for radius, job in jobs.b.items():
@@ -295,13 +295,15 @@ def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
             core_seconds=round(sum(stages.values()), 2), stages=stages,
             label_trials=status.labels.label_trials if status.labels else 0,
             labelled_grasps=status.labels.labelled_grasps if status.labels else 0,
-            labelled_bytes=disk_bytes(labelled) if labelled.exists() else 0, dataset_bytes=disk_bytes(Path(job.output)))
+            labelled_bytes=disk_bytes(labelled) if labelled.exists() else 0, dataset_bytes=disk_bytes(Path(job.output)),
+            delivered_bytes=delivered_bytes(job.output))
     for name, count in random_arms(spec, records, a.progress.grasps):
         share = count / max(a.progress.grasps, 1)
         stages = {stage: round(share * seconds, 2) for stage, seconds in a_stages.items()}
         costs[name] = ArmCost(core_seconds=round(sum(stages.values()), 2), stages=stages, label_trials=count * k,
                               labelled_grasps=count, labelled_bytes=int(share * a_cost.labelled_bytes),
-                              dataset_bytes=int(share * a_cost.dataset_bytes))
+                              dataset_bytes=int(share * a_cost.dataset_bytes),
+                              delivered_bytes=int(share * a_cost.delivered_bytes))
     return costs
 
 
