@@ -97,6 +97,10 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
         trials = status.labels.label_trials if status.labels else a.label_trials_one_object
         _err(f"one object: {a.unique_codes} patches, {a.bounding_box_m} m, fidelity {a.fidelity:.1%}, "
              f"{trials} label trials on it (labelling every grasp of every object: {a.label_trials_all_grasps})")
+    if status.labels and not status.assembly:
+        labels = status.labels
+        _err(f"budget: {labels.labelled_grasps} of {status.progress.grasps} candidates labelled on their own objects "
+             f"({labels.label_trials} label trials, success rate {labels.success_rate:.2f})")
     if status.training:
         t = status.training
         _err(f"trained {t.model} for {t.epochs} epochs: on its own validation split (held-back grasps of the "

@@ -12,7 +12,7 @@ import math
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
 
@@ -197,8 +197,9 @@ class TrainSpec(_Frozen):
 
     model: Literal["pointnet", "voxel"] = Field("pointnet",
         description="Grasp network: PointNet on the crop's points, or a 3D CNN on its voxel code.")
-    data: Literal["assembled", "all"] = Field("assembled", description="Labelled grasps of the one object "
-                                              "(assembled/grasps) or of every object (grasps, needs sim.label).")
+    data: Literal["assembled", "all", "budget"] = Field("assembled", description="Labelled grasps of the one "
+                                                        "object (assembled/grasps), of every object (grasps, needs "
+                                                        "sim.label) or a budget's (labelled/grasps).")
     epochs: int = Field(10, ge=1, le=1000, description="Passes over the training split.")
     batch_size: int = Field(64, ge=2, le=4096, description="Grasps per gradient step.")
     learning_rate: float = Field(1e-3, gt=0, le=1, description="Adam learning rate.")
@@ -216,6 +217,39 @@ class TrainSpec(_Frozen):
                                   "many extracted grasps its patch's code stands for (unique/count, mean 1). Off by "
                                   "default: on the paper experiment it lowered held-out AP and top-1 "
                                   "(docs/performance.md, What would lift B to R).")
+
+
+class BudgetSpec(_Frozen):
+    """Label only a seeded subset of the extracted candidates, on their own objects, spread over every object:
+    the R plan of a study as a job (service/budget.py). Give a count or a fraction, not both; neither labels as
+    the stages say (every candidate with sim.label, or the one object)."""
+
+    count: int | None = Field(None, ge=1, description="Candidates to label in all (at least one per object; more "
+                              "than there are labels them all).")
+    fraction: float | None = Field(None, description="Share of the extracted candidates to label, in (0, 1].")
+
+    @field_validator("fraction")
+    @classmethod
+    def _share(cls, fraction: float | None) -> float | None:
+        if fraction is not None and not 0 < fraction <= 1:
+            raise ValueError(f"{fraction}: a share of the candidates in (0, 1]")
+        return fraction
+
+    @model_validator(mode="after")
+    def _one_of(self) -> BudgetSpec:
+        if self.count is not None and self.fraction is not None:
+            raise ValueError("budget: give a count or a fraction, not both")
+        return self
+
+    @property
+    def enabled(self) -> bool:
+        return self.count is not None or self.fraction is not None
+
+    def size(self, candidates: int) -> int:
+        """How many of ``candidates`` the budget labels."""
+        if self.count is not None:
+            return min(self.count, candidates)
+        return min(candidates, max(1, math.ceil((self.fraction or 0) * candidates - 1e-9)))
 
 
 class EvaluateSpec(_Frozen):
@@ -260,6 +294,15 @@ class JobSpec(_Frozen):
     closure: ClosureSpec = ClosureSpec()
     train: TrainSpec = TrainSpec()
     evaluate: EvaluateSpec = EvaluateSpec()
+    budget: BudgetSpec = BudgetSpec()
+
+    @model_validator(mode="after")
+    def _budget_labels_sources(self) -> JobSpec:
+        if self.budget.enabled and (self.runs("assemble") or self.sim.label or not self.runs("label")):
+            raise ValueError("budget labels a subset of the candidates on their own objects in the 'label' stage: "
+                             "it needs 'label' in stages, no 'assemble' (the one object) and sim.label false "
+                             "(every candidate labelled)")
+        return self
 
     @model_validator(mode="after")
     def _grid_is_whole(self) -> JobSpec:

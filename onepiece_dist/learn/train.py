@@ -89,7 +89,7 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
     device = resolve_device(spec.device)
     folder = Path(checkpoint_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    group = "assembled/grasps" if spec.data == "assembled" else "grasps"
+    group = {"assembled": "assembled/grasps", "all": "grasps", "budget": "labelled/grasps"}[spec.data]
     train_set, val_set = GraspDataset(dataset_path, group, inputs=MODEL_INPUTS[spec.model]).split_by_group(
         spec.validation, seed)
     model = MODELS[spec.model]().to(device)

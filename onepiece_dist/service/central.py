@@ -73,6 +73,10 @@ class CentralActor:
         """The label stage in shards for the workers (the one object must be assembled)."""
         from onepiece_dist.service.label_one import label_tasks
 
+        if self.spec.budget.enabled:
+            from onepiece_dist.service.budget import budget_tasks
+
+            return budget_tasks(self.spec, self.spec.output)
         if not DatasetReader(self.spec.output).attrs.get("assembly"):
             raise MissingAssembly(f"{self.spec.output}: the label stage needs an assembled object "
                                   "(run the assemble stage first)")
@@ -85,6 +89,11 @@ class CentralActor:
         for task, result in zip(tasks, results, strict=True):
             if result.status != "ok":
                 raise JobError(f"label shard {result.index} (patches {task.start}-{task.stop - 1}): {result.reason}")
+        if self.spec.budget.enabled:
+            from onepiece_dist.service.budget import write_budget_labels
+
+            seconds = sum(result.made_seconds for result in results)
+            return write_budget_labels(self.spec, self.spec.output, tasks, self.parts, seconds)
         report = write_labels(self.spec, self.spec.output, tasks, self.parts)
         if self.spec.sim.transfer_codes:
             from onepiece_dist.service.transfer import measure_transfer

@@ -81,6 +81,10 @@ def label_key(spec: JobSpec, reader: DatasetReader) -> str:
 
 def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> LabelShardResult:
     """Label one shard into its part (once: a committed part is reused). Runs in a worker."""
+    if task.rows is not None:
+        from onepiece_dist.service.budget import label_budget_shard
+
+        return label_budget_shard(spec, task, index, parts)
     start = time.perf_counter()
     if not parts.is_committed(task.part_key):
         arrays = label_patches(spec, task)

@@ -16,7 +16,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Protocol
 
-from onepiece_dist.errors import JobCancelled, JobError, SourceError
+from onepiece_dist.errors import JobCancelled, JobError, SourceError, SpecError
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult
 from onepiece_dist.service.status import (
@@ -98,7 +98,7 @@ def run_pipeline(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Rep
         status.error = f"{type(err).__name__}: {err}"
         log.info("job %s %s during its %s stage (%s)", status.job_id, status.state, status.stage, type(err).__name__)
         report(status)
-        if isinstance(err, JobError | SourceError) or not isinstance(err, Exception):
+        if isinstance(err, JobError | SourceError | SpecError) or not isinstance(err, Exception):
             raise
         raise JobError(f"job {status.job_id} {status.state}: {err}") from err
     status.state, status.stage = "succeeded", "done"
@@ -112,6 +112,10 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
     with stage(status, "ingest", report):
         refs = resolve_source(spec.objects) if refs is None else refs
         status.progress.objects_total = len(refs)
+        if spec.budget.enabled:
+            from onepiece_dist.service.budget import check_budget
+
+            check_budget(spec, len(refs))
     if spec.runs("extract"):
         with stage(status, "extract", report):
             results = runtime.extract(refs, lambda result: (record_result(status, result), report(status)))

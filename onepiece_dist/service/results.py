@@ -49,12 +49,14 @@ def part_key(content_id: str, result_key: str) -> str:
 class LabelTask:
     """A shard of the label stage: patches [start, stop) of the one object at ``dataset``, whose patches and
     label-relevant spec hash to ``label_key``; its labelled grasps go to the part ``part_key`` (so a re-run, or a
-    resumed job, finds the shard done)."""
+    resumed job, finds the shard done). With ``rows``: a budget shard, those rows of grasps/ (one object's) labelled
+    on their own object, [start, stop) their positions among the job's chosen rows (service/budget.py)."""
 
     start: int
     stop: int
     dataset: str
     label_key: str
+    rows: tuple[int, ...] | None = None
 
     @property
     def part_key(self) -> str:

@@ -203,12 +203,13 @@ EXTRACTION_RECORDS = ("grasps", "unique", "exact")  # every extracted candidate:
 
 def delivered_groups(path: str | os.PathLike) -> list[str]:
     """The top-level groups a trainer needs, the rest being records of how the dataset was made that a copy may
-    leave out: with labels on the one object (assembled/grasps), everything but the extraction records (grasps/,
-    unique/, exact/); with labels on the objects themselves (grasps/success), everything but unique/ and exact/.
+    leave out: with labels on the one object (assembled/grasps) or a budget's (labelled/grasps), everything but
+    the extraction records (grasps/, unique/, exact/); with every candidate labelled (grasps/success), everything
+    but unique/ and exact/.
     The objects' meshes are references (objects/ names them) in both."""
     root = zarr.open_group(str(path), mode="r")
-    on_one_object = "assembled/grasps/success" in root
-    drop = set(EXTRACTION_RECORDS) if on_one_object else set(EXTRACTION_RECORDS) - {"grasps"}
+    apart = "assembled/grasps/success" in root or "labelled/grasps/success" in root  # labels beside the records
+    drop = set(EXTRACTION_RECORDS) if apart else set(EXTRACTION_RECORDS) - {"grasps"}
     return sorted(name for name, _ in root.groups() if name not in drop)
 
 

@@ -7,13 +7,15 @@ from pydantic import BaseModel, ConfigDict, Field
 from onepiece_dist.store.format import GRASP_ARRAYS
 
 LABELLED_ONLY = ("object", "code_index", "exact_index")  # per-object bookkeeping, not on the one object's grasps
+SKIPPED = {"grasps": ("patch", "row"), "assembled/grasps": (*LABELLED_ONLY, "row"),
+           "labelled/grasps": ("patch", "code_index", "exact_index")}
 
 
 def _grasp_entries(group: str, rows: str) -> tuple[tuple[str, str, str, str], ...]:
     """The per-grasp arrays of ``group`` (``rows`` of them) from the one grasp-array schema (store/format.py)."""
     entries = []
     for name, dtype, row_shape, meaning in GRASP_ARRAYS:
-        if name in (("patch",) if group == "grasps" else LABELLED_ONLY):
+        if name in SKIPPED[group]:
             continue
         inner = [part for part in row_shape.strip("()").replace(" ", "").split(",") if part]
         entries.append((f"{group}/{name}", dtype, f"({', '.join([rows, *inner])}{',' if not inner else ''})", meaning))
@@ -62,6 +64,7 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/source_pose", "float32", "(U, 4, 4)", "the representative's settled pose on its source object"),
     ("assembled/source_volume", "float64", "(U,)", "volume of each patch's source object (m^3): its mass rule"),
     *_grasp_entries("assembled/grasps", "L"),
+    *_grasp_entries("labelled/grasps", "L2"),  # a budget's labelled candidates (service/budget.py)
     ("train/train_loss", "float32", "(T,)", "training loss of each epoch (T epochs run)"),
     ("train/val_loss", "float32", "(T,)", "validation loss of each epoch"),
     ("train/val_accuracy", "float32", "(T,)", "validation accuracy of each epoch"),
@@ -102,6 +105,9 @@ class DatasetAttributes(BaseModel):
                                                     "schemas/job_status.schema.json), once assembled.")
     assembly_labels: dict | None = Field(None, description="The label stage's report (LabelReport, with label "
                                                            "transfer), once labelled on the one object.")
+    budget_labels: dict | None = Field(None, description="A budget's label stage (labelled/grasps): labelled "
+                                       "grasps, label trials, success rate, what was asked, whether it was every "
+                                       "candidate, the label stage's core-seconds.")
     training: dict | None = Field(None, description="The train stage's report (TrainingReport), once trained.")
     evaluation: dict | None = Field(None, description="The evaluate stage's report (EvaluationReport): the trained "
                                     "network on held-out objects, once evaluated.")
