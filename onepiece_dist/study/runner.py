@@ -181,7 +181,7 @@ def check_jobs(records: dict[str, JobRecord]) -> None:
 
 
 def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> list[ArmRun]:
-    """Every arm's runs: A on all its labelled grasps, B r on its one object, R on seeded random subsets of A's."""
+    """Every arm's runs: A on all its labelled grasps, B r on its one object, R on a budget's subsets of A's."""
     t = spec.training
     heldout = jobs.heldout.output
 
@@ -196,7 +196,7 @@ def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
     for radius, job in jobs.b.items():
         plan += runs(f"B r{radius}", job.output, "assembled/grasps", None)
     for name, count in random_arms(spec, records, a_count):
-        plan += runs(name, jobs.a.output, "grasps", random_rows(a_count, count, spec.seed))
+        plan += runs(name, jobs.a.output, "grasps", random_rows(jobs.a.output, count, spec.seed))
     return plan
 
 
@@ -209,10 +209,15 @@ def random_arms(spec: StudySpec, records: dict[str, JobRecord], a_count: int) ->
     return arms
 
 
-def random_rows(total: int, count: int, seed: int) -> tuple[int, ...]:
-    """A seeded random subset of ``count`` of ``total`` rows, sorted (the same for every training seed)."""
-    rng = np.random.default_rng([seed, 17, count])
-    return tuple(int(r) for r in np.sort(rng.choice(total, count, replace=False)))
+def random_rows(a_output: str, count: int, seed: int) -> tuple[int, ...]:
+    """The rows of A a budget job with ``count`` labels would label (``service.budget.budget_rows``: spread over
+    every object, at random within each, seeded): R is that plan, its labels A's (the same for every training
+    seed)."""
+    from onepiece_dist.service.budget import budget_rows
+    from onepiece_dist.store import open_dataset
+
+    owner = open_dataset(a_output)["grasps/object"].astype(np.int64)
+    return tuple(int(r) for r in budget_rows(owner, count, seed))
 
 
 def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
