@@ -71,7 +71,7 @@ def label_key(spec: JobSpec, reader: DatasetReader) -> str:
     """Hash of the one object's patches and placements and of the spec fields labels depend on."""
     digest = hashlib.blake2b(digest_size=8)
     for name in ("placement", "piece_vertices", "piece_vertex_count", "patch_piece_count", "source_points",
-                 "source_point_count", "source_object", "source_pose", "source_volume"):
+                 "source_point_count", "source_box", "source_object", "source_pose", "source_volume"):
         digest.update(np.ascontiguousarray(reader[f"assembled/{name}"]).tobytes())
     relevant = spec.model_dump(mode="json", include={"seed", "gripper", "voxel", "views", "closure"})
     relevant["sim"] = spec.sim.model_dump(mode="json", exclude={"transfer_codes", "transfer_grasps"})

@@ -55,11 +55,13 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/representative", "int64", "(U,)", "row in grasps/ of the grasp each patch was cut from"),
     ("assembled/patch_piece_count", "int64", "(U,)", "convex pieces of each patch (in patch order)"),
     ("assembled/piece_vertex_count", "int64", "(K,)", "points of each convex piece (in piece order)"),
-    ("assembled/piece_vertices", "float64", "(W, 3)", "points of the pieces, patch (gripper) frame; each piece "
+    ("assembled/piece_vertices", "float32", "(W, 3)", "points of the pieces, patch (gripper) frame; each piece "
      "is their convex hull"),
     ("assembled/source_point_count", "int64", "(S,)", "surface points of each source object a patch is cut from"),
-    ("assembled/source_points", "float32", "(Q, 3)", "their dense surface points, object frame, once per object: a "
-     "patch's points are those inside its patch box at its source pose"),
+    ("assembled/source_points", "uint16", "(Q, 3)", "their dense surface points, object frame, once per object, in "
+     "steps of source_box: a patch's points are those inside its patch box at its source pose"),
+    ("assembled/source_box", "float64", "(S, 2, 3)", "each source's lower corner and step (m): a point is lower + "
+     "steps * step"),
     ("assembled/source_object", "int64", "(U,)", "which source (row of source_point_count) each patch is cut from"),
     ("assembled/source_pose", "float32", "(U, 4, 4)", "the representative's settled pose on its source object"),
     ("assembled/source_volume", "float64", "(U,)", "volume of each patch's source object (m^3): its mass rule"),
