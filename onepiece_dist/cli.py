@@ -158,7 +158,7 @@ def inspect(
     _print_mapping(summary, as_json)
 
 
-FOLDER_FORMATS = ("acronym", "graspgen", "urdf-patches")  # these write a folder of files
+FOLDER_FORMATS = ("acronym", "graspgen", "urdf-patches", "delivered")  # these write a folder
 
 
 @app.command()
@@ -168,7 +168,8 @@ def export(
                                            "urdf-patches); nothing is written outside it.")],
     fmt: Annotated[str, typer.Option("--format", help="obj, ply or urdf: the one object (the URDF's OBJs beside "
                                      "it); acronym: an HDF5 file per object; graspgen: a JSON file per object and "
-                                     "split lists; urdf-patches: a URDF per patch and a scene file.")] = "obj",
+                                     "split lists; urdf-patches: a URDF per patch and a scene file; delivered: a "
+                                     "copy of the dataset without its extraction records.")] = "obj",
     valid_fraction: Annotated[float, typer.Option(help="graspgen: share of the objects in valid.txt (seeded by "
                                                        "the job's seed).")] = 0.2,
     valid_objects: Annotated[str, typer.Option(help="graspgen: comma-separated object names for valid.txt "
@@ -193,6 +194,10 @@ def export(
 
             chosen = tuple(name.strip() for name in valid_objects.split(",") if name.strip())
             written = export_graspgen(dataset, out, valid_fraction, chosen)
+        elif fmt == "delivered":
+            from onepiece_dist.store.dataset import copy_delivered
+
+            written = [copy_delivered(dataset, out)]
         elif fmt == "urdf-patches":
             from onepiece_dist.service.patch_export import export_patches
 

@@ -432,3 +432,32 @@ def test_the_chamfer_distance_taken_in_row_blocks_is_the_brute_force_one(rows):
     d = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2))
     assert chamfer_distance(a, b, rows) == (d.min(axis=1).mean() + d.min(axis=0).mean()) / 2  # to the last bit
     assert chamfer_distance(a, a, rows) == 0.0
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_the_delivered_copy_leaves_the_extraction_records_and_reads_as_the_original(tmp_path):
+    from onepiece_dist.errors import StoreError
+    from onepiece_dist.learn.dataset import GraspDataset
+    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.store.dataset import delivered_bytes, disk_bytes
+
+    out = tmp_path / "b.zarr"
+    run_local(JobSpec(objects="primitives[0:3]", grasps_per_object=16, output=str(out),
+                      sampler={"surface_points": 3000},
+                      sim={"perturbations_per_patch": 0, "points_per_grasp": 32, "transfer_codes": 0},
+                      stages=("ingest", "extract", "dedup", "assemble", "label")))
+    copied = CliRunner().invoke(app, ["export", str(out), "--format", "delivered", "--out", str(tmp_path / "d.zarr")])
+    assert copied.exit_code == 0, copied.output
+    copy = open_dataset(tmp_path / "d.zarr")
+    assert not copy.has("grasps/code") and not copy.has("unique/code") and copy.has("assembled/grasps/success")
+    assert disk_bytes(tmp_path / "d.zarr") < disk_bytes(out) and delivered_bytes(out) < disk_bytes(out)
+    ours, theirs = GraspDataset(out, "assembled/grasps"), GraspDataset(tmp_path / "d.zarr", "assembled/grasps")
+    assert np.array_equal(ours.labels(), theirs.labels()) and np.array_equal(ours.groups, theirs.groups)
+    a, b = read_patches(open_dataset(out)), read_patches(copy)
+    assert all(np.array_equal(p, q) for p, q in zip(a.points, b.points, strict=True))
+    assert copy.summary()["delivered_bytes"] > 0 and copy.summary()["grasps"] == 0
+    with pytest.raises(StoreError, match="already exists"):
+        from onepiece_dist.store.dataset import copy_delivered
+
+        copy_delivered(out, tmp_path / "d.zarr")

@@ -177,8 +177,8 @@ class DatasetReader:
 
     def summary(self) -> dict:
         """Counts and sizes for `onepiece inspect`."""
-        grasps = int(self.array("grasps/code").shape[0])
-        unique = int(self.array("unique/code").shape[0])
+        grasps = int(self.array("grasps/code").shape[0]) if self.has("grasps/code") else 0  # 0: a delivered copy
+        unique = int(self.array("unique/code").shape[0]) if self.has("unique/code") else 0
         out = {
             "path": str(self.path),
             "objects": int(self.array("objects/name").shape[0]),
@@ -193,7 +193,7 @@ class DatasetReader:
         for key in ("assembly", "assembly_labels", "training", "evaluation"):
             if key in self.attrs:
                 out[key] = self.attrs[key]
-        if self.has("grasps/success"):
+        if self.has("grasps/success") and grasps:
             out["success_rate"] = float(np.mean(self["grasps/success"])) if grasps else 0.0
         return out
 
@@ -218,6 +218,28 @@ def delivered_bytes(path: str | os.PathLike) -> int:
     path = Path(path)
     groups = sum(disk_bytes(path / name) for name in delivered_groups(path))
     return groups + sum(f.stat().st_size for f in path.iterdir() if f.is_file())
+
+
+def copy_delivered(path: str | os.PathLike, out: str | os.PathLike) -> Path:
+    """A copy of the dataset at ``path`` at ``out`` (a new folder) holding only its delivered groups (the
+    extraction records left out), its root attributes and metadata consolidated again: a dataset every reader of
+    the labelled grasps and of the one object opens as the original."""
+    import shutil
+
+    source, target = Path(path), Path(out)
+    if target.exists():
+        raise StoreError(f"{target}: already exists (give a new folder for the delivered dataset)")
+    DatasetReader(source)  # a complete dataset of this format, or a clear error
+    target.mkdir(parents=True)
+    for entry in source.iterdir():
+        if entry.is_file():
+            shutil.copy2(entry, target / entry.name)
+    for name in delivered_groups(source):
+        shutil.copytree(source / name, target / name)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Consolidated metadata", UserWarning)
+        zarr.consolidate_metadata(str(target))
+    return target
 
 
 def open_dataset(path: str | os.PathLike) -> DatasetReader:
