@@ -461,3 +461,23 @@ def test_the_delivered_copy_leaves_the_extraction_records_and_reads_as_the_origi
         from onepiece_dist.store.dataset import copy_delivered
 
         copy_delivered(out, tmp_path / "d.zarr")
+
+
+def test_patches_cut_in_shards_equal_the_ones_cut_in_one_go_and_a_resumed_stage_reuses_its_shards(small_dataset):
+    from onepiece_dist.service.patch_shards import build_patch_shard, merge_patch_shards, patch_tasks
+    from onepiece_dist.service.patches import build_patches
+    from onepiece_dist.store import PartStore
+
+    spec, out, _ = small_dataset
+    reader, parts = open_dataset(out), PartStore(spec.parts_folder())
+    tasks = patch_tasks(spec, out)
+    results = [build_patch_shard(spec, task, k, parts) for k, task in enumerate(tasks)]
+    assert all(result.reused for result in results)  # the job's own assemble stage made these parts
+    sharded = merge_patch_shards(spec, reader, parts, tasks, results)
+    whole = build_patches(spec, reader, parts, reader["unique/representative"])  # the central actor, alone
+    assert np.array_equal(sharded.source_pose, whole.source_pose)
+    assert np.array_equal(sharded.source_object, whole.source_object)
+    assert all(np.array_equal(a, b) for a, b in zip(sharded.points, whole.points, strict=True))
+    for a, b in zip(sharded.pieces, whole.pieces, strict=True):
+        assert len(a) == len(b) and all(np.array_equal(p, q) for p, q in zip(a, b, strict=True))
+    assert np.array_equal(sharded.source_volume, whole.source_volume)

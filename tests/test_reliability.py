@@ -217,3 +217,33 @@ def test_the_store_holds_no_pickled_data(spec_factory, tmp_path, record_figure):
             assert node["data_type"] in ("uint8", "int8", "int32", "int64", "float16", "float32", "float64"), meta
             assert all(c["name"] in ("bytes", "blosc", "zstd", "transpose") for c in node["codecs"]), meta
     record_figure(f"{arrays} arrays, every one numeric with bytes/blosc codecs")
+
+
+@pytest.mark.ray
+def test_killing_a_worker_while_it_cuts_patches_gives_the_fault_free_dataset(ray_session, spec_factory, tmp_path,
+                                                                             fault_free, record_figure):
+    """The assemble stage's patches are cut on the worker pool: the worker process that has just begun a patch
+    shard (its crash record says so) is killed, its shards run again, and the one object is the fault-free one."""
+    import os
+    import signal
+
+    from onepiece_dist.service.crashes import crash_folder
+
+    spec = labelled_spec(spec_factory, tmp_path, "patchkill")
+    job_id = default_job_id(spec)
+    client = Client()
+    handle = client.submit(spec)
+    assert stage_reached(client, job_id, "assemble")
+    records, deadline, victim = crash_folder(spec.parts_folder(), job_id), time.monotonic() + 120, None
+    while victim is None and time.monotonic() < deadline:
+        for record in records.glob("*.log") if records.is_dir() else []:
+            if record.read_text(errors="replace").startswith("patch "):
+                victim = int(record.stem.rsplit("-", 1)[1])  # <host>-<pid>.log
+                break
+    assert victim is not None, "no worker began a patch shard"
+    os.kill(victim, signal.SIGKILL)
+    final = handle.wait(timeout=300)
+    assert final.state == "succeeded", handle.error
+    assert final.retries >= 1  # its shards ran again elsewhere
+    assert same(spec.output, fault_free(spec))
+    record_figure(f"1 patch worker killed as the assemble stage began; {final.retries} re-runs, identical dataset")

@@ -15,7 +15,7 @@ from onepiece_dist.core.dedup import DedupIndex
 from onepiece_dist.errors import JobError, MissingAssembly
 from onepiece_dist.service.actors import ActorClient, restartable_actor
 from onepiece_dist.service.commit import commit_dataset
-from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult
+from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
 from onepiece_dist.service.status import AssemblyReport, LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
@@ -57,16 +57,22 @@ class CentralActor:
                              unique_codes=int(reader.array("unique/code").shape[0]),
                              exact_unique_codes=int(reader.array(exact).shape[0]))
 
-    def assemble(self) -> AssemblyReport:
-        """Cut each unique code's patch from its representative's source object, build the one object from them
-        and store it under ``assembled/``."""
+    def patch_tasks(self) -> list[PatchTask]:
+        """The patch cutting in shards for the workers."""
+        from onepiece_dist.service.patch_shards import patch_tasks
+
+        return patch_tasks(self.spec, self.spec.output)
+
+    def assemble(self, tasks: list[PatchTask], results: list[LabelShardResult]) -> AssemblyReport:
+        """Read the patches the workers cut (each unique code's, from its representative's source object), build
+        the one object from them and store it under ``assembled/``."""
         from onepiece_dist.service.assemble import assemble_dataset
-        from onepiece_dist.service.patches import build_patches
+        from onepiece_dist.service.patch_shards import merge_patch_shards
 
         reader = DatasetReader(self.spec.output)
         if self.unique_codes is None or self.grasps is None:
             self.unique_codes, self.grasps = reader["unique/code"], int(reader.array("grasps/code").shape[0])
-        patches = build_patches(self.spec, reader, self.parts, reader["unique/representative"])
+        patches = merge_patch_shards(self.spec, reader, self.parts, tasks, results)
         return assemble_dataset(self.spec, self.spec.output, self.unique_codes, patches, self.grasps)
 
     def label_tasks(self) -> list[LabelTask]:
@@ -136,8 +142,11 @@ class CentralClient(ActorClient):
     def committed(self) -> CommitSummary:
         return self.call("committed")
 
-    def assemble(self) -> AssemblyReport:
-        return self.call("assemble")
+    def patch_tasks(self) -> list[PatchTask]:
+        return self.call("patch_tasks")
+
+    def assemble(self, tasks: list[PatchTask], results: list[LabelShardResult]) -> AssemblyReport:
+        return self.call("assemble", tasks, results)
 
     def label_tasks(self) -> list[LabelTask]:
         return self.call("label_tasks")

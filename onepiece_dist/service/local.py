@@ -13,8 +13,9 @@ from onepiece_dist.service.central import CentralActor
 from onepiece_dist.service.evaluate import evaluation_spec, record_evaluation
 from onepiece_dist.service.extract import extract_object
 from onepiece_dist.service.label_one import label_shard
+from onepiece_dist.service.patch_shards import build_patch_shard
 from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
-from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult
+from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
 from onepiece_dist.service.status import EvaluationReport, JobStatus
 from onepiece_dist.service.trainer import Trainer, objects_scored
 from onepiece_dist.spec import JobSpec
@@ -44,6 +45,9 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
     def label(tasks: list[LabelTask]) -> list[LabelShardResult]:
         return [label_shard(spec, task, index, central.parts) for index, task in enumerate(tasks)]
 
+    def patch(tasks: list[PatchTask]) -> list[LabelShardResult]:
+        return [build_patch_shard(spec, task, index, central.parts) for index, task in enumerate(tasks)]
+
     trainer = Trainer()
 
     def evaluate(job: JobSpec) -> EvaluationReport:
@@ -51,5 +55,6 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
         labelled = run_local(heldout, job_id=f"{job_id}-evaluate")
         return record_evaluation(job, trainer.score(job, heldout.output, objects_scored(labelled)))
 
-    runtime = Runtime(extract=extract, central=central, label=label, train=trainer.fit, evaluate=evaluate)
+    runtime = Runtime(extract=extract, central=central, label=label, patch=patch, train=trainer.fit,
+                      evaluate=evaluate)
     return run_pipeline(spec, new_status(spec, job_id), runtime, report, refs)

@@ -18,7 +18,7 @@ from typing import Protocol
 
 from onepiece_dist.errors import JobCancelled, JobError, SourceError, SpecError
 from onepiece_dist.objects import ObjectRef, resolve_source
-from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult
+from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
 from onepiece_dist.service.status import (
     AssemblyReport,
     EvaluationReport,
@@ -40,21 +40,24 @@ class Central(Protocol):
 
     def commit(self, results: list[ObjectResult]) -> CommitSummary: ...
     def committed(self) -> CommitSummary: ...
-    def assemble(self) -> AssemblyReport: ...
+    def patch_tasks(self) -> list[PatchTask]: ...
+    def assemble(self, tasks: list[PatchTask], results: list[LabelShardResult]) -> AssemblyReport: ...
     def label_tasks(self) -> list[LabelTask]: ...
     def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport: ...
 
 
 @dataclass(frozen=True)
 class Runtime:
-    """extract(refs, on_result) -> results in object order; the central actor; label(tasks) -> shard results in
-    task order (the workers simulate, not the central actor); train(spec) -> report; evaluate(spec) -> report (a
+    """extract(refs, on_result) -> results in object order; the central actor; patch(tasks) -> the patch shards'
+    results in task order (the workers cut the patches); label(tasks) -> shard results in task order (the workers
+    simulate, not the central actor); train(spec) -> report; evaluate(spec) -> report (a
     labelling job on the held-out objects, then the trained network scored on them); prepare(stage): start what
     ``stage`` will need (its workers) while the central actor is still busy with the stage before it."""
 
     extract: Callable[[list[ObjectRef], Callable[[ObjectResult], None]], list[ObjectResult]]
     central: Central
     label: Callable[[list[LabelTask]], list[LabelShardResult]]
+    patch: Callable[[list[PatchTask]], list[LabelShardResult]]
     train: Callable[[JobSpec], TrainingReport]
     evaluate: Callable[[JobSpec], EvaluationReport]
     prepare: Callable[[str], None] = lambda stage: None
@@ -131,9 +134,11 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
     shapes = summary.exact_unique_codes if summary is not None else 0
     if spec.runs("assemble") and shapes:
         with stage(status, "assemble", report):
+            tasks = runtime.central.patch_tasks()
+            shards = runtime.patch(tasks)  # the workers cut the patches
             if spec.runs("label"):
                 runtime.prepare("label")  # label workers start up (imports, pybullet) while the one object is built
-            status.assembly = runtime.central.assemble()
+            status.assembly = runtime.central.assemble(tasks, shards)
     if spec.runs("label") and shapes:
         with stage(status, "label", report):
             tasks = runtime.central.label_tasks()

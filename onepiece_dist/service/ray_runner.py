@@ -27,9 +27,10 @@ from onepiece_dist.service.crashes import CrashLog, crash_folder, crashed_on
 from onepiece_dist.service.evaluate import evaluation_spec, record_evaluation
 from onepiece_dist.service.extract import extract_object
 from onepiece_dist.service.label_one import label_shard
+from onepiece_dist.service.patch_shards import build_patch_shard
 from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
 from onepiece_dist.service.registry import RegistryClient
-from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult
+from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
 from onepiece_dist.service.status import EvaluationReport, JobStatus
 from onepiece_dist.service.trainer import TrainerClient, objects_scored
 from onepiece_dist.spec import JobSpec
@@ -60,6 +61,11 @@ class SimWorker:
         """Label one shard of the one object into its part."""
         self.starting("label", index)
         return dataclasses.replace(label_shard(self.spec, task, index, self.parts), node=_node_id())
+
+    def patch(self, task: PatchTask, index: int) -> LabelShardResult:
+        """Cut one shard of the one object's patches into its part."""
+        self.starting("patch", index)
+        return dataclasses.replace(build_patch_shard(self.spec, task, index, self.parts), node=_node_id())
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
         """Extract one object; its codes go to the central actor (named ``central``), once. When that message
@@ -143,6 +149,9 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
     def label(tasks: list[LabelTask]) -> list[LabelShardResult]:
         return on_pool("label", tasks, lambda result: None, "label", quarantined_shard)
 
+    def patch(tasks: list[PatchTask]) -> list[LabelShardResult]:
+        return on_pool("patch", tasks, lambda result: None, "patch", quarantined_shard)
+
     def train(train_spec: JobSpec):
         clients.append(TrainerClient.start(train_spec, job_id))
         return clients[-1].fit(train_spec)
@@ -158,8 +167,9 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         return record_evaluation(job, clients[-1].score(job, heldout.output, objects_scored(labelled)))
 
     try:
-        return run_pipeline(spec, status, Runtime(extract=extract, central=central, label=label, train=train,
-                                                  evaluate=evaluate, prepare=prepare), report, refs)
+        runtime = Runtime(extract=extract, central=central, label=label, patch=patch, train=train, evaluate=evaluate,
+                          prepare=prepare)
+        return run_pipeline(spec, status, runtime, report, refs)
     except JobError as err:
         if isinstance(err, RuntimeLost) or isinstance(err.__cause__, RuntimeLost | RaySystemError):
             lost = err if isinstance(err, RuntimeLost) else err.__cause__

@@ -64,8 +64,24 @@ class LabelTask:
 
 
 @dataclass(frozen=True)
+class PatchTask:
+    """A shard of the assemble stage's patch cutting: patches [start, stop), in source-object order
+    (service/patch_shards.py), of the committed dataset at ``dataset``; its part is keyed by ``patch_key``."""
+
+    start: int
+    stop: int
+    dataset: str
+    patch_key: str
+
+    @property
+    def part_key(self) -> str:
+        return f"patch-{self.patch_key}-{self.start:06d}"
+
+
+@dataclass(frozen=True)
 class LabelShardResult:
-    """A labelled shard: 'ok' with its part and grasp count, or 'rejected' (its worker kept dying)."""
+    """A labelled (or patch) shard: 'ok' with its part and grasp (patch) count, or 'rejected' (its worker kept
+    dying)."""
 
     index: int
     status: str
