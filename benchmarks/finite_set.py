@@ -181,6 +181,7 @@ def measure(args, folder: Path) -> dict:
             "objects_source": spec.objects, "grasps_per_object": spec.grasps_per_object,
             "objects_ok": int(len(np.unique(owner))), "grasps": int(len(owner)),
             "rejected": len(status.rejections), "extraction_wall_seconds": round(seconds, 1),
+            "objects_reused": status.progress.objects_reused,
             "extraction_core_seconds": round(status.part_seconds, 1), "orders": ORDERS, "predict_at": PREDICT_AT,
             "curves": curves}
 
@@ -216,7 +217,8 @@ def write_page(out: dict, path: Path) -> None:
              f"One extraction job: {out['objects_ok']} objects (`{out['objects_source']}`, {out['rejected']} rejected) "
              f"x {out['grasps_per_object']} candidates from the paper's normal-direction sampler, each settled in "
              f"pybullet and cropped at its settled pose: {out['grasps']:,} grasps in "
-             f"{out['extraction_core_seconds']:,.0f} core-seconds ({out['extraction_wall_seconds']:,.0f} s wall). "
+             f"{out['extraction_core_seconds']:,.0f} core-seconds ({out['extraction_wall_seconds']:,.0f} s wall in "
+             f"this run, which reused {out.get('objects_reused', 0)} objects' parts of an earlier one). "
              f"Unique codes among the grasps of the first N objects, mean [min, max] over {out['orders']} seeded "
              "object orders; 5 and 20 mm codes crop the same settled poses again from each object's stored surface "
              "points.", "",

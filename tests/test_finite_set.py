@@ -38,7 +38,7 @@ def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
     out = json.loads((ROOT / "benchmarks" / "results" / "finite_set.json").read_text())
     finite.write_page(out, tmp_path / "page.md")
     assert (tmp_path / "page.md").read_text() == (ROOT / "docs" / "finite_set.md").read_text()
-    assert out["objects_ok"] >= 500 and out["grasps_per_object"] == 500
+    assert out["objects_ok"] >= 512 and out["grasps_per_object"] == 500
     assert {(c["resolution_mm"], c["radius"]) for c in out["curves"]} == {(10, 0), (10, 1), (10, 2), (5, 0), (20, 0)}
 
 
