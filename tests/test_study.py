@@ -202,3 +202,16 @@ def test_a_job_that_trains_also_evaluates_on_unseen_objects_and_says_so(tmp_path
     heldout = open_dataset(evaluation["dataset"])
     assert heldout.attrs["job_spec"]["objects"] == "pybullet:random_urdfs[500:502]"
     assert len(heldout["grasps/success"]) == evaluation["grasps"]
+
+
+def test_the_committed_quick_study_page_is_the_rendering_of_its_result(tmp_path):
+    import shutil
+
+    from onepiece_dist.study.runner import report_study
+
+    committed = ROOT / "docs" / "studies" / "quick"
+    shutil.copy(committed / "study.json", tmp_path / "study.json")
+    result = report_study(tmp_path)
+    assert (tmp_path / "study.md").read_text() == (committed / "study.md").read_text()
+    assert result.spec == load_study_spec(ROOT / "examples" / "studies" / "quick.yaml", {})
+    assert {arm.kind for arm in result.arms} == {"A", "B", "R"} and result.wall_seconds < 600
