@@ -12,12 +12,12 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import time
 
 import numpy as np
 
 from onepiece_dist.errors import SpecError
 from onepiece_dist.service.results import LabelShardResult, LabelTask
+from onepiece_dist.service.shards import shard_once
 from onepiece_dist.service.status import LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
@@ -96,18 +96,13 @@ def label_budget_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartSt
     """Label one shard of chosen candidates on their own object into its part (once). Runs in a worker."""
     from onepiece_dist.service.transfer import label_on_sources
 
-    start = time.perf_counter()
-    reused = parts.is_committed(task.part_key)
-    if not reused:
+    def make() -> dict[str, np.ndarray]:
         rows = np.asarray(task.rows, dtype=np.int64)
         success, quality = label_on_sources(spec, DatasetReader(task.dataset), parts, rows)
-        parts.write(task.part_key, {"row": rows, "success": success.astype(np.uint8),
-                                    "quality": quality.astype(np.float32)},
-                    {"rows": [task.start, task.stop], "made_seconds": time.perf_counter() - start})
-    seconds = time.perf_counter() - start
-    made = float(parts.read_meta(task.part_key).get("made_seconds", seconds))
-    return LabelShardResult(index, "ok", task.part_key, task.stop - task.start, reused=reused, seconds=seconds,
-                            made_seconds=made)
+        return {"row": rows, "success": success.astype(np.uint8), "quality": quality.astype(np.float32)}
+
+    return shard_once(parts, task.part_key, index, make, {"rows": [task.start, task.stop]},
+                      lambda: task.stop - task.start)
 
 
 def write_budget_labels(spec: JobSpec, path: str | os.PathLike, tasks: list[LabelTask], parts: PartStore,

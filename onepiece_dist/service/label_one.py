@@ -14,7 +14,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import time
 
 import numpy as np
 
@@ -24,6 +23,7 @@ from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_regions
 from onepiece_dist.service.patches import Patches, read_patches
 from onepiece_dist.service.results import LabelShardResult, LabelTask
+from onepiece_dist.service.shards import shard_once
 from onepiece_dist.service.status import LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
@@ -85,18 +85,9 @@ def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) ->
         from onepiece_dist.service.budget import label_budget_shard
 
         return label_budget_shard(spec, task, index, parts)
-    start = time.perf_counter()
-    if not parts.is_committed(task.part_key):
-        arrays = label_patches(spec, task)
-        parts.write(task.part_key, arrays, {"patches": [task.start, task.stop],
-                                            "made_seconds": time.perf_counter() - start})
-        reused = False
-    else:
-        reused = True
-    grasps = int(parts.array_shapes(task.part_key)["patch"][0][0])
-    seconds = time.perf_counter() - start
-    made = float(parts.read_meta(task.part_key).get("made_seconds", seconds))
-    return LabelShardResult(index, "ok", task.part_key, grasps, reused=reused, seconds=seconds, made_seconds=made)
+    return shard_once(parts, task.part_key, index, lambda: label_patches(spec, task),
+                      {"patches": [task.start, task.stop]},
+                      lambda: int(parts.array_shapes(task.part_key)["patch"][0][0]))
 
 
 def label_patches(spec: JobSpec, task: LabelTask) -> dict[str, np.ndarray]:

@@ -13,13 +13,13 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import time
 
 import numpy as np
 
 from onepiece_dist.errors import JobError
 from onepiece_dist.service.patches import Patches, _offsets, _split, _stack, as_stored, build_patches, source_geometry
 from onepiece_dist.service.results import LabelShardResult, PatchTask
+from onepiece_dist.service.shards import shard_once
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader
@@ -57,25 +57,20 @@ def patch_tasks(spec: JobSpec, path: str | os.PathLike) -> list[PatchTask]:
 
 def build_patch_shard(spec: JobSpec, task: PatchTask, index: int, parts: PartStore) -> LabelShardResult:
     """Cut one shard's patches into its part (once: a committed part is reused). Runs in a worker."""
-    start = time.perf_counter()
-    reused = parts.is_committed(task.part_key)
-    if not reused:
+    def make() -> dict[str, np.ndarray]:
         reader = DatasetReader(task.dataset)
         positions = patch_order(reader)[task.start:task.stop]
         patches = build_patches(spec, reader, parts, reader["unique/representative"][positions])
         pieces = [piece for patch in patches.pieces for piece in patch]
-        parts.write(task.part_key, {
-            "position": positions.astype(np.int64),
-            "patch_piece_count": np.array([len(p) for p in patches.pieces], dtype=np.int64),
-            "piece_vertex_count": np.array([len(p) for p in pieces], dtype=np.int64),
-            "piece_vertices": _stack(pieces, np.float32),
-            "point_count": np.array([len(p) for p in patches.points], dtype=np.int64),
-            "points": _stack(patches.points, np.float32), "source_volume": patches.source_volume},
-            {"patches": [task.start, task.stop], "made_seconds": time.perf_counter() - start})
-    seconds = time.perf_counter() - start
-    made = float(parts.read_meta(task.part_key).get("made_seconds", seconds))
-    return LabelShardResult(index, "ok", task.part_key, task.stop - task.start, reused=reused, seconds=seconds,
-                            made_seconds=made)
+        return {"position": positions.astype(np.int64),
+                "patch_piece_count": np.array([len(p) for p in patches.pieces], dtype=np.int64),
+                "piece_vertex_count": np.array([len(p) for p in pieces], dtype=np.int64),
+                "piece_vertices": _stack(pieces, np.float32),
+                "point_count": np.array([len(p) for p in patches.points], dtype=np.int64),
+                "points": _stack(patches.points, np.float32), "source_volume": patches.source_volume}
+
+    return shard_once(parts, task.part_key, index, make, {"patches": [task.start, task.stop]},
+                      lambda: task.stop - task.start)
 
 
 def merge_patch_shards(spec: JobSpec, reader: DatasetReader, parts: PartStore, tasks: list[PatchTask],
