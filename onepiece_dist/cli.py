@@ -307,6 +307,11 @@ def schema(
 
 
 def main() -> None:
+    """The ``onepiece`` command: started again with glibc's math functions pinned where it was not (sim.libm),
+    so that what it simulates in process is what the workers of any node simulate."""
+    from onepiece_dist.sim.libm import restart_pinned
+
+    restart_pinned()
     app()
 
 

@@ -41,7 +41,7 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "cli_common": (BASE, {"typer", "rich"}),
     "cli_jobs": (BASE | {"api", "service", "cli_common"}, {"typer", "yaml"}),
     "cli_study": (BASE | {"study", "cli_common"}, {"typer"}),
-    "cli": (BASE | {"api", "objects", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study"},
+    "cli": (BASE | {"api", "objects", "sim", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study"},
             {"typer", "rich", "yaml", "pydantic"}),
 }
 STDLIB = set(sys.stdlib_module_names)

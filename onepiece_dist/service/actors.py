@@ -27,12 +27,15 @@ def runtime_alive() -> bool:
 
 def restartable_actor(cls, name: str, **options):
     """A named actor class of ``cls`` that Ray restarts when it dies; its methods are not retried by Ray (the
-    caller decides what to run again)."""
+    caller decides what to run again). Its process starts with glibc's math functions pinned (``sim.libm``) on
+    whichever node it lands, whatever that node was started with."""
     import ray
 
     from onepiece_dist.service.ray_env import NAMESPACE
+    from onepiece_dist.sim.libm import worker_environment
 
-    return ray.remote(cls).options(name=name, namespace=NAMESPACE, max_restarts=-1, max_task_retries=0, **options)
+    return ray.remote(cls).options(name=name, namespace=NAMESPACE, max_restarts=-1, max_task_retries=0,
+                                   runtime_env={"env_vars": worker_environment()}, **options)
 
 
 class ActorClient:

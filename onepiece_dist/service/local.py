@@ -1,7 +1,8 @@
 """In-process runner: the job's pipeline with one object at a time, the central actor and the trainer as plain
 objects in this process.
 
-Used for debugging and as the reference that the distributed runner must match byte for byte.
+Used for debugging and as the reference that the distributed runner must match byte for byte. Simulation runs
+with glibc's math functions pinned as on every worker: here, or in a child where this process is not pinned.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from onepiece_dist.service.evaluate import evaluation_spec, record_evaluation
 from onepiece_dist.service.extract import extract_object
 from onepiece_dist.service.label_one import label_shard
 from onepiece_dist.service.patch_shards import build_patch_shard
+from onepiece_dist.service.pinned_child import PinnedSimulation
 from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
 from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
 from onepiece_dist.service.status import EvaluationReport, JobStatus
@@ -27,11 +29,12 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
     'extract', the later stages run on the committed dataset."""
     central = CentralActor(spec)
     central.parts.remove_stale_temporaries()
+    simulate = PinnedSimulation()
 
     def extract(refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
         results = []
         for index, ref in enumerate(refs):
-            results.append(extract_object(spec, ref, index, central.parts))
+            results.append(simulate(extract_object, spec, ref, index, central.parts))
             if results[-1].status == "ok":
                 central.add(index, results[-1].part_key)
             on_result(results[-1])
@@ -43,7 +46,7 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
             progress(status)
 
     def label(tasks: list[LabelTask]) -> list[LabelShardResult]:
-        return [label_shard(spec, task, index, central.parts) for index, task in enumerate(tasks)]
+        return [simulate(label_shard, spec, task, index, central.parts) for index, task in enumerate(tasks)]
 
     def patch(tasks: list[PatchTask]) -> list[LabelShardResult]:
         return [build_patch_shard(spec, task, index, central.parts) for index, task in enumerate(tasks)]
@@ -57,4 +60,7 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
 
     runtime = Runtime(extract=extract, central=central, label=label, patch=patch, train=trainer.fit,
                       evaluate=evaluate)
-    return run_pipeline(spec, new_status(spec, job_id), runtime, report, refs)
+    try:
+        return run_pipeline(spec, new_status(spec, job_id), runtime, report, refs)
+    finally:
+        simulate.close()

@@ -24,6 +24,8 @@ import secrets
 import socket
 from pathlib import Path
 
+from onepiece_dist.sim.libm import pin_children
+
 NAMESPACE = "onepiece"
 LOOPBACK_ENV = {"RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_USAGE_STATS_ENABLED": "0"}
 AUTH_ENV = {"RAY_AUTH_MODE": "token"}  # every Ray we start or join: decided here, not left to ray.init
@@ -76,6 +78,7 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> None:
     if ray.is_initialized():
         return
     loopback_environment()
+    pin_children()  # an embedded Ray's raylet and workers start with glibc's math functions pinned (sim.libm)
     refresh_ray_config()
     if address:
         check_reachable(address)
