@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import provenance, render_block, table
+from benchmarks.report import provenance, render_block, table
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "assembly.md"
 FIGURES_START = "<!-- figures: rendered by benchmarks/report.py from benchmarks/results/default_job.json -->"
@@ -59,7 +59,7 @@ def _or_dash(value) -> str:
 
 
 def render_assembly_page() -> str:
-    from bench_cpu_independence import CPU_END, CPU_START, cpu_section
+    from benchmarks.bench_cpu_independence import CPU_END, CPU_START, cpu_section
 
     text = render_block(PAGE, FIGURES_START, FIGURES_END, "default_job", default_job_figures)
     return render_block(PAGE, CPU_START, CPU_END, "cpu_independence", cpu_section, text=text)

@@ -1,6 +1,6 @@
 """The assemble stage on 1 and 2 workers at the paper's size (issue 43, item 2).
 
-    .venv/bin/python benchmarks/bench_assembly_scaling.py [--folder DIR] [--quick]
+    .venv/bin/python -m benchmarks.bench_assembly_scaling [--folder DIR] [--quick]
 
 The B r0 job of examples/studies/paper.yaml (64 objects x 2,000 candidates, 11,678 patches) runs to its assemble
 stage on the embedded Ray with 1 worker, then 2, then 1 and 2 again (the machine's drift shows in the repeats);
@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> dict:
     speedup = round((sum(one) / len(one)) / (sum(two) / len(two)), 3)
     out = {"benchmark": "assembly_scaling", "date": date.today().isoformat(), "quick": args.quick,
            "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-           "command": "python benchmarks/bench_assembly_scaling.py" + (" --quick" if args.quick else ""),
+           "command": "python -m benchmarks.bench_assembly_scaling" + (" --quick" if args.quick else ""),
            "spec": "examples/studies/paper.yaml, B r0", "patches": runs[0]["patches"], "runs": runs,
            "speedup_2_workers": speedup, "target": TARGET, "met": speedup >= TARGET}
     if not args.quick:

@@ -1,6 +1,6 @@
 """Candidate generation and the extract stage's work around the physics, per core.
 
-    .venv/bin/python benchmarks/bench_candidates.py [--candidates 2000]
+    .venv/bin/python -m benchmarks.bench_candidates [--candidates 2000]
 
 1. Candidate generation (antipodal sampling + open-gripper collision check) on a 10,000-point object
    (pybullet:random_urdfs[0]): candidates/s/core, against the per-pose collision check it replaced
@@ -22,21 +22,19 @@ import os
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import cProfile  # noqa: E402
-import json  # noqa: E402
-import platform  # noqa: E402
-import pstats  # noqa: E402
-import sys  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-from datetime import date  # noqa: E402
-from pathlib import Path  # noqa: E402
+import argparse
+import cProfile
+import json
+import platform
+import pstats
+import tempfile
+import time
+from datetime import date
+from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
 from onepiece_dist.core.frames import in_box, to_gripper_frame  # noqa: E402
 from onepiece_dist.core.mesh import sample_surface  # noqa: E402
 from onepiece_dist.core.sampling import (  # noqa: E402
@@ -163,7 +161,7 @@ def main() -> None:
     args = parser.parse_args()
     spec = JobSpec(objects=OBJECT, grasps_per_object=args.candidates, stages=("ingest", "extract", "dedup"))
     mesh = load_object(resolve_source(OBJECT)[0], spec).mesh
-    result = {"command": f"python benchmarks/bench_candidates.py --candidates {args.candidates}",
+    result = {"command": f"python -m benchmarks.bench_candidates --candidates {args.candidates}",
               "date": str(date.today()), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
               "object": OBJECT, "target_candidates_per_s_per_core": TARGET,
               "generation": generation(spec, mesh, args.candidates), "extract_profile": profile(spec, mesh),

@@ -1,7 +1,7 @@
 """Force-closure and robust-epsilon scores per second on one core (core.closure), against a per-grasp reference
 scorer run side by side on the same grasps.
 
-    .venv/bin/python benchmarks/bench_closure.py
+    .venv/bin/python -m benchmarks.bench_closure
 
 Objects: the named pybullet objects and random_urdfs below, antipodal candidates on each. Ours: every grasp's pad
 contacts (core.raycast), the smallest friction level of graspnetAPI's sweep and the Ferrari-Canny epsilon,
@@ -93,7 +93,7 @@ def main() -> dict:
            "reference_epsilon_per_s": total["grasps"] / total["ref_eps_s"],
            "robust_epsilon_per_s": total["robust_grasps"] / total["robust_s"],
            "levels_equal_to_reference": total["agree"] / total["grasps"],
-           "targets": TARGETS, "command": "python benchmarks/bench_closure.py"}
+           "targets": TARGETS, "command": "python -m benchmarks.bench_closure"}
     (HERE / "results" / "closure.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

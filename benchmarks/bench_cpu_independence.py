@@ -1,6 +1,6 @@
 """Does a job's dataset depend on the CPU it ran on? Jobs run with this CPU's numpy, libm and BLAS paths turned off.
 
-    .venv/bin/python benchmarks/bench_cpu_independence.py
+    .venv/bin/python -m benchmarks.bench_cpu_independence
 
 x86-64 CPUs differ in what numpy (SIMD level: SVML on AVX-512), glibc's libm (FMA or plain variants), OpenBLAS
 (kernel per CPU) and Embree (kernel per CPU and, on Intel, per model) pick for them, and in how many threads they
@@ -130,7 +130,8 @@ def _walk(group, prefix: str = ""):
 
 def in_process(job: str, env: dict[str, str], formula: str, keep: Path) -> dict[str, str]:
     """``run_one`` in a fresh Python with ``env`` added (the CPU settings take effect at library load)."""
-    command = [sys.executable, __file__, "--one", job, "--formula", formula, "--keep", str(keep)]
+    command = [sys.executable, "-m", "benchmarks.bench_cpu_independence", "--one", job, "--formula", formula, "--keep",
+               str(keep)]
     out = subprocess.run(command, capture_output=True, text=True, env={**os.environ, **env}, timeout=900, cwd=ROOT)
     if out.returncode != 0:
         raise RuntimeError(f"{job} ({env}, {formula}) failed: {out.stderr[-2000:]}")
@@ -266,7 +267,6 @@ def main(argv=None) -> dict:
     parser.add_argument("--formula", default="shipped", choices=FORMULAS, help=argparse.SUPPRESS)
     parser.add_argument("--keep", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(ROOT))
     if args.one:
         from tests.test_pinned_job import ONE_CPU
 
@@ -282,7 +282,7 @@ def main(argv=None) -> dict:
                "machine": f"{platform.machine()}, {cpu_model()}, {os.cpu_count()} cores", "settings": settings,
                "extract_objects": EXTRACT_OBJECTS, "rows": rows, "numpy_sines": sine_sensitivity(folder),
                "blas_patches": blas_patch_labels(folder), "embree_hits": embree_sensitivity(folder),
-               "command": "python benchmarks/bench_cpu_independence.py"}
+               "command": "python -m benchmarks.bench_cpu_independence"}
     (HERE / "results" / "cpu_independence.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

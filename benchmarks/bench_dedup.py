@@ -1,6 +1,6 @@
 """Dedup throughput: 10 million 64-bit codes on one core, against a pairwise-comparison baseline.
 
-Run: .venv/bin/python benchmarks/bench_dedup.py  (writes benchmarks/results/dedup.json)
+Run: .venv/bin/python -m benchmarks.bench_dedup  (writes benchmarks/results/dedup.json)
 The pairwise baseline compares every pair of a sample vectorized row by row and is extrapolated to N.
 """
 
@@ -10,15 +10,13 @@ import json
 import os
 import platform
 import resource
-import sys
 import time
 from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from onepiece_dist.core.dedup import unique_codes  # noqa: E402
+from onepiece_dist.core.dedup import unique_codes
 
 N = int(os.environ.get("BENCH_DEDUP_N", 10_000_000))
 SAMPLE = 20_000
@@ -56,7 +54,7 @@ def main() -> dict:
         "seconds": round(seconds, 3), "codes_per_second": round(N / seconds), "extra_peak_rss_mb": round(peak_mb),
         "pairwise_baseline_seconds_estimated": round(baseline, 1), "speedup_vs_pairwise": round(baseline / seconds),
         "targets": {"seconds_max": 3.0, "peak_rss_mb_max": 1024},
-        "command": "python benchmarks/bench_dedup.py",
+        "command": "python -m benchmarks.bench_dedup",
     }
     path = Path(__file__).parent / "results" / "dedup.json"
     path.write_text(json.dumps(out, indent=2) + "\n")

@@ -1,6 +1,6 @@
 """The end-to-end budget: the 64-object job with 2000 candidates per object, wall time per stage and peak memory.
 
-    .venv/bin/python benchmarks/bench_end_to_end.py [--objects 64] [--grasps 2000]
+    .venv/bin/python -m benchmarks.bench_end_to_end [--objects 64] [--grasps 2000]
         [--stages ingest,extract,dedup,assemble,label,train] [--train-model voxel] [--train-epochs 2]
 
 Runs the job as a user does (`onepiece.api.run_job` on an embedded Ray, one extraction worker per core, physics
@@ -38,16 +38,13 @@ from pathlib import Path
 import numpy as np
 import psutil
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_sim import load_all, protocol_rates, time_protocols  # noqa: E402
-from process_tree import ProcessTree  # noqa: E402
-
-from onepiece_dist.api import run_job  # noqa: E402
-from onepiece_dist.objects import resolve_source  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
-from onepiece_dist.store import open_dataset  # noqa: E402
-from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
+from benchmarks.bench_sim import load_all, protocol_rates, time_protocols
+from benchmarks.process_tree import ProcessTree
+from onepiece_dist.api import run_job
+from onepiece_dist.objects import resolve_source
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import open_dataset
+from onepiece_dist.store.dataset import disk_bytes
 
 HERE = Path(__file__).resolve().parent
 GIB = 2**30
@@ -260,7 +257,7 @@ def _result(args, spec: JobSpec, status, wall: float, peak: int, idle: int, by_s
         "dataset_bytes": summary["bytes_on_disk"], "parts_bytes": disk_bytes(Path(f"{spec.output}.parts")),
         "targets": {"budget_seconds": 600, "peak_memory_gib": 4,
                     "extract_candidates_per_s_per_core": 400},
-        "command": "python benchmarks/bench_end_to_end.py " + " ".join(sys.argv[1:]),
+        "command": "python -m benchmarks.bench_end_to_end " + " ".join(sys.argv[1:]),
     }
 
 

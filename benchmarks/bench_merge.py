@@ -1,6 +1,6 @@
 """Merge rate and memory of the global dedup at 1 M, 5 M and 20 M codes (issue: past one machine).
 
-    .venv/bin/python benchmarks/bench_merge.py [--sizes 1,5,20] [--batch 2000] [--partitions 2]
+    .venv/bin/python -m benchmarks.bench_merge [--sizes 1,5,20] [--batch 2000] [--partitions 2]
 
 Synthetic 64-bit codes (the default 10 mm grid, 4 x 8 x 2 voxels) arrive in batches of one object's grasps and
 go through the merge path of the central actor: `DedupIndex.add` in process, and the `CentralActor` Ray actor
@@ -27,12 +27,11 @@ from pathlib import Path
 import numpy as np
 import psutil
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from onepiece_dist.core.dedup import DedupIndex, merge_partitions, merge_unique, unique_codes  # noqa: E402
-from onepiece_dist.service.central import CentralActor  # noqa: E402
-from onepiece_dist.service.dedup_shards import DedupShard, route_codes  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
-from onepiece_dist.store import PartStore  # noqa: E402
+from onepiece_dist.core.dedup import DedupIndex, merge_partitions, merge_unique, unique_codes
+from onepiece_dist.service.central import CentralActor
+from onepiece_dist.service.dedup_shards import DedupShard, route_codes
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import PartStore
 
 HERE = Path(__file__).resolve().parent
 CODE_BYTES = 8
@@ -157,7 +156,7 @@ def main() -> dict:
            "baseline_resort_each_batch": baseline, "partitioned": partitioned,
            "speedup_vs_baseline_at_first_size": round(central[0]["codes_per_s"] / baseline["codes_per_s"], 1),
            "part_read": part_read_overhead(200, args.batch),
-           "command": "python benchmarks/bench_merge.py " + " ".join(sys.argv[1:])}
+           "command": "python -m benchmarks.bench_merge " + " ".join(sys.argv[1:])}
     (HERE / "results" / "bench_merge.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

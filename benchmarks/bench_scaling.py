@@ -1,7 +1,7 @@
 """Throughput of the Ray service with 1 and 2 workers on this machine, for extraction and for the label stage on
 the one object, and orchestration overhead.
 
-Run: .venv/bin/python benchmarks/bench_scaling.py  (writes benchmarks/results/scaling.json)
+Run: .venv/bin/python -m benchmarks.bench_scaling  (writes benchmarks/results/scaling.json)
 Each configuration runs the same job on a fresh embedded Ray with a fresh parts folder (nothing reused).
 Parallel efficiency = (objects/s with 2 workers) / (2 x objects/s with 1 worker). Orchestration overhead per
 object = (extract-stage wall time x workers - sum of per-object worker time) / objects: time a worker slot spends
@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import sys
 import tempfile
 import time
 from datetime import date
@@ -29,13 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_sim import load_all, time_protocols  # noqa: E402
-from process_tree import ProcessTree, process_kind  # noqa: E402
-
-from onepiece_dist.service.ray_env import connect  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
+from benchmarks.bench_sim import load_all, time_protocols
+from benchmarks.process_tree import ProcessTree, process_kind
+from onepiece_dist.service.ray_env import connect
+from onepiece_dist.spec import JobSpec
 
 OBJECTS = os.environ.get("BENCH_SCALING_OBJECTS", "pybullet:random_urdfs[0:16]")
 GRASPS = int(os.environ.get("BENCH_SCALING_GRASPS", 128))
@@ -130,7 +126,7 @@ def main() -> dict:
            "speed_ratio_per_pair": [round(d, 3) for d in drift],
            "raw_efficiency_per_pair": [round(e, 3) for e in raw],
            "raw_label_speedup_per_pair": [round(x, 3) for x in raw_speedup],
-           "command": "python benchmarks/bench_scaling.py"}
+           "command": "python -m benchmarks.bench_scaling"}
     (Path(__file__).parent / "results" / "scaling.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

@@ -1,6 +1,6 @@
 """Trial throughput on pybullet:random_urdfs objects with the default gripper, one core.
 
-Run: .venv/bin/python benchmarks/bench_sim.py  (writes benchmarks/results/sim.json)
+Run: .venv/bin/python -m benchmarks.bench_sim  (writes benchmarks/results/sim.json)
 Measures the extract protocol (early stall exit), the label protocol (extract + lift + shake), and a plain
 fixed-step baseline (close then lift, 240 steps of 1/240 s, no early exit) on the same candidates. Then label
 fidelity: the same candidates labelled with a converged reference (1/480 s steps, 100 solver iterations, cone
@@ -16,7 +16,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import sys
 import tempfile
 import time
 from dataclasses import asdict
@@ -26,15 +25,14 @@ from pathlib import Path
 import numpy as np
 import pybullet as pb
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from onepiece_dist.core.mesh import enclosed_volume, sample_surface  # noqa: E402
-from onepiece_dist.core.sampling import object_rng, sample_candidates  # noqa: E402
-from onepiece_dist.core.voxel import crop_codes  # noqa: E402
-from onepiece_dist.objects import load_object, resolve_source  # noqa: E402
-from onepiece_dist.sim.collision import convex_pieces  # noqa: E402
-from onepiece_dist.sim.trials import place, run_trials  # noqa: E402
-from onepiece_dist.sim.world import PhysicsSettings, SimWorld, process_world  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
+from onepiece_dist.core.mesh import enclosed_volume, sample_surface
+from onepiece_dist.core.sampling import object_rng, sample_candidates
+from onepiece_dist.core.voxel import crop_codes
+from onepiece_dist.objects import load_object, resolve_source
+from onepiece_dist.sim.collision import convex_pieces
+from onepiece_dist.sim.trials import place, run_trials
+from onepiece_dist.sim.world import PhysicsSettings, SimWorld, process_world
+from onepiece_dist.spec import JobSpec
 
 OBJECTS = os.environ.get("BENCH_SIM_OBJECTS", "pybullet:random_urdfs[0:8]")
 GRASPS = int(os.environ.get("BENCH_SIM_GRASPS", 64))
@@ -128,7 +126,7 @@ def main() -> dict:
                                  "density_kg_m3": spec.sim.density},
            "targets": {"extract_trials_per_s_per_core": 300, "label_trials_per_s_per_core": 150},
            "label_fidelity": fidelity(spec, loaded), "extract_fidelity": extract_fidelity(spec, loaded),
-           "command": "python benchmarks/bench_sim.py"}
+           "command": "python -m benchmarks.bench_sim"}
     (Path(__file__).parent / "results" / "sim.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

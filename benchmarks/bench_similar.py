@@ -1,7 +1,7 @@
 """Similar-shape filter at Hamming radius 2 on 1 million 512-bit codes (one core), against the all-pairs
 baseline, whose time is estimated from a sample measured in the same run.
 
-Run: .venv/bin/python benchmarks/bench_similar.py  (writes benchmarks/results/similar.json)
+Run: .venv/bin/python -m benchmarks.bench_similar  (writes benchmarks/results/similar.json)
 The codes are random with planted near-duplicates (a tenth are copies of others with 1-2 flipped bits).
 """
 
@@ -10,16 +10,14 @@ from __future__ import annotations
 import json
 import os
 import platform
-import sys
 import time
 from datetime import date
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from onepiece_dist.core.dedup import unique_codes  # noqa: E402
-from onepiece_dist.core.similar import hamming, similar_clusters  # noqa: E402
+from onepiece_dist.core.dedup import unique_codes
+from onepiece_dist.core.similar import hamming, similar_clusters
 
 N = int(os.environ.get("BENCH_SIMILAR_N", 1_000_000))
 NBYTES, RADIUS, SAMPLE = 64, 2, 3000
@@ -52,7 +50,7 @@ def main() -> dict:
            f"{os.cpu_count()} cores (one used)", "codes": int(len(codes)), "code_bits": NBYTES * 8, "radius": RADIUS,
            "clusters": int(len(result.representative)), "seconds": round(seconds, 2),
            "all_pairs_seconds_estimated": round(baseline), "speedup": round(baseline / seconds),
-           "target_seconds": 60, "command": "python benchmarks/bench_similar.py"}
+           "target_seconds": 60, "command": "python -m benchmarks.bench_similar"}
     (Path(__file__).parent / "results" / "similar.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

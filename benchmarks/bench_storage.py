@@ -1,6 +1,6 @@
 """Storage per grasp: the same content written three ways in one run.
 
-Run: .venv/bin/python benchmarks/bench_storage.py  (writes benchmarks/results/storage.json)
+Run: .venv/bin/python -m benchmarks.bench_storage  (writes benchmarks/results/storage.json)
 Content: the labelled grasps of a job on pybullet:named (codes, poses, labels, 750 gripper-frame points each).
 Ways: our Zarr layout (blosc zstd, shuffled, 8192-row chunks; points float16); one .npy file of float32 points
 per grasp plus one .npy per other array (the way PointNetGPD-style pipelines keep their clouds); one uncompressed
@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import sys
 import tempfile
 import time
 from datetime import date
@@ -22,11 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from onepiece_dist.service.local import run_local  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
-from onepiece_dist.store import open_dataset  # noqa: E402
-from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
+from onepiece_dist.service.local import run_local
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import open_dataset
+from onepiece_dist.store.dataset import disk_bytes
 
 ARRAYS = ("code", "pose", "success", "quality", "points")
 
@@ -54,7 +52,7 @@ def main() -> dict:
            "ratio_npy_over_zarr": round(npy_bytes / total_zarr, 2),
            "ratio_npz_over_zarr": round(archive_bytes / total_zarr, 2),
            "compressor_sweep": sweep,
-           "command": "python benchmarks/bench_storage.py"}
+           "command": "python -m benchmarks.bench_storage"}
     (Path(__file__).parent / "results" / "storage.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

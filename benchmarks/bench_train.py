@@ -2,8 +2,8 @@
 the DataLoader (our reader: ``__getitems__`` per batch, ``ChunkBatchSampler``) against the same tensors already in
 host memory, per model, measured in the same run.
 
-Run: .venv/bin/python benchmarks/bench_train.py                      (CPU here; writes results/train_cpu.json)
-     python benchmarks/bench_train.py --device cuda --rows 200000 --workers 12   (a GPU machine: train_gpu.json)
+Run: .venv/bin/python -m benchmarks.bench_train                      (CPU here; writes results/train_cpu.json)
+     python -m benchmarks.bench_train --device cuda --rows 200000 --workers 12   (a GPU machine: train_gpu.json)
 Needs numpy, zarr and torch only (the reader-only set), so it runs on a GPU machine without ray or pybullet.
 The dataset is synthetic (random 750-point float16 clouds, which compress worse than real ones: a harder read).
 """
@@ -24,11 +24,10 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate  # noqa: E402
-from onepiece_dist.learn.models import MODELS  # noqa: E402
-from onepiece_dist.learn.train import TrainStep  # noqa: E402
-from tests.factories import synthetic_labelled_dataset  # noqa: E402
+from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate
+from onepiece_dist.learn.models import MODELS
+from onepiece_dist.learn.train import TrainStep
+from tests.factories import synthetic_labelled_dataset
 
 RESULTS = Path(__file__).resolve().parent / "results"
 POINTS = 750
@@ -133,7 +132,7 @@ def main() -> None:
                 for model, batch, precision in runs]
         reader = [reader_only(path, model, batch, args.workers, args.seconds / 2)
                   for model, batch in sorted({(m, b) for m, b, _ in runs})]
-    result = {"command": "python benchmarks/bench_train.py " + " ".join(sys.argv[1:]), "date": str(date.today()),
+    result = {"command": "python -m benchmarks.bench_train " + " ".join(sys.argv[1:]), "date": str(date.today()),
               "machine": machine(device), "device": args.device, "rows": args.rows, "points": POINTS,
               "dataset_write_seconds": round(written, 1), "runs": rows, "reader_only": reader,
               "targets": {"store_over_memory_cpu": 0.8, "pointnet_store_samples_per_s_gpu": 50_000}}

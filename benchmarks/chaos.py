@@ -1,7 +1,7 @@
 """A bounded chaos run on the local multi-node cluster: several jobs at once, worker actors and a worker node killed
 at seeded random times, every job's dataset compared with its fault-free run.
 
-Run: .venv/bin/python benchmarks/chaos.py [--jobs 3] [--seed 0]   (minutes; writes benchmarks/results/chaos.json)
+Run: .venv/bin/python -m benchmarks.chaos [--jobs 3] [--seed 0]   (minutes; writes benchmarks/results/chaos.json)
 Starts its own cluster (cluster/local_cluster.sh, its own ports) and stops only the nodes it started. Reports jobs,
 kills, recoveries (jobs that succeeded after a kill), and grasps lost or duplicated against the fault-free runs
 (targets 0 and 0); a job counts as identical when its content digest (store.content_digest) equals the fault-free
@@ -16,14 +16,12 @@ import os
 import platform
 import random
 import subprocess
-import sys
 import tempfile
 import time
 from datetime import date
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 from onepiece_dist.api import Client  # noqa: E402
 from onepiece_dist.service.local import run_local  # noqa: E402
 from onepiece_dist.spec import JobSpec, default_job_id  # noqa: E402
@@ -130,7 +128,7 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=3)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    result = {"command": f"python benchmarks/chaos.py --jobs {args.jobs} --seed {args.seed}",
+    result = {"command": f"python -m benchmarks.chaos --jobs {args.jobs} --seed {args.seed}",
               "date": str(date.today()), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
               "targets": {"lost_grasps": 0, "duplicated_grasps": 0}, **run(args.jobs, args.seed)}
     (ROOT / "benchmarks" / "results" / "chaos.json").write_text(json.dumps(result, indent=2) + "\n")

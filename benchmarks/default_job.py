@@ -1,7 +1,7 @@
 """Figures of the default job (the one `scripts/dev run` runs): the one object, its label cost and label transfer.
 
-Run: .venv/bin/python benchmarks/default_job.py            (runs the default job on an embedded Ray, ~3 min)
-     .venv/bin/python benchmarks/default_job.py --dataset onepiece-out/dataset.zarr   (a dataset it already made)
+Run: .venv/bin/python -m benchmarks.default_job            (runs the default job on an embedded Ray, ~3 min)
+     .venv/bin/python -m benchmarks.default_job --dataset onepiece-out/dataset.zarr   (a dataset it already made)
 Writes benchmarks/results/default_job.json; benchmarks/report.py renders it into docs/assembly.md.
 """
 
@@ -10,16 +10,14 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import sys
 import tempfile
 from datetime import date
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from onepiece_dist.service.status import JobStatus  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
-from onepiece_dist.store import open_dataset  # noqa: E402
-from onepiece_dist.store.dataset import disk_bytes  # noqa: E402
+from onepiece_dist.service.status import JobStatus
+from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import open_dataset
+from onepiece_dist.store.dataset import disk_bytes
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -51,7 +49,7 @@ def main() -> None:
     default = JobSpec().model_dump(mode="json", exclude={"output"})
     if {k: v for k, v in spec.items() if k != "output"} != default:
         raise SystemExit(f"{args.dataset}: not made by the default job spec")
-    result = {"command": "python benchmarks/default_job.py", "date": str(date.today()),
+    result = {"command": "python -m benchmarks.default_job", "date": str(date.today()),
               "machine": f"{platform.machine()}, {platform.python_version()}", **figures(args.dataset)}
     (RESULTS / "default_job.json").write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps(result, indent=2))

@@ -1,6 +1,6 @@
 """What would lift B to R? The experiment's B arms trained again with patch weights or other inputs.
 
-    .venv/bin/python benchmarks/experiment_b_variants.py --folder /tmp/exp-full [--radii 0,2]
+    .venv/bin/python -m benchmarks.experiment_b_variants --folder /tmp/exp-full [--radii 0,2]
         [--variants as_trained,sqrt_weights,count_weights,representatives,source_labels] [--repeat-per-object 40]
 
 B labels each shape once, on its patch of the one object, and trains on the one object's crops with uniform
@@ -41,10 +41,8 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
-sys.path.insert(0, str(HERE))
-from experiment_learn import TrainJob, arm_summary  # noqa: E402
-from experiment_train import spawn_context, train_all  # noqa: E402
+from benchmarks.experiment_learn import TrainJob, arm_summary  # noqa: E402
+from benchmarks.experiment_train import spawn_context, train_all  # noqa: E402
 
 VARIANTS = {"as_trained": "none", "sqrt_weights": "sqrt", "count_weights": "count", "representatives": "none",
             "source_labels": "none"}
@@ -209,7 +207,7 @@ def main(argv=None) -> dict:
            "label_transfer": transfer_agreement(experiment),
            "label_repeatability": (label_repeatability(args.folder, args.repeat_per_object, experiment["args"]["seed"])
                                    if args.repeat_per_object else None),
-           "command": "python benchmarks/experiment_b_variants.py " + " ".join(sys.argv[1:] if argv is None else argv)}
+           "command": "python -m benchmarks.experiment_b_variants " + " ".join(sys.argv[1:] if argv is None else argv)}
     (HERE / "results" / "experiment_b_variants.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out["rows"], indent=2))
     return out

@@ -6,12 +6,12 @@ splits and held-out grasps, at the learning rate chosen on the arm's validation 
 ``--rates``, or ``--rates chosen``: the one the 2-core run's search picked), so one can see whether the
 comparison of A, B and R depends on the training budget.
 
-    python benchmarks/experiment_longer.py export --folder /tmp/exp-grasp \
+    python -m benchmarks.experiment_longer export --folder /tmp/exp-grasp \
         --results benchmarks/results/paper_experiment_grasp_load.json --to .gpu/grasp_load.npz
-    python benchmarks/experiment_longer.py train --data .gpu/grasp_load.npz --out OUT     (GPU: 7 processes)
-    python benchmarks/experiment_longer.py train --data .gpu/grasp_load.npz --out OUT --device cpu --workers 2 \
+    python -m benchmarks.experiment_longer train --data .gpu/grasp_load.npz --out OUT     (GPU: 7 processes)
+    python -m benchmarks.experiment_longer train --data .gpu/grasp_load.npz --out OUT --device cpu --workers 2 \
         --steps 2000 --batch-size 64 --rates chosen --arms "A,B r0,R r0"                 (this 2-core machine)
-    python benchmarks/experiment_longer.py report --data .gpu/grasp_load.npz --runs OUT \
+    python -m benchmarks.experiment_longer report --data .gpu/grasp_load.npz --runs OUT \
         --results benchmarks/results/paper_experiment_grasp_load.json --train-command "..."
 
 ``export`` (here: zarr, the results file and the experiment's folder) writes one ``.npz`` (no pickles): each
@@ -25,14 +25,13 @@ scores them with the statistics of ``experiment_learn`` and writes ``benchmarks/
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from report import in_words  # standard library only: runs on the GPU machine too
+
+from benchmarks.report import in_words  # standard library only: runs on the GPU machine too
 
 ROOT = Path(__file__).resolve().parents[1]
 QUANT = 127  # int8 steps on each side of zero
@@ -44,8 +43,7 @@ def _dataset_key(path: str) -> str:
 
 def export(folder: Path, results: dict, to: Path) -> dict:
     """Write the arms' data of the experiment in ``folder`` (its results file ``results``) to ``to``."""
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from paper_experiment import train_jobs
+    from benchmarks.paper_experiment import train_jobs
 
     args = argparse.Namespace(**results["args"])
     jobs = train_jobs(args, results["arms"], folder, 0.0)
@@ -98,11 +96,10 @@ def _split(job) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _pointnet():
-    """onepiece_dist/learn/models.py's PointNetGrasp, loaded from its file (the package imports zarr)."""
-    spec = importlib.util.spec_from_file_location("onepiece_models", ROOT / "onepiece_dist" / "learn" / "models.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.PointNetGrasp
+    """The package's PointNetGrasp (``onepiece_dist.learn.models`` imports with torch alone)."""
+    from onepiece_dist.learn.models import PointNetGrasp
+
+    return PointNetGrasp
 
 
 class ArmData:
@@ -260,8 +257,7 @@ def _write_arm(out: Path, arm: str, done: list[dict], probes: list[dict], opts: 
 def report(data_path: Path, runs_dir: Path, results: dict, command: str, tag: str = "") -> dict:
     """Held-out statistics of the longer runs of every trained arm beside the 2-core run's (``results``); ``tag``
     names a second budget's files (NAME_longer_TAG) beside the first's."""
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from experiment_learn import arm_summary
+    from benchmarks.experiment_learn import arm_summary
 
     data = np.load(data_path, allow_pickle=False)
     labels, groups = data["success_heldout"].astype(np.float64), data["groups_heldout"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from report import in_words, pct, provenance, table
+from benchmarks.report import in_words, pct, provenance, table
 
 PAPER = {"time_ratio": "8x", "storage_ratio": "6.3x", "success": "89% = 89% (real robot)"}
 STAGES = ("ingest", "extract", "dedup", "assemble", "label")
@@ -367,7 +367,7 @@ def _longer_link(out: dict) -> list[str]:
 def _key_study_link() -> list[str]:
     """A line naming benchmarks/key_study.py's pages (other dedup keys than the occupancy code) and what each says,
     where their results are committed."""
-    from key_study_page import headline_sentence
+    from benchmarks.key_study_page import headline_sentence
 
     found = sorted((Path(__file__).resolve().parent / "results").glob("key_study*.json"))
     if not found:

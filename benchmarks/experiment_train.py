@@ -20,8 +20,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from experiment_learn import TrainJob, fit_and_score
 
+from benchmarks.experiment_learn import TrainJob, fit_and_score
 from onepiece_dist.study.training import search_rates
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,6 +1,6 @@
 """Is the set of in-gripper shapes finite? Unique codes against the number of objects (issue 43, item 3).
 
-    .venv/bin/python benchmarks/finite_set.py [--objects 512] [--grasps 500] [--folder DIR] [--quick]
+    .venv/bin/python -m benchmarks.finite_set [--objects 512] [--grasps 500] [--folder DIR] [--quick]
 
 The paper's premise is that at the network's voxel resolution the in-gripper shapes form a finite, highly repeated
 set. Its experiment grew the candidates per object (250 to 2,000 on 64 objects), never the objects. This grows the
@@ -177,7 +177,7 @@ def measure(args, folder: Path) -> dict:
             curves.append({"resolution_mm": mm, "radius": radius, "code_bits": nbits, "rows": rows, "fit": fit(rows)})
     return {"benchmark": "finite_set", "date": date.today().isoformat(),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-            "command": "python benchmarks/finite_set.py " + " ".join(args.argv),
+            "command": "python -m benchmarks.finite_set " + " ".join(args.argv),
             "objects_source": spec.objects, "grasps_per_object": spec.grasps_per_object,
             "objects_ok": int(len(np.unique(owner))), "grasps": int(len(owner)),
             "rejected": len(status.rejections), "extraction_wall_seconds": round(seconds, 1),

@@ -1,6 +1,6 @@
 """Which dedup key decides the label: the premise of ONE PIECE measured key by key, on unseen objects (issue 17).
 
-    .venv/bin/python benchmarks/key_study.py [--quick] [--objects 64] [--grasps 200] [--heldout 48]
+    .venv/bin/python -m benchmarks.key_study [--quick] [--objects 64] [--grasps 200] [--heldout 48]
         [--heldout-grasps 200] [--load grasp] [--repeat-per-object 20] [--folder /tmp/keys]
 
 The method labels one grasp per key (the voxel code) and lets that label stand for every grasp with the key, on
@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -39,12 +38,9 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
-sys.path.insert(0, str(HERE))
-import paper_experiment as experiment  # noqa: E402
-from experiment_learn import pair_agreement  # noqa: E402
-from experiment_train import spawn_context, work_folder  # noqa: E402
-
+from benchmarks import paper_experiment as experiment  # noqa: E402
+from benchmarks.experiment_learn import pair_agreement  # noqa: E402
+from benchmarks.experiment_train import spawn_context, work_folder  # noqa: E402
 from onepiece_dist.core.contact import ContactKeySpec, contact_keys  # noqa: E402
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.voxel import voxel_indices  # noqa: E402
@@ -319,7 +315,7 @@ def experiment_args(args) -> argparse.Namespace:
 
 
 def run_study(args, folder: Path) -> dict:
-    from experiment_b_variants import label_repeatability
+    from benchmarks.experiment_b_variants import label_repeatability
 
     gen = generate(args, folder)
     spec = gen["specs"]["A"]
@@ -364,11 +360,11 @@ def parse_args(argv=None):
 def command_line(args) -> str:
     sizes = " ".join(f"--{k.replace('_', '-')} {getattr(args, k)}" for k in
                      ("objects", "grasps", "heldout", "heldout_grasps", "repeat_per_object"))
-    return f"python benchmarks/key_study.py {sizes} --load {args.load}"
+    return f"python -m benchmarks.key_study {sizes} --load {args.load}"
 
 
 def main(argv=None) -> dict:
-    from key_study_page import plot_keys, write_page
+    from benchmarks.key_study_page import plot_keys, write_page
 
     args = parse_args(argv)
     start = time.perf_counter()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import in_words, pct
+from benchmarks.report import in_words, pct
 
 REFERENCE = "occupancy 10 mm"  # the code the paper experiment dedups by
 
@@ -224,7 +224,7 @@ def _jobs(out: dict) -> str:
 
 
 def plot_keys(out: dict, path: Path) -> None:
-    from experiment_page import _pyplot
+    from benchmarks.experiment_page import _pyplot
 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.0, 4.0), dpi=110)

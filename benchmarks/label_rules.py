@@ -1,6 +1,6 @@
 """Positive rate of the label rules on unseen objects: what share of candidates each binary label calls a success.
 
-Run: .venv/bin/python benchmarks/label_rules.py  (writes benchmarks/results/label_rules.json; about 1 minute)
+Run: .venv/bin/python -m benchmarks.label_rules  (writes benchmarks/results/label_rules.json; about 1 minute)
 One single-process job labels the held-out objects of the paper's experiment (random_urdfs 500 on, never train
 objects) with the paper's normal-direction sampler, the default physics and K = 4 label trials, then reads the
 rates off the stored labels: the nominal trial held (``sim.success: nominal``), all K trials held
@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import platform
-import sys
 import tempfile
 from datetime import date
 from pathlib import Path
@@ -21,7 +20,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 from onepiece_dist.service.local import run_local  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
 from onepiece_dist.store import open_dataset  # noqa: E402

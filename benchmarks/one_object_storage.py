@@ -1,6 +1,6 @@
 """What the one object costs on disk at the paper's size, in format 2 (issue 43, item 4).
 
-    .venv/bin/python benchmarks/one_object_storage.py [--folder DIR] [--quick]
+    .venv/bin/python -m benchmarks.one_object_storage [--folder DIR] [--quick]
 
 Runs the B jobs of examples/studies/paper.yaml (64 objects x 2,000 candidates; extraction once, then dedup,
 assembly and labels on the one object at radius 0, 1 and 2) on the embedded Ray and measures each dataset: the
@@ -74,7 +74,7 @@ def measure(args, folder: Path) -> dict:
            "whole_r0_no_larger_than_a": by.get("B r0", {}).get("whole_bytes", 1 << 62) <= a["whole_bytes"]}
     return {"benchmark": "one_object_storage", "date": date.today().isoformat(),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores", "quick": args.quick,
-            "command": "python benchmarks/one_object_storage.py" + (" --quick" if args.quick else ""),
+            "command": "python -m benchmarks.one_object_storage" + (" --quick" if args.quick else ""),
             "spec": "examples/studies/paper.yaml", "a": a, "arms": rows, "targets": TARGETS, "met": met}
 
 

@@ -1,6 +1,6 @@
 """The ONE PIECE paper's experiment, in simulation, powerful enough to decide (issue 17), as one command.
 
-    .venv/bin/python benchmarks/paper_experiment.py [--quick] [--objects 64] [--grasps 2000] [--heldout 64]
+    .venv/bin/python -m benchmarks.paper_experiment [--quick] [--objects 64] [--grasps 2000] [--heldout 64]
         [--heldout-grasps 200] [--label-trials 4] [--steps 500] [--seeds 3] [--radii 0,1,2] [--crop partial]
         [--learning-rates 0.0003,0.001,0.003]
 
@@ -37,12 +37,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-from experiment_learn import TrainJob, arm_summary, baselines, pair_agreement  # noqa: E402
-from experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
-from experiment_train import parse_rates, spawn_context, train_all, train_with_search, work_folder  # noqa: E402
-
+from benchmarks.experiment_learn import TrainJob, arm_summary, baselines, pair_agreement  # noqa: E402
+from benchmarks.experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
+from benchmarks.experiment_train import parse_rates, spawn_context, train_all, train_with_search, work_folder  # noqa: E402
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.similar import similar_clusters  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
@@ -386,7 +383,7 @@ def run_experiment(args, folder: Path) -> dict:
     out = {"benchmark": "paper_experiment", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {os.cpu_count()} cores", "args": {k: str(v) if isinstance(v, Path)
                                                                                 else v for k, v in vars(args).items()},
-           "command": "python benchmarks/paper_experiment.py " + " ".join(sys.argv[1:]),
+           "command": "python -m benchmarks.paper_experiment " + " ".join(sys.argv[1:]),
            "generation_wall_seconds": round(generation_wall, 1), "training_wall_seconds": round(training_wall, 1),
            "analysis_wall_seconds": round(analysis_wall, 1), "heldout": baselines(labels, groups),
            "heldout_job": gen["heldout"], "train_objects_ok": gen["A"]["objects_ok"], "arms": costs,

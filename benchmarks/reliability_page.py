@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from report import load, met, provenance, render_block, table
+from benchmarks.report import load, met, provenance, render_block, table
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "reliability.md"
 CHAOS_START = "<!-- chaos: rendered by benchmarks/report.py from benchmarks/results/chaos.json -->"

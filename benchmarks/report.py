@@ -1,6 +1,6 @@
 """Render docs/performance.md from benchmarks/results/*.json (run by `scripts/dev bench` after the benchmarks).
 
-    .venv/bin/python benchmarks/report.py
+    .venv/bin/python -m benchmarks.report
 
 Every table comes from a result file, with the command that made it and the date and machine it ran on; a
 benchmark whose result file is missing is listed as not run.
@@ -9,12 +9,9 @@ benchmark whose result file is missing is listed as not run.
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-if str(HERE) not in sys.path:  # the page modules (scaling_page, experiment_page) sit beside this file
-    sys.path.insert(0, str(HERE))
 RESULTS = HERE / "results"
 PAGE = HERE.parent / "docs" / "performance.md"
 
@@ -402,8 +399,8 @@ def assembly_scaling_section(r: dict) -> list[str]:
 
 
 def render() -> str:
-    from experiment_page import static_section, variants_section
-    from scaling_page import scaling_section
+    from benchmarks.experiment_page import static_section, variants_section
+    from benchmarks.scaling_page import scaling_section
 
     sections = [("bench_end_to_end", lambda r: end_to_end_section(r, load("sim"))),
                 ("candidates", candidates_section),
@@ -450,14 +447,14 @@ def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[
 
 
 def main() -> None:
-    from assembly_page import PAGE as ASSEMBLY_PAGE
-    from assembly_page import render_assembly_page
-    from reliability_page import PAGE as RELIABILITY_PAGE
-    from reliability_page import render_reliability_page
-    from scaling_page import PAGE as SCALING_PAGE
-    from scaling_page import render_scaling_page
-    from trials_page import PAGE as TRIALS_PAGE
-    from trials_page import render_trials_page
+    from benchmarks.assembly_page import PAGE as ASSEMBLY_PAGE
+    from benchmarks.assembly_page import render_assembly_page
+    from benchmarks.reliability_page import PAGE as RELIABILITY_PAGE
+    from benchmarks.reliability_page import render_reliability_page
+    from benchmarks.scaling_page import PAGE as SCALING_PAGE
+    from benchmarks.scaling_page import render_scaling_page
+    from benchmarks.trials_page import PAGE as TRIALS_PAGE
+    from benchmarks.trials_page import render_trials_page
 
     PAGE.write_text(render())
     ASSEMBLY_PAGE.write_text(render_assembly_page())

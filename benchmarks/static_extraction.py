@@ -1,7 +1,7 @@
 """Would crops at the candidate pose (no physics in extraction) lift the paper experiment's time ratio? A cost
 projection from measured figures, without labelling or training.
 
-    .venv/bin/python benchmarks/static_extraction.py [--objects 64] [--grasps 2000] [--radii 0,1,2]
+    .venv/bin/python -m benchmarks.static_extraction [--objects 64] [--grasps 2000] [--radii 0,1,2]
 
 Runs the extraction of arm B static of benchmarks/paper_experiment.py (same objects, candidates, seed and spec;
 ingest, extract and dedup, one process, one thread, a fresh folder) and counts its shapes at each radius. Its
@@ -17,21 +17,18 @@ import os
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core, as the experiment's single-process jobs
 
-import json  # noqa: E402
-import platform  # noqa: E402
-import sys  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-from datetime import date  # noqa: E402
-from pathlib import Path  # noqa: E402
+import json
+import platform
+import sys
+import tempfile
+import time
+from datetime import date
+from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
-sys.path.insert(0, str(HERE))
-import paper_experiment  # noqa: E402
-
+from benchmarks import paper_experiment  # noqa: E402
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.similar import similar_clusters  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
@@ -100,7 +97,7 @@ def main(argv=None) -> dict:
            "patch_seconds": experiment["cost_curve"]["per_unit_seconds"]["patch"],
            "a_core_seconds": {row["arm"]: row for row in experiment["arms"]}["A"]["core_seconds"],
            "experiment": experiment["command"].strip(), "rows": projection(experiment, extraction, shapes),
-           "command": "python benchmarks/static_extraction.py " + " ".join(sys.argv[1:] if argv is None else argv)}
+           "command": "python -m benchmarks.static_extraction " + " ".join(sys.argv[1:] if argv is None else argv)}
     (HERE / "results" / "static_extraction.json").write_text(json.dumps(out, indent=2) + "\n")
     print(json.dumps(out, indent=2))
     return out

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import render_block
+from benchmarks.report import render_block
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "trials.md"
 START = "<!-- label rules: rendered by benchmarks/report.py from benchmarks/results/label_rules.json -->"
@@ -16,7 +16,7 @@ def label_rules_block(r: dict) -> str:
     rate = r["positive_rate"]
     slips = " / ".join(f"{rate[f'nominal_slip_below_{mm}mm']:.1%}" for mm in (5, 10, 20))
     first, last = r["objects"].split("[")[1].rstrip("]").split(":")
-    return "\n".join([START, f"`python benchmarks/label_rules.py` ({r['date']}) labels the paper experiment's held-out "
+    return "\n".join([START, f"`python -m benchmarks.label_rules` ({r['date']}) labels the paper experiment's held-out "
                       f"objects (random_urdfs {first}-{int(last) - 1}, {r['candidates_per_object']} normal-sampler "
                       f"candidates each, K = {r['label_trials']}, the default physics) and reads each rule's positive "
                       f"rate off the same {r['held_grasps']:,} held grasps: nominal {rate['nominal']:.1%}, every "

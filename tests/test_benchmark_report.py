@@ -1,17 +1,13 @@
 """docs/performance.md is rendered from the committed benchmark results."""
 
 import importlib.util
-import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def load_report():
-    spec = importlib.util.spec_from_file_location("report", ROOT / "benchmarks" / "report.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return importlib.import_module("benchmarks.report")
 
 
 def test_every_committed_result_renders_with_its_command_and_date():
@@ -25,42 +21,37 @@ def test_every_committed_result_renders_with_its_command_and_date():
 
 def test_the_committed_page_is_the_rendered_one():
     assert (ROOT / "docs" / "performance.md").read_text() == load_report().render(), \
-        "docs/performance.md is stale: run `python benchmarks/report.py`"
+        "docs/performance.md is stale: run `python -m benchmarks.report`"
 
 
 def test_the_assembly_figures_are_the_rendered_ones():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from assembly_page import PAGE, render_assembly_page
+    from benchmarks.assembly_page import PAGE, render_assembly_page
 
     assert PAGE.read_text() == render_assembly_page(), \
-        "docs/assembly.md figures are stale: run `python benchmarks/report.py`"
+        "docs/assembly.md figures are stale: run `python -m benchmarks.report`"
 
 
 def test_the_scaling_plan_is_the_rendered_one():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from scaling_page import PAGE, render_scaling_page
+    from benchmarks.scaling_page import PAGE, render_scaling_page
 
-    assert PAGE.read_text() == render_scaling_page(), "docs/scaling.md plan is stale: run `python benchmarks/report.py`"
+    assert PAGE.read_text() == render_scaling_page(), "docs/scaling.md plan is stale: run `python -m benchmarks.report`"
 
 
 def test_the_label_rule_figures_are_the_rendered_ones():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from trials_page import PAGE, render_trials_page
+    from benchmarks.trials_page import PAGE, render_trials_page
 
-    assert PAGE.read_text() == render_trials_page(), "docs/trials.md is stale: run `python benchmarks/report.py`"
+    assert PAGE.read_text() == render_trials_page(), "docs/trials.md is stale: run `python -m benchmarks.report`"
 
 
 def test_the_reliability_figures_are_the_rendered_ones():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from reliability_page import PAGE, render_reliability_page
+    from benchmarks.reliability_page import PAGE, render_reliability_page
 
     assert PAGE.read_text() == render_reliability_page(), \
-        "docs/reliability.md figures are stale: run `python benchmarks/report.py`"
+        "docs/reliability.md figures are stale: run `python -m benchmarks.report`"
 
 
 def test_every_guarantee_names_tests_that_exist_and_each_recorded_its_figure():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from reliability_page import GUARANTEES_END, GUARANTEES_START, PAGE, test_ids
+    from benchmarks.reliability_page import GUARANTEES_END, GUARANTEES_START, PAGE, test_ids
 
     page = PAGE.read_text()
     rows = [line for line in page[page.index(GUARANTEES_START):page.index(GUARANTEES_END)].splitlines()
@@ -76,8 +67,7 @@ def test_every_guarantee_names_tests_that_exist_and_each_recorded_its_figure():
 
 
 def test_test_ids_follow_the_file_named_before():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from reliability_page import test_ids
+    from benchmarks.reliability_page import test_ids
 
     ids = test_ids("`a.py::test_x`, `::test_y`, `b.py::test_z`")
     assert ids == ["a.py::test_x", "a.py::test_y", "b.py::test_z"]
@@ -106,10 +96,9 @@ def test_the_physics_floor_is_given_at_one_copys_rates_and_at_two_at_once():
 
 
 def test_the_cpu_block_says_met_only_when_no_array_differs():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from bench_cpu_independence import cpu_section
+    from benchmarks.bench_cpu_independence import cpu_section
 
-    result = {"command": "python benchmarks/bench_cpu_independence.py", "date": "2026-11-27", "machine": "x86_64",
+    result = {"command": "python -m benchmarks.bench_cpu_independence", "date": "2026-11-27", "machine": "x86_64",
               "settings": {"SSE": {"OPENBLAS_CORETYPE": "Prescott"}}, "extract_objects": "primitives[0:1]",
               "rows": [{"job": "pinned", "setting": "SSE", "arrays": 44, "differing": []}],
               "numpy_sines": {"angles_with_another_sine_or_cosine": 0.06, "grasps": 100,

@@ -3,16 +3,14 @@ and numpy only), scored with the experiment's statistics, its page rendered from
 
 import importlib
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-longer = importlib.import_module("experiment_longer")
-learn = importlib.import_module("experiment_learn")
+longer = importlib.import_module("benchmarks.experiment_longer")
+learn = importlib.import_module("benchmarks.experiment_learn")
 
 
 def _separable(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

@@ -9,9 +9,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("finite_set", ROOT / "benchmarks" / "finite_set.py")
-finite = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(finite)
+finite = importlib.import_module("benchmarks.finite_set")
 
 
 def rows(n: list[int], u: np.ndarray) -> list[dict]:

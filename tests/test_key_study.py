@@ -14,9 +14,8 @@ from onepiece_dist.core.mesh import box_mesh, sample_surface
 from onepiece_dist.core.voxel import crop_regions
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-study = importlib.import_module("key_study")
-page = importlib.import_module("key_study_page")
+study = importlib.import_module("benchmarks.key_study")
+page = importlib.import_module("benchmarks.key_study_page")
 
 
 def keys(values) -> np.ndarray:
@@ -157,8 +156,8 @@ def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
 
 @pytest.mark.slow
 def test_the_quick_study_labels_train_and_held_out_objects_and_measures_every_key(tmp_path):
-    subprocess.run([sys.executable, str(ROOT / "benchmarks" / "key_study.py"), "--quick", "--out", str(tmp_path)],
-                   check=True, capture_output=True, timeout=300)
+    subprocess.run([sys.executable, "-m", "benchmarks.key_study", "--quick", "--out", str(tmp_path)],
+                   check=True, capture_output=True, timeout=300, cwd=ROOT)
     out = json.loads((tmp_path / "benchmarks" / "results" / "key_study.json").read_text())
     assert [r["key"] for r in out["keys"]] == [name for name, _, _ in study.KEYS]
     assert out["train"]["grasps"] > 0 and out["heldout"]["grasps"] > 0 and out["ceiling"]["grasps"] > 0

@@ -8,9 +8,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("one_object_storage", ROOT / "benchmarks" / "one_object_storage.py")
-storage = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(storage)
+storage = importlib.import_module("benchmarks.one_object_storage")
 
 
 def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):

@@ -14,10 +14,9 @@ import pytest
 from onepiece_dist.store.format import FORMAT_VERSION
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-learn = importlib.import_module("experiment_learn")
-page = importlib.import_module("experiment_page")
-training = importlib.import_module("experiment_train")
+learn = importlib.import_module("benchmarks.experiment_learn")
+page = importlib.import_module("benchmarks.experiment_page")
+training = importlib.import_module("benchmarks.experiment_train")
 
 
 def test_the_bootstrap_interval_holds_the_mean_and_narrows_with_more_objects():
@@ -111,8 +110,8 @@ def test_each_arm_keeps_the_learning_rate_its_validation_loss_picks_and_trains_i
 @pytest.mark.slow
 @pytest.mark.sim
 def test_the_quick_experiment_runs_every_arm_and_renders_a_page_that_decides(tmp_path):
-    subprocess.run([sys.executable, str(ROOT / "benchmarks" / "paper_experiment.py"), "--quick", "--out",
-                    str(tmp_path), "--folder", str(tmp_path / "work")], check=True, capture_output=True, timeout=600)
+    subprocess.run([sys.executable, "-m", "benchmarks.paper_experiment", "--quick", "--out", str(tmp_path),
+                    "--folder", str(tmp_path / "work")], check=True, capture_output=True, timeout=600, cwd=ROOT)
     out = json.loads((tmp_path / "benchmarks" / "results" / "paper_experiment.json").read_text())
     arms = {row["arm"]: row for row in out["arms"]}
     assert set(arms) == {"A", "B r0", "B r1", "B static r0", "R r0", "R r1", "R static r0"}  # --quick: static r0
@@ -147,7 +146,7 @@ def test_the_quick_experiment_runs_every_arm_and_renders_a_page_that_decides(tmp
 def _train_longer_on_its_exported_arms(out: dict, tmp_path: Path) -> None:
     """benchmarks/experiment_longer.py on the quick run's folder: the exported rows are the ones each seed trained
     on; three arms train again (a few steps) from the arrays alone and are scored on the same held-out grasps."""
-    longer = importlib.import_module("experiment_longer")
+    longer = importlib.import_module("benchmarks.experiment_longer")
     longer.export(tmp_path / "work", out, tmp_path / "arms.npz")
     data = np.load(tmp_path / "arms.npz", allow_pickle=False)
     trained = {(row["arm"], s["seed"]): s["train_grasps"] for row in out["arms"] for s in row["heldout"]["seeds"]}
@@ -172,7 +171,7 @@ def _arm(name: str, core_seconds: float, top1: float, ap: float) -> dict:
 
 @pytest.mark.parametrize("b_ap, holds", [(0.70, True), (0.66, False)])
 def test_b_is_as_good_as_r_only_when_its_top1_and_its_ap_both_are(b_ap, holds):
-    experiment = importlib.import_module("paper_experiment")
+    experiment = importlib.import_module("benchmarks.paper_experiment")
     out = {"arms": [_arm("A", 1000.0, 0.85, 0.72), _arm("B r2", 150.0, 0.83, b_ap), _arm("R r2", 20.0, 0.80, 0.70)],
            "heldout": {"positive_rate": 0.44}}
     d = experiment.decide(out)
@@ -203,7 +202,7 @@ def test_the_representatives_dataset_gives_each_labelled_patch_its_representativ
 
     from onepiece_dist.learn.dataset import GraspDataset
 
-    variants = importlib.import_module("experiment_b_variants")
+    variants = importlib.import_module("benchmarks.experiment_b_variants")
     source = zarr.open_group(str(tmp_path / "b.zarr"), mode="w")
     source.attrs.update({"onepiece_format": FORMAT_VERSION, "complete": True, "grid_shape": [4, 8, 2], "code_bytes": 8,
                          "assembly": {"unique_codes": 3}})
@@ -234,7 +233,7 @@ def test_the_source_labels_dataset_gives_each_patch_the_label_a_gave_its_represe
     from onepiece_dist.learn.dataset import GraspDataset
     from onepiece_dist.store.dataset import encode_names
 
-    variants = importlib.import_module("experiment_b_variants")
+    variants = importlib.import_module("benchmarks.experiment_b_variants")
     poses = np.tile(np.eye(4), (5, 1, 1))
     poses[:, 0, 3] = np.arange(5)  # B's grasp k: object [duck, duck, mug, mug, mug][k], candidate k
     crops = np.random.default_rng(0).normal(size=(3, 16, 3)).astype(np.float16)
@@ -257,7 +256,7 @@ def test_the_source_labels_dataset_gives_each_patch_the_label_a_gave_its_represe
 
 
 def test_repeat_agreement_counts_equal_labels_against_the_floor_of_independent_ones():
-    variants = importlib.import_module("experiment_b_variants")
+    variants = importlib.import_module("benchmarks.experiment_b_variants")
     first, again = np.array([1, 1, 0, 0], bool), np.array([1, 0, 0, 0], bool)
     out = variants.repeat_agreement(first, again, np.array([1.0, 0.75, 0.5, 0.0]), np.array([1.0, 0.5, 0.25, 0.0]))
     assert out["agreement"] == 0.75 and out["independent_floor"] == 0.5  # 0.5 * 0.25 + 0.5 * 0.75
@@ -272,12 +271,12 @@ def _variant_row(radius: int, variant: str, ap: float, top1: float) -> dict:
 
 
 def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labels_repeat():
-    page = importlib.import_module("experiment_page")
+    page = importlib.import_module("benchmarks.experiment_page")
     rows = [_variant_row(radius, variant, ap, top1) for radius, variant, ap, top1 in (
         (0, "as_trained", 0.69, 0.84), (0, "representatives", 0.692, 0.87), (0, "source_labels", 0.72, 0.90),
         (2, "as_trained", 0.67, 0.83), (2, "representatives", 0.66, 0.82), (2, "source_labels", 0.70, 0.95))]
-    r = {"command": "python benchmarks/experiment_b_variants.py", "date": "2026-11-27", "machine": "x86_64",
-         "experiment": "python benchmarks/paper_experiment.py", "experiment_date": "2026-11-27", "model": "pointnet",
+    r = {"command": "python -m benchmarks.experiment_b_variants", "date": "2026-11-27", "machine": "x86_64",
+         "experiment": "python -m benchmarks.paper_experiment", "experiment_date": "2026-11-27", "model": "pointnet",
          "steps": 500, "heldout_random_choice": 0.42, "rows": rows,
          "label_transfer": {"0": {"patch_vs_representative": 0.66, "patch_vs_every_grasp": 0.525}},
          "label_repeatability": {"grasps": 2560, "agreement": 0.75, "quality_correlation": 0.6,
@@ -296,7 +295,7 @@ def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labe
 
 
 def test_the_label_load_reaches_every_arm_spec_and_the_page_says_which_it_was(tmp_path):
-    experiment = importlib.import_module("paper_experiment")
+    experiment = importlib.import_module("benchmarks.paper_experiment")
     args = experiment.parse_args(["--quick", "--load", "grasp", "--load-mass", "0.25", "--name", "run_b"])
     spec = experiment.base_spec(args, tmp_path)
     assert (spec.sim.load, spec.sim.load_mass, args.name) == ("grasp", 0.25, "run_b")

@@ -126,7 +126,6 @@ if __name__ == "__main__" and sys.argv[1:] == ["--print"]:
 
     if os.environ.get(ONE_CPU):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
     with tempfile.TemporaryDirectory() as scratch:
         print(json.dumps(run_pinned_job(Path(scratch))))
 

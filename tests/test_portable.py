@@ -9,7 +9,6 @@ import os
 import platform
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,5 +127,4 @@ def test_both_crop_products_give_the_same_bits_and_a_face_on_a_voxel_boundary_on
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
     print(json.dumps(pose_digests()))
