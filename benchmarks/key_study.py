@@ -364,7 +364,7 @@ def command_line(args) -> str:
 
 
 def main(argv=None) -> dict:
-    from benchmarks.key_study_page import plot_keys, write_page
+    from onepiece_dist.study.key_study_page import plot_keys, write_page
 
     args = parse_args(argv)
     start = time.perf_counter()

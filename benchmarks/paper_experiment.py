@@ -38,11 +38,11 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 from benchmarks.experiment_learn import TrainJob, arm_summary, baselines, pair_agreement  # noqa: E402
-from benchmarks.experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
 from benchmarks.experiment_train import parse_rates, spawn_context, train_all, train_with_search, work_folder  # noqa: E402
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
 from onepiece_dist.core.similar import similar_clusters  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
+from onepiece_dist.study.experiment_page import plot_curves, plot_tradeoff, write_page  # noqa: E402
 from onepiece_dist.study.jobs import finished  # noqa: E402
 
 HELDOUT_START = 500  # random_urdfs from here on are never train objects
@@ -351,7 +351,7 @@ def main(argv=None) -> dict:
     (args.out / "benchmarks" / "results" / f"{args.name}.json").write_text(json.dumps(out, indent=2) + "\n")
     plot_curves(out, args.out / "docs" / f"{args.name}_cost.png")
     plot_tradeoff(out, args.out / "docs" / f"{args.name}_tradeoff.png")
-    write_page(out, args.out / "docs" / f"{args.name}.md")
+    write_page(out, args.out / "docs" / f"{args.name}.md", ROOT / "benchmarks" / "results")
     print(json.dumps({k: v for k, v in out.items() if k in ("decision", "wall_seconds")}, indent=2))
     return out
 

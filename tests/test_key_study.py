@@ -15,7 +15,7 @@ from onepiece_dist.core.voxel import crop_regions
 
 ROOT = Path(__file__).resolve().parents[1]
 study = importlib.import_module("benchmarks.key_study")
-page = importlib.import_module("benchmarks.key_study_page")
+page = importlib.import_module("onepiece_dist.study.key_study_page")
 
 
 def keys(values) -> np.ndarray:

@@ -14,8 +14,9 @@ import pytest
 from onepiece_dist.store.format import FORMAT_VERSION
 
 ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
 learn = importlib.import_module("benchmarks.experiment_learn")
-page = importlib.import_module("benchmarks.experiment_page")
+page = importlib.import_module("onepiece_dist.study.experiment_page")
 training = importlib.import_module("benchmarks.experiment_train")
 
 
@@ -54,7 +55,7 @@ def test_pair_agreement_is_perfect_when_the_code_decides_the_label_and_lower_for
 def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path, name):
     result = json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
     assert result["args"].get("name", "paper_experiment") == name
-    page.write_page(result, tmp_path / "page.md")
+    page.write_page(result, tmp_path / "page.md", ROOT / "benchmarks" / "results")
     assert (ROOT / "docs" / f"{name}.md").read_text() == (tmp_path / "page.md").read_text(), \
         f"docs/{name}.md is stale: rerun benchmarks/paper_experiment.py (or render its results)"
     for plot in ("cost", "tradeoff"):
@@ -271,7 +272,7 @@ def _variant_row(radius: int, variant: str, ap: float, top1: float) -> dict:
 
 
 def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labels_repeat():
-    page = importlib.import_module("benchmarks.experiment_page")
+    page = importlib.import_module("onepiece_dist.study.experiment_page")
     rows = [_variant_row(radius, variant, ap, top1) for radius, variant, ap, top1 in (
         (0, "as_trained", 0.69, 0.84), (0, "representatives", 0.692, 0.87), (0, "source_labels", 0.72, 0.90),
         (2, "as_trained", 0.67, 0.83), (2, "representatives", 0.66, 0.82), (2, "source_labels", 0.70, 0.95))]
@@ -281,17 +282,17 @@ def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labe
          "label_transfer": {"0": {"patch_vs_representative": 0.66, "patch_vs_every_grasp": 0.525}},
          "label_repeatability": {"grasps": 2560, "agreement": 0.75, "quality_correlation": 0.6,
                                  "positive_rate": 0.44, "positive_rate_again": 0.45, "independent_floor": 0.5}}
-    text = "\n".join(page.variants_section(r))
+    text = "\n".join(page.variants_section(r, RESULTS))
     assert "Lifts B to R: r0 representatives' own crops and A's labels." in text  # r2's AP 0.70 < R's 0.71
     perfect = [line for line in text.splitlines() if line.startswith("- r")]
     assert "reaches R" in perfect[0] and "from 0.690 to 0.692" in perfect[0] and "still trails R" in perfect[1]
     assert "agree with A's labels 75.0%" in text and "r0: 66.0% with their representatives'" in text
     r["label_repeatability"] = None
-    assert "repeats itself" not in "\n".join(page.variants_section(r))
+    assert "repeats itself" not in "\n".join(page.variants_section(r, RESULTS))
     r["dataset_counts"] = {"B r0": [11118, 11128], "heldout": [7502, 7500]}
-    assert "B r0 11,118 (11,128), heldout 7,502 (7,500)" in "\n".join(page.variants_section(r))
+    assert "B r0 11,118 (11,128), heldout 7,502 (7,500)" in "\n".join(page.variants_section(r, RESULTS))
     r["dataset_counts"] = {"B r0": [11128, 11128], "heldout": [7500, 7500]}
-    assert "the experiment's own (same counts)" in "\n".join(page.variants_section(r))
+    assert "the experiment's own (same counts)" in "\n".join(page.variants_section(r, RESULTS))
 
 
 def test_the_label_load_reaches_every_arm_spec_and_the_page_says_which_it_was(tmp_path):

@@ -5,11 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from onepiece_dist.study.markdown import pct, pyplot
 from onepiece_dist.study.result import Arm, Measure, StudyResult
-
-
-def pct(value: float | None) -> str:
-    return "-" if value is None else f"{100 * value:.1f}%"
 
 
 def megabytes(count: int | None) -> str:
@@ -104,10 +101,7 @@ def plot_curves(result: StudyResult, path: Path) -> bool:
     """Held-out top-1 and AP against labelled grasps (R's learning curve, B's arms, A's band); False without
     matplotlib (the optional 'plots' extra)."""
     try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = pyplot()
     except ImportError:
         return False
     a = result.arms[0]

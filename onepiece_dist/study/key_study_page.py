@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from benchmarks.report import in_words, pct
+from onepiece_dist.study.markdown import in_words, pct, pyplot
 
 REFERENCE = "occupancy 10 mm"  # the code the paper experiment dedups by
 
@@ -161,7 +161,8 @@ def write_page(out: dict, path: Path) -> None:
     lines = [
         "# Which dedup key decides the label", "",
         f"Command: `{out['command']}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} minutes"
-        f"{_jobs(out)}). Rendered from benchmarks/results/{out['name']}.json by benchmarks/key_study_page.py.", "",
+        f"{_jobs(out)}). Rendered from benchmarks/results/{out['name']}.json by "
+        "onepiece_dist/study/key_study_page.py.", "",
         "The method labels one grasp per key and lets that label stand for every grasp with the key. This measures, "
         "without a network, how far each key's label holds on unseen objects: a held-out grasp whose key some "
         "train grasp has takes the label of one of that key's train grasps (B's one label per key, as if its patch "
@@ -224,9 +225,8 @@ def _jobs(out: dict) -> str:
 
 
 def plot_keys(out: dict, path: Path) -> None:
-    from benchmarks.experiment_page import _pyplot
 
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.0, 4.0), dpi=110)
     for k, r in enumerate(out["keys"]):
         share, majority = r["decided_share_one_label"], r["decided_share_majority"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from benchmarks.report import in_words, pct, provenance, table
+from onepiece_dist.study.markdown import in_words, pct, provenance, pyplot, table
 
 PAPER = {"time_ratio": "8x", "storage_ratio": "6.3x", "success": "89% = 89% (real robot)"}
 STAGES = ("ingest", "extract", "dedup", "assemble", "label")
@@ -254,7 +254,7 @@ VARIANT_WORDS = {"as_trained": "as the experiment trained it", "sqrt_weights": "
                  "source_labels": "representatives' own crops and A's labels"}
 
 
-def variants_section(r: dict) -> list[str]:
+def variants_section(r: dict, results: Path) -> list[str]:
     """B trained again with patch weights, its representatives' crops or their labels on the source objects,
     against the experiment's B and R; and how far the label protocol repeats itself."""
     def reaches_r(row: dict) -> bool:
@@ -283,7 +283,7 @@ def variants_section(r: dict) -> list[str]:
             + f" A random choice per held-out object succeeds {pct(r['heldout_random_choice'])} of the time: a top-1 "
             "below it ranks the held-out grasps worse than chance. Weighing by count puts most of the loss on a "
             "few large clusters, each with the one label of its representative.", "", *_perfect_patch(r),
-            *_repeatability(r), *_key_study_link()]
+            *_repeatability(r), *_key_study_link(results)]
 
 
 def _datasets_sentence(r: dict) -> str:
@@ -354,9 +354,10 @@ def _label_load(out: dict) -> str:
             "docs/paper_experiment_grasp_load.md.")
 
 
-def _longer_link(out: dict) -> list[str]:
-    """A line pointing to benchmarks/experiment_longer.py's pages for this run, where their results are committed."""
-    found = sorted((Path(__file__).resolve().parent / "results").glob(f"{_name(out)}_longer*.json"))
+def _longer_link(out: dict, results: Path) -> list[str]:
+    """A line pointing to benchmarks/experiment_longer.py's pages for this run, where their results are committed
+    in ``results``."""
+    found = sorted(results.glob(f"{_name(out)}_longer*.json"))
     if not found:
         return []
     pages = in_words([f"docs/{path.stem}.md ({_budget(json.loads(path.read_text()))})" for path in found])
@@ -364,12 +365,12 @@ def _longer_link(out: dict) -> list[str]:
             "same rows and held-out grasps (benchmarks/experiment_longer.py)."]
 
 
-def _key_study_link() -> list[str]:
+def _key_study_link(results: Path) -> list[str]:
     """A line naming benchmarks/key_study.py's pages (other dedup keys than the occupancy code) and what each says,
-    where their results are committed."""
-    from benchmarks.key_study_page import headline_sentence
+    where their results are committed in ``results``."""
+    from onepiece_dist.study.key_study_page import headline_sentence
 
-    found = sorted((Path(__file__).resolve().parent / "results").glob("key_study*.json"))
+    found = sorted(results.glob("key_study*.json"))
     if not found:
         return []
     said = [f"docs/{path.stem}.md: {headline_sentence(json.loads(path.read_text()))}" for path in found]
@@ -382,14 +383,17 @@ def _budget(longer: dict) -> str:
             f"{longer['device'].split(',')[0]}")
 
 
-def write_page(out: dict, path: Path) -> None:
+def write_page(out: dict, path: Path, results: Path) -> None:
+    """The page of the experiment ``out`` at ``path``, linking the longer trainings and key studies committed in
+    ``results`` (the checkout's benchmarks/results)."""
     args = out["args"]
     lines = ["# The paper's experiment, in simulation", "",
              f"Command: `{out['command'].strip()}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} "
-             f"minutes). Rendered from benchmarks/results/{_name(out)}.json by benchmarks/experiment_page.py.", "",
+             f"minutes). Rendered from benchmarks/results/{_name(out)}.json by "
+             "onepiece_dist/study/experiment_page.py.", "",
              _label_load(out), "",
              *headline(out), "", "## What holds here", "", *verdict(out), "", "## What the figures say", "",
-             *analysis(out), *_longer_link(out), "", "## Scale and protocol", "",
+             *analysis(out), *_longer_link(out, results), "", "## Scale and protocol", "",
              f"Train: {args['objects']} objects (pybullet named + random_urdfs; {out['train_objects_ok']} passed "
              f"validation), {args['grasps']} candidates each from the paper's normal-direction sampler, seed "
              f"{args['seed']}. Held-out: random_urdfs from index 500 on, {args['heldout']} objects x "
@@ -429,12 +433,12 @@ def write_page(out: dict, path: Path) -> None:
              "labelled on its own object). Same-code pairs: the first grasp of each code (cluster, at radius r) "
              "against up to four others; random pairs: as many pairs of grasps with different codes. The code "
              "decides the label as far as same-code agreement exceeds random-pair agreement. The plot leaves out "
-             "rows with fewer than 30 same-code pairs.", *_key_study_link()]
+             "rows with fewer than 30 same-code pairs.", *_key_study_link(results)]
     path.write_text("\n".join(lines) + "\n")
 
 
 def plot_curves(out: dict, path: Path) -> None:
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.4), dpi=110)
     radii = sorted({r["radius"] for r in out["cost_curve"]["rows"]})
     for radius in radii:
@@ -456,7 +460,7 @@ def plot_curves(out: dict, path: Path) -> None:
 
 
 def plot_tradeoff(out: dict, path: Path) -> None:
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.8), dpi=110)
     for r in out["tradeoff"]:
         same = r["same_code"]["success_agreement"]
@@ -474,12 +478,3 @@ def plot_tradeoff(out: dict, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
