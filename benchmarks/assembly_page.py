@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from benchmarks.report import provenance, render_block, table
+from benchmarks.committed import render_block
+from onepiece_dist.study.markdown import provenance, table
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "assembly.md"
 FIGURES_START = "<!-- figures: rendered by benchmarks/report.py from benchmarks/results/default_job.json -->"

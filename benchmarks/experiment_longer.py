@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.report import in_words  # standard library only: runs on the GPU machine too
+from onepiece_dist.study.markdown import in_words  # standard library only: runs on the GPU machine too
 
 ROOT = Path(__file__).resolve().parents[1]
 QUANT = 127  # int8 steps on each side of zero

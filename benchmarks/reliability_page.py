@@ -7,7 +7,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from benchmarks.report import load, met, provenance, render_block, table
+from benchmarks.committed import load, met, render_block
+from onepiece_dist.study.markdown import provenance, table
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "reliability.md"
 CHAOS_START = "<!-- chaos: rendered by benchmarks/report.py from benchmarks/results/chaos.json -->"

@@ -8,24 +8,15 @@ benchmark whose result file is missing is listed as not run.
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
+from benchmarks.committed import HERE, RESULTS, load, met
+from onepiece_dist.study.markdown import pct, provenance, table
 
-from onepiece_dist.study.markdown import in_words, pct, provenance, table  # noqa: F401  (the page modules import them here)
-
-HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "results"
 PAGE = HERE.parent / "docs" / "performance.md"
 
 
 PINNED_SENTENCE = ("Speed work leaves codes and labels as they were: tests/test_pinned_job.py pins the codes, "
                    "representatives and labels of a small labelled job (3 objects x 24 candidates, every stage "
                    "to label), and fails when any of them changes.")
-
-def load(name: str) -> dict | None:
-    path = RESULTS / f"{name}.json"
-    return json.loads(path.read_text()) if path.is_file() else None
-
 
 def dedup_section(r: dict) -> list[str]:
     return [f"## Exact dedup: {provenance(r)}", "", *table(
@@ -127,10 +118,6 @@ def _fidelity_lines(r: dict) -> list[str]:
                 ["settings", "label trials/s/core", "success rate", "labels equal to the reference"],
                 [[f"{row['settings']} ({settings(row)})", row["label_trials_per_s_per_core"],
                   f"{row['success_rate']:.3f}", f"{row['agreement_with_reference']:.1%}"] for row in fid["rows"]])]
-
-
-def met(value: float, target: float) -> str:
-    return "met" if value >= target else "not met"
 
 
 def similar_section(r: dict) -> list[str]:
@@ -416,19 +403,6 @@ def render() -> str:
     if missing:
         lines += [f"Not run yet: {', '.join(missing)}.", ""]
     return "\n".join(lines)
-
-
-def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[str, ...], section,
-                 text: str | None = None) -> str:
-    """``page``'s text (or ``text``, the page as rendered so far) with the block between the two marks rendered by
-    ``section`` from the result(s) ``names`` (one argument each; the block is kept as it is when any of them is
-    missing)."""
-    text = page.read_text() if text is None else text
-    results = [load(name) for name in ((names,) if isinstance(names, str) else names)]
-    if any(result is None for result in results):
-        return text
-    start, end = text.index(start_mark), text.index(end_mark) + len(end_mark)
-    return text[:start] + section(*results) + text[end:]
 
 
 def main() -> None:

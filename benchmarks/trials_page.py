@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from benchmarks.report import render_block
+from benchmarks.committed import render_block
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "trials.md"
 START = "<!-- label rules: rendered by benchmarks/report.py from benchmarks/results/label_rules.json -->"

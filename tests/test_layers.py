@@ -109,3 +109,35 @@ def test_the_example_job_lists_every_field_at_its_default():
     assert load_job_spec(example, {}) == JobSpec()
     for name in JobSpec.model_fields:
         assert f"\n{name}:" in example.read_text(), name
+
+
+def benchmark_imports() -> dict[str, set[str]]:
+    """{benchmarks module: the benchmarks modules it imports (``benchmarks.X``, lazy ones too)}."""
+    folder = ROOT / "benchmarks"
+    graph = {}
+    for path in folder.glob("*.py"):
+        found = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("benchmarks."):
+                found.add(node.module.split(".")[1])
+            elif isinstance(node, ast.ImportFrom) and node.module == "benchmarks":
+                found |= {alias.name for alias in node.names}
+        graph[path.stem] = found
+    return graph
+
+
+def test_benchmarks_import_each_other_without_a_circle_or_a_path_trick():
+    """Issue 38: the scripts in benchmarks/ form no import circle, and nothing in benchmarks/ or tests/ edits
+    sys.path to reach a module (benchmarks is a package, the checkout's package is installed)."""
+    graph = benchmark_imports()
+    assert graph["report"] and graph["scaling_page"] == {"committed"}, graph  # the guard sees imports
+
+    def reaches(start: str, target: str, seen: frozenset = frozenset()) -> bool:
+        return any(d == target or (d not in seen and reaches(d, target, seen | {d})) for d in graph.get(start, ()))
+
+    assert [m for m in graph if reaches(m, m)] == []
+    tricks = [f"{path.relative_to(ROOT)}:{number}" for folder in ("benchmarks", "tests")
+              for path in (ROOT / folder).rglob("*.py")
+              for number, line in enumerate(path.read_text().splitlines(), 1)
+              if "sys.path.insert" in line and path.name != "test_layers.py"]
+    assert tricks == []
