@@ -31,12 +31,19 @@ class StudyJobs:
 
 
 def study_jobs(spec: StudySpec, folder: Path) -> StudyJobs:
+    """The held-out job (every candidate labelled by physics trials: the truth), A and B per radius. With the
+    force-closure label, A scores its candidates without lifting anything, and B labels each patch at the settled
+    pose of one trial; the held-out job also keeps the closure scores (how well the label predicts the truth)."""
     jobs = folder / "jobs"
-    labelled = {"sim": {"label": True}, "stages": ("ingest", "extract", "dedup")}
-    heldout = spec.job_spec(spec.heldout, spec.heldout_grasps, spec.seed + 1, str(jobs / "heldout.zarr"), **labelled)
-    a = spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / "A.zarr"), **labelled)
+    stages = ("ingest", "extract", "dedup")
+    closure = spec.label == "force_closure"
+    heldout = spec.job_spec(spec.heldout, spec.heldout_grasps, spec.seed + 1, str(jobs / "heldout.zarr"),
+                            sim={"label": True}, stages=stages, closure=spec.closure(truth=True))
+    a = spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / "A.zarr"),
+                      sim={"label": not closure}, stages=stages, closure=spec.closure())
+    b_sim = {"label_trials": 1} if closure else {}
     b = {r: spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / f"B-r{r}.zarr"),
-                          cache_dir=str(jobs / "parts-B"), similar_radius=r,
+                          cache_dir=str(jobs / "parts-B"), similar_radius=r, sim=b_sim, closure=spec.closure(),
                           stages=("ingest", "extract", "dedup", "assemble", "label"))
          for r in spec.radii}
     return StudyJobs(heldout, a, b)

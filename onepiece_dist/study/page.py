@@ -23,8 +23,9 @@ def verdict(result: StudyResult) -> list[str]:
     d, a = result.decision, result.arms[0]
     conf = f"{100 * result.spec.targets.confidence:.0f}%"
     lines = [f"**Answer.** On these {result.train_objects} train objects and {result.heldout.objects} held-out "
-             f"objects, A (every candidate labelled) reaches held-out top-1 {measure(a.heldout.top1, True)} and AP "
-             f"{measure(a.heldout.ap, False)} ({conf} intervals over held-out objects)."]
+             f"objects, {label_words(result)}, A (every candidate labelled) reaches held-out top-1 "
+             f"{measure(a.heldout.top1, True)} and AP {measure(a.heldout.ap, False)} ({conf} intervals over held-out "
+             "objects)."]
     if d.cheapest is None or d.cheapest == "A":
         lines.append("No cheaper plan reaches A's intervals: **label everything (A)**.")
     else:
@@ -46,6 +47,27 @@ def verdict(result: StudyResult) -> list[str]:
                      f"{pct(p.patch_vs_every_grasp)} (floor {pct(p.shuffled_patches)}); the code decides "
                      f"{pct(p.share_decided)} of the label's headroom over chance.")
     return lines
+
+
+def label_words(result: StudyResult) -> str:
+    s = result.spec
+    if s.label == "physics":
+        return "every arm trained on the physics trials' label"
+    return (f"every arm trained on force closure (good when fc_mu <= {s.good_mu:g}) and judged by physics trials "
+            "on the held-out objects")
+
+
+def label_fit_lines(result: StudyResult) -> list[str]:
+    f = result.label_fit
+    if f is None:
+        return []
+    return ["## The label against the held-out truth", "",
+            f"No network: the held-out candidates ({f.grasps:,}) scored by force closure and labelled by physics "
+            f"trials. Good by force closure (fc_mu <= {f.good_mu:g}): {pct(f.closure_positive_rate)}; held in the "
+            f"trials: {pct(f.physics_positive_rate)}; the two labels agree on {pct(f.agreement)}. Ranked by fc_mu, "
+            f"the candidates reach AP {f.ap:.3f} for physics success (a random ranking: "
+            f"{f.physics_positive_rate:.3f}); per object, a candidate among those with the lowest fc_mu succeeds "
+            f"{pct(f.top1)} (a random candidate: {pct(result.heldout.random_choice)}).", ""]
 
 
 def arm_row(arm: Arm) -> str:
@@ -86,6 +108,7 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
                   *(f"| {p.radius} | {p.matched_grasps:,} | {pct(p.patch_vs_representative)} | "
                     f"{pct(p.patch_vs_every_grasp)} | {pct(p.shuffled_patches)} | {pct(p.same_code)} | "
                     f"{pct(p.random_pairs)} | {pct(p.share_decided)} |" for p in result.premise), ""]
+    lines += label_fit_lines(result)
     if result.rejected:
         lines += ["## Rejected objects", "", *(f"- {r}" for r in result.rejected), ""]
     lines += ["## Run", "",

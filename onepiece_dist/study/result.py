@@ -110,6 +110,22 @@ class Premise(_Frozen):
                                         "the label's headroom over chance the code decides.")
 
 
+class LabelFit(_Frozen):
+    """With a force-closure study: how well the train label itself, with no network, predicts the held-out truth
+    (physics trials) on the held-out candidates, which carry both."""
+
+    label: str = Field(description="The train arms' label ('force_closure').")
+    good_mu: float
+    grasps: int = Field(description="Held-out candidates scored.")
+    closure_positive_rate: float = Field(description="Share good by force closure (fc_mu <= good_mu).")
+    physics_positive_rate: float = Field(description="Share that held in the physics trials (the truth).")
+    agreement: float = Field(description="Force-closure label equal to the physics label.")
+    ap: float = Field(description="AP of ranking the candidates by fc_mu (lowest first, ties counted together) "
+                      "for physics success.")
+    top1: float = Field(description="Per object, the expected physics success of a candidate drawn among those "
+                        "with the lowest fc_mu; mean over objects.")
+
+
 class Decision(_Frozen):
     """The answer, first lines of the page: the cheapest plan as good as A, and whether the one object pays."""
 
@@ -144,4 +160,6 @@ class StudyResult(_Frozen):
     heldout: Baselines
     arms: list[Arm]
     premise: list[Premise]
+    label_fit: LabelFit | None = Field(None, description="The train label against the held-out truth (force-closure "
+                                       "studies).")
     decision: Decision

@@ -224,7 +224,7 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                     trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int) -> StudyResult:
     from onepiece_dist.service.registry import package_version
     from onepiece_dist.store import open_dataset
-    from onepiece_dist.study.premise import premise
+    from onepiece_dist.study.premise import label_fit, premise
     from onepiece_dist.study.stats import baselines
 
     ho = open_dataset(jobs.heldout.output)
@@ -242,6 +242,7 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                        reused_jobs=[name for name, rec in records.items() if rec.reused], reused_runs=reused_runs,
                        train_objects=status.progress.objects_done - len(status.rejections), rejected=rejected,
                        heldout=Baselines(**baselines(labels, groups)), arms=arms, premise=premises,
+                       label_fit=label_fit(ho, spec.good_mu) if spec.label == "force_closure" else None,
                        decision=decide(arms, spec.targets))
 
 
@@ -283,7 +284,7 @@ def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
     radius; R labels its candidates on their own objects, at A's cost per candidate."""
     from onepiece_dist.store.dataset import delivered_bytes, disk_bytes
 
-    k = spec.label_trials
+    k = spec.label_trials if spec.label == "physics" else 0  # force closure labels A without lifting anything
     a = records["A"].status
     a_stages = core_seconds(a)
     a_cost = ArmCost(core_seconds=round(sum(a_stages.values()), 2), stages=a_stages,

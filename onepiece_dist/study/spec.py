@@ -81,6 +81,12 @@ class StudySpec(_Frozen):
     load: Literal["object", "grasp"] = Field("object", description="What the label trials lift: the object, or "
                                              "a payload at the grasp centre (docs/trials.md).")
     load_mass: float = Field(0.5, gt=0, le=10, description="The payload (kg) with load='grasp'.")
+    label: Literal["physics", "force_closure"] = Field("physics", description="What the train arms learn: the "
+        "physics trials' outcome, or force closure at good_mu or better (the paper's label: closure scores on the "
+        "source meshes for A and R, without lifting anything, and on the one object's patches at the settled pose "
+        "of one trial for B). Held-out objects are always judged by physics, the stand-in for the paper's robot.")
+    good_mu: float = Field(0.4, gt=0, le=10, description="With label='force_closure': a grasp is good when its "
+                           "smallest friction level in force closure (graspnetAPI's sweep) is at most this.")
     points_per_grasp: int = Field(256, ge=16, le=4096, description="Gripper-frame points stored per grasp.")
     sampler: Literal["antipodal", "normal"] = Field("normal", description="Candidate sampler (the paper samples "
                                                     "along the surface normal).")
@@ -104,6 +110,13 @@ class StudySpec(_Frozen):
     def digest(self) -> str:
         """Names this study: a folder holding another digest's results holds another study."""
         return hashlib.blake2b(self.model_dump_json().encode(), digest_size=8).hexdigest()
+
+    def closure(self, truth: bool = False) -> dict[str, Any]:
+        """The jobs' closure settings: none for a physics study; with force closure, the scores and (for train
+        jobs, not the held-out ``truth``) the label."""
+        if self.label == "physics":
+            return {}
+        return {"enabled": True, "good_mu": self.good_mu, "label": "physics" if truth else "force_closure"}
 
     def job_spec(self, objects: str, grasps: int, seed: int, output: str, **update: Any) -> JobSpec:
         """The job every arm shares: the study's sampler, physics, label protocol and crop."""
