@@ -153,9 +153,14 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
         assert len(arm.heldout.seeds) == 2 and arm.heldout.top1.interval[0] <= arm.heldout.top1.interval[1]
         assert 0 <= arm.heldout.ap.mean <= 1 and arm.cost.core_seconds > 0
     assert result.arms[3].cost.labelled_grasps == b.cost.labelled_grasps  # R of B's size
+    k = result.lookup  # the study's own code as a lookup, no network
+    assert list(k.ranked) == ["A", "B", "R", "S"] and k.ranked["A"].labels == a.cost.labelled_grasps
+    assert k.ranked["B"].labels == k.ranked["R"].labels == k.train_codes and 0 < k.coverage <= 1
+    assert k.ranked["A"].coverage == pytest.approx(k.coverage, abs=1e-4)
     assert result.decision.cheapest in {arm.name for arm in result.arms if arm.within_a}
     page = (folder / "study.md").read_text()
     assert page.splitlines()[2].startswith("**Answer.**") and f"{100 * a.heldout.top1.mean:.1f}%" in page
+    assert "## The code as a lookup (no network)" in page and f"{k.ranked['B'].ap:.3f}" in page
     (folder / "study.md").unlink()
     shown = subprocess.run([*ONEPIECE, "study", "report", str(folder)], capture_output=True, text=True, timeout=120)
     assert shown.returncode == 0, shown.stderr[-2000:]

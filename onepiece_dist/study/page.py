@@ -70,6 +70,23 @@ def label_fit_lines(result: StudyResult) -> list[str]:
             f"{pct(f.top1)} (a random candidate: {pct(result.heldout.random_choice)}).", ""]
 
 
+def lookup_lines(result: StudyResult) -> list[str]:
+    k = result.lookup
+    if k is None:
+        return []
+    lines = ["## The code as a lookup (no network)", "",
+             f"Each held-out candidate looks its code up among A's {k.train_codes:,} train codes: {pct(k.coverage)} "
+             f"find theirs. One train label of the code (B's one label per code) agrees with the held-out label "
+             f"{pct(k.one_label)} (labels that ignore the shape: {pct(k.one_label_floor)}); the code's majority "
+             f"{pct(k.majority)} (floor {pct(k.majority_floor)}). Held-out candidates ranked by the lookup:", "",
+             "| labels from | labels | coverage | AP | accuracy |", "| --- | ---: | ---: | ---: | ---: |"]
+    words = {"A": "every train grasp (A)", "B": "one per code (B)", "R": "as many at random (R)",
+             "S": "as many spread over codes by count (S)"}
+    lines += [f"| {words.get(arm, arm)} | {r.labels:,} | {pct(r.coverage)} | {r.ap:.3f} | {pct(r.accuracy)} |"
+              for arm, r in k.ranked.items()]
+    return [*lines, ""]
+
+
 def arm_row(arm: Arm) -> str:
     c, h = arm.cost, arm.heldout
     return (f"| {arm.name} | {c.labelled_grasps:,} | {c.label_trials:,} | {c.core_seconds:.1f} | "
@@ -108,7 +125,7 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
                   *(f"| {p.radius} | {p.matched_grasps:,} | {pct(p.patch_vs_representative)} | "
                     f"{pct(p.patch_vs_every_grasp)} | {pct(p.shuffled_patches)} | {pct(p.same_code)} | "
                     f"{pct(p.random_pairs)} | {pct(p.share_decided)} |" for p in result.premise), ""]
-    lines += label_fit_lines(result)
+    lines += lookup_lines(result) + label_fit_lines(result)
     if result.rejected:
         lines += ["## Rejected objects", "", *(f"- {r}" for r in result.rejected), ""]
     lines += ["## Run", "",

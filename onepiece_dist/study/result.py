@@ -126,6 +126,30 @@ class LabelFit(_Frozen):
                         "with the lowest fc_mu; mean over objects.")
 
 
+class LookupRanking(_Frozen):
+    """Held-out grasps ranked by the mean train label of their code among ``labels`` train labels."""
+
+    labels: int
+    coverage: float = Field(description="Held-out grasps whose code is among the labelled train grasps'.")
+    ap: float = Field(description="AP over the held-out grasps (ties counted together).")
+    accuracy: float = Field(description="Accuracy of a score above one half.")
+
+
+class KeyLookup(_Frozen):
+    """The premise with perfect patches and no network (study.lookup): each held-out grasp looks its code up
+    among A's train grasps and takes one train label of that code (B's one label per code) or the code's
+    majority; and held-out grasps ranked by such lookups from every train label (A), one label per code (B), as
+    many random labels (R) or labels spread over the codes by count (S), B, R and S over seeded draws."""
+
+    train_codes: int = Field(description="Distinct codes among A's grasps.")
+    coverage: float = Field(description="Held-out grasps whose code some train grasp has.")
+    one_label: float | None = Field(description="Agreement of one train label of the code with the held-out label.")
+    one_label_floor: float | None = Field(description="The same for labels that ignore the shape.")
+    majority: float | None = Field(description="Agreement of the code's majority train label.")
+    majority_floor: float | None
+    ranked: dict[str, LookupRanking] = Field(description="'A', 'B', 'R', 'S'.")
+
+
 class Decision(_Frozen):
     """The answer, first lines of the page: the cheapest plan as good as A, and whether the one object pays."""
 
@@ -160,6 +184,7 @@ class StudyResult(_Frozen):
     heldout: Baselines
     arms: list[Arm]
     premise: list[Premise]
+    lookup: KeyLookup | None = Field(None, description="The code as a lookup, without a network.")
     label_fit: LabelFit | None = Field(None, description="The train label against the held-out truth (force-closure "
                                        "studies).")
     decision: Decision

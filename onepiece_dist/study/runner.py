@@ -224,6 +224,7 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                     trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int) -> StudyResult:
     from onepiece_dist.service.registry import package_version
     from onepiece_dist.store import open_dataset
+    from onepiece_dist.study.lookup import key_lookup
     from onepiece_dist.study.premise import label_fit, premise
     from onepiece_dist.study.stats import baselines
 
@@ -242,6 +243,8 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                        reused_jobs=[name for name, rec in records.items() if rec.reused], reused_runs=reused_runs,
                        train_objects=status.progress.objects_done - len(status.rejections), rejected=rejected,
                        heldout=Baselines(**baselines(labels, groups)), arms=arms, premise=premises,
+                       lookup=key_lookup(a["grasps/code"], a["grasps/success"], ho["grasps/code"], labels > 0,
+                                         spec.seed),
                        label_fit=label_fit(ho, spec.good_mu) if spec.label == "force_closure" else None,
                        decision=decide(arms, spec.targets))
 
