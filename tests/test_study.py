@@ -169,6 +169,22 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
 
 @pytest.mark.sim
 @pytest.mark.slow
+def test_b_weighting_reaches_only_the_one_objects_runs(tiny_study):
+    """training.b_weighting (the variants of docs/performance.md as a study setting) weighs B's patches only."""
+    from onepiece_dist.study.jobs import run_or_reuse, study_jobs
+    from onepiece_dist.study.runner import plan_runs
+
+    folder, _ = tiny_study
+    spec = StudySpec(**{**TINY, "training": {**TINY["training"], "b_weighting": "sqrt"}})
+    jobs = study_jobs(spec, folder)
+    records = {name: run_or_reuse(name, job, lambda *_: pytest.fail("every job is finished")) for name, job
+               in jobs.named()}
+    weighting = {(run.arm, run.run.weighting) for run in plan_runs(spec, jobs, records)}
+    assert weighting == {("A", "none"), ("B r0", "sqrt"), ("R 0.5", "none"), ("R ~B r0", "none")}
+
+
+@pytest.mark.sim
+@pytest.mark.slow
 def test_a_force_closure_study_trains_on_closure_and_judges_by_physics(tmp_path):
     """Issue 40: the paper's label in a study. A and R learn force closure scored without lifting anything, B
     scores its patches at their settled pose, the held-out objects keep physics as the truth and carry the scores,

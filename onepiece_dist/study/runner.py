@@ -186,8 +186,9 @@ def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
     heldout = jobs.heldout.output
 
     def runs(arm: str, path: str, group: str, rows: tuple[int, ...] | None) -> list[ArmRun]:
+        weighting = t.b_weighting if group == "assembled/grasps" else "none"
         base = StepRun(path, group, rows, heldout, t.model, t.steps, t.batch_size, t.learning_rates[0],
-                       t.validation, 0, t.evaluations, device=t.device)
+                       t.validation, 0, t.evaluations, weighting=weighting, device=t.device)
         return [ArmRun(arm, seed, t.learning_rates[0], dataclasses.replace(base, seed=seed))
                 for seed in range(t.seeds)]
 

@@ -34,6 +34,10 @@ class StudyTraining(_Frozen):
     validation: float = Field(0.2, gt=0, lt=1, description="Share of train objects (or patches) held out to pick "
                               "the checkpoint and the learning rate.")
     evaluations: int = Field(10, ge=1, le=1000, description="Validation checks per run; the best is kept.")
+    b_weighting: Literal["none", "count", "sqrt"] = Field("none", description="B arms only: each patch's loss "
+                                                          "weighed by how many extracted grasps its label stands "
+                                                          "for (its code's count), that count's square root, or "
+                                                          "not (docs/performance.md, What would lift B to R).")
     device: Literal["auto", "cpu", "cuda"] = Field("auto", description="Where runs train: 'auto' takes a GPU "
                                                    "when the trainer actor has one.")
 
