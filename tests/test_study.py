@@ -265,3 +265,71 @@ def test_the_committed_quick_study_page_is_the_rendering_of_its_result(tmp_path)
     assert (tmp_path / "study.md").read_text() == (committed / "study.md").read_text()
     assert result.spec == load_study_spec(ROOT / "examples" / "studies" / "quick.yaml", {})
     assert {arm.kind for arm in result.arms} == {"A", "B", "R"} and result.wall_seconds < 600
+
+
+def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
+    from onepiece_dist.study.adaptive import first_rows, least_sure
+
+    inverse = np.array([0, 0, 0, 1, 1, 2, 3, 3])
+    first = first_rows(inverse, 4, np.random.default_rng(0))
+    assert sorted(inverse[first]) == [0, 1, 2, 3]  # every code once before any code twice
+    more = first_rows(inverse, 6, np.random.default_rng(0))
+    assert len(set(more)) == 6 and set(inverse[more]) == {0, 1, 2, 3}
+    scores = np.array([0.5, 0.45, 0.9, 0.52, 0.1, 0.0, 0.6, 0.49])
+    assert list(least_sure(scores, np.array([0]), inverse, 2)) == [7, 3]  # codes 3 and 1, least sure first
+    assert list(least_sure(scores, np.array([0]), inverse, 5)) == [7, 3, 1, 5, 6]  # codes 0, 2, then the rest
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_the_adaptive_arm_stops_by_its_rule(tiny_study):
+    """U stops after `patience` rounds without a validation AP gain above the margin, or at its round limit."""
+    from onepiece_dist.learn.train import StepResult
+    from onepiece_dist.study.adaptive import adaptive_rows
+
+    folder, _ = tiny_study
+    a_output = str(folder / "jobs" / "A.zarr")
+    trained = []
+    from onepiece_dist.store import open_dataset
+
+    n = len(open_dataset(a_output)["grasps/code"])
+    adaptive = {"first": 0.2, "batch": 0.1, "rounds": 5, "patience": 2, "margin": 0.01}
+    spec = StudySpec(**{**TINY, "adaptive": adaptive})
+
+    def fake(aps):
+        def train_one(run):
+            trained.append(run.rows)
+            return StepResult(scores=np.random.default_rng(len(trained)).random(n).astype(np.float32),
+                              curve=[{"step": 1, "val_ap": aps[len(trained) - 1]}], best_step=1, train_seconds=0.0,
+                              train_grasps=len(run.rows), validation_grasps=0, device="cpu")
+        return train_one
+
+    rows, rounds = adaptive_rows(spec, a_output, 1e-3, fake([0.5, 0.6, 0.605, 0.61, 0.9, 0.9]))
+    assert [r.validation_ap for r in rounds] == [0.5, 0.6, 0.605, 0.61]  # two rounds within the margin: stop
+    assert [r.labels for r in rounds] == [round(0.2 * n), *(round(0.2 * n) + k * round(0.1 * n) for k in (1, 2, 3))]
+    assert len(rows) == rounds[-1].labels == len(set(rows)) and list(trained[-1]) == list(rows)
+    trained.clear()
+    _, capped = adaptive_rows(StudySpec(**{**TINY, "adaptive": {**adaptive, "rounds": 1}}), a_output, 1e-3,
+                              fake([0.1, 0.5, 0.9]))
+    assert len(capped) == 2  # the round limit
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_a_study_with_the_adaptive_arm_compares_it_with_random_labels_of_its_size(tmp_path):
+    import jsonschema
+
+    from onepiece_dist.study.runner import Where, run_study
+
+    adaptive = {"first": 0.2, "batch": 0.1, "rounds": 2, "patience": 1, "margin": 0.0}
+    result = run_study(StudySpec(**{**TINY, "adaptive": adaptive}), tmp_path, Where(in_process=True))
+    arms = {arm.name: arm for arm in result.arms}
+    assert arms["U"].kind == "U" and arms["R ~U"].kind == "R"
+    assert arms["U"].cost.labelled_grasps == arms["R ~U"].cost.labelled_grasps == result.adaptive[-1].labels
+    assert arms["U"].cost.core_seconds == pytest.approx(
+        arms["A"].cost.core_seconds * result.adaptive[-1].labels / arms["A"].cost.labelled_grasps, abs=0.02)
+    assert 1 <= len(result.adaptive) <= 3 and result.decision.u_beats_random in (True, False)
+    document = json.loads((tmp_path / "study.json").read_text())
+    jsonschema.validate(document, json.loads((ROOT / "schemas" / "study_result.schema.json").read_text()))
+    page = (tmp_path / "study.md").read_text()
+    assert "## The adaptive arm" in page and "as many random labels (R ~U" in page

@@ -63,6 +63,8 @@ def decide(arms: list[Arm], targets: StudyTargets) -> Decision:
         control = matched_random(b, arms)
         if control is not None:
             versus[b.name] = b_beats_r(b, control)
+    named = {arm.name: arm for arm in arms}
+    u_beats = b_beats_r(named["U"], named["R ~U"]) if {"U", "R ~U"} <= set(named) else None
     return Decision(
         cheapest=cheapest.name if cheapest else None,
         cheapest_core_seconds=cheapest.cost.core_seconds if cheapest else None,
@@ -72,4 +74,4 @@ def decide(arms: list[Arm], targets: StudyTargets) -> Decision:
         cheapest_storage_ratio=cheapest.storage_ratio if cheapest else None,
         time_met=bool(cheapest and cheapest.time_ratio >= targets.time_ratio),
         storage_met=bool(cheapest and cheapest.storage_ratio >= targets.storage_ratio),
-        best_b=best_b.name if best_b else None, b_beats_random=versus)
+        best_b=best_b.name if best_b else None, b_beats_random=versus, u_beats_random=u_beats)

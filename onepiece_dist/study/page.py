@@ -42,6 +42,11 @@ def verdict(result: StudyResult) -> list[str]:
     for name, beats in d.b_beats_random.items():
         lines.append(f"{name} {'beats' if beats else 'does not beat'} a random subset of its size "
                      f"(R ~{name}: {'both' if beats else 'not both'} top-1 and AP at least R's).")
+    if d.u_beats_random is not None:
+        u = next(arm for arm in result.arms if arm.name == "U")
+        lines.append(f"The adaptive arm U ({u.cost.labelled_grasps:,} labels chosen by the network in "
+                     f"{len(result.adaptive or [])} rounds) {'beats' if d.u_beats_random else 'does not beat'} as "
+                     "many random labels (R ~U: both top-1 and AP at least R's).")
     for p in result.premise:
         lines.append(f"Premise at radius {p.radius}: a patch's label agrees with the grasps it stands for "
                      f"{pct(p.patch_vs_every_grasp)} (floor {pct(p.shuffled_patches)}); the code decides "
@@ -68,6 +73,19 @@ def label_fit_lines(result: StudyResult) -> list[str]:
             f"the candidates reach AP {f.ap:.3f} for physics success (a random ranking: "
             f"{f.physics_positive_rate:.3f}); per object, a candidate among those with the lowest fc_mu succeeds "
             f"{pct(f.top1)} (a random candidate: {pct(result.heldout.random_choice)}).", ""]
+
+
+def adaptive_lines(result: StudyResult) -> list[str]:
+    if not result.adaptive:
+        return []
+    plan = result.spec.adaptive
+    return ["## The adaptive arm", "",
+            f"Round 0 takes {pct(plan.first)} of A's candidates, one per code; each later round {pct(plan.batch)} "
+            "more, where the network trained on the labels so far is least sure, one per code while codes last; "
+            f"U stops after {plan.patience} rounds without a validation AP gain above {plan.margin:g}, or after "
+            f"{plan.rounds} rounds. Its labels are A's; the validation rows are part of them.", "",
+            "| round | labels | validation AP |", "| ---: | ---: | ---: |",
+            *(f"| {r.round} | {r.labels:,} | {r.validation_ap:.3f} |" for r in result.adaptive), ""]
 
 
 def lookup_lines(result: StudyResult) -> list[str]:
@@ -103,7 +121,8 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
         lines += [f"![held-out top-1 and AP against labelled grasps]({plot})", ""]
     lines += ["## Arms", "",
               "A labels every candidate on its own object; B r builds the one object at similar-shape radius r and "
-              "labels only there; R labels a random share of A's candidates (R ~B r: as many as B r labels). Every "
+              "labels only there; R labels a random share of A's candidates (R ~B r: as many as B r labels; R ~U: as "
+              "many as U); U takes the labels the network asks for (The adaptive arm, below). Every "
               f"arm trains the {s.training.model} network {s.training.steps} steps, {s.training.seeds} seeds, at the "
               "learning rate its own validation split picks. Core-seconds are summed inside the workers; R is "
               "charged A's cost per candidate. Delivered: what a trainer needs (the one object and its labels for B, "
@@ -125,7 +144,7 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
                   *(f"| {p.radius} | {p.matched_grasps:,} | {pct(p.patch_vs_representative)} | "
                     f"{pct(p.patch_vs_every_grasp)} | {pct(p.shuffled_patches)} | {pct(p.same_code)} | "
                     f"{pct(p.random_pairs)} | {pct(p.share_decided)} |" for p in result.premise), ""]
-    lines += lookup_lines(result) + label_fit_lines(result)
+    lines += adaptive_lines(result) + lookup_lines(result) + label_fit_lines(result)
     if result.rejected:
         lines += ["## Rejected objects", "", *(f"- {r}" for r in result.rejected), ""]
     lines += ["## Run", "",

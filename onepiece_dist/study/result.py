@@ -67,12 +67,20 @@ class ArmCost(_Frozen):
                                  "one object and labels, A's labelled grasps (R: its share of A's).")
 
 
+class AdaptiveRound(_Frozen):
+    """One round of the adaptive arm: its labels so far and the validation AP of the network trained on them."""
+
+    round: int
+    labels: int
+    validation_ap: float
+
+
 class Arm(_Frozen):
     """One arm: A (every candidate labelled on its own object), B (the one object at a similar-shape radius) or R
     (a random subset of A's labels, of a budget's size or of a B arm's size)."""
 
-    name: str = Field(description="'A', 'B r<radius>', 'R <share>' or 'R ~B r<radius>'.")
-    kind: Literal["A", "B", "R"]
+    name: str = Field(description="'A', 'B r<radius>', 'R <share>', 'R ~B r<radius>', 'U' or 'R ~U'.")
+    kind: Literal["A", "B", "R", "U"]
     radius: int | None = Field(None, description="B: the similar-shape radius; R ~B: the matched B arm's.")
     share: float | None = Field(None, description="R: share of A's labelled candidates.")
     unique_codes: int | None = Field(None, description="B: patches on the one object.")
@@ -165,6 +173,8 @@ class Decision(_Frozen):
     best_b: str | None = Field(description="The cheapest B arm within A's intervals, if any.")
     b_beats_random: dict[str, bool] = Field(description="Per B arm: its top-1 and AP are both at least those of "
                                             "the R arm of its size.")
+    u_beats_random: bool | None = Field(None, description="The adaptive arm's top-1 and AP both at least those of "
+                                        "R ~U, random labels of its size (with spec.adaptive).")
 
 
 class StudyResult(_Frozen):
@@ -184,6 +194,8 @@ class StudyResult(_Frozen):
     heldout: Baselines
     arms: list[Arm]
     premise: list[Premise]
+    adaptive: list[AdaptiveRound] | None = Field(None, description="The adaptive arm's rounds (with "
+                                                 "spec.adaptive).")
     lookup: KeyLookup | None = Field(None, description="The code as a lookup, without a network.")
     label_fit: LabelFit | None = Field(None, description="The train label against the held-out truth (force-closure "
                                        "studies).")

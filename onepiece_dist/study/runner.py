@@ -27,7 +27,7 @@ from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
 from onepiece_dist.study.jobs import JobRecord, StudyJobs, core_seconds, run_or_reuse, study_jobs
-from onepiece_dist.study.result import ArmCost, Baselines, HeldoutScore, Measure, SeedRun, StudyResult
+from onepiece_dist.study.result import AdaptiveRound, ArmCost, Baselines, HeldoutScore, Measure, SeedRun, StudyResult
 from onepiece_dist.study.spec import StudySpec
 from onepiece_dist.study.training import ArmRun, RunStore, train_arms
 
@@ -164,9 +164,13 @@ def run_study(spec: StudySpec, folder: str | Path, where: Where = Where(), say: 
         arm_runs = plan_runs(spec, jobs, records)
         store = RunStore(folder / "runs")
         say(f"study: training {len(arm_runs)} runs (+ learning-rate probes)")
-        trained, _search = train_arms(arm_runs, spec.training.learning_rates, store,
-                                      trainer_runner(where, prefix, spec.training.device, len(arm_runs)))
-    result = assemble_result(spec, jobs, records, trained, start, store.reused)
+        trained, search = train_arms(arm_runs, spec.training.learning_rates, store,
+                                     trainer_runner(where, prefix, spec.training.device, len(arm_runs)))
+        rounds = None
+        if spec.adaptive is not None:
+            rounds, more = train_adaptive(spec, jobs, search, store, where, prefix, say)
+            trained += more
+    result = assemble_result(spec, jobs, records, trained, start, store.reused, rounds)
     write_result(result, folder)
     say(f"study: done in {result.wall_seconds:.0f} s: {folder / RESULT_FILE}")
     return result
@@ -180,17 +184,41 @@ def check_jobs(records: dict[str, JobRecord]) -> None:
             raise SourceError(f"the study's {name} job extracted no grasp: {reasons}")
 
 
+def train_adaptive(spec: StudySpec, jobs: StudyJobs, search: dict, store: RunStore, where: Where, prefix: str,
+                   say: Say) -> tuple[list[AdaptiveRound], list[tuple[ArmRun, StepResult]]]:
+    """The adaptive arm U (study.adaptive) at A's learning rate, and R ~U, random rows of U's size."""
+    from onepiece_dist.study.adaptive import adaptive_rows
+
+    rate = search["A"]["chosen"] if search else spec.training.learning_rates[0]
+    one = trainer_runner(where, prefix, spec.training.device, 1)
+
+    def train_one(run: StepRun) -> StepResult:
+        found = store.get(run)
+        return found if found is not None else one([run], lambda _, result: store.put(run, result))[0]
+
+    rows, rounds = adaptive_rows(spec, jobs.a.output, rate, train_one)
+    say(f"study: U: {len(rounds)} rounds, {len(rows)} labels")
+    plan = (arm_runs(spec, jobs, "U", jobs.a.output, "grasps", rows)
+            + arm_runs(spec, jobs, "R ~U", jobs.a.output, "grasps", random_rows(jobs.a.output, len(rows), spec.seed)))
+    trained, _ = train_arms(plan, (rate,), store, trainer_runner(where, prefix, spec.training.device, len(plan)))
+    return rounds, trained
+
+
+def arm_runs(spec: StudySpec, jobs: StudyJobs, arm: str, path: str, group: str,
+             rows: tuple[int, ...] | None) -> list[ArmRun]:
+    """One arm's runs, a seed each, scored on the held-out objects."""
+    t = spec.training
+    weighting = t.b_weighting if group == "assembled/grasps" else "none"
+    base = StepRun(path, group, rows, jobs.heldout.output, t.model, t.steps, t.batch_size, t.learning_rates[0],
+                   t.validation, 0, t.evaluations, weighting=weighting, device=t.device)
+    return [ArmRun(arm, seed, t.learning_rates[0], dataclasses.replace(base, seed=seed)) for seed in range(t.seeds)]
+
+
 def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> list[ArmRun]:
     """Every arm's runs: A on all its labelled grasps, B r on its one object, R on a budget's subsets of A's."""
-    t = spec.training
-    heldout = jobs.heldout.output
 
     def runs(arm: str, path: str, group: str, rows: tuple[int, ...] | None) -> list[ArmRun]:
-        weighting = t.b_weighting if group == "assembled/grasps" else "none"
-        base = StepRun(path, group, rows, heldout, t.model, t.steps, t.batch_size, t.learning_rates[0],
-                       t.validation, 0, t.evaluations, weighting=weighting, device=t.device)
-        return [ArmRun(arm, seed, t.learning_rates[0], dataclasses.replace(base, seed=seed))
-                for seed in range(t.seeds)]
+        return arm_runs(spec, jobs, arm, path, group, rows)
 
     a_count = records["A"].status.progress.grasps
     plan = runs("A", jobs.a.output, "grasps", None)
@@ -222,7 +250,8 @@ def random_rows(a_output: str, count: int, seed: int) -> tuple[int, ...]:
 
 
 def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
-                    trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int) -> StudyResult:
+                    trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int,
+                    rounds: list[AdaptiveRound] | None = None) -> StudyResult:
     from onepiece_dist.service.registry import package_version
     from onepiece_dist.store import open_dataset
     from onepiece_dist.study.lookup import key_lookup
@@ -231,7 +260,7 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
 
     ho = open_dataset(jobs.heldout.output)
     labels, groups = ho["grasps/success"].astype(np.float64), ho["grasps/object"].astype(np.int64)
-    drafts = arm_drafts(spec, jobs, records, trained, labels, groups)
+    drafts = arm_drafts(spec, jobs, records, trained, labels, groups, rounds[-1].labels if rounds else None)
     arms = finish_arms(drafts)
     a = open_dataset(jobs.a.output)
     premises = [premise(a, open_dataset(job.output), radius, spec.seed) for radius, job in jobs.b.items()
@@ -244,6 +273,7 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                        reused_jobs=[name for name, rec in records.items() if rec.reused], reused_runs=reused_runs,
                        train_objects=status.progress.objects_done - len(status.rejections), rejected=rejected,
                        heldout=Baselines(**baselines(labels, groups)), arms=arms, premise=premises,
+                       adaptive=rounds,
                        lookup=key_lookup(a["grasps/code"], a["grasps/success"], ho["grasps/code"], labels > 0,
                                          spec.seed),
                        label_fit=label_fit(ho, spec.good_mu) if spec.label == "force_closure" else None,
@@ -251,14 +281,15 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
 
 
 def arm_drafts(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
-               trained: list[tuple[ArmRun, StepResult]], labels: np.ndarray, groups: np.ndarray) -> list[ArmDraft]:
-    costs = arm_costs(spec, jobs, records)
+               trained: list[tuple[ArmRun, StepResult]], labels: np.ndarray, groups: np.ndarray,
+               adaptive_labels: int | None = None) -> list[ArmDraft]:
+    costs = arm_costs(spec, jobs, records, adaptive_labels)
     drafts = []
     for name, cost in costs.items():
         runs = [(job, result) for job, result in trained if job.arm == name]
         kind = name[0]
         radius = int(name.rsplit("r", 1)[1]) if name.startswith(("B", "R ~B")) else None
-        share = float(name[2:]) if kind == "R" and radius is None else None
+        share = float(name[2:]) if kind == "R" and not name.startswith("R ~") else None
         b = records.get(f"B r{radius}") if kind == "B" else None
         drafts.append(ArmDraft(name, kind, cost, heldout_score(spec, runs, labels, groups), radius, share,
                                b.status.progress.unique_codes if b else None))
@@ -283,9 +314,11 @@ def heldout_score(spec: StudySpec, runs: list[tuple[ArmRun, StepResult]], labels
                         learning_rate=runs[0][0].learning_rate, seeds=[SeedRun(**s) for s in summary["seeds"]])
 
 
-def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> dict[str, ArmCost]:
+def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
+              adaptive_labels: int | None = None) -> dict[str, ArmCost]:
     """Each arm's cost. B's extraction (shared by the radii through the parts cache) is charged in full to each
-    radius; R labels its candidates on their own objects, at A's cost per candidate."""
+    radius; R and U label their candidates on their own objects, at A's cost per candidate (U's round trainings
+    are not counted: they are compute, not labels)."""
     from onepiece_dist.store.dataset import delivered_bytes, disk_bytes
 
     k = spec.label_trials if spec.label == "physics" else 0  # force closure labels A without lifting anything
@@ -307,7 +340,10 @@ def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
             labelled_grasps=status.labels.labelled_grasps if status.labels else 0,
             labelled_bytes=disk_bytes(labelled) if labelled.exists() else 0, dataset_bytes=disk_bytes(Path(job.output)),
             delivered_bytes=delivered_bytes(job.output))
-    for name, count in random_arms(spec, records, a.progress.grasps):
+    shares = random_arms(spec, records, a.progress.grasps)
+    if adaptive_labels is not None:
+        shares += [("U", adaptive_labels), ("R ~U", adaptive_labels)]
+    for name, count in shares:
         share = count / max(a.progress.grasps, 1)
         stages = {stage: round(share * seconds, 2) for stage, seconds in a_stages.items()}
         costs[name] = ArmCost(core_seconds=round(sum(stages.values()), 2), stages=stages, label_trials=count * k,

@@ -48,6 +48,18 @@ class StudyTraining(_Frozen):
         return self
 
 
+class StudyAdaptive(_Frozen):
+    """The adaptive arm U (study.adaptive): labels chosen by the network in rounds, among A's candidates."""
+
+    first: float = Field(0.02, gt=0, le=1, description="Round 0: this share of A's candidates, one per voxel code.")
+    batch: float = Field(0.01, gt=0, le=1, description="Each later round: this share, where the network is "
+                         "least sure, one per code while codes last.")
+    rounds: int = Field(6, ge=0, le=100, description="Rounds after the first, at most.")
+    patience: int = Field(2, ge=1, le=100, description="Stop after this many rounds without a validation AP "
+                          "gain above margin.")
+    margin: float = Field(0.005, ge=0, le=1, description="The validation AP gain that counts as a rise.")
+
+
 class StudyTargets(_Frozen):
     """What the report decides with: A's intervals and the cost targets a plan must meet to be called cheap."""
 
@@ -95,6 +107,8 @@ class StudySpec(_Frozen):
     sampler: Literal["antipodal", "normal"] = Field("normal", description="Candidate sampler (the paper samples "
                                                     "along the surface normal).")
     training: StudyTraining = StudyTraining()
+    adaptive: StudyAdaptive | None = Field(None, description="Add the adaptive arm U (labels chosen by the "
+                                           "network in rounds); none by default.")
     targets: StudyTargets = StudyTargets()
 
     @field_validator("radii")
