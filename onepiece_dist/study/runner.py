@@ -317,8 +317,10 @@ def heldout_score(spec: StudySpec, runs: list[tuple[ArmRun, StepResult]], labels
 def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
               adaptive_labels: int | None = None) -> dict[str, ArmCost]:
     """Each arm's cost. B's extraction (shared by the radii through the parts cache) is charged in full to each
-    radius; R and U label their candidates on their own objects, at A's cost per candidate (U's round trainings
-    are not counted: they are compute, not labels)."""
+    radius; R labels its candidates on their own objects, at A's cost per candidate. U extracts every candidate
+    (it picks by code and by the network's score of each crop: B's extraction) and labels its picks at A's label
+    cost per candidate (A's cost beyond that extraction); its rounds' training is compute, not labels, and is not
+    counted."""
     from onepiece_dist.store.dataset import delivered_bytes, disk_bytes
 
     k = spec.label_trials if spec.label == "physics" else 0  # force closure labels A without lifting anything
@@ -346,6 +348,9 @@ def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
     for name, count in shares:
         share = count / max(a.progress.grasps, 1)
         stages = {stage: round(share * seconds, 2) for stage, seconds in a_stages.items()}
+        if name == "U":  # U needs every candidate's code and crop: B's extraction, then A's label cost per label
+            per_label = max(a_cost.core_seconds - b_extract, 0.0) / max(a.progress.grasps, 1)
+            stages = {"extract": round(b_extract, 2), "label": round(count * per_label, 2)}
         costs[name] = ArmCost(core_seconds=round(sum(stages.values()), 2), stages=stages, label_trials=count * k,
                               labelled_grasps=count, labelled_bytes=int(share * a_cost.labelled_bytes),
                               dataset_bytes=int(share * a_cost.dataset_bytes),
