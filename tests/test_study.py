@@ -267,6 +267,21 @@ def test_the_committed_quick_study_page_is_the_rendering_of_its_result(tmp_path)
     assert {arm.kind for arm in result.arms} == {"A", "B", "R"} and result.wall_seconds < 600
 
 
+def test_the_committed_force_closure_study_is_the_paper_force_closure_example_and_its_page_its_rendering(tmp_path):
+    """Issue 40: the full-size study under force closure, committed with its premise, lookup and label figures."""
+    import shutil
+
+    from onepiece_dist.study.runner import report_study
+
+    committed = ROOT / "docs" / "studies" / "paper_force_closure"
+    shutil.copy(committed / "study.json", tmp_path / "study.json")
+    result = report_study(tmp_path)
+    assert (tmp_path / "study.md").read_text() == (committed / "study.md").read_text()
+    assert result.spec == load_study_spec(ROOT / "examples" / "studies" / "paper_force_closure.yaml", {})
+    assert result.train_objects == 64 and result.heldout.objects == 64 and len(result.premise) == 3
+    assert result.label_fit is not None and result.lookup is not None
+
+
 def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
     from onepiece_dist.study.adaptive import first_rows, least_sure
 

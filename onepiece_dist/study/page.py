@@ -54,6 +54,12 @@ def verdict(result: StudyResult) -> list[str]:
     return lines
 
 
+def trials_words(s) -> str:
+    trials = f"{s.label_trials} label trials per grasp ({s.success}, lifting the {s.load})"
+    return trials if s.label == "physics" else (f"train labels by force closure (fc_mu <= {s.good_mu:g}), held-out "
+                                                f"labels by {trials}")
+
+
 def label_words(result: StudyResult) -> str:
     s = result.spec
     if s.label == "physics":
@@ -151,7 +157,7 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
               f"{result.date}, {result.machine}, onepiece-dist {result.package_version}: {result.wall_seconds:.0f} s "
               f"wall; reused jobs: {', '.join(result.reused_jobs) or 'none'}; reused training runs: "
               f"{result.reused_runs}. Train `{s.train}` x {s.grasps_per_object} candidates, held-out `{s.heldout}` "
-              f"x {s.heldout_grasps}, {s.label_trials} label trials per grasp ({s.success}, lifting the {s.load}).",
+              f"x {s.heldout_grasps}, {trials_words(s)}.",
               ""]
     return "\n".join(lines)
 
