@@ -254,30 +254,29 @@ def test_a_job_that_trains_also_evaluates_on_unseen_objects_and_says_so(tmp_path
     assert len(heldout["grasps/success"]) == evaluation["grasps"]
 
 
-def test_the_committed_quick_study_page_is_the_rendering_of_its_result(tmp_path):
+def rendered_again(name: str, folder: Path):
+    """The committed study ``docs/studies/NAME``'s result, its page rendered again in ``folder``, and its spec as
+    the example of the same name gives it."""
     import shutil
 
     from onepiece_dist.study.runner import report_study
 
-    committed = ROOT / "docs" / "studies" / "quick"
-    shutil.copy(committed / "study.json", tmp_path / "study.json")
-    result = report_study(tmp_path)
-    assert (tmp_path / "study.md").read_text() == (committed / "study.md").read_text()
-    assert result.spec == load_study_spec(ROOT / "examples" / "studies" / "quick.yaml", {})
+    committed = ROOT / "docs" / "studies" / name
+    shutil.copy(committed / "study.json", folder / "study.json")
+    result = report_study(folder)
+    assert (folder / "study.md").read_text() == (committed / "study.md").read_text()
+    assert result.spec == load_study_spec(ROOT / "examples" / "studies" / f"{name}.yaml", {})
+    return result
+
+
+def test_the_committed_quick_study_page_is_the_rendering_of_its_result(tmp_path):
+    result = rendered_again("quick", tmp_path)
     assert {arm.kind for arm in result.arms} == {"A", "B", "R"} and result.wall_seconds < 600
 
 
 def test_the_committed_force_closure_study_is_the_paper_force_closure_example_and_its_page_its_rendering(tmp_path):
     """Issue 40: the full-size study under force closure, committed with its premise, lookup and label figures."""
-    import shutil
-
-    from onepiece_dist.study.runner import report_study
-
-    committed = ROOT / "docs" / "studies" / "paper_force_closure"
-    shutil.copy(committed / "study.json", tmp_path / "study.json")
-    result = report_study(tmp_path)
-    assert (tmp_path / "study.md").read_text() == (committed / "study.md").read_text()
-    assert result.spec == load_study_spec(ROOT / "examples" / "studies" / "paper_force_closure.yaml", {})
+    result = rendered_again("paper_force_closure", tmp_path)
     assert result.train_objects == 64 and result.heldout.objects == 64 and len(result.premise) == 3
     assert result.label_fit is not None and result.lookup is not None
 
