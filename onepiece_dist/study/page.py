@@ -46,7 +46,8 @@ def verdict(result: StudyResult) -> list[str]:
         u = next(arm for arm in result.arms if arm.name == "U")
         lines.append(f"The adaptive arm U ({u.cost.labelled_grasps:,} labels chosen by the network in "
                      f"{len(result.adaptive or [])} rounds) {'beats' if d.u_beats_random else 'does not beat'} as "
-                     "many random labels (R ~U: both top-1 and AP at least R's).")
+                     f"many random labels (R ~U: {'both' if d.u_beats_random else 'not both'} top-1 and AP at least "
+                     "R's).")
     for p in result.premise:
         lines.append(f"Premise at radius {p.radius}: a patch's label agrees with the grasps it stands for "
                      f"{pct(p.patch_vs_every_grasp)} (floor {pct(p.shuffled_patches)}); the code decides "
