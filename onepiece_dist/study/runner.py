@@ -191,12 +191,7 @@ def train_adaptive(spec: StudySpec, jobs: StudyJobs, search: dict, store: RunSto
 
     rate = search["A"]["chosen"] if search else spec.training.learning_rates[0]
     one = trainer_runner(where, prefix, spec.training.device, 1)
-
-    def train_one(run: StepRun) -> StepResult:
-        found = store.get(run)
-        return found if found is not None else one([run], lambda _, result: store.put(run, result))[0]
-
-    rows, rounds = adaptive_rows(spec, jobs.a.output, rate, train_one)
+    rows, rounds = adaptive_rows(spec, jobs.a.output, rate, lambda run: store.train([run], one)[0])
     say(f"study: U: {len(rounds)} rounds, {len(rows)} labels")
     plan = (arm_runs(spec, jobs, "U", jobs.a.output, "grasps", rows)
             + arm_runs(spec, jobs, "R ~U", jobs.a.output, "grasps", random_rows(jobs.a.output, len(rows), spec.seed)))

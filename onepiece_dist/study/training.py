@@ -23,6 +23,7 @@ from onepiece_dist.learn.train import StepResult, StepRun
 
 Job = TypeVar("Job")  # a frozen dataclass with ``arm``, ``seed`` and ``learning_rate``
 Train = Callable[[list[Any]], list[Any]]  # jobs -> their results, in order
+Trainers = Callable[[list[StepRun], Callable[[int, StepResult], None]], list[StepResult]]  # runs, on done -> results
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,13 @@ class RunStore:
         self.reused += 1
         return StepResult(scores=np.load(scores, allow_pickle=False), **fields)
 
+    def train(self, runs: list[StepRun], trainers: Trainers) -> list[StepResult]:
+        """Each run's result: read back when stored, else trained by ``trainers`` and stored as it finishes."""
+        found = [self.get(run) for run in runs]
+        todo = [run for run, result in zip(runs, found, strict=True) if result is None]
+        fresh = iter(trainers(todo, lambda index, result: self.put(todo[index], result)) if todo else [])
+        return [result if result is not None else next(fresh) for result in found]
+
     def put(self, run: StepRun, result: StepResult) -> None:
         self.folder.mkdir(parents=True, exist_ok=True)
         key = self.key(run)
@@ -91,18 +99,13 @@ class RunStore:
         (self.folder / f"{key}.json").write_text(json.dumps(fields))
 
 
-def train_arms(jobs: list[ArmRun], rates: Sequence[float], store: RunStore,
-               trainers: Callable[[list[StepRun], Callable[[int, StepResult], None]], list[StepResult]]
+def train_arms(jobs: list[ArmRun], rates: Sequence[float], store: RunStore, trainers: Trainers
                ) -> tuple[list[tuple[ArmRun, StepResult]], dict]:
     """Every arm run's result, with the learning-rate search; runs found in ``store`` are not trained again, and
     each fresh run is stored as it finishes."""
 
     def train(batch: list[ArmRun]) -> list[StepResult]:
-        runs = [with_rate(job) for job in batch]
-        found = [store.get(run) for run in runs]
-        todo = [run for run, result in zip(runs, found, strict=True) if result is None]
-        fresh = iter(trainers(todo, lambda index, result: store.put(todo[index], result)) if todo else [])
-        return [result if result is not None else next(fresh) for result in found]
+        return store.train([with_rate(job) for job in batch], trainers)
 
     results, search = search_rates(jobs, rates, train, StepResult.best_validation_loss)
     chosen = [dataclasses.replace(job, learning_rate=search[job.arm]["chosen"]) if search else
