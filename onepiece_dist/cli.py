@@ -99,8 +99,13 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
              f"{trials} label trials on it (labelling every grasp of every object: {a.label_trials_all_grasps})")
     if status.labels and not status.assembly:
         labels = status.labels
-        _err(f"budget: {labels.labelled_grasps} of {status.progress.grasps} candidates labelled on their own objects "
+        plan = "adaptive" if status.adaptive else "budget"
+        _err(f"{plan}: {labels.labelled_grasps} of {status.progress.grasps} candidates labelled on their own objects "
              f"({labels.label_trials} label trials, success rate {labels.success_rate:.2f})")
+    if status.adaptive:
+        rounds = status.adaptive.rounds
+        _err(f"adaptive: {len(rounds)} rounds, stopped by {status.adaptive.stopped}; validation AP by round "
+             + ", ".join(f"{r.validation_ap:.3f} ({r.labels} labels)" for r in rounds))
     if status.training:
         t = status.training
         _err(f"trained {t.model} for {t.epochs} epochs: on its own validation split (held-back grasps of the "

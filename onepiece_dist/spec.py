@@ -199,7 +199,8 @@ class TrainSpec(_Frozen):
         description="Grasp network: PointNet on the crop's points, or a 3D CNN on its voxel code.")
     data: Literal["assembled", "all", "budget"] = Field("assembled", description="Labelled grasps of the one "
                                                         "object (assembled/grasps), of every object (grasps, needs "
-                                                        "sim.label) or a budget's (labelled/grasps).")
+                                                        "sim.label) or a budget's or adaptive rounds' "
+                                                        "(labelled/grasps).")
     epochs: int = Field(10, ge=1, le=1000, description="Passes over the training split.")
     batch_size: int = Field(64, ge=2, le=4096, description="Grasps per gradient step.")
     learning_rate: float = Field(1e-3, gt=0, le=1, description="Adam learning rate.")
@@ -252,6 +253,48 @@ class BudgetSpec(_Frozen):
         return min(candidates, max(1, math.ceil((self.fraction or 0) * candidates - 1e-9)))
 
 
+class RoundsRule(_Frozen):
+    """Labels chosen by a network in rounds: round 0 takes one candidate per voxel code, each later round those it
+    is least sure of; the rounds stop when the validation AP has not risen by more than ``margin`` for
+    ``patience`` rounds, or after ``rounds`` rounds. Shares are of the candidates."""
+
+    first: float = Field(0.02, gt=0, le=1, description="Round 0: this share of the candidates, one per voxel code.")
+    batch: float = Field(0.01, gt=0, le=1, description="Each later round: this share, where the network is least "
+                         "sure, one per code while codes last.")
+    rounds: int = Field(6, ge=0, le=100, description="Rounds after the first, at most.")
+    patience: int = Field(2, ge=1, le=100, description="Stop after this many rounds without a validation AP gain "
+                          "above margin.")
+    margin: float = Field(0.005, ge=0, le=1, description="The validation AP gain that counts as a rise.")
+
+    def count(self, share: float, candidates: int) -> int:
+        """Candidates for ``share`` of ``candidates``: at least one."""
+        return max(1, min(candidates, round(share * candidates)))
+
+    def stale(self, validation_aps: list[float]) -> int:
+        """Rounds since the validation AP last rose by more than ``margin`` over its best before."""
+        best, stale = -math.inf, 0
+        for ap in validation_aps:
+            best, stale = (ap, 0) if ap > best + self.margin else (best, stale + 1)
+        return stale
+
+
+class AdaptiveSpec(RoundsRule):
+    """Adaptive labelling (service/adaptive_job.py): the label stage in rounds. Every candidate is extracted; round
+    0 labels one candidate per voxel code (codes in a seeded order) and a fixed validation set on validation
+    objects held out from the rounds; after each round the trainer trains (warm start from the last round) and
+    scores every candidate; the next round labels those it is least sure of. The rounds also stop at ``limit``."""
+
+    enabled: bool = Field(False, description="Label in rounds chosen by the network (needs stages 'label' and "
+                          "'train', no 'assemble', sim.label false).")
+    limit: float = Field(0.1, gt=0, le=1, description="The label budget: stop before the labels exceed this share "
+                         "of the candidates.")
+    validation: float = Field(0.2, gt=0, lt=1, description="Share of the objects held out from the rounds; their "
+                              "validation_grasps labels measure each round's AP.")
+    validation_grasps: int = Field(16, ge=1, le=100_000, description="Candidates labelled on each validation "
+                                   "object in round 0 (at most its candidates).")
+    steps: int = Field(300, ge=1, le=1_000_000, description="Gradient steps of each round's training.")
+
+
 class EvaluateSpec(_Frozen):
     """The evaluate stage: the trained network on objects it never saw, every candidate labelled by the same
     protocol through the worker pool (a job of its own, ``<output>.eval.zarr``)."""
@@ -295,6 +338,22 @@ class JobSpec(_Frozen):
     train: TrainSpec = TrainSpec()
     evaluate: EvaluateSpec = EvaluateSpec()
     budget: BudgetSpec = BudgetSpec()
+    adaptive: AdaptiveSpec = AdaptiveSpec()
+
+    @model_validator(mode="after")
+    def _adaptive_labels_in_rounds(self) -> JobSpec:
+        if not self.adaptive.enabled:
+            return self
+        if self.budget.enabled:
+            raise ValueError("adaptive: its budget is adaptive.limit; leave budget.count and budget.fraction unset")
+        if self.runs("assemble") or self.sim.label or not (self.runs("label") and self.runs("train")):
+            raise ValueError("adaptive labels candidates on their own objects in rounds of the 'label' stage, the "
+                             "trainer choosing each round: it needs 'label' and 'train' in stages, no 'assemble' "
+                             "(the one object) and sim.label false")
+        if self.train.data != "budget":
+            raise ValueError("adaptive: the train stage fits the rounds' labels (labelled/grasps): set "
+                             "train.data: budget")
+        return self
 
     @model_validator(mode="after")
     def _budget_labels_sources(self) -> JobSpec:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from onepiece_dist.core import selection
 from onepiece_dist.core.mesh import box_mesh, sample_surface
 from onepiece_dist.core.voxel import crop_regions
 
@@ -53,9 +54,11 @@ def test_one_label_per_key_agrees_as_its_keys_positive_fraction_expects_and_the_
 def test_one_grasp_per_key_is_drawn_among_each_keys_own_grasps_and_reaches_every_one_of_them():
     inverse = np.array([0, 0, 0, 1, 2, 2])
     rng = np.random.default_rng(5)
-    drawn = np.array([lookup.one_grasp_per_key(inverse, rng) for _ in range(200)])
+    drawn = np.array([selection.one_grasp_per_key(inverse, rng) for _ in range(200)])
     assert np.array_equal(inverse[drawn], np.broadcast_to(np.arange(3), drawn.shape))
     assert set(drawn[:, 0]) == {0, 1, 2} and set(drawn[:, 1]) == {3} and set(drawn[:, 2]) == {4, 5}
+    sparse = selection.one_grasp_per_key(np.array([4, 1, 4]), rng)  # keys 0, 2, 3 have no row: none for them
+    assert sparse[0] == 1 and sparse[1] in (0, 2) and len(sparse) == 2
 
 
 def test_the_share_decided_runs_from_zero_at_the_floor_to_one_at_the_ceiling():

@@ -282,7 +282,7 @@ def test_the_committed_force_closure_study_is_the_paper_force_closure_example_an
 
 
 def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
-    from onepiece_dist.study.adaptive import first_rows, least_sure
+    from onepiece_dist.core.selection import first_rows, least_sure
 
     inverse = np.array([0, 0, 0, 1, 1, 2, 3, 3])
     first = first_rows(inverse, 4, np.random.default_rng(0))

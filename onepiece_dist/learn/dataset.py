@@ -67,7 +67,8 @@ class GraspDataset(Dataset):
     """
 
     def __init__(self, path: str | os.PathLike, group: str = "assembled/grasps", rows: np.ndarray | None = None,
-                 inputs: tuple[str, ...] | None = None, memory_bytes: int = SMALL_ARRAY_BYTES, crop: str = "gripper"):
+                 inputs: tuple[str, ...] | None = None, memory_bytes: int = SMALL_ARRAY_BYTES, crop: str = "gripper",
+                 labelled: bool = True):
         if crop not in CROPS:
             raise ValueError(f"crop={crop!r}: expected one of {CROPS}")
         self.path, self.group, self.memory_bytes, self.crop = str(path), group, memory_bytes, crop
@@ -76,7 +77,7 @@ class GraspDataset(Dataset):
         problem = format_problem(attrs)
         if problem:
             raise StoreError(f"{self.path}: not a readable OnePiece dataset: {problem}")
-        if f"{group}/success" not in root:
+        if labelled and f"{group}/success" not in root:
             raise StoreError(f"{self.path}: {group}/success is missing: the dataset has no labels there "
                              "(run the 'label' stage, or extract with sim.label: true)")
         present = tuple(name for name in INPUTS if f"{group}/{name}" in root)
@@ -88,9 +89,11 @@ class GraspDataset(Dataset):
             raise StoreError(f"{self.path}: crop='pointnetgpd' needs {group}/points and {group}/width")
         self.grid_shape = tuple(attrs["grid_shape"])
         self.closing_depth = float(attrs["gripper"]["closing_depth"]) if crop == "pointnetgpd" else None
-        self.length = int(root[f"{group}/success"].shape[0])
+        self.labelled = labelled  # False: candidates to score, every label read as 0
+        stored = ("success", *self.inputs) if labelled else self.inputs
+        self.length = int(root[f"{group}/{stored[0]}"].shape[0])
         self.rows = np.arange(self.length) if rows is None else np.asarray(rows, dtype=np.int64)
-        self.chunk_rows = min(int(root[f"{group}/{name}"].chunks[0]) for name in ("success", *self.inputs))
+        self.chunk_rows = min(int(root[f"{group}/{name}"].chunks[0]) for name in stored)
         self.groups = root[f"{group}/{'patch' if group.startswith('assembled') else 'object'}"][:].astype(np.int64)
         self._root, self._small = None, {}
 
@@ -121,7 +124,8 @@ class GraspDataset(Dataset):
         per array, of the requested rows only."""
         rows = self.rows[np.asarray(items, dtype=np.int64)]
         wanted, back = np.unique(rows, return_inverse=True)
-        out = {"label": torch.from_numpy(self._read("success", wanted)[back].astype(np.float32)),
+        labels = self._read("success", wanted)[back] if self.labelled else np.zeros(len(rows))
+        out = {"label": torch.from_numpy(labels.astype(np.float32)),
                "group": torch.from_numpy(self.groups[rows])}
         for name in ("points", "quality"):
             if name in self.inputs:
@@ -158,6 +162,11 @@ class GraspDataset(Dataset):
         rng = np.random.default_rng(seed)
         held = set(rng.permutation(groups)[: max(1, int(round(validation * len(groups))))].tolist())
         in_val = np.isin(self.groups[self.rows], list(held))
+        return self._subset(self.rows[~in_val]), self._subset(self.rows[in_val])
+
+    def split_by_groups(self, held: tuple[int, ...]) -> tuple[GraspDataset, GraspDataset]:
+        """(train, validation): the rows of the objects (or patches) ``held`` are the validation split."""
+        in_val = np.isin(self.groups[self.rows], np.asarray(held, dtype=np.int64))
         return self._subset(self.rows[~in_val]), self._subset(self.rows[in_val])
 
     def _subset(self, rows: np.ndarray) -> GraspDataset:

@@ -53,6 +53,18 @@ def load_checkpoint(path: str | os.PathLike) -> dict:
     return torch.load(path, map_location="cpu", weights_only=True)
 
 
+def load_round_model(dataset: str | os.PathLike, number: int) -> torch.nn.Module:
+    """The network of adaptive labelling's round ``number``, from the dataset's ``adaptive/round_NNN/`` arrays
+    (plain arrays: nothing is unpickled)."""
+    import zarr
+
+    root = zarr.open_group(str(dataset), mode="r")
+    group = root[f"adaptive/round_{number:03d}"]
+    model = MODELS[root.attrs["adaptive"]["model"]]()
+    model.load_state_dict({name: torch.from_numpy(np.asarray(array[...])) for name, array in group.arrays()})
+    return model.eval()
+
+
 def load_model(path: str | os.PathLike) -> torch.nn.Module:
     checkpoint = load_checkpoint(path)
     model = MODELS[checkpoint["model"]]()
@@ -207,6 +219,10 @@ class StepRun:
     validation_cap: int = 4096  # grasps of the validation split scored at each evaluation (a seeded sample)
     weighting: str = "none"  # the one object's grasps: loss per patch weighted by none, count or sqrt
     device: str = "cpu"
+    validation_groups: tuple[int, ...] | None = None  # these objects (or patches) are the validation split
+    warm_start: str | None = None  # a checkpoint whose weights the network starts from
+    save_to: str | None = None  # where the kept checkpoint is written (a plain state dict)
+    heldout_labelled: bool = True  # False: the held-out grasps are candidates without labels, only scored
 
 
 @dataclass(frozen=True)
@@ -237,11 +253,15 @@ def fit_steps(run: StepRun) -> StepResult:
     # about one stored chunk per row
     rows = None if run.rows is None else np.asarray(run.rows, dtype=np.int64)
     full = GraspDataset(run.path, run.group, rows=rows, inputs=inputs, memory_bytes=IN_MEMORY_BYTES)
-    train, val = full.split_by_group(run.validation, run.seed)
+    train, val = (full.split_by_group(run.validation, run.seed) if run.validation_groups is None
+                  else full.split_by_groups(run.validation_groups))
     if len(val) > run.validation_cap:  # the same sample at every evaluation: checkpoints stay comparable
         val = val._subset(np.sort(np.random.default_rng([run.seed, 13]).choice(val.rows, run.validation_cap,
                                                                                  replace=False)))
-    model = MODELS[run.model]().to(device)
+    model = MODELS[run.model]()
+    if run.warm_start is not None:
+        model.load_state_dict(load_checkpoint(run.warm_start)["state_dict"])
+    model = model.to(device)
     step = TrainStep(model, torch.optim.Adam(model.parameters(), lr=run.learning_rate), device,
                      group_weights=patch_weights(run.path, run.group, run.weighting))
     rng = np.random.default_rng([run.seed, 11])
@@ -257,6 +277,16 @@ def fit_steps(run: StepRun) -> StepResult:
                 best, best_state = metrics["loss"], {n: t.detach().clone() for n, t in model.state_dict().items()}
     seconds = time.perf_counter() - start
     model.load_state_dict(best_state)
-    scores = predict(model, GraspDataset(run.heldout_path, "grasps", inputs=inputs))
+    if run.save_to is not None:
+        save_weights(run.model, best_state, Path(run.save_to))
+    scores = predict(model, GraspDataset(run.heldout_path, "grasps", inputs=inputs, labelled=run.heldout_labelled))
     return StepResult(scores.astype(np.float32), curve, min(curve, key=lambda c: c["val_loss"])["step"],
                       round(seconds, 1), len(train), len(val), device.type)
+
+
+def save_weights(model: str, state_dict: dict, path: Path) -> None:
+    """A checkpoint of the network alone (name and weights), written atomically."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    torch.save({"model": model, "state_dict": {n: t.detach().cpu() for n, t in state_dict.items()}}, tmp)
+    os.replace(tmp, path)

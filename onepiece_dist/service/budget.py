@@ -118,10 +118,13 @@ def write_budget_labels(spec: JobSpec, path: str | os.PathLike, tasks: list[Labe
               for name in ("success", "quality")}
     arrays = {name: reader.array(f"grasps/{name}").oindex[rows] for name in _grasp_names(reader)}
     arrays.update({**labels, "row": rows})
+    if tasks and tasks[0].round is not None:  # adaptive labelling: the round of each labelled grasp
+        rounds = [np.full(len(shard["row"]), task.round) for task, shard in zip(tasks, shards, strict=True)]
+        arrays["round"] = np.concatenate(rounds)[order]
     candidates = int(reader.array("grasps/object").shape[0])
     summary = LabelReport(label_trials=int(len(rows) * spec.sim.label_trials), labelled_grasps=int(len(rows)),
                           success_rate=float(np.mean(labels["success"])) if len(rows) else 0.0)
-    requested = spec.budget.count if spec.budget.count is not None else spec.budget.fraction
+    requested = spec.budget.count if spec.budget.count is not None else spec.budget.fraction or spec.adaptive.limit
     write_group(path, "labelled/grasps", grasp_arrays(arrays), {"budget_labels": {
         **summary.model_dump(mode="json"), "requested": requested, "candidates": candidates,
         "all_candidates": bool(len(rows) == candidates), "objects": int(len(np.unique(arrays["object"]))),

@@ -16,10 +16,10 @@ from onepiece_dist.errors import JobError, MissingAssembly
 from onepiece_dist.service.actors import ActorClient, restartable_actor
 from onepiece_dist.service.commit import commit_dataset
 from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
-from onepiece_dist.service.status import AssemblyReport, LabelReport
+from onepiece_dist.service.status import AdaptiveReport, AssemblyReport, LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
-from onepiece_dist.store.dataset import update_attributes
+from onepiece_dist.store.dataset import update_attributes, write_group
 
 
 class CentralActor:
@@ -95,7 +95,7 @@ class CentralActor:
         for task, result in zip(tasks, results, strict=True):
             if result.status != "ok":
                 raise JobError(f"label shard {result.index} (patches {task.start}-{task.stop - 1}): {result.reason}")
-        if self.spec.budget.enabled:
+        if self.spec.budget.enabled or self.spec.adaptive.enabled:
             from onepiece_dist.service.budget import write_budget_labels
 
             seconds = sum(result.made_seconds for result in results)
@@ -108,6 +108,20 @@ class CentralActor:
             report = report.model_copy(update={"transfer": transfer})
             update_attributes(self.spec.output, {"assembly_labels": report.model_dump(mode="json")})
         return report
+
+
+    def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None:
+        """Adaptive labelling's rounds: ``adaptive/`` (each round's scores of every candidate, the validation
+        objects) and the ``adaptive`` attribute."""
+        from onepiece_dist.service.adaptive_job import round_weights
+
+        for number in record.rounds:
+            write_group(self.spec.output, f"adaptive/round_{number.round:03d}",
+                        round_weights(self.parts, number.part), {})
+        write_group(self.spec.output, "adaptive", {"scores": scores.astype(np.float32),
+                                                   "validation_objects": np.asarray(record.validation_objects,
+                                                                                    dtype=np.int64)},
+                    {"adaptive": {**record.model_dump(mode="json"), "model": self.spec.train.model}})
 
 
 class CentralClient(ActorClient):
@@ -153,6 +167,9 @@ class CentralClient(ActorClient):
 
     def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport:
         return self.call("merge_labels", tasks, results)
+
+    def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None:
+        return self.call("record_rounds", record, scores)
 
 
 def central_name(job_id: str) -> str:

@@ -118,7 +118,8 @@ def _grasp_rows(arrays: dict[str, np.ndarray], k: int, index: DedupIndex, cluste
 def keeps_every_grasp_points(spec: JobSpec) -> bool:
     """Whether grasps/points holds every extracted grasp's points. A job that labels on the one object and not
     every grasp needs them only for the representatives (unique/points), unless ``keep_all_points`` asks."""
-    return spec.keep_all_points or spec.sim.label or spec.budget.enabled or not spec.runs("label")
+    return (spec.keep_all_points or spec.sim.label or spec.budget.enabled or spec.adaptive.enabled
+            or not spec.runs("label"))
 
 
 def _unique_groups(index: DedupIndex, clusters, first: FirstRows) -> dict[str, dict[str, np.ndarray]]:

@@ -59,7 +59,7 @@ def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None 
         return record_evaluation(job, trainer.score(job, heldout.output, objects_scored(labelled)))
 
     runtime = Runtime(extract=extract, central=central, label=label, patch=patch, train=trainer.fit,
-                      evaluate=evaluate)
+                      evaluate=evaluate, fit_round=trainer.fit_steps)
     try:
         return run_pipeline(spec, new_status(spec, job_id), runtime, report, refs)
     finally:

@@ -14,12 +14,15 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
 
 from onepiece_dist.errors import JobCancelled, JobError, SourceError, SpecError
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
 from onepiece_dist.service.status import (
+    AdaptiveReport,
     AssemblyReport,
     EvaluationReport,
     JobStatus,
@@ -28,6 +31,9 @@ from onepiece_dist.service.status import (
     TrainingReport,
 )
 from onepiece_dist.spec import JobSpec
+
+if TYPE_CHECKING:  # torch loads where a trainer trains
+    from onepiece_dist.learn.train import StepResult, StepRun
 
 Report = Callable[[JobStatus], None]  # called whenever the status changes: save it, publish it, draw progress
 ProgressFn = Callable[[JobStatus], None]  # a caller's progress display, called after each report
@@ -44,6 +50,7 @@ class Central(Protocol):
     def assemble(self, tasks: list[PatchTask], results: list[LabelShardResult]) -> AssemblyReport: ...
     def label_tasks(self) -> list[LabelTask]: ...
     def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport: ...
+    def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -61,6 +68,7 @@ class Runtime:
     train: Callable[[JobSpec], TrainingReport]
     evaluate: Callable[[JobSpec], EvaluationReport]
     prepare: Callable[[str], None] = lambda stage: None
+    fit_round: Callable[[StepRun], StepResult] | None = None  # adaptive labelling: one round's training
 
 
 def new_status(spec: JobSpec, job_id: str) -> JobStatus:
@@ -139,7 +147,12 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
             if spec.runs("label"):
                 runtime.prepare("label")  # label workers start up (imports, pybullet) while the one object is built
             status.assembly = runtime.central.assemble(tasks, shards)
-    if spec.runs("label") and shapes:
+    if spec.runs("label") and shapes and spec.adaptive.enabled:
+        from onepiece_dist.service.adaptive_job import label_in_rounds
+
+        with stage(status, "label", report):
+            status.labels = label_in_rounds(spec, status, runtime.central, runtime.label, runtime.fit_round, report)
+    elif spec.runs("label") and shapes:
         with stage(status, "label", report):
             tasks = runtime.central.label_tasks()
             shards = runtime.label(tasks)

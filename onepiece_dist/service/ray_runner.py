@@ -156,6 +156,13 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
         clients.append(TrainerClient.start(train_spec, job_id))
         return clients[-1].fit(train_spec)
 
+    def fit_round(run):
+        trainer = TrainerClient.start_named(f"trainer-{job_id}-round", spec.train.device)
+        try:
+            return trainer.fit_steps(run)
+        finally:
+            trainer.kill()  # its CPU goes back to the next round's label workers
+
     def evaluate(job: JobSpec) -> EvaluationReport:
         for trainer in clients[1:]:  # the labelling workers get the trainer's CPU
             with contextlib.suppress(Exception):
@@ -168,7 +175,7 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
 
     try:
         runtime = Runtime(extract=extract, central=central, label=label, patch=patch, train=train, evaluate=evaluate,
-                          prepare=prepare)
+                          prepare=prepare, fit_round=fit_round)
         return run_pipeline(spec, status, runtime, report, refs)
     except JobError as err:
         if isinstance(err, RuntimeLost) or isinstance(err.__cause__, RuntimeLost | RaySystemError):

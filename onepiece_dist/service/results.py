@@ -57,6 +57,7 @@ class LabelTask:
     dataset: str
     label_key: str
     rows: tuple[int, ...] | None = None
+    round: int | None = None  # adaptive labelling: the round whose batch this shard belongs to
 
     @property
     def part_key(self) -> str:

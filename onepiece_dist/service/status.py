@@ -91,6 +91,31 @@ class LabelReport(_Report):
     transfer: TransferReport | None = Field(None, description="Label transfer, when sim.transfer_codes > 0.")
 
 
+class AdaptiveRound(_Report):
+    """One round of adaptive labelling (service/adaptive_job.py)."""
+
+    round: int
+    labels: int = Field(description="Candidates labelled so far, the validation set included.")
+    new: int = Field(description="Candidates this round labelled.")
+    validation_ap: float = Field(description="AP on the validation objects of the checkpoint the round kept.")
+    best_step: int
+    train_seconds: float
+    checkpoint: str = Field(description="The round's network (a plain state dict; its weights are also in the "
+                            "dataset, adaptive/round_NNN/).")
+    part: str = Field(description="The part holding the round's scores and weights (a resumed job reuses it).")
+
+
+class AdaptiveReport(_Report):
+    """What adaptive labelling did (also the dataset's ``adaptive`` attribute)."""
+
+    candidates: int
+    validation_objects: list[int] = Field(description="Rows in objects/ held out from the rounds.")
+    validation_labels: int
+    limit: int = Field(description="The most labels the rounds may spend (adaptive.limit).")
+    stopped: str = Field(description="Why the rounds ended: patience, rounds, limit or all (every candidate).")
+    rounds: list[AdaptiveRound]
+
+
 class TrainingReport(_Report):
     """What the train stage fitted (also the dataset's ``training`` attribute)."""
 
@@ -140,6 +165,7 @@ class JobStatus(BaseModel):
     spec: dict = Field(default_factory=dict, description="The JobSpec (so a job can be resumed from its status).")
     assembly: AssemblyReport | None = Field(None, description="Report of the assemble stage.")
     labels: LabelReport | None = Field(None, description="Report of the label stage on the one object.")
+    adaptive: AdaptiveReport | None = Field(None, description="Report of adaptive labelling's rounds.")
     training: TrainingReport | None = Field(None, description="Report of the train stage.")
     evaluation: EvaluationReport | None = Field(None, description="Report of the evaluate stage.")
     error: str = ""

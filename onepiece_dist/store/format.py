@@ -31,6 +31,8 @@ GRASP_ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("exact_index", "int64", "()", "with similar_radius > 0: row in exact/ of each grasp's code"),
     ("patch", "int32", "()", "assembled/grasps only: the patch (row in unique/) a labelled grasp belongs to"),
     ("row", "int64", "()", "labelled/grasps only: the row in grasps/ of a budget's labelled grasp"),
+    ("round", "int32", "()", "labelled/grasps of adaptive labelling only: the round that labelled the grasp (0: "
+     "the first, with the validation set)"),
     ("fc_mu", "float32", "()", "smallest friction of closure.levels at which the grasp is in force closure, +inf "
      "for none (only with closure.enabled)"),
     ("fc_epsilon", "float32", "()", "Ferrari-Canny L1 epsilon at closure.epsilon_mu, 0 without closure (only with "

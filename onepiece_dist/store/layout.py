@@ -7,7 +7,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from onepiece_dist.store.format import GRASP_ARRAYS
 
 LABELLED_ONLY = ("object", "code_index", "exact_index")  # per-object bookkeeping, not on the one object's grasps
-SKIPPED = {"grasps": ("patch", "row"), "assembled/grasps": (*LABELLED_ONLY, "row"),
+SKIPPED = {"grasps": ("patch", "row", "round"), "assembled/grasps": (*LABELLED_ONLY, "row", "round"),
            "labelled/grasps": ("patch", "code_index", "exact_index")}
 
 
@@ -66,7 +66,11 @@ ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("assembled/source_pose", "float32", "(U, 4, 4)", "the representative's settled pose on its source object"),
     ("assembled/source_volume", "float64", "(U,)", "volume of each patch's source object (m^3): its mass rule"),
     *_grasp_entries("assembled/grasps", "L"),
-    *_grasp_entries("labelled/grasps", "L2"),  # a budget's labelled candidates (service/budget.py)
+    *_grasp_entries("labelled/grasps", "L2"),  # a budget's or adaptive rounds' labelled candidates
+    ("adaptive/scores", "float32", "(R, N)", "adaptive labelling: each round's network's success probability of "
+     "every candidate of grasps/ (what chose the next round's batch)"),
+    ("adaptive/validation_objects", "int64", "(V,)", "adaptive labelling: rows in objects/ held out from the rounds "
+     "(their labelled grasps measure each round's validation AP)"),
     ("train/train_loss", "float32", "(T,)", "training loss of each epoch (T epochs run)"),
     ("train/val_loss", "float32", "(T,)", "validation loss of each epoch"),
     ("train/val_accuracy", "float32", "(T,)", "validation accuracy of each epoch"),
@@ -110,6 +114,8 @@ class DatasetAttributes(BaseModel):
     budget_labels: dict | None = Field(None, description="A budget's label stage (labelled/grasps): labelled "
                                        "grasps, label trials, success rate, what was asked, whether it was every "
                                        "candidate, the label stage's core-seconds.")
+    adaptive: dict | None = Field(None, description="Adaptive labelling's rounds (AdaptiveReport): each round's "
+                                  "labels, validation AP and network, and why the rounds stopped.")
     training: dict | None = Field(None, description="The train stage's report (TrainingReport), once trained.")
     evaluation: dict | None = Field(None, description="The evaluate stage's report (EvaluationReport): the trained "
                                     "network on held-out objects, once evaluated.")

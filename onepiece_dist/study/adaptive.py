@@ -23,36 +23,16 @@ from collections.abc import Callable
 import numpy as np
 
 from onepiece_dist.core.dedup import unique_codes
+from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.learn.train import StepResult, StepRun
-from onepiece_dist.study.lookup import one_grasp_per_key
 from onepiece_dist.study.result import AdaptiveRound
 from onepiece_dist.study.spec import StudySpec
 
 TrainOne = Callable[[StepRun], StepResult]
 
 
-def first_rows(inverse: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
-    """Round 0: ``count`` rows, one per code (codes in random order), then random rows once every code has one:
-    inverse (n,) int64 code of each row -> (count,) int64 rows."""
-    per_code = rng.permutation(one_grasp_per_key(inverse, rng))[:count]
-    if len(per_code) < count:
-        rest = np.setdiff1d(np.arange(len(inverse)), per_code)
-        per_code = np.concatenate([per_code, rng.permutation(rest)[:count - len(per_code)]])
-    return per_code
 
 
-def least_sure(scores: np.ndarray, labelled: np.ndarray, inverse: np.ndarray, count: int) -> np.ndarray:
-    """The ``count`` unlabelled rows whose score is nearest one half, at most one per code while unlabelled codes
-    last, then the next least sure: scores (n,), labelled (k,) rows, inverse (n,) code of each row."""
-    free = np.ones(len(scores), dtype=bool)
-    free[labelled] = False
-    order = np.flatnonzero(free)[np.argsort(np.abs(scores[free] - 0.5), kind="stable")]
-    _, first = np.unique(inverse[order], return_index=True)
-    diverse = order[np.sort(first)]  # each unlabelled code's least sure row, least sure codes first
-    picked = diverse[:count]
-    if len(picked) < count:
-        picked = np.concatenate([picked, np.setdiff1d(order, picked, assume_unique=True)[:count - len(picked)]])
-    return picked
 
 
 def validation_ap(result: StepResult) -> float:
@@ -73,13 +53,12 @@ def adaptive_rows(spec: StudySpec, a_output: str, learning_rate: float, train_on
     base = StepRun(a_output, "grasps", None, a_output, t.model, t.steps, t.batch_size, learning_rate, t.validation,
                    0, t.evaluations, device=t.device)
     rounds: list[AdaptiveRound] = []
-    best, stale = -np.inf, 0
+    aps: list[float] = []
     for number in range(plan.rounds + 1):
         result = train_one(dataclasses.replace(base, rows=tuple(int(r) for r in np.sort(labelled))))
-        ap = validation_ap(result)
-        rounds.append(AdaptiveRound(round=number, labels=int(len(labelled)), validation_ap=round(ap, 4)))
-        best, stale = (ap, 0) if ap > best + plan.margin else (best, stale + 1)
-        if stale >= plan.patience or number == plan.rounds or len(labelled) >= n:
+        aps.append(validation_ap(result))
+        rounds.append(AdaptiveRound(round=number, labels=int(len(labelled)), validation_ap=round(aps[-1], 4)))
+        if plan.stale(aps) >= plan.patience or number == plan.rounds or len(labelled) >= n:
             break
         labelled = np.concatenate([labelled, least_sure(result.scores, labelled, inverse, share(plan.batch))])
     return tuple(int(r) for r in np.sort(labelled)), rounds

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from onepiece_dist.core.dedup import unique_codes
+from onepiece_dist.core.selection import one_grasp_per_key
 from onepiece_dist.study.result import KeyLookup, LookupRanking
 from onepiece_dist.study.stats import threshold_ap
 
@@ -128,13 +129,6 @@ def grasps_by_key_count(inverse: np.ndarray, budget: int, rng: np.random.Generat
     return grouped[rank < np.repeat(take, counts)]
 
 
-def one_grasp_per_key(inverse: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """One row drawn at random among the rows of each key: inverse (n,) int64 key of each row -> (U,) int64 rows,
-    in key order."""
-    order = rng.permutation(len(inverse))
-    first = np.full(int(inverse.max()) + 1 if len(inverse) else 0, -1, dtype=np.int64)
-    first[inverse[order][::-1]] = np.arange(len(order))[::-1]  # each key's first place in the shuffled order
-    return order[first]
 
 
 def key_lookup(train_codes: np.ndarray, train_success: np.ndarray, test_codes: np.ndarray,

@@ -13,7 +13,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.spec import JobSpec, describe_validation_error
+from onepiece_dist.spec import JobSpec, RoundsRule, describe_validation_error
 
 
 class _Frozen(BaseModel):
@@ -48,16 +48,8 @@ class StudyTraining(_Frozen):
         return self
 
 
-class StudyAdaptive(_Frozen):
+class StudyAdaptive(RoundsRule):
     """The adaptive arm U (study.adaptive): labels chosen by the network in rounds, among A's candidates."""
-
-    first: float = Field(0.02, gt=0, le=1, description="Round 0: this share of A's candidates, one per voxel code.")
-    batch: float = Field(0.01, gt=0, le=1, description="Each later round: this share, where the network is "
-                         "least sure, one per code while codes last.")
-    rounds: int = Field(6, ge=0, le=100, description="Rounds after the first, at most.")
-    patience: int = Field(2, ge=1, le=100, description="Stop after this many rounds without a validation AP "
-                          "gain above margin.")
-    margin: float = Field(0.005, ge=0, le=1, description="The validation AP gain that counts as a rise.")
 
 
 class StudyTargets(_Frozen):
