@@ -80,6 +80,21 @@ def test_the_decision_is_the_cheapest_arm_inside_a_s_intervals_with_targets_from
     assert decide(arms(b_top1=0.76), StudyTargets()).b_beats_random == {"B r0": False}  # below R of its size
 
 
+def test_the_adaptive_arm_meets_its_targets_only_inside_a_s_intervals_at_its_share_of_a_s_cost():
+    def with_u(seconds: float, top1: float, ap: float):
+        return finish_arms([ArmDraft("A", "A", cost(100, 1000), score(0.8, 0.7)),
+                            ArmDraft("R 0.05", "R", cost(5, 50), score(0.70, 0.60), share=0.05),
+                            ArmDraft("R 0.1", "R", cost(10, 100), score(0.79, 0.68), share=0.1),
+                            ArmDraft("U", "U", cost(seconds, 80), score(top1, ap)),
+                            ArmDraft("R ~U", "R", cost(8, 80), score(0.7, 0.6))])
+
+    cheap = decide(with_u(9, 0.79, 0.69), StudyTargets(adaptive_share=0.1))
+    assert cheap.u_met and cheap.u_cost_share == 0.09 and cheap.r_labels_at_u_ap is None  # no R reaches its AP
+    assert not decide(with_u(9, 0.79, 0.69), StudyTargets(adaptive_share=0.05)).u_met  # the spec's share
+    assert not decide(with_u(9, 0.70, 0.69), StudyTargets()).u_met  # outside A's top-1 interval
+    assert decide(with_u(9, 0.79, 0.60), StudyTargets()).r_labels_at_u_ap == 50  # R 0.05 reaches AP 0.60
+
+
 def test_a_study_spec_names_the_field_it_refuses(tmp_path):
     with pytest.raises(SpecError, match=r"budgets"):
         load_study_spec(None, {"budgets": [0.0]})

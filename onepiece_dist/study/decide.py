@@ -66,6 +66,7 @@ def decide(arms: list[Arm], targets: StudyTargets) -> Decision:
     named = {arm.name: arm for arm in arms}
     u_beats = b_beats_r(named["U"], named["R ~U"]) if {"U", "R ~U"} <= set(named) else None
     return Decision(
+        **adaptive_target(named.get("U"), arms, targets),
         cheapest=cheapest.name if cheapest else None,
         cheapest_core_seconds=cheapest.cost.core_seconds if cheapest else None,
         cheapest_label_trials=cheapest.cost.label_trials if cheapest else None,
@@ -75,3 +76,15 @@ def decide(arms: list[Arm], targets: StudyTargets) -> Decision:
         time_met=bool(cheapest and cheapest.time_ratio >= targets.time_ratio),
         storage_met=bool(cheapest and cheapest.storage_ratio >= targets.storage_ratio),
         best_b=best_b.name if best_b else None, b_beats_random=versus, u_beats_random=u_beats)
+
+
+def adaptive_target(u: Arm | None, arms: list[Arm], targets: StudyTargets) -> dict:
+    """Issue 39's targets for the adaptive arm U: inside A's intervals at no more than targets.adaptive_share of
+    A's core-seconds, and fewer labels than random labels need for the same held-out AP."""
+    if u is None:
+        return {}
+    share = u.cost.core_seconds / max(arms[0].cost.core_seconds, 1e-9)
+    reaching = [r.cost.labelled_grasps for r in arms
+                if r.kind == "R" and round(r.heldout.ap.mean, 4) >= round(u.heldout.ap.mean, 4)]
+    return {"u_cost_share": round(share, 4), "u_met": bool(u.within_a and share <= targets.adaptive_share),
+            "r_labels_at_u_ap": min(reaching) if reaching else None}

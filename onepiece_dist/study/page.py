@@ -48,11 +48,26 @@ def verdict(result: StudyResult) -> list[str]:
                      f"{len(result.adaptive or [])} rounds) {'beats' if d.u_beats_random else 'does not beat'} as "
                      f"many random labels (R ~U: {'both' if d.u_beats_random else 'not both'} top-1 and AP at least "
                      "R's).")
+        lines += adaptive_target_lines(result, u)
     for p in result.premise:
         lines.append(f"Premise at radius {p.radius}: a patch's label agrees with the grasps it stands for "
                      f"{pct(p.patch_vs_every_grasp)} (floor {pct(p.shuffled_patches)}); the code decides "
                      f"{pct(p.share_decided)} of the label's headroom over chance.")
     return lines
+
+
+def adaptive_target_lines(result: StudyResult, u) -> list[str]:
+    """Issue 39's targets for U, met or not."""
+    d, t = result.decision, result.spec.targets
+    if d.u_met is None:
+        return []
+    fewer = d.r_labels_at_u_ap is None or d.r_labels_at_u_ap > u.cost.labelled_grasps
+    reach = (f"random labels reach U's held-out AP ({u.heldout.ap.mean:.3f}) with {d.r_labels_at_u_ap:,} labels"
+             if d.r_labels_at_u_ap is not None else f"no R arm reaches U's held-out AP ({u.heldout.ap.mean:.3f})")
+    return [f"Target for U, inside A's intervals at no more than {t.adaptive_share:.0%} of A's core-seconds: "
+            f"{'met' if d.u_met else 'not met'} (U is {'inside' if u.within_a else 'outside'} A's intervals at "
+            f"{d.u_cost_share:.1%} of A's core-seconds). Target for U, fewer labels than random labels for the same "
+            f"held-out AP: {'met' if fewer else 'not met'} ({reach}; U used {u.cost.labelled_grasps:,})."]
 
 
 def trials_words(s) -> str:

@@ -175,6 +175,11 @@ class Decision(_Frozen):
                                             "the R arm of its size.")
     u_beats_random: bool | None = Field(None, description="The adaptive arm's top-1 and AP both at least those of "
                                         "R ~U, random labels of its size (with spec.adaptive).")
+    u_cost_share: float | None = Field(None, description="U's core-seconds over A's.")
+    u_met: bool | None = Field(None, description="U inside A's intervals at no more than targets.adaptive_share of "
+                               "A's core-seconds.")
+    r_labels_at_u_ap: int | None = Field(None, description="The fewest labels of an R arm whose mean held-out AP "
+                                         "reaches U's (None: no R arm does).")
 
 
 class StudyResult(_Frozen):

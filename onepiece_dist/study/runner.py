@@ -368,7 +368,14 @@ def report_study(folder: str | Path) -> StudyResult:
     if not path.is_file():
         raise SpecError(f"{path}: no study result here (run `onepiece study run ... --out {folder}` first)")
     result = StudyResult.model_validate_json(path.read_text())
-    from onepiece_dist.study.page import write_pages
+    from onepiece_dist.study.decide import decide
 
-    write_pages(result, Path(folder))
+    decision = decide(list(result.arms), result.spec.targets)  # figures a result from older code lacks
+    if decision != result.decision:
+        result = result.model_copy(update={"decision": decision})
+        write_result(result, Path(folder))
+    else:
+        from onepiece_dist.study.page import write_pages
+
+        write_pages(result, Path(folder))
     return result

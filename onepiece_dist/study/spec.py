@@ -65,6 +65,8 @@ class StudyTargets(_Frozen):
                               "paper: 2 days against about 6 hours).")
     storage_ratio: float = Field(6.3, gt=0, description="Labelled-storage ratio A / plan that counts as cheap "
                                  "(the paper: 43.7 GB against 6.9 GB).")
+    adaptive_share: float = Field(0.1, gt=0, le=1, description="The adaptive arm's target: stop inside A's "
+                                  "intervals at no more than this share of A's label cost (core-seconds).")
 
 
 class StudySpec(_Frozen):
