@@ -16,8 +16,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from onepiece_dist.errors import SpecError
 
-RESULTS_REVISION = 3  # bump when code changes what an extraction produces (2: one rigid body, coupled fingers;
-#                      3: parts keep the object's surface points and convex pieces, for patches)
+RESULTS_REVISION = 4  # bump when code changes what an extraction produces (2: one rigid body, coupled fingers;
+#                      3: parts keep the object's surface points and convex pieces, for patches; 4: fc_epsilon's
+#                      hull without qhull's pre-merging, the last bits of a quarter of the epsilons)
 
 STAGES = ("ingest", "extract", "dedup", "assemble", "label", "train", "evaluate")
 Stage = Literal["ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"]

@@ -108,6 +108,24 @@ def test_epsilon_grows_with_friction_and_two_point_contacts_hold_no_torque():
     assert ferrari_canny(antipodal(math.radians(40)), 0.5)[0] == 0.0  # outside the cone: no closure, no epsilon
 
 
+def test_the_fast_hull_gives_the_default_hulls_epsilon_and_a_friction_per_grasp_scores_each_alone():
+    from scipy.spatial import ConvexHull
+
+    rng = np.random.default_rng(4)
+    tilts = rng.uniform(0, math.radians(20), 30)
+    contacts = Contacts(np.repeat(antipodal().points, 30, axis=0),
+                        np.stack([antipodal(t).normals[0] for t in tilts]), np.zeros(30, dtype=np.int8),
+                        np.tile([[0.0, 1.0, 0.0]], (30, 1)))
+    mu = rng.uniform(0.3, 1.0, 30)
+    eps = ferrari_canny(contacts, mu)
+    wrenches = contact_wrenches(contacts, mu)
+    default = [max(-ConvexHull(w).equations[:, -1].max(), 0.0) for w in wrenches]  # qhull with its defaults
+    assert np.allclose(eps, default, rtol=1e-10, atol=0) and (eps > 0).sum() >= 20
+    alone = [ferrari_canny(Contacts(contacts.points[k:k + 1], contacts.normals[k:k + 1], contacts.state[k:k + 1],
+                                    contacts.approach[k:k + 1]), float(mu[k]))[0] for k in range(30)]
+    assert np.array_equal(eps, alone)
+
+
 def test_scores_do_not_change_when_the_object_and_the_grasp_turn_together():
     vertices, faces = wedge(math.radians(25))
     poses = np.concatenate([top_down(0.0), top_down(0.005, 0.004)])

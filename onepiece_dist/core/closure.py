@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.frames import apply_rotation, perpendicular, perturb_pose
+from onepiece_dist.core.frames import apply_rotation, perpendicular, perturb_poses
 from onepiece_dist.core.portable import sin_cos
 from onepiece_dist.core.raycast import cast_rays, cross, dot
 
@@ -112,10 +112,12 @@ def smallest_level(required: np.ndarray, levels: tuple[float, ...] = GRASPNET_LE
     return np.where(index < len(ordered), ordered[np.minimum(index, len(ordered) - 1)], np.inf)
 
 
-def contact_wrenches(contacts: Contacts, mu: float, facets: int = 8, soft: bool = True) -> np.ndarray:
+def contact_wrenches(contacts: Contacts, mu: float | np.ndarray, facets: int = 8, soft: bool = True) -> np.ndarray:
     """(n, 2 * (facets + 2 soft), 6) each grasp's contact wrench generators (module docstring), forces first,
-    torques about the contacts' midpoint over TORQUE_LENGTH; normals turned to point at the other contact."""
+    torques about the contacts' midpoint over TORQUE_LENGTH; normals turned to point at the other contact. ``mu``:
+    one friction for every grasp, or (n,) one each."""
     p, n = contacts.points, contacts.normals
+    mu = np.broadcast_to(np.asarray(mu, dtype=np.float64), (len(p),))[:, None, None, None]
     centre = p.mean(axis=1, keepdims=True)
     towards = (p[:, ::-1] - p)  # each contact to the other
     n = np.where((dot(n, towards) < 0)[..., None], -n, n)
@@ -134,28 +136,38 @@ def contact_wrenches(contacts: Contacts, mu: float, facets: int = 8, soft: bool 
     torques = cross(np.broadcast_to(arm, forces.shape), forces) / TORQUE_LENGTH
     wrenches = [np.concatenate([forces, torques], axis=-1)]
     if soft:
-        twist = mu * TORSION_RADIUS / TORQUE_LENGTH
+        twist = mu[:, :, 0] * TORSION_RADIUS / TORQUE_LENGTH
         base = cross(arm[:, :, 0], n) / TORQUE_LENGTH
         for sign in (1.0, -1.0):
             wrenches.append(np.concatenate([n, base + sign * twist * n], axis=-1)[:, :, None])
     return np.concatenate(wrenches, axis=2).reshape(len(p), -1, 6)
 
 
-def ferrari_canny(contacts: Contacts, mu: float, facets: int = 8, soft: bool = True) -> np.ndarray:
-    """(n,) float64 the Ferrari-Canny L1 epsilon of each grasp at friction ``mu``: the distance from the origin
-    to the boundary of its contact wrenches' hull, 0 where the origin is not strictly inside (and for every state
-    but "two")."""
-    from scipy.spatial import ConvexHull, QhullError
-
+def ferrari_canny(contacts: Contacts, mu: float | np.ndarray, facets: int = 8, soft: bool = True) -> np.ndarray:
+    """(n,) float64 the Ferrari-Canny L1 epsilon of each grasp at friction ``mu`` (one, or (n,) one each): the
+    distance from the origin to the boundary of its contact wrenches' hull, 0 where the origin is not strictly
+    inside (and for every state but "two")."""
     wrenches = contact_wrenches(contacts, mu, facets, soft)
     out = np.zeros(len(wrenches))
     for k in np.flatnonzero(contacts.state == 0):
-        try:
-            offsets = ConvexHull(wrenches[k]).equations[:, -1]
-        except QhullError:
-            continue  # flat in wrench space (two point contacts): the origin is on its boundary
-        out[k] = max(float(-offsets.max()), 0.0)
+        offsets = hull_offsets(wrenches[k])
+        if offsets is not None:
+            out[k] = max(float(-offsets.max()), 0.0)
     return out
+
+
+def hull_offsets(points: np.ndarray) -> np.ndarray | None:
+    """The offsets of the facets of the convex hull of ``points`` (k, 6), None where the hull is flat. Qhull
+    without pre-merging ('Q0', a third of the default's time on these hulls, the same facets where it succeeds),
+    else with its defaults where Q0 reports a precision problem."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    for options in ("Q0", None):
+        try:
+            return ConvexHull(points, qhull_options=options).equations[:, -1]
+        except QhullError:
+            continue  # Q0: a precision problem, try merging; the defaults: flat (two point contacts)
+    return None
 
 
 def robust_scores(vertices: np.ndarray, faces: np.ndarray, poses: np.ndarray, rng: np.random.Generator,
@@ -163,16 +175,16 @@ def robust_scores(vertices: np.ndarray, faces: np.ndarray, poses: np.ndarray, rn
                   object_turn: float = 0.01, friction_sigma: float = 0.1, **pad) -> tuple[np.ndarray, np.ndarray]:
     """Dex-Net's robust epsilon: over ``samples`` perturbations of each pose (gripper moved by Gaussian noise of
     ``gripper_shift`` m, the object by ``object_shift`` m and turned by ``object_turn`` rad, friction mu with
-    relative sigma ``friction_sigma``), the mean epsilon and the share in force closure. ``pad``: the gripper's
-    max_opening, finger_length, finger_height. -> (n,) mean epsilon, (n,) probability of force closure"""
-    eps, closed = np.zeros((samples, len(poses))), np.zeros((samples, len(poses)))
-    for s in range(samples):
-        moved = np.stack([perturb_pose(pose, rng, np.hypot(gripper_shift, object_shift), object_turn)
-                          for pose in poses])
-        friction = max(mu * (1 + friction_sigma * rng.normal()), 1e-3)
-        contacts = pad_contacts(vertices, faces, moved, **pad)
-        eps[s] = ferrari_canny(contacts, friction)
-        closed[s] = required_friction(contacts) <= friction
+    relative sigma ``friction_sigma``, drawn per grasp and sample), the mean epsilon and the share in force
+    closure; every sample's contacts found in one call. ``pad``: the gripper's max_opening, finger_length,
+    finger_height. -> (n,) mean epsilon, (n,) probability of force closure"""
+    n = len(poses)
+    moved = perturb_poses(np.tile(np.asarray(poses, dtype=np.float64), (samples, 1, 1)), rng,
+                          np.hypot(gripper_shift, object_shift), object_turn)
+    friction = np.maximum(mu * (1 + friction_sigma * rng.normal(size=samples * n)), 1e-3)
+    contacts = pad_contacts(vertices, faces, moved, **pad)
+    eps = ferrari_canny(contacts, friction).reshape(samples, n)
+    closed = (required_friction(contacts) <= friction).reshape(samples, n)
     return eps.mean(axis=0), closed.mean(axis=0)
 
 

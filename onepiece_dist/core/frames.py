@@ -146,6 +146,25 @@ def perturb_pose(pose: np.ndarray, rng: np.random.Generator, translation: float,
     return out
 
 
+def perturb_poses(poses: np.ndarray, rng: np.random.Generator, translation: float, rotation: float) -> np.ndarray:
+    """(m, 4, 4) each of ``poses`` perturbed as :func:`perturb_pose` does, with every draw made at once (axes,
+    then angles, then shifts): the same distribution, not the same draws."""
+    poses = np.asarray(poses, dtype=np.float64)
+    m = len(poses)
+    axis = rng.normal(size=(m, 3))
+    axis /= np.sqrt(np.sum(axis * axis, axis=1))[:, None]
+    angle = rng.normal(0, rotation, m)
+    k = np.zeros((m, 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axis[:, 2], -axis[:, 1], axis[:, 0]
+    sin, cos = sin_cos(angle)
+    turn = np.eye(3) + sin[:, None, None] * k + (1 - cos)[:, None, None] * compose_rotations(k, k)
+    out = poses.copy()
+    out[:, :3, :3] = compose_rotations(poses[:, :3, :3], turn)
+    out[:, :3, 3] += rng.normal(0, translation, (m, 3))
+    return out
+
+
 def perpendicular(vectors: np.ndarray) -> np.ndarray:
     """A unit vector perpendicular to each of (n, 3) vectors."""
     vectors = _unit(vectors)
