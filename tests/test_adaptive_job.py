@@ -88,6 +88,10 @@ def test_an_adaptive_job_stops_by_its_rule_and_keeps_every_round_in_the_dataset(
         assert np.allclose(predict(load_round_model(tmp_path / "a.zarr", entry["round"]), candidates),
                            scores[entry["round"]], atol=1e-6)
     assert status.training is not None and status.training.data == "budget"
+    from onepiece_dist.store.dataset import DatasetReader, delivered_groups
+
+    assert delivered_groups(tmp_path / "a.zarr") == ["labelled", "objects", "train"]  # the rounds are records
+    assert DatasetReader(tmp_path / "a.zarr").summary()["adaptive"]["stopped"] == record["stopped"]  # inspect
 
 
 @pytest.mark.sim

@@ -190,7 +190,7 @@ class DatasetReader:
             "bytes_on_disk": disk_bytes(self.path),
             "delivered_bytes": delivered_bytes(self.path),
         }
-        for key in ("assembly", "assembly_labels", "training", "evaluation"):
+        for key in ("assembly", "assembly_labels", "budget_labels", "adaptive", "training", "evaluation"):
             if key in self.attrs:
                 out[key] = self.attrs[key]
         if self.has("grasps/success") and grasps:
@@ -205,11 +205,12 @@ def delivered_groups(path: str | os.PathLike) -> list[str]:
     """The top-level groups a trainer needs, the rest being records of how the dataset was made that a copy may
     leave out: with labels on the one object (assembled/grasps) or a budget's (labelled/grasps), everything but
     the extraction records (grasps/, unique/, exact/); with every candidate labelled (grasps/success), everything
-    but unique/ and exact/.
+    but unique/ and exact/; never adaptive/ (the rounds' record).
     The objects' meshes are references (objects/ names them) in both."""
     root = zarr.open_group(str(path), mode="r")
     apart = "assembled/grasps/success" in root or "labelled/grasps/success" in root  # labels beside the records
     drop = set(EXTRACTION_RECORDS) if apart else set(EXTRACTION_RECORDS) - {"grasps"}
+    drop.add("adaptive")  # adaptive labelling's rounds: how the labels were chosen, scores of grasps/ rows
     return sorted(name for name, _ in root.groups() if name not in drop)
 
 
