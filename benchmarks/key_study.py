@@ -43,7 +43,6 @@ from benchmarks.experiment_learn import pair_agreement  # noqa: E402
 from benchmarks.experiment_train import spawn_context, work_folder  # noqa: E402
 from onepiece_dist.core.contact import ContactKeySpec, contact_keys  # noqa: E402
 from onepiece_dist.core.dedup import unique_codes  # noqa: E402
-from onepiece_dist.core.voxel import voxel_indices  # noqa: E402
 from onepiece_dist.study.lookup import (  # noqa: E402
     budget_lookup,
     decided_share,
@@ -85,10 +84,11 @@ class Crops:
 
 def occupancy_of(crops: Crops, grid: tuple[int, int, int], resolution: float) -> np.ndarray:
     """Packed occupancy codes of the crops at ``resolution``: (n, B) uint8 (core.voxel's layout)."""
-    occupancy = np.zeros((crops.count, int(np.prod(grid))), dtype=bool)
-    flat = voxel_indices(crops.points, grid, resolution)
-    occupancy[crops.rows[flat >= 0], flat[flat >= 0]] = True
-    return np.packbits(occupancy, axis=1, bitorder="big")
+    from onepiece_dist.study.keys import Crops as KeyCrops
+    from onepiece_dist.study.keys import occupancy
+
+    region = tuple(n * resolution for n in grid)
+    return occupancy(KeyCrops(crops.points, crops.rows, crops.count), region, resolution)
 
 
 def keys_of(crops: Crops, kind: str, params: dict, region: tuple[float, float, float]) -> np.ndarray:
@@ -152,29 +152,13 @@ def key_rows(train: Crops, heldout: Crops, region: tuple[float, float, float], c
 
 
 def settled_crops(dataset: Path, spec) -> Crops:
-    """Every grasp of a labelled dataset cropped at its settled pose (``grasps/pose``) from its object's surface
-    points, sampled as the job samples them (the paper experiment's trade-off does the same)."""
-    from onepiece_dist.core.mesh import sample_surface
-    from onepiece_dist.core.sampling import object_rng
-    from onepiece_dist.core.voxel import crop_regions
-    from onepiece_dist.objects import load_object, resolve_source
+    """Every grasp of a labelled dataset cropped at its settled pose (study.keys.settled_crops), with its labels."""
     from onepiece_dist.store import open_dataset
+    from onepiece_dist.study.keys import settled_crops as crops_of
 
-    ds = open_dataset(str(dataset))
-    owner, poses = ds["grasps/object"].astype(np.int64), ds["grasps/pose"].astype(np.float64)
-    refs = {r.name: r for r in resolve_source(spec.objects)}
-    grid = spec.voxel.grid_shape(spec.gripper)
-    points, rows = [np.zeros((0, 3))], [np.zeros(0, dtype=np.int64)]
-    for k, name in enumerate(ds.object_names):
-        mine = np.flatnonzero(owner == k)
-        if len(mine):
-            mesh = load_object(refs[name], spec).mesh
-            cloud = sample_surface(mesh, spec.sampler.surface_points, object_rng(mesh.content_id, spec.seed))[0]
-            _, counts, kept = crop_regions(cloud, poses[mine], grid, spec.voxel.resolution, keep_points=True)
-            points += kept
-            rows.append(np.repeat(mine, counts))
-    return Crops(np.concatenate(points), np.concatenate(rows), ds["grasps/success"].astype(bool),
-                 ds["grasps/quality"].astype(np.float64), owner)
+    ds, crops = open_dataset(str(dataset)), crops_of(str(dataset), spec)
+    return Crops(crops.points, crops.rows, ds["grasps/success"].astype(bool), ds["grasps/quality"].astype(np.float64),
+                 ds["grasps/object"].astype(np.int64))
 
 
 def generate(args, folder: Path) -> dict:

@@ -184,6 +184,33 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
 
 @pytest.mark.sim
 @pytest.mark.slow
+def test_other_keys_are_looked_up_from_settled_crops_and_the_jobs_own_resolution_gives_its_code(tiny_study):
+    """study.keys (the key study as a study option): the occupancy key at the job's resolution, computed again
+    from every grasp's crop at its settled pose, is the job's code, so its lookup is the study's own."""
+    from onepiece_dist.study.jobs import study_jobs
+    from onepiece_dist.study.keys import key_measures
+    from onepiece_dist.study.page import render_page
+    from onepiece_dist.study.spec import StudyKey
+
+    folder, result = tiny_study
+    keys = (StudyKey(name="occupancy 10 mm", kind="occupancy", resolution=0.01),
+            StudyKey(name="contact 10 mm, 2 mm", kind="contact", cell=0.01, step=0.002),
+            StudyKey(name="both", kind="both", resolution=0.01, cell=0.01, step=0.002),
+            StudyKey(name="occupancy 20 mm", kind="occupancy", resolution=0.02))
+    jobs = study_jobs(StudySpec(**TINY), folder)
+    own, contact, both, coarse = key_measures(keys, (jobs.a.output, jobs.a), (jobs.heldout.output, jobs.heldout),
+                                              result.spec.seed)
+    assert own.lookup == result.lookup and own.unique == result.lookup.train_codes
+    assert both.unique >= max(own.unique, contact.unique) and coarse.unique <= own.unique
+    assert both.key_bytes == own.key_bytes + contact.key_bytes
+    page = render_page(result.model_copy(update={"keys": [own, contact, both, coarse]}))
+    assert "## Other keys as lookups" in page and f"| contact 10 mm, 2 mm | {contact.key_bytes} |" in page
+    with pytest.raises(SpecError, match="does not divide"):
+        load_study_spec(None, {**TINY, "keys": [{"name": "x", "kind": "occupancy", "resolution": 0.03}]})
+
+
+@pytest.mark.sim
+@pytest.mark.slow
 def test_b_weighting_reaches_only_the_one_objects_runs(tiny_study):
     """training.b_weighting (the variants of docs/performance.md as a study setting) weighs B's patches only."""
     from onepiece_dist.study.jobs import run_or_reuse, study_jobs

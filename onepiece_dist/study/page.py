@@ -127,6 +127,24 @@ def lookup_lines(result: StudyResult) -> list[str]:
     return [*lines, ""]
 
 
+def keys_lines(result: StudyResult) -> list[str]:
+    """The other keys of spec.keys as lookups (study.keys), beside the job's own code."""
+    if not result.keys:
+        return []
+    lines = ["## Other keys as lookups", "",
+             "Every grasp's crop at its settled pose keyed again (study.keys); each held-out candidate looks its key "
+             "up among A's train grasps. Agreement is with the held-out label, beside labels that ignore the shape "
+             "(floor); AP ranks the held-out candidates by one label per key (B) or as many random labels (R).", "",
+             "| key | bytes | unique among A | coverage | one label (floor) | majority (floor) | AP B | AP R |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for key in result.keys:
+        k = key.lookup
+        lines.append(f"| {key.name} | {key.key_bytes} | {pct(key.unique_fraction)} | {pct(k.coverage)} | "
+                     f"{pct(k.one_label)} ({pct(k.one_label_floor)}) | {pct(k.majority)} ({pct(k.majority_floor)}) "
+                     f"| {k.ranked['B'].ap:.3f} | {k.ranked['R'].ap:.3f} |")
+    return [*lines, ""]
+
+
 def arm_row(arm: Arm) -> str:
     c, h = arm.cost, arm.heldout
     return (f"| {arm.name} | {c.labelled_grasps:,} | {c.label_trials:,} | {c.core_seconds:.1f} | "
@@ -166,7 +184,7 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
                   *(f"| {p.radius} | {p.matched_grasps:,} | {pct(p.patch_vs_representative)} | "
                     f"{pct(p.patch_vs_every_grasp)} | {pct(p.shuffled_patches)} | {pct(p.same_code)} | "
                     f"{pct(p.random_pairs)} | {pct(p.share_decided)} |" for p in result.premise), ""]
-    lines += adaptive_lines(result) + lookup_lines(result) + label_fit_lines(result)
+    lines += adaptive_lines(result) + lookup_lines(result) + keys_lines(result) + label_fit_lines(result)
     if result.rejected:
         lines += ["## Rejected objects", "", *(f"- {r}" for r in result.rejected), ""]
     lines += ["## Run", "",

@@ -182,6 +182,16 @@ class Decision(_Frozen):
                                          "reaches U's (None: no R arm does).")
 
 
+class KeyMeasure(_Frozen):
+    """One key of spec.keys (study.keys): how many distinct keys A's grasps have and the key as a lookup."""
+
+    name: str
+    key_bytes: int
+    unique: int = Field(description="Distinct keys among A's grasps.")
+    unique_fraction: float = Field(description="unique over A's grasps: the labels one label per key pays for.")
+    lookup: KeyLookup
+
+
 class StudyResult(_Frozen):
     """A study's result: ``study.json``."""
 
@@ -202,6 +212,7 @@ class StudyResult(_Frozen):
     adaptive: list[AdaptiveRound] | None = Field(None, description="The adaptive arm's rounds (with "
                                                  "spec.adaptive).")
     lookup: KeyLookup | None = Field(None, description="The code as a lookup, without a network.")
+    keys: list[KeyMeasure] = Field([], description="The other keys of spec.keys as lookups.")
     label_fit: LabelFit | None = Field(None, description="The train label against the held-out truth (force-closure "
                                        "studies).")
     decision: Decision

@@ -249,6 +249,7 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                     rounds: list[AdaptiveRound] | None = None) -> StudyResult:
     from onepiece_dist.service.registry import package_version
     from onepiece_dist.store import open_dataset
+    from onepiece_dist.study.keys import key_measures
     from onepiece_dist.study.lookup import key_lookup
     from onepiece_dist.study.premise import label_fit, premise
     from onepiece_dist.study.stats import baselines
@@ -270,6 +271,8 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                        heldout=Baselines(**baselines(labels, groups)), arms=arms, premise=premises,
                        adaptive=rounds,
                        lookup=key_lookup(a["grasps/code"], a["grasps/success"], ho["grasps/code"], labels > 0,
+                                         spec.seed),
+                       keys=key_measures(spec.keys, (jobs.a.output, jobs.a), (jobs.heldout.output, jobs.heldout),
                                          spec.seed),
                        label_fit=label_fit(ho, spec.good_mu) if spec.label == "force_closure" else None,
                        decision=decide(arms, spec.targets))

@@ -52,6 +52,34 @@ class StudyAdaptive(RoundsRule):
     """The adaptive arm U (study.adaptive): labels chosen by the network in rounds, among A's candidates."""
 
 
+class StudyKey(_Frozen):
+    """A dedup key measured as a lookup (study.keys): occupancy at a resolution, a contact key (the relief under
+    each pad, core.contact), or both concatenated."""
+
+    name: str = Field(min_length=1, max_length=80, description="What the page calls it.")
+    kind: Literal["occupancy", "contact", "both"]
+    resolution: float = Field(0.01, gt=0, le=0.1, description="Occupancy voxel edge (m); it must divide the "
+                              "closing region.")
+    cell: float = Field(0.01, gt=0, le=0.1, description="Contact: pad cell edge (m).")
+    step: float = Field(0.002, gt=0, le=0.1, description="Contact: relief step (m).")
+    levels: int = Field(4, ge=1, le=254, description="Contact: relief levels before 'farther'.")
+    width_step: float = Field(0.005, gt=0, le=0.1, description="Contact: opening step (m).")
+
+    @model_validator(mode="after")
+    def _divides_the_closing_region(self) -> StudyKey:
+        from onepiece_dist.core.contact import ContactKeySpec
+        from onepiece_dist.spec import GripperSpec
+
+        g = GripperSpec()  # a study's jobs grip with the default gripper
+        region = (g.closing_depth, g.closing_width, g.closing_height)
+        if self.kind in ("occupancy", "both") and any(abs(x / self.resolution - round(x / self.resolution)) > 1e-6
+                                                      for x in region):
+            raise ValueError(f"resolution={self.resolution} does not divide the closing region {region} (m)")
+        if self.kind in ("contact", "both"):
+            ContactKeySpec(region, self.cell, self.step, self.levels, self.width_step)  # ValueError names the field
+        return self
+
+
 class StudyTargets(_Frozen):
     """What the report decides with: A's intervals and the cost targets a plan must meet to be called cheap."""
 
@@ -103,6 +131,8 @@ class StudySpec(_Frozen):
     training: StudyTraining = StudyTraining()
     adaptive: StudyAdaptive | None = Field(None, description="Add the adaptive arm U (labels chosen by the "
                                            "network in rounds); none by default.")
+    keys: tuple[StudyKey, ...] = Field((), description="Other dedup keys to measure as lookups from A's labels to "
+                                       "the held-out labels (the key study, docs/key_study.md); none by default.")
     targets: StudyTargets = StudyTargets()
 
     @field_validator("radii")
