@@ -1,10 +1,9 @@
-"""benchmarks/key_study.py: its measures on synthetic keys, its occupancy codes against core.voxel's, its page
-rendered from the committed results, and `--quick` as a smoke test of the whole script (real labelling jobs)."""
+"""The key study's measures (study.lookup) on synthetic keys, study.keys' occupancy codes against core.voxel's,
+and the committed key-study pages rendered from their committed results. The key study itself is now a study
+option (`keys`, examples/studies/key_study.yaml; tests/test_study.py runs it on the tiny study)."""
 
 import importlib
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +14,6 @@ from onepiece_dist.core.mesh import box_mesh, sample_surface
 from onepiece_dist.core.voxel import crop_regions
 
 ROOT = Path(__file__).resolve().parents[1]
-study = importlib.import_module("benchmarks.key_study")
 lookup = importlib.import_module("onepiece_dist.study.lookup")
 page = importlib.import_module("onepiece_dist.study.key_study_page")
 
@@ -102,31 +100,22 @@ def test_a_key_that_decides_the_label_ranks_perfectly_from_one_label_per_key():
 
 
 def test_occupancy_codes_from_the_kept_crop_points_are_the_codes_core_voxel_gives():
+    from onepiece_dist.study.keys import Crops, key_of
+    from onepiece_dist.study.spec import StudyKey
+
     mesh = box_mesh((0.05, 0.03, 0.04))
     cloud = sample_surface(mesh, 3000, np.random.default_rng(1))[0]
     poses = np.repeat(np.eye(4)[None], 3, axis=0)
     poses[:, 0, 3] = [-0.03, -0.02, -0.035]  # palm behind the box along u; the region holds part of it
     poses[2, :3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]  # turned about u
     codes, counts, kept = crop_regions(cloud, poses, (4, 8, 2), 0.01, keep_points=True)
-    crops = study.Crops(np.concatenate(kept), np.repeat(np.arange(3), counts), np.zeros(3, bool), np.zeros(3),
-                        np.zeros(3, np.int64))
+    crops = Crops(np.concatenate(kept), np.repeat(np.arange(3), counts), 3)
+    region = (0.04, 0.08, 0.02)
     assert counts.min() > 0
-    assert np.array_equal(study.occupancy_of(crops, (4, 8, 2), 0.01), codes)
-    both = study.keys_of(crops, "both", {"resolution": 0.01, "cell": 0.02, "step": 0.004, "levels": 3,
-                                         "width_step": 0.01}, (0.04, 0.08, 0.02))
+    assert np.array_equal(key_of(crops, StudyKey(name="10 mm", kind="occupancy", resolution=0.01), region), codes)
+    both = key_of(crops, StudyKey(name="both", kind="both", resolution=0.01, cell=0.02, step=0.004, levels=3,
+                                  width_step=0.01), region)
     assert both.shape == (3, 8 + 5) and np.array_equal(both[:, :8], codes)
-
-
-def test_cutting_each_object_to_its_first_grasps_keeps_their_points_and_renumbers_them_in_order():
-    owner = np.array([0, 0, 0, 1, 1, 2])
-    rows = np.array([0, 0, 1, 2, 2, 2, 3, 4, 4, 5])  # points of each grasp, in grasp order
-    points = np.arange(30, dtype=np.float64).reshape(10, 3)
-    crops = study.Crops(points, rows, np.array([1, 0, 1, 1, 0, 1], bool), np.arange(6.0), owner)
-    cut = study.first_per_object(crops, 2)
-    assert cut.count == 5 and cut.object.tolist() == [0, 0, 1, 1, 2]
-    assert cut.success.tolist() == [True, False, True, False, True] and cut.quality.tolist() == [0, 1, 3, 4, 5]
-    assert cut.rows.tolist() == [0, 0, 1, 2, 3, 3, 4]  # grasp 2's points dropped, later grasps renumbered
-    assert np.array_equal(cut.points, points[[0, 1, 2, 6, 7, 8, 9]])
 
 
 def row(name: str, unique: float, coverage: float, share: float) -> dict:
@@ -154,26 +143,5 @@ def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
         assert not out["quick"] and out["name"] == results.stem
         page.write_page(out, tmp_path / "page.md")
         assert (ROOT / "docs" / f"{results.stem}.md").read_text() == (tmp_path / "page.md").read_text(), \
-            f"docs/{results.stem}.md is stale: rerun benchmarks/key_study.py (or render its results)"
+            f"docs/{results.stem}.md is stale: render its results (onepiece_dist/study/key_study_page.py)"
         assert (ROOT / "docs" / f"{results.stem}.png").stat().st_size > 1000
-
-
-@pytest.mark.slow
-def test_the_quick_study_labels_train_and_held_out_objects_and_measures_every_key(tmp_path):
-    subprocess.run([sys.executable, "-m", "benchmarks.key_study", "--quick", "--out", str(tmp_path)],
-                   check=True, capture_output=True, timeout=300, cwd=ROOT)
-    out = json.loads((tmp_path / "benchmarks" / "results" / "key_study.json").read_text())
-    assert [r["key"] for r in out["keys"]] == [name for name, _, _ in study.KEYS]
-    assert out["train"]["grasps"] > 0 and out["heldout"]["grasps"] > 0 and out["ceiling"]["grasps"] > 0
-    for r in out["keys"]:
-        assert 0 < r["unique"] <= out["train"]["grasps"]
-        assert r["lookup"]["test_grasps"] == out["heldout"]["grasps"]
-        assert 0 <= r["lookup"]["covered"] <= r["lookup"]["test_grasps"]
-        assert r["budget"]["B"]["labels"] == r["budget"]["R"]["labels"] == r["unique"]
-    assert [(r["key"], r["grasps_per_object"]) for r in out["redundancy"]] == [
-        (key, n) for key in study.REDUNDANCY_KEYS for n in (4, 8)]
-    for key in study.REDUNDANCY_KEYS:  # fewer grasps per object, fewer train grasps: never more
-        four, eight = (r for r in out["redundancy"] if r["key"] == key)
-        assert 0 < four["grasps"] <= eight["grasps"] <= out["train"]["grasps"]
-    assert (tmp_path / "docs" / "key_study.png").stat().st_size > 1000
-    assert "# Which dedup key decides the label" in (tmp_path / "docs" / "key_study.md").read_text()

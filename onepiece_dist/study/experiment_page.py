@@ -366,8 +366,8 @@ def _longer_link(out: dict, results: Path) -> list[str]:
 
 
 def _key_study_link(results: Path) -> list[str]:
-    """A line naming benchmarks/key_study.py's pages (other dedup keys than the occupancy code) and what each says,
-    where their results are committed in ``results``."""
+    """A line naming the key study's pages (other dedup keys than the occupancy code) and what each says, where
+    their results are committed in ``results``."""
     from onepiece_dist.study.key_study_page import headline_sentence
 
     found = sorted(results.glob("key_study*.json"))
@@ -375,7 +375,8 @@ def _key_study_link(results: Path) -> list[str]:
         return []
     said = [f"docs/{path.stem}.md: {headline_sentence(json.loads(path.read_text()))}" for path in found]
     return ["", "Other keys than the occupancy code, measured on unseen objects without a network "
-            f"(benchmarks/key_study.py): {'; '.join(said)}."]
+            f"(the key study, measured with a script that is now the study option `keys`, docs/study.md): "
+            f"{'; '.join(said)}."]
 
 
 def _budget(longer: dict) -> str:

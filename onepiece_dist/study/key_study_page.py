@@ -1,4 +1,5 @@
-"""docs/key_study.md and its plot, rendered from benchmarks/results/key_study.json (benchmarks/key_study.py)."""
+"""docs/key_study.md and its plot, rendered from benchmarks/results/key_study.json (written by the script
+benchmarks/key_study.py, since replaced by the study option ``keys``: study/keys.py)."""
 
 from __future__ import annotations
 
@@ -162,7 +163,8 @@ def write_page(out: dict, path: Path) -> None:
         "# Which dedup key decides the label", "",
         f"Command: `{out['command']}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} minutes"
         f"{_jobs(out)}). Rendered from benchmarks/results/{out['name']}.json by "
-        "onepiece_dist/study/key_study_page.py.", "",
+        "onepiece_dist/study/key_study_page.py. The script is now a study option: `onepiece study run "
+        "examples/studies/key_study.yaml` (`keys`, docs/study.md).", "",
         "The method labels one grasp per key and lets that label stand for every grasp with the key. This measures, "
         "without a network, how far each key's label holds on unseen objects: a held-out grasp whose key some "
         "train grasp has takes the label of one of that key's train grasps (B's one label per key, as if its patch "
