@@ -211,6 +211,28 @@ def test_other_keys_are_looked_up_from_settled_crops_and_the_jobs_own_resolution
 
 @pytest.mark.sim
 @pytest.mark.slow
+def test_a_b_static_arm_builds_the_one_object_from_crops_at_the_candidate_pose_with_its_own_control(tmp_path):
+    """static_radii (the paper's static extraction as a study arm): its job crops at the candidate pose, its
+    extraction is charged apart from the settled B's, and its control is R ~B static r."""
+    from onepiece_dist.store import open_dataset
+    from onepiece_dist.study.jobs import study_jobs
+    from onepiece_dist.study.runner import Where, run_study
+
+    spec = StudySpec(**{**TINY, "static_radii": [0], "budgets": []})
+    result = run_study(spec, tmp_path, Where(in_process=True))
+    arms = {arm.name: arm for arm in result.arms}
+    assert list(arms) == ["A", "B r0", "B static r0", "R ~B r0", "R ~B static r0"]
+    static = open_dataset(study_jobs(spec, tmp_path).b["B static r0"].output)
+    assert np.array_equal(static["grasps/code"], static["grasps/candidate_code"])  # no settling: the nominal crop
+    assert arms["B static r0"].cost.stages["extract"] < arms["B r0"].cost.stages["extract"]
+    assert arms["R ~B static r0"].cost.labelled_grasps == min(arms["B static r0"].cost.labelled_grasps,
+                                                              arms["A"].cost.labelled_grasps)  # at most A's
+    assert set(result.decision.b_beats_random) == {"B r0", "B static r0"} and len(result.premise) == 1
+    assert "B static r does the same from crops at each candidate's pose" in (tmp_path / "study.md").read_text()
+
+
+@pytest.mark.sim
+@pytest.mark.slow
 def test_b_weighting_reaches_only_the_one_objects_runs(tiny_study):
     """training.b_weighting (the variants of docs/performance.md as a study setting) weighs B's patches only."""
     from onepiece_dist.study.jobs import run_or_reuse, study_jobs

@@ -44,8 +44,8 @@ def finish_arms(drafts: list[ArmDraft]) -> list[Arm]:
 
 
 def matched_random(arm: Arm, arms: list[Arm]) -> Arm | None:
-    """The R arm of a B arm's size."""
-    return next((r for r in arms if r.kind == "R" and r.share is None and r.radius == arm.radius), None)
+    """The R arm of a B arm's size (``R ~<B arm's name>``)."""
+    return next((r for r in arms if r.kind == "R" and r.name == f"R ~{arm.name}"), None)
 
 
 def b_beats_r(b: Arm, r: Arm) -> bool:

@@ -2,7 +2,8 @@
 dataset is already there, made from the very same spec: a study killed at any point goes on from what it finished.
 
 Jobs: the held-out set (every candidate labelled), A (every train candidate labelled on its own object) and one B
-job per radius (extraction once, in a parts cache the radii share; then dedup, the one object and its labels).
+job per radius (extraction once, in a parts cache the radii share; then dedup, the one object and its labels),
+and one B static job per static radius (the same from crops at the candidate pose, no extraction physics).
 """
 
 from __future__ import annotations
@@ -24,10 +25,14 @@ class StudyJobs:
 
     heldout: JobSpec
     a: JobSpec
-    b: dict[int, JobSpec]  # radius -> B job
+    b: dict[str, JobSpec]  # arm name ('B r0', 'B static r0') -> its B job; its radius is the job's similar_radius
 
     def named(self) -> list[tuple[str, JobSpec]]:
-        return [("heldout", self.heldout), ("A", self.a), *((f"B r{r}", s) for r, s in self.b.items())]
+        return [("heldout", self.heldout), ("A", self.a), *self.b.items()]
+
+    def settled_b(self) -> dict[str, JobSpec]:
+        """The B arms whose extraction settles each grasp (not the static ones)."""
+        return {name: job for name, job in self.b.items() if job.sim.physics}
 
 
 def study_jobs(spec: StudySpec, folder: Path) -> StudyJobs:
@@ -42,10 +47,16 @@ def study_jobs(spec: StudySpec, folder: Path) -> StudyJobs:
     a = spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / "A.zarr"),
                       sim={"label": not closure}, stages=stages, closure=spec.closure())
     b_sim = {"label_trials": 1} if closure else {}
-    b = {r: spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / f"B-r{r}.zarr"),
-                          cache_dir=str(jobs / "parts-B"), similar_radius=r, sim=b_sim, closure=spec.closure(),
-                          stages=("ingest", "extract", "dedup", "assemble", "label"))
-         for r in spec.radii}
+
+    def b_job(radius: int, static: bool) -> JobSpec:
+        tag = "-static" if static else ""
+        return spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, str(jobs / f"B{tag}-r{radius}.zarr"),
+                             cache_dir=str(jobs / f"parts-B{tag}"), similar_radius=radius,
+                             sim={**b_sim, **({"physics": False} if static else {})}, closure=spec.closure(),
+                             stages=("ingest", "extract", "dedup", "assemble", "label"))
+
+    b = {f"B r{r}": b_job(r, False) for r in spec.radii}
+    b.update({f"B static r{r}": b_job(r, True) for r in spec.static_radii})
     return StudyJobs(heldout, a, b)
 
 

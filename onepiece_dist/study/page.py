@@ -161,7 +161,10 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
         lines += [f"![held-out top-1 and AP against labelled grasps]({plot})", ""]
     lines += ["## Arms", "",
               "A labels every candidate on its own object; B r builds the one object at similar-shape radius r and "
-              "labels only there; R labels a random share of A's candidates (R ~B r: as many as B r labels; R ~U: as "
+              "labels only there; "
+              + ("B static r does the same from crops at each candidate's pose, with no physics in extraction; "
+                 if s.static_radii else "")
+              + "R labels a random share of A's candidates (R ~B r: as many as B r labels; R ~U: as "
               "many as U); U takes the labels the network asks for (The adaptive arm, below). Every "
               f"arm trains the {s.training.model} network {s.training.steps} steps, {s.training.seeds} seeds, at the "
               "learning rate its own validation split picks. Core-seconds are summed inside the workers; R is "

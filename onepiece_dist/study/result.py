@@ -79,7 +79,8 @@ class Arm(_Frozen):
     """One arm: A (every candidate labelled on its own object), B (the one object at a similar-shape radius) or R
     (a random subset of A's labels, of a budget's size or of a B arm's size)."""
 
-    name: str = Field(description="'A', 'B r<radius>', 'R <share>', 'R ~B r<radius>', 'U' or 'R ~U'.")
+    name: str = Field(description="'A', 'B r<radius>', 'B static r<radius>', 'R <share>', 'R ~<B arm>', 'U' or "
+                      "'R ~U'.")
     kind: Literal["A", "B", "R", "U"]
     radius: int | None = Field(None, description="B: the similar-shape radius; R ~B: the matched B arm's.")
     share: float | None = Field(None, description="R: share of A's labelled candidates.")

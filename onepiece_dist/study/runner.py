@@ -217,8 +217,8 @@ def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
 
     a_count = records["A"].status.progress.grasps
     plan = runs("A", jobs.a.output, "grasps", None)
-    for radius, job in jobs.b.items():
-        plan += runs(f"B r{radius}", job.output, "assembled/grasps", None)
+    for name, job in jobs.b.items():
+        plan += runs(name, job.output, "assembled/grasps", None)
     for name, count in random_arms(spec, records, a_count):
         plan += runs(name, jobs.a.output, "grasps", random_rows(jobs.a.output, count, spec.seed))
     return plan
@@ -227,9 +227,9 @@ def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -
 def random_arms(spec: StudySpec, records: dict[str, JobRecord], a_count: int) -> list[tuple[str, int]]:
     """(name, labelled grasps) of each R arm: one per budget share, one the size of each B arm."""
     arms = [(f"R {share:g}", max(2, min(a_count, round(share * a_count)))) for share in spec.budgets]
-    for radius in spec.radii:
-        labels = records[f"B r{radius}"].status.labels
-        arms.append((f"R ~B r{radius}", max(2, min(a_count, labels.labelled_grasps if labels else 0))))
+    for name in (name for name in records if name.startswith("B ")):
+        labels = records[name].status.labels
+        arms.append((f"R ~{name}", max(2, min(a_count, labels.labelled_grasps if labels else 0))))
     return arms
 
 
@@ -259,8 +259,8 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
     drafts = arm_drafts(spec, jobs, records, trained, labels, groups, rounds[-1].labels if rounds else None)
     arms = finish_arms(drafts)
     a = open_dataset(jobs.a.output)
-    premises = [premise(a, open_dataset(job.output), radius, spec.seed) for radius, job in jobs.b.items()
-                if records[f"B r{radius}"].status.labels is not None]
+    premises = [premise(a, open_dataset(job.output), job.similar_radius, spec.seed)
+                for name, job in jobs.settled_b().items() if records[name].status.labels is not None]
     rejected = sorted({f"{r.name}: {r.reason}" for rec in records.values() for r in rec.status.rejections})
     status = records["A"].status
     return StudyResult(spec=spec, digest=spec.digest(), date=date.today().isoformat(),
@@ -288,7 +288,7 @@ def arm_drafts(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
         kind = name[0]
         radius = int(name.rsplit("r", 1)[1]) if name.startswith(("B", "R ~B")) else None
         share = float(name[2:]) if kind == "R" and not name.startswith("R ~") else None
-        b = records.get(f"B r{radius}") if kind == "B" else None
+        b = records.get(name) if kind == "B" else None
         drafts.append(ArmDraft(name, kind, cost, heldout_score(spec, runs, labels, groups), radius, share,
                                b.status.progress.unique_codes if b else None))
     return drafts
@@ -329,12 +329,16 @@ def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
                      labelled_bytes=disk_bytes(Path(jobs.a.output) / "grasps"),
                      dataset_bytes=disk_bytes(Path(jobs.a.output)), delivered_bytes=delivered_bytes(jobs.a.output))
     costs = {"A": a_cost}
-    b_extract = max((core_seconds(records[f"B r{r}"].status).get("extract", 0.0) for r in jobs.b), default=0.0)
-    for radius, job in jobs.b.items():
-        status = records[f"B r{radius}"].status
-        stages = {**core_seconds(status), "extract": b_extract}
+    extract = {}  # the arms of one parts cache share one extraction: each is charged all of it
+    for name, job in jobs.b.items():
+        seconds = core_seconds(records[name].status).get("extract", 0.0)
+        extract[job.cache_dir] = max(extract.get(job.cache_dir, 0.0), seconds)
+    b_extract = max((extract[job.cache_dir] for job in jobs.settled_b().values()), default=0.0)
+    for name, job in jobs.b.items():
+        status = records[name].status
+        stages = {**core_seconds(status), "extract": extract[job.cache_dir]}
         labelled = Path(job.output) / "assembled" / "grasps"
-        costs[f"B r{radius}"] = ArmCost(
+        costs[name] = ArmCost(
             core_seconds=round(sum(stages.values()), 2), stages=stages,
             label_trials=status.labels.label_trials if status.labels else 0,
             labelled_grasps=status.labels.labelled_grasps if status.labels else 0,

@@ -110,6 +110,9 @@ class StudySpec(_Frozen):
     seed: int = Field(0, ge=0, lt=2**62, description="Seed of the train jobs (held-out: seed + 1), the R subsets "
                       "and the statistics.")
     radii: tuple[int, ...] = Field((0, 1, 2), min_length=1, description="Similar-shape radii of the B arms.")
+    static_radii: tuple[int, ...] = Field((), description="Radii of B static arms: the one object from crops at "
+                                          "each candidate's pose, with no physics in extraction (the paper's static "
+                                          "extraction); none by default.")
     budgets: tuple[float, ...] = Field((0.01, 0.03, 0.1, 0.3), description="R arms: shares of A's labelled "
                                        "candidates, drawn at random (the learning curve); R arms the size of each B "
                                        "arm are added.")
@@ -135,7 +138,7 @@ class StudySpec(_Frozen):
                                        "the held-out labels (the key study, docs/key_study.md); none by default.")
     targets: StudyTargets = StudyTargets()
 
-    @field_validator("radii")
+    @field_validator("radii", "static_radii")
     @classmethod
     def _distinct_radii(cls, radii: tuple[int, ...]) -> tuple[int, ...]:
         if any(r < 0 or r > 64 for r in radii) or len(set(radii)) != len(radii):
