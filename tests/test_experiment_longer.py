@@ -1,48 +1,14 @@
-"""benchmarks/experiment_longer.py: the experiment's arms trained with a larger budget on exported arrays (torch
-and numpy only), scored with the experiment's statistics, its page rendered from the committed results."""
+"""The committed longer trainings of the experiment's arms (study/longer_page.py): their verdict and their pages
+rendered from the committed results. Longer budgets are now a study's `training.steps`."""
 
 import importlib
 import json
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-longer = importlib.import_module("benchmarks.experiment_longer")
-learn = importlib.import_module("benchmarks.experiment_learn")
-
-
-def _separable(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 32, 3) int8 point sets whose label is which side of the gripper's x axis they lie on, and (n,) labels."""
-    rng = np.random.default_rng(seed)
-    labels = (rng.random(n) < 0.5).astype(np.uint8)
-    points = rng.integers(5, 120, (n, 32, 3))
-    points[:, :, 0] *= np.where(labels == 1, 1, -1)[:, None]
-    return points.astype(np.int8), labels
-
-
-def test_a_run_learns_a_separable_set_and_scores_the_heldout_grasps_with_its_best_checkpoint():
-    torch = pytest.importorskip("torch")
-    points, labels = _separable(200, 0)
-    held, held_labels = _separable(100, 1)
-    data = {"scale": np.float64(0.0004), "points_toy": points, "success_toy": labels, "points_heldout": held}
-    arm = longer.ArmData(data, "toy", torch.device("cpu"))
-    run = longer.fit(arm, torch.arange(150), torch.arange(150, 200), 3e-3, seed=0, steps=60, batch=32,
-                     evaluations=4)
-    assert [c["step"] for c in run["curve"]] == [15, 30, 45, 60]
-    best = min(run["curve"], key=lambda c: c["val_loss"])
-    assert run["best_step"] == best["step"] and run["best_val_loss"] == pytest.approx(best["val_loss"], abs=1e-4)
-    assert run["scores"].shape == (100,) and run["train_grasps"] == 150
-    from onepiece_dist.learn.train import average_precision
-
-    assert average_precision(run["scores"], held_labels.astype(float)) > 0.95
-
-
-def test_a_plan_takes_the_two_core_runs_rate_only_when_told_to():
-    run = {"cpu_learning_rate": 0.003}
-    assert longer._rates("chosen", run) == [0.003]
-    assert longer._rates("0.001,0.01", run) == [0.001, 0.01]
+longer = importlib.import_module("onepiece_dist.study.longer_page")
 
 
 def _arm(name: str, top1: float, ap: float, low: float, best_step: int = 10) -> dict:
@@ -71,8 +37,6 @@ COMMITTED = sorted(p.stem for p in (ROOT / "benchmarks" / "results").glob("*_lon
 def test_a_tagged_budget_has_its_own_files_beside_the_first():
     assert longer.longer_name({"source": "paper_experiment", "tag": ""}) == "paper_experiment_longer"
     assert longer.longer_name({"source": "paper_experiment", "tag": "gpu"}) == "paper_experiment_longer_gpu"
-    assert longer.parse_args(["report", "--data", "d", "--runs", "r", "--results", "x", "--train-command", "c",
-                              "--tag", "gpu"]).tag == "gpu"
 
 
 @pytest.mark.parametrize("name", COMMITTED)
@@ -81,7 +45,7 @@ def test_the_committed_longer_page_is_the_rendering_of_its_results(name):
     assert longer.longer_name(result) == name and result["source"] == name.split("_longer")[0]
     assert result["decision"] == json.loads(json.dumps(longer.decide(result)))
     assert (ROOT / "docs" / f"{name}.md").read_text() == longer.page(result), \
-        f"docs/{name}.md is stale: rerun benchmarks/experiment_longer.py report"
+        f"docs/{name}.md is stale: render its results (onepiece_dist/study/longer_page.py)"
 
 
 def test_both_budgets_are_committed_and_linked_from_the_experiment_page():

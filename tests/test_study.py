@@ -95,6 +95,15 @@ def test_the_adaptive_arm_meets_its_targets_only_inside_a_s_intervals_at_its_sha
     assert decide(with_u(9, 0.79, 0.60), StudyTargets()).r_labels_at_u_ap == 50  # R 0.05 reaches AP 0.60
 
 
+def test_a_study_with_views_crops_every_job_from_depth_views_and_refuses_keys_of_the_full_surface():
+    spec = StudySpec(**{**TINY, "views": 8})
+    jobs = [spec.job_spec(spec.train, 4, 0, "a.zarr"), spec.job_spec(spec.heldout, 4, 1, "h.zarr")]
+    assert all(job.views.crop == "partial" and job.views.count == 8 for job in jobs)
+    assert StudySpec(**TINY).job_spec(spec.train, 4, 0, "a.zarr").views.crop == "full"
+    with pytest.raises(SpecError, match="keys are computed from crops of the full surface"):
+        load_study_spec(None, {**TINY, "views": 8, "keys": [{"name": "k", "kind": "occupancy"}]})
+
+
 def test_a_study_spec_names_the_field_it_refuses(tmp_path):
     with pytest.raises(SpecError, match=r"budgets"):
         load_study_spec(None, {"budgets": [0.0]})

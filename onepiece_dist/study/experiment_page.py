@@ -1,5 +1,6 @@
 """docs/paper_experiment.md and its plots, rendered from benchmarks/results/paper_experiment.json (never typed:
-tests/test_paper_experiment.py keeps the committed page equal to the rendering of the committed results)."""
+tests/test_paper_experiment.py keeps the committed page equal to the rendering of the committed results). The
+script that wrote them, benchmarks/paper_experiment.py, is now ``onepiece study run examples/studies/paper.yaml``."""
 
 from __future__ import annotations
 
@@ -355,14 +356,14 @@ def _label_load(out: dict) -> str:
 
 
 def _longer_link(out: dict, results: Path) -> list[str]:
-    """A line pointing to benchmarks/experiment_longer.py's pages for this run, where their results are committed
-    in ``results``."""
+    """A line pointing to the longer trainings' pages for this run, where their results are committed in
+    ``results``."""
     found = sorted(results.glob(f"{_name(out)}_longer*.json"))
     if not found:
         return []
     pages = in_words([f"docs/{path.stem}.md ({_budget(json.loads(path.read_text()))})" for path in found])
     return [f"- **A larger training budget.** {pages} train arms of this run again with more gradient steps on the "
-            "same rows and held-out grasps (benchmarks/experiment_longer.py)."]
+            "same rows and held-out grasps (trained by a script that is now a study's `training.steps`)."]
 
 
 def _key_study_link(results: Path) -> list[str]:
@@ -391,7 +392,8 @@ def write_page(out: dict, path: Path, results: Path) -> None:
     lines = ["# The paper's experiment, in simulation", "",
              f"Command: `{out['command'].strip()}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} "
              f"minutes). Rendered from benchmarks/results/{_name(out)}.json by "
-             "onepiece_dist/study/experiment_page.py.", "",
+             "onepiece_dist/study/experiment_page.py. The script is now a study configuration: `onepiece study run "
+             "examples/studies/paper.yaml` (docs/study.md).", "",
              _label_load(out), "",
              *headline(out), "", "## What holds here", "", *verdict(out), "", "## What the figures say", "",
              *analysis(out), *_longer_link(out, results), "", "## Scale and protocol", "",

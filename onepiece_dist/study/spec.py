@@ -131,12 +131,21 @@ class StudySpec(_Frozen):
     points_per_grasp: int = Field(256, ge=16, le=4096, description="Gripper-frame points stored per grasp.")
     sampler: Literal["antipodal", "normal"] = Field("normal", description="Candidate sampler (the paper samples "
                                                     "along the surface normal).")
+    views: int = Field(0, ge=0, le=256, description="0: every arm crops from the object's full surface; N: from "
+                       "the nearest of N depth views per object, what a robot sees (docs/views.md).")
     training: StudyTraining = StudyTraining()
     adaptive: StudyAdaptive | None = Field(None, description="Add the adaptive arm U (labels chosen by the "
                                            "network in rounds); none by default.")
     keys: tuple[StudyKey, ...] = Field((), description="Other dedup keys to measure as lookups from A's labels to "
                                        "the held-out labels (the key study, docs/key_study.md); none by default.")
     targets: StudyTargets = StudyTargets()
+
+    @model_validator(mode="after")
+    def _keys_crop_the_full_surface(self) -> StudySpec:
+        if self.keys and self.views:
+            raise ValueError("keys are computed from crops of the full surface: with views (partial crops) they "
+                             "would not be the jobs' crops; set views: 0 or leave keys out")
+        return self
 
     @field_validator("radii", "static_radii")
     @classmethod
@@ -168,8 +177,9 @@ class StudySpec(_Frozen):
         sim = {"label_trials": self.label_trials, "success": self.success, "perturbations_per_patch": 0,
                "load": self.load, "load_mass": self.load_mass, "transfer_codes": 0,
                "points_per_grasp": self.points_per_grasp, **update.pop("sim", {})}
+        views = {"count": self.views, "crop": "partial"} if self.views else {}
         return JobSpec(objects=objects, grasps_per_object=grasps, seed=seed, output=output,
-                       sampler={"method": self.sampler}, sim=sim, **update)
+                       sampler={"method": self.sampler}, sim=sim, views=views, **update)
 
 
 QUICK = {"grasps_per_object": 96, "heldout_grasps": 48, "radii": (0, 1), "budgets": (0.1, 0.25, 0.5),
