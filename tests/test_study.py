@@ -354,6 +354,15 @@ def test_the_committed_force_closure_study_is_the_paper_force_closure_example_an
     assert result.label_fit is not None and result.lookup is not None
 
 
+def test_the_committed_key_study_is_its_example_and_measures_every_key_beside_the_jobs_own_code(tmp_path):
+    """Issue 38 item 6: the key study as a study configuration, committed with every key's lookup."""
+    result = rendered_again("key_study", tmp_path)
+    assert [key.name for key in result.keys] == [key.name for key in result.spec.keys] and len(result.keys) == 8
+    own = result.keys[0]
+    assert own.lookup == result.lookup  # the job's 10 mm code, recomputed from the settled crops
+    assert result.train_objects == 64 and result.heldout.objects == 48
+
+
 def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
     from onepiece_dist.core.selection import first_rows, least_sure
 
