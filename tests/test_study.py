@@ -223,17 +223,21 @@ def test_other_keys_are_looked_up_from_settled_crops_and_the_jobs_own_resolution
 def test_a_b_static_arm_builds_the_one_object_from_crops_at_the_candidate_pose_with_its_own_control(tmp_path):
     """static_radii (the paper's static extraction as a study arm): its job crops at the candidate pose, its
     extraction is charged apart from the settled B's, and its control is R ~B static r."""
+    from onepiece_dist.api import read_status
     from onepiece_dist.store import open_dataset
-    from onepiece_dist.study.jobs import study_jobs
+    from onepiece_dist.study.jobs import core_seconds, study_jobs
     from onepiece_dist.study.runner import Where, run_study
 
     spec = StudySpec(**{**TINY, "static_radii": [0], "budgets": []})
     result = run_study(spec, tmp_path, Where(in_process=True))
     arms = {arm.name: arm for arm in result.arms}
     assert list(arms) == ["A", "B r0", "B static r0", "R ~B r0", "R ~B static r0"]
-    static = open_dataset(study_jobs(spec, tmp_path).b["B static r0"].output)
+    jobs = study_jobs(spec, tmp_path).b
+    static = open_dataset(jobs["B static r0"].output)
     assert np.array_equal(static["grasps/code"], static["grasps/candidate_code"])  # no settling: the nominal crop
-    assert arms["B static r0"].cost.stages["extract"] < arms["B r0"].cost.stages["extract"]
+    assert not jobs["B static r0"].sim.physics and jobs["B static r0"].cache_dir != jobs["B r0"].cache_dir
+    for name in ("B r0", "B static r0"):  # each charged its own parts cache's extraction, not the other's
+        assert arms[name].cost.stages["extract"] == core_seconds(read_status(jobs[name].output))["extract"]
     assert arms["R ~B static r0"].cost.labelled_grasps == min(arms["B static r0"].cost.labelled_grasps,
                                                               arms["A"].cost.labelled_grasps)  # at most A's
     assert set(result.decision.b_beats_random) == {"B r0", "B static r0"} and len(result.premise) == 1
