@@ -28,6 +28,10 @@ def run(
     address: Address = None,
     workers: Annotated[int | None, typer.Option(help="Workers per job (default: the cluster's CPUs).")] = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run without Ray (debugging).")] = False,
+    extend: Annotated[bool, typer.Option("--extend", help="Take over --out's study when this one differs from it "
+                                         "only in its arms or targets (radii, static_radii, budgets, adaptive, "
+                                         "keys, targets): its jobs and runs are reused, its result replaced.")
+                      ] = False,
     as_json: AsJson = False,
 ) -> None:
     """Run a study (or finish one cut short: every finished job and training run is reused) and print the path of
@@ -41,7 +45,8 @@ def run(
         raise typer.Exit(EXIT_USAGE)
     with exit_codes(address):
         spec = load_study_spec(study_file, {"train": train, "heldout": heldout}, quick=quick)
-        result = run_study(spec, out, Where(address=address, in_process=in_process, workers=workers), say=err)
+        result = run_study(spec, out, Where(address=address, in_process=in_process, workers=workers), say=err,
+                           extend=extend)
     _show(result, out, as_json)
 
 

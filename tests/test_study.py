@@ -154,6 +154,28 @@ def test_bad_input_is_refused_before_any_work_and_names_the_objects(tmp_path):
         run_study(StudySpec(**TINY), tmp_path / "c", Where(in_process=True))
 
 
+@pytest.mark.sim
+@pytest.mark.slow
+def test_a_study_extended_with_an_arm_reuses_every_job_and_run_and_only_with_extend(tmp_path):
+    from onepiece_dist.study.runner import Where, run_study
+
+    base = StudySpec(**{**TINY, "training": {**TINY["training"], "seeds": 1}})
+    first = run_study(base, tmp_path, Where(in_process=True))
+    more = StudySpec(**{**base.model_dump(), "budgets": [0.5, 0.25]})
+    with pytest.raises(SpecError, match=r"or add --extend: it differs only in its arms"):
+        run_study(more, tmp_path, Where(in_process=True))
+    other = StudySpec(**{**base.model_dump(), "seed": 3, "budgets": [0.5, 0.25]})
+    with pytest.raises(SpecError, match=r"another study's results \(study [0-9a-f]+, not [0-9a-f]+\); give another "
+                                        r"--out, or remove that folder$"):
+        run_study(other, tmp_path, Where(in_process=True), extend=True)  # not the same jobs: no extending
+    extended = run_study(more, tmp_path, Where(in_process=True), extend=True)
+    assert set(extended.reused_jobs) == {"heldout", "A", "B r0"}  # every job reused
+    assert extended.reused_runs >= first.reused_runs + 4 and "R 0.25" in {arm.name for arm in extended.arms}
+    assert {arm.name: arm.heldout for arm in first.arms} == {arm.name: arm.heldout for arm in extended.arms
+                                                              if arm.name != "R 0.25"}
+    assert StudySpec.model_validate_json((tmp_path / "study.spec.json").read_text()) == more
+
+
 @pytest.fixture(scope="module")
 def tiny_study(tmp_path_factory):
     from onepiece_dist.study.runner import Where, run_study

@@ -45,27 +45,41 @@ class Where:
     workers: int | None = None
 
 
-def check_folder(spec: StudySpec, folder: Path) -> Path:
-    """``folder`` as an absolute path; refused when it holds another study's results or other files."""
+ARM_FIELDS = ("radii", "static_radii", "budgets", "adaptive", "keys", "targets")  # what an extension may change
+
+
+def same_base(one: StudySpec, other: StudySpec) -> bool:
+    """Whether two studies differ at most in their arms and targets: the same objects, label protocol, crops and
+    training, so every job and run they share is the same."""
+    return one.model_dump(exclude=set(ARM_FIELDS)) == other.model_dump(exclude=set(ARM_FIELDS))
+
+
+def check_folder(spec: StudySpec, folder: Path, extend: bool = False) -> Path:
+    """``folder`` as an absolute path; refused when it holds another study's results or other files. With
+    ``extend``, a study that differs from the folder's only in its arms or targets (ARM_FIELDS) takes the folder
+    over: it reuses every job and run they share and its result replaces the folder's."""
     folder = folder.resolve()
     marker = folder / SPEC_FILE
     if marker.is_file():
         other = StudySpec.model_validate_json(marker.read_text())
-        if other != spec:
+        if other != spec and not (extend and same_base(other, spec)):
+            hint = (" or add --extend: it differs only in its arms or targets, so it reuses that study's jobs and "
+                    "runs and replaces its result" if same_base(other, spec) else "")
             raise SpecError(f"{folder} holds another study's results (study {other.digest()}, not {spec.digest()}); "
-                            "give another --out, or remove that folder")
+                            f"give another --out, or remove that folder{hint}")
     elif folder.is_dir() and any(folder.iterdir()):
         raise SpecError(f"{folder} is not empty and holds no study: give an empty or new --out")
     return folder
 
 
 def claim_folder(spec: StudySpec, folder: Path) -> None:
-    """Mark ``folder`` as this study's (``study.spec.json``)."""
+    """Mark ``folder`` as this study's (``study.spec.json``; an extended study's replaces the one before)."""
     folder.mkdir(parents=True, exist_ok=True)
-    if not (folder / SPEC_FILE).is_file():
+    marker = folder / SPEC_FILE
+    if not marker.is_file() or StudySpec.model_validate_json(marker.read_text()) != spec:
         tmp = folder / f".{SPEC_FILE}.tmp"
         tmp.write_text(spec.model_dump_json(indent=2))
-        os.replace(tmp, folder / SPEC_FILE)
+        os.replace(tmp, marker)
 
 
 def check_objects(spec: StudySpec) -> None:
@@ -147,11 +161,12 @@ def trainer_runner(where: Where, prefix: str, device: str, limit: int):
     return train
 
 
-def run_study(spec: StudySpec, folder: str | Path, where: Where = Where(), say: Say = lambda line: None
-              ) -> StudyResult:
-    """Run (or finish) the study in ``folder`` and write its result and pages there."""
+def run_study(spec: StudySpec, folder: str | Path, where: Where = Where(), say: Say = lambda line: None,
+              extend: bool = False) -> StudyResult:
+    """Run (or finish) the study in ``folder`` and write its result and pages there; ``extend``: see
+    :func:`check_folder`."""
     start = time.perf_counter()
-    folder = check_folder(spec, Path(folder))
+    folder = check_folder(spec, Path(folder), extend)
     check_objects(spec)  # before anything is written
     claim_folder(spec, folder)
     jobs = study_jobs(spec, folder)
