@@ -389,6 +389,17 @@ def test_the_committed_key_study_is_its_example_and_measures_every_key_beside_th
     assert result.train_objects == 64 and result.heldout.objects == 48
 
 
+def test_the_committed_key_study_extended_with_u_reused_the_key_studys_work_and_says_its_targets(tmp_path):
+    """Issue 39 under the physics label, at the key study's size: `--extend` on the committed key study's folder."""
+    result = rendered_again("key_study_adaptive", tmp_path)
+    keys = json.loads((ROOT / "docs" / "studies" / "key_study" / "study.json").read_text())
+    assert set(result.reused_jobs) == {"heldout", "A", "B r0"} and result.reused_runs >= 20
+    shared = {arm["name"]: arm["heldout"] for arm in keys["arms"]}
+    assert all(arm.heldout.model_dump(mode="json") == shared[arm.name] for arm in result.arms if arm.name in shared)
+    assert result.adaptive and result.decision.u_met is not None
+    assert "Target for U" in (tmp_path / "study.md").read_text()
+
+
 def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
     from onepiece_dist.core.selection import first_rows, least_sure
 
