@@ -468,3 +468,18 @@ def test_a_study_with_the_adaptive_arm_compares_it_with_random_labels_of_its_siz
     jsonschema.validate(document, json.loads((ROOT / "schemas" / "study_result.schema.json").read_text()))
     page = (tmp_path / "study.md").read_text()
     assert "## The adaptive arm" in page and "as many random labels (R ~U" in page
+
+
+def test_a_stored_run_keeps_its_key_when_step_runs_gain_fields_at_their_defaults(tmp_path):
+    """The run store's key of a run as the code before the adaptive job's StepRun fields computed it (at 887feea):
+    a study's finished runs are found again after the upgrade; a later field set to something else is another run."""
+    import dataclasses
+
+    from onepiece_dist.learn.train import StepRun
+    from onepiece_dist.study.training import RunStore
+
+    run = StepRun("/nowhere/A.zarr", "grasps", (1, 2, 3), "/nowhere/heldout.zarr", "pointnet", 500, 64, 0.001, 0.2, 0,
+                  10)
+    store = RunStore(tmp_path)
+    assert store.key(run) == "cbd9dfa5940d47f6102337d0"
+    assert store.key(dataclasses.replace(run, warm_start="round-0.pt")) != store.key(run)

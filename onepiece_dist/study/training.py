@@ -60,6 +60,17 @@ def with_rate(job: ArmRun) -> StepRun:
     return dataclasses.replace(job.run, learning_rate=job.learning_rate)
 
 
+# StepRun fields added after runs were first stored: left out of a run's key while at their defaults, so a run
+# stored before they existed is found again (they did not change what such a run computes).
+LATER_FIELDS = {"validation_groups": None, "warm_start": None, "save_to": None, "heldout_labelled": True}
+
+
+def run_fields(run: StepRun) -> dict:
+    """What a run's key digests: its fields, less the later ones at their defaults."""
+    fields = dataclasses.asdict(run)
+    return {k: v for k, v in fields.items() if not (k in LATER_FIELDS and v == LATER_FIELDS[k])}
+
+
 class RunStore:
     """Finished step runs kept in ``folder``: metadata as JSON, scores as a plain .npy (never pickled), keyed by
     a digest of the run and of the status files of its datasets (they change whenever a dataset is made again)."""
@@ -69,7 +80,7 @@ class RunStore:
         self.reused = 0
 
     def key(self, run: StepRun) -> str:
-        digest = hashlib.sha256(json.dumps(dataclasses.asdict(run), sort_keys=True, default=str).encode())
+        digest = hashlib.sha256(json.dumps(run_fields(run), sort_keys=True, default=str).encode())
         for path in (Path(f"{run.path}.status.json"), Path(f"{run.heldout_path}.status.json")):
             digest.update(path.read_bytes() if path.is_file() else b"-")
         return digest.hexdigest()[:24]
