@@ -229,8 +229,7 @@ def test_other_keys_are_looked_up_from_settled_crops_and_the_jobs_own_resolution
             StudyKey(name="both", kind="both", resolution=0.01, cell=0.01, step=0.002),
             StudyKey(name="occupancy 20 mm", kind="occupancy", resolution=0.02))
     jobs = study_jobs(StudySpec(**TINY), folder)
-    own, contact, both, coarse = key_measures(keys, (jobs.a.output, jobs.a), (jobs.heldout.output, jobs.heldout),
-                                              result.spec.seed)
+    own, contact, both, coarse = key_measures(keys, jobs.a, jobs.heldout, result.spec.seed)
     assert own.lookup == result.lookup and own.unique == result.lookup.train_codes
     assert both.unique >= max(own.unique, contact.unique) and coarse.unique <= own.unique
     assert both.key_bytes == own.key_bytes + contact.key_bytes

@@ -137,13 +137,20 @@ def perturb_pose(pose: np.ndarray, rng: np.random.Generator, translation: float,
     axis = rng.normal(size=3)
     axis /= np.sqrt(np.sum(axis * axis))
     angle = rng.normal(0, rotation)
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    sin, cos = sin_cos(angle)
-    turn = np.eye(3) + sin * k + (1 - cos) * compose_rotations(k, k)
     out = pose.copy()
-    out[:3, :3] = compose_rotations(pose[:3, :3], turn)
+    out[:3, :3] = compose_rotations(pose[:3, :3], axis_turns(axis[None], np.array([angle]))[0])
     out[:3, 3] += rng.normal(0, translation, 3)
     return out
+
+
+def axis_turns(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """(m, 3, 3) the rotations by ``angle`` (m,) rad about unit ``axis`` (m, 3) (Rodrigues), the same bits on
+    every CPU."""
+    k = np.zeros((len(axis), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axis[:, 2], -axis[:, 1], axis[:, 0]
+    sin, cos = sin_cos(angle)
+    return np.eye(3) + sin[:, None, None] * k + (1 - cos)[:, None, None] * compose_rotations(k, k)
 
 
 def perturb_poses(poses: np.ndarray, rng: np.random.Generator, translation: float, rotation: float) -> np.ndarray:
@@ -154,13 +161,8 @@ def perturb_poses(poses: np.ndarray, rng: np.random.Generator, translation: floa
     axis = rng.normal(size=(m, 3))
     axis /= np.sqrt(np.sum(axis * axis, axis=1))[:, None]
     angle = rng.normal(0, rotation, m)
-    k = np.zeros((m, 3, 3))
-    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
-    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axis[:, 2], -axis[:, 1], axis[:, 0]
-    sin, cos = sin_cos(angle)
-    turn = np.eye(3) + sin[:, None, None] * k + (1 - cos)[:, None, None] * compose_rotations(k, k)
     out = poses.copy()
-    out[:, :3, :3] = compose_rotations(poses[:, :3, :3], turn)
+    out[:, :3, :3] = compose_rotations(poses[:, :3, :3], axis_turns(axis, angle))
     out[:, :3, 3] += rng.normal(0, translation, (m, 3))
     return out
 

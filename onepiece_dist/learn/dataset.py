@@ -160,9 +160,8 @@ class GraspDataset(Dataset):
         """(train, validation) with whole objects (or patches) on one side: never split by grasp."""
         groups = np.unique(self.groups[self.rows])
         rng = np.random.default_rng(seed)
-        held = set(rng.permutation(groups)[: max(1, int(round(validation * len(groups))))].tolist())
-        in_val = np.isin(self.groups[self.rows], list(held))
-        return self._subset(self.rows[~in_val]), self._subset(self.rows[in_val])
+        held = rng.permutation(groups)[: max(1, int(round(validation * len(groups))))]
+        return self.split_by_groups(tuple(int(g) for g in held))
 
     def split_by_groups(self, held: tuple[int, ...]) -> tuple[GraspDataset, GraspDataset]:
         """(train, validation): the rows of the objects (or patches) ``held`` are the validation split."""

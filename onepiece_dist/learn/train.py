@@ -193,10 +193,15 @@ def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, m
                   "rng": torch.get_rng_state(), **state}
     if improved:
         torch.save(checkpoint, folder / BEST)
-    tmp = folder / f".{LAST}.tmp"
-    torch.save(checkpoint, tmp)
-    os.replace(tmp, folder / LAST)
+    save_atomically(checkpoint, folder / LAST)
     return state
+
+
+def save_atomically(checkpoint: dict, path: Path) -> None:
+    """``checkpoint`` (tensors and plain values) at ``path``, written whole or not at all."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    torch.save(checkpoint, tmp)
+    os.replace(tmp, path)
 
 
 @dataclass(frozen=True)
@@ -287,6 +292,4 @@ def fit_steps(run: StepRun) -> StepResult:
 def save_weights(model: str, state_dict: dict, path: Path) -> None:
     """A checkpoint of the network alone (name and weights), written atomically."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    torch.save({"model": model, "state_dict": {n: t.detach().cpu() for n, t in state_dict.items()}}, tmp)
-    os.replace(tmp, path)
+    save_atomically({"model": model, "state_dict": {n: t.detach().cpu() for n, t in state_dict.items()}}, path)

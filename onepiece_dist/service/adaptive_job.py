@@ -18,8 +18,8 @@ round's training is deterministic given its rows and the last round's network.
 from __future__ import annotations
 
 import hashlib
-import json
 import logging
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.errors import JobError, SpecError
-from onepiece_dist.service.budget import BUDGET_SHARD_GRASPS
+from onepiece_dist.service.budget import labels_key, row_shards
 from onepiece_dist.service.results import LabelShardResult, LabelTask
 from onepiece_dist.service.status import AdaptiveReport, AdaptiveRound, JobStatus
 from onepiece_dist.spec import JobSpec
@@ -67,29 +67,20 @@ def rounds_plan(spec: JobSpec, reader: DatasetReader) -> RoundsPlan:
     rows = [np.random.default_rng([spec.seed, 39, 3, int(obj)]).choice(np.flatnonzero(owner == obj), q,
                                                                          replace=False)
             for obj, q in zip(held, quota, strict=True)]
-    digest = hashlib.blake2b(digest_size=8)
-    digest.update(np.ascontiguousarray(reader.array("grasps/candidate_pose")[:]).tobytes())
-    digest.update(reader.array("objects/id")[:].tobytes())
-    relevant = spec.model_dump(mode="json", include={"seed", "gripper", "voxel", "closure", "adaptive"})
-    relevant["sim"] = spec.sim.model_dump(mode="json", exclude={"transfer_codes", "transfer_grasps"})
-    relevant["train"] = spec.train.model_dump(mode="json", include={"model", "batch_size", "learning_rate"})
-    digest.update(json.dumps(relevant, sort_keys=True).encode())
+    training = {"train": spec.train.model_dump(mode="json", include={"model", "batch_size", "learning_rate"})}
     return RoundsPlan(owner, reader["grasps/code_index"].astype(np.int64), held,
-                      np.sort(np.concatenate(rows)), digest.hexdigest())
+                      np.sort(np.concatenate(rows)), labels_key(spec, reader, None, "adaptive", training))
+
+
+def round_key(plan: RoundsPlan, number: int, rows: np.ndarray) -> str:
+    """Hash of round ``number`` of the plan and of ``rows`` (sorted), what its work depends on."""
+    return hashlib.blake2b(f"{plan.key}-{number}".encode() + rows.tobytes(), digest_size=8).hexdigest()
 
 
 def round_tasks(dataset: str, plan: RoundsPlan, rows: np.ndarray, number: int) -> list[LabelTask]:
-    """A round's new rows in shards of at most BUDGET_SHARD_GRASPS rows of one object each."""
+    """A round's new rows in the budget's shards of one object each."""
     rows = np.sort(rows)
-    key = hashlib.blake2b(f"{plan.key}-{number}".encode() + rows.tobytes(), digest_size=8).hexdigest()
-    tasks, start = [], 0
-    for obj in np.unique(plan.owner[rows]):
-        mine = rows[plan.owner[rows] == obj]
-        for first in range(0, len(mine), BUDGET_SHARD_GRASPS):
-            chunk = mine[first:first + BUDGET_SHARD_GRASPS]
-            tasks.append(LabelTask(start, start + len(chunk), dataset, key, tuple(int(r) for r in chunk), number))
-            start += len(chunk)
-    return tasks
+    return row_shards(dataset, plan.owner, rows, round_key(plan, number, rows), number)
 
 
 def first_batch(spec: JobSpec, plan: RoundsPlan, limit: int) -> np.ndarray:
@@ -139,14 +130,13 @@ def train_round(spec: JobSpec, plan: RoundsPlan, parts: PartStore, number: int, 
     score; once: a part keyed by the rows it trained on holds them for a resumed job."""
     from onepiece_dist.learn.train import StepRun
 
-    key = "round-" + hashlib.blake2b(f"{plan.key}-{number}".encode() + np.sort(labelled).tobytes(),
-                                     digest_size=8).hexdigest()
-    checkpoint = str(parts.folder / "rounds" / f"{key}.pt")
-    if not (parts.is_committed(key) and parts.folder.joinpath("rounds", f"{key}.pt").is_file()):
+    key = "round-" + round_key(plan, number, np.sort(labelled))
+    checkpoint = parts.folder / "rounds" / f"{key}.pt"
+    if not (parts.is_committed(key) and checkpoint.is_file()):
         run = StepRun(spec.output, "labelled/grasps", None, spec.output, spec.train.model, spec.adaptive.steps,
                       spec.train.batch_size, spec.train.learning_rate, spec.train.validation, spec.seed,
                       device=spec.train.device, validation_groups=tuple(int(o) for o in plan.validation_objects),
-                      warm_start=warm_start, save_to=checkpoint, heldout_labelled=False)
+                      warm_start=warm_start, save_to=str(checkpoint), heldout_labelled=False)
         result = train(run)
         point = next(p for p in result.curve if p["step"] == result.best_step)
         weights = {f"{WEIGHT}{name}": array for name, array in checkpoint_arrays(checkpoint).items()}
@@ -156,14 +146,14 @@ def train_round(spec: JobSpec, plan: RoundsPlan, parts: PartStore, number: int, 
     meta = parts.read_meta(key)
     return RoundOutcome(parts.read_array(key, "scores"), AdaptiveRound(
         round=number, labels=len(labelled), new=0, validation_ap=round(meta["validation_ap"], 4),
-        best_step=int(meta["best_step"]), train_seconds=float(meta["train_seconds"]), checkpoint=checkpoint,
+        best_step=int(meta["best_step"]), train_seconds=float(meta["train_seconds"]), checkpoint=str(checkpoint),
         part=key))
 
 
 WEIGHT = "weight."  # a round part's arrays named so hold its network's weights
 
 
-def checkpoint_arrays(path: str) -> dict[str, np.ndarray]:
+def checkpoint_arrays(path: str | os.PathLike) -> dict[str, np.ndarray]:
     """A network checkpoint's weights as numpy arrays (loaded with ``weights_only=True``)."""
     from onepiece_dist.learn.train import load_checkpoint
 

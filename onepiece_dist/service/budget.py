@@ -64,16 +64,35 @@ def check_budget(spec: JobSpec, objects: int) -> None:
                         "at least one candidate of each object (give a larger count, or budget.fraction)")
 
 
-def budget_key(spec: JobSpec, reader: DatasetReader, rows: np.ndarray) -> str:
-    """Hash of the chosen candidates and of the spec fields their labels depend on."""
+def labels_key(spec: JobSpec, reader: DatasetReader, rows: np.ndarray | None, plan: str,
+               extra: dict | None = None) -> str:
+    """Hash of the candidates a labelling plan chooses among (``rows``, None: all of them), of the objects, and of
+    the spec fields their labels depend on (``plan``: the plan's own field, budget or adaptive; ``extra``: more)."""
     digest = hashlib.blake2b(digest_size=8)
-    digest.update(np.ascontiguousarray(rows).tobytes())
-    digest.update(np.ascontiguousarray(reader.array("grasps/candidate_pose").oindex[rows]).tobytes())
+    poses = reader.array("grasps/candidate_pose")
+    if rows is not None:
+        digest.update(np.ascontiguousarray(rows).tobytes())
+    digest.update(np.ascontiguousarray(poses[:] if rows is None else poses.oindex[rows]).tobytes())
     digest.update(reader.array("objects/id")[:].tobytes())
-    relevant = spec.model_dump(mode="json", include={"seed", "gripper", "voxel", "closure", "budget"})
+    relevant = spec.model_dump(mode="json", include={"seed", "gripper", "voxel", "closure", plan})
     relevant["sim"] = spec.sim.model_dump(mode="json", exclude={"transfer_codes", "transfer_grasps"})
+    relevant.update(extra or {})
     digest.update(json.dumps(relevant, sort_keys=True).encode())
     return digest.hexdigest()
+
+
+def row_shards(dataset: str, owner: np.ndarray, rows: np.ndarray, key: str,
+               number: int | None = None) -> list[LabelTask]:
+    """Label tasks for ``rows`` of grasps/ (sorted): shards of at most BUDGET_SHARD_GRASPS rows of one object
+    each (``owner``: each row's object), positioned in row order; ``number``: an adaptive round's."""
+    tasks, start = [], 0
+    for obj in np.unique(owner[rows]):
+        mine = rows[owner[rows] == obj]
+        for first in range(0, len(mine), BUDGET_SHARD_GRASPS):
+            chunk = mine[first:first + BUDGET_SHARD_GRASPS]
+            tasks.append(LabelTask(start, start + len(chunk), dataset, key, tuple(int(r) for r in chunk), number))
+            start += len(chunk)
+    return tasks
 
 
 def budget_tasks(spec: JobSpec, path: str | os.PathLike) -> list[LabelTask]:
@@ -81,15 +100,7 @@ def budget_tasks(spec: JobSpec, path: str | os.PathLike) -> list[LabelTask]:
     reader = DatasetReader(path)
     owner = reader["grasps/object"].astype(np.int64)
     rows = budget_rows(owner, spec.budget.size(len(owner)), spec.seed)
-    key = budget_key(spec, reader, rows)
-    tasks, start = [], 0
-    for obj in np.unique(owner[rows]):
-        mine = rows[owner[rows] == obj]
-        for first in range(0, len(mine), BUDGET_SHARD_GRASPS):
-            chunk = mine[first:first + BUDGET_SHARD_GRASPS]
-            tasks.append(LabelTask(start, start + len(chunk), str(path), key, tuple(int(r) for r in chunk)))
-            start += len(chunk)
-    return tasks
+    return row_shards(str(path), owner, rows, labels_key(spec, reader, rows, "budget"))
 
 
 def label_budget_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> LabelShardResult:

@@ -19,7 +19,7 @@ from onepiece_dist.service.results import CommitSummary, LabelShardResult, Label
 from onepiece_dist.service.status import AdaptiveReport, AssemblyReport, LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
-from onepiece_dist.store.dataset import update_attributes, write_group
+from onepiece_dist.store.dataset import update_attributes, write_groups
 
 
 class CentralActor:
@@ -109,19 +109,16 @@ class CentralActor:
             update_attributes(self.spec.output, {"assembly_labels": report.model_dump(mode="json")})
         return report
 
-
     def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None:
         """Adaptive labelling's rounds: ``adaptive/`` (each round's scores of every candidate, the validation
-        objects) and the ``adaptive`` attribute."""
+        objects, each round's network under ``round_NNN/``) and the ``adaptive`` attribute."""
         from onepiece_dist.service.adaptive_job import round_weights
 
-        for number in record.rounds:
-            write_group(self.spec.output, f"adaptive/round_{number.round:03d}",
-                        round_weights(self.parts, number.part), {})
-        write_group(self.spec.output, "adaptive", {"scores": scores.astype(np.float32),
-                                                   "validation_objects": np.asarray(record.validation_objects,
-                                                                                    dtype=np.int64)},
-                    {"adaptive": {**record.model_dump(mode="json"), "model": self.spec.train.model}})
+        groups = {"adaptive": {"scores": scores.astype(np.float32),  # the parent first, then its round groups
+                               "validation_objects": np.asarray(record.validation_objects, dtype=np.int64)}}
+        groups.update({f"adaptive/round_{r.round:03d}": round_weights(self.parts, r.part) for r in record.rounds})
+        write_groups(self.spec.output, groups,
+                     {"adaptive": {**record.model_dump(mode="json"), "model": self.spec.train.model}})
 
 
 class CentralClient(ActorClient):

@@ -16,8 +16,6 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
-import numpy as np
-
 from onepiece_dist.errors import JobCancelled, JobError, SourceError, SpecError
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
@@ -33,6 +31,8 @@ from onepiece_dist.service.status import (
 from onepiece_dist.spec import JobSpec
 
 if TYPE_CHECKING:  # torch loads where a trainer trains
+    import numpy as np
+
     from onepiece_dist.learn.train import StepResult, StepRun
 
 Report = Callable[[JobStatus], None]  # called whenever the status changes: save it, publish it, draw progress

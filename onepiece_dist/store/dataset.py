@@ -71,7 +71,7 @@ def begin_dataset(path: str | os.PathLike, attrs: dict) -> None:
 
 def finish_dataset(path: str | os.PathLike, objects: ObjectTable, groups: dict[str, dict[str, np.ndarray]]) -> None:
     """The remaining groups, consolidated metadata, then ``complete = true`` last."""
-    _write_groups(path, {"objects": objects.arrays(), **groups}, {"complete": True})
+    write_groups(path, {"objects": objects.arrays(), **groups}, {"complete": True})
 
 
 class GroupAppender:
@@ -120,11 +120,12 @@ class GroupAppender:
 def write_group(path: str | os.PathLike, group_name: str, arrays: dict[str, np.ndarray], attrs: dict) -> None:
     """Add a group of arrays to a complete dataset, then its root attributes ``attrs`` (written last: a reader
     that finds them finds the arrays too). Only the committer calls this."""
-    _write_groups(path, {group_name: arrays}, attrs)
+    write_groups(path, {group_name: arrays}, attrs)
 
 
-def _write_groups(path: str | os.PathLike, groups: dict[str, dict[str, np.ndarray]], last_attrs: dict) -> None:
-    """Arrays first, then consolidated metadata, then ``last_attrs`` (the commit)."""
+def write_groups(path: str | os.PathLike, groups: dict[str, dict[str, np.ndarray]], last_attrs: dict) -> None:
+    """Groups of arrays (name -> arrays) first, then consolidated metadata once, then ``last_attrs`` (the
+    commit). Only the committer calls this."""
     root = zarr.open_group(str(path), mode="a")
     for group_name, arrays in groups.items():
         group = root.require_group(group_name)

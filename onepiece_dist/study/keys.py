@@ -17,7 +17,7 @@ import numpy as np
 
 from onepiece_dist.core.contact import ContactKeySpec, contact_keys
 from onepiece_dist.core.dedup import unique_codes
-from onepiece_dist.core.voxel import voxel_indices
+from onepiece_dist.core.voxel import pack_codes, voxel_indices
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.study.lookup import key_lookup
 from onepiece_dist.study.result import KeyMeasure
@@ -34,16 +34,16 @@ class Crops:
     count: int
 
 
-def settled_crops(dataset: str, spec: JobSpec) -> Crops:
-    """Every grasp of the job's dataset cropped at its settled pose from its object's surface points, sampled as
-    the job samples them."""
+def settled_crops(spec: JobSpec) -> Crops:
+    """Every grasp of the job's dataset (``spec.output``) cropped at its settled pose from its object's surface
+    points, sampled as the job samples them."""
     from onepiece_dist.core.mesh import sample_surface
     from onepiece_dist.core.sampling import object_rng
     from onepiece_dist.core.voxel import crop_regions
     from onepiece_dist.objects import load_object, resolve_source
     from onepiece_dist.store import open_dataset
 
-    ds = open_dataset(dataset)
+    ds = open_dataset(spec.output)
     owner, poses = ds["grasps/object"].astype(np.int64), ds["grasps/pose"].astype(np.float64)
     refs = {ref.name: ref for ref in resolve_source(spec.objects)}
     grid = spec.voxel.grid_shape(spec.gripper)
@@ -65,7 +65,7 @@ def occupancy(crops: Crops, region: tuple[float, float, float], resolution: floa
     occupied = np.zeros((crops.count, int(np.prod(grid))), dtype=bool)
     flat = voxel_indices(crops.points, grid, resolution)
     occupied[crops.rows[flat >= 0], flat[flat >= 0]] = True
-    return np.packbits(occupied, axis=1, bitorder="big")
+    return pack_codes(occupied)
 
 
 def key_of(crops: Crops, key: StudyKey, region: tuple[float, float, float]) -> np.ndarray:
@@ -79,17 +79,17 @@ def key_of(crops: Crops, key: StudyKey, region: tuple[float, float, float]) -> n
     return np.concatenate(parts, axis=1)
 
 
-def key_measures(keys: tuple[StudyKey, ...], a: tuple[str, JobSpec], heldout: tuple[str, JobSpec],
-                 seed: int) -> list[KeyMeasure]:
-    """Each key's unique fraction among A's grasps and its lookup from A's labels to the held-out labels."""
+def key_measures(keys: tuple[StudyKey, ...], a: JobSpec, heldout: JobSpec, seed: int) -> list[KeyMeasure]:
+    """Each key's unique fraction among A's grasps and its lookup from A's labels to the held-out labels (the
+    jobs' datasets)."""
     from onepiece_dist.store import open_dataset
 
     if not keys:
         return []
-    train, held = settled_crops(*a), settled_crops(*heldout)
-    train_success = open_dataset(a[0])["grasps/success"].astype(bool)
-    held_success = open_dataset(heldout[0])["grasps/success"].astype(bool)
-    g = a[1].gripper
+    train, held = settled_crops(a), settled_crops(heldout)
+    train_success = open_dataset(a.output)["grasps/success"].astype(bool)
+    held_success = open_dataset(heldout.output)["grasps/success"].astype(bool)
+    g = a.gripper
     region = (g.closing_depth, g.closing_width, g.closing_height)
     out = []
     for key in keys:

@@ -226,16 +226,12 @@ def arm_runs(spec: StudySpec, jobs: StudyJobs, arm: str, path: str, group: str,
 
 def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> list[ArmRun]:
     """Every arm's runs: A on all its labelled grasps, B r on its one object, R on a budget's subsets of A's."""
-
-    def runs(arm: str, path: str, group: str, rows: tuple[int, ...] | None) -> list[ArmRun]:
-        return arm_runs(spec, jobs, arm, path, group, rows)
-
     a_count = records["A"].status.progress.grasps
-    plan = runs("A", jobs.a.output, "grasps", None)
+    plan = arm_runs(spec, jobs, "A", jobs.a.output, "grasps", None)
     for name, job in jobs.b.items():
-        plan += runs(name, job.output, "assembled/grasps", None)
+        plan += arm_runs(spec, jobs, name, job.output, "assembled/grasps", None)
     for name, count in random_arms(spec, records, a_count):
-        plan += runs(name, jobs.a.output, "grasps", random_rows(jobs.a.output, count, spec.seed))
+        plan += arm_runs(spec, jobs, name, jobs.a.output, "grasps", random_rows(jobs.a.output, count, spec.seed))
     return plan
 
 
@@ -287,8 +283,7 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
                        adaptive=rounds,
                        lookup=key_lookup(a["grasps/code"], a["grasps/success"], ho["grasps/code"], labels > 0,
                                          spec.seed),
-                       keys=key_measures(spec.keys, (jobs.a.output, jobs.a), (jobs.heldout.output, jobs.heldout),
-                                         spec.seed),
+                       keys=key_measures(spec.keys, jobs.a, jobs.heldout, spec.seed),
                        label_fit=label_fit(ho, spec.good_mu) if spec.label == "force_closure" else None,
                        decision=decide(arms, spec.targets))
 

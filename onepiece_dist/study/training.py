@@ -62,13 +62,13 @@ def with_rate(job: ArmRun) -> StepRun:
 
 # StepRun fields added after runs were first stored: left out of a run's key while at their defaults, so a run
 # stored before they existed is found again (they did not change what such a run computes).
-LATER_FIELDS = {"validation_groups": None, "warm_start": None, "save_to": None, "heldout_labelled": True}
+LATER_FIELDS = ("validation_groups", "warm_start", "save_to", "heldout_labelled")
 
 
 def run_fields(run: StepRun) -> dict:
     """What a run's key digests: its fields, less the later ones at their defaults."""
-    fields = dataclasses.asdict(run)
-    return {k: v for k, v in fields.items() if not (k in LATER_FIELDS and v == LATER_FIELDS[k])}
+    defaults = {f.name: f.default for f in dataclasses.fields(StepRun) if f.name in LATER_FIELDS}
+    return {k: v for k, v in dataclasses.asdict(run).items() if not (k in defaults and v == defaults[k])}
 
 
 class RunStore:
