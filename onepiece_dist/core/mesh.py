@@ -169,6 +169,16 @@ def resample_points(points: np.ndarray, count: int, rng: np.random.Generator) ->
     return points[rng.integers(0, len(points), count)]
 
 
+def resample_crops(inside: list[np.ndarray], count: int, rng: np.random.Generator) -> np.ndarray:
+    """(n, P, 3) float16: each grasp's gripper-frame points inside its closing region ((k_i, 3) each), resampled
+    to P = ``count`` in grasp order: the network's point input, the same for the training crops of a job and
+    for a planner's crops of a camera's cloud."""
+    out = np.zeros((len(inside), count, 3), dtype=np.float16)
+    for i, points in enumerate(inside):
+        out[i] = resample_points(points, count, rng)
+    return out
+
+
 def solid_properties(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     """Volume (m^3), centre of mass (3,) and inertia tensor (3, 3) about it per unit density of the solid a
     closed, outward-wound triangle mesh bounds (signed tetrahedra from the origin; exact for polyhedra)."""

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_points, sample_surface
+from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_crops, sample_surface
 from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_candidates
 from onepiece_dist.core.voxel import canonical_codes, crop_regions
 from onepiece_dist.errors import MeshRejected
@@ -68,7 +68,7 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
         codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
     arrays = grasp_arrays({**grasps, "code": codes, "candidate_code": static})
     if spec.sim.points_per_grasp:
-        arrays["points"] = _grasp_points([inside[i] for i in np.flatnonzero(keep)], spec.sim.points_per_grasp, rng)
+        arrays["points"] = resample_crops([inside[i] for i in np.flatnonzero(keep)], spec.sim.points_per_grasp, rng)
     if spec.closure.enabled:
         arrays.update(closure_labelled(spec, mesh.vertices, mesh.faces, grasps["pose"], arrays.get("success")))
     if views is not None:
@@ -159,14 +159,6 @@ def crop_codes_from(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndar
         for row, points in zip(rows, found or [], strict=False):
             inside[row] = points
     return codes, counts, inside if keep_points else None
-
-
-def _grasp_points(inside: list[np.ndarray], count: int, rng: np.random.Generator) -> np.ndarray:
-    """(n, P, 3) float16: each grasp's gripper-frame points inside its closing region, resampled to P."""
-    out = np.zeros((len(inside), count, 3), dtype=np.float16)
-    for i, points in enumerate(inside):
-        out[i] = resample_points(points, count, rng)
-    return out
 
 
 def _from_meta(index: int, name: str, key: str, meta: dict, reused: bool, start: float) -> ObjectResult:

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.intervals import bootstrap_interval, percentile_interval
+
 
 def average_precision(scores: np.ndarray, labels: np.ndarray) -> float:
     """Area under the precision-recall curve (step interpolation, ties in the given order); 0 without a positive."""
@@ -66,20 +68,6 @@ def baselines(labels: np.ndarray, groups: np.ndarray) -> dict[str, float | int]:
             "positive_rate": float(labels.mean()), "objects": int(len(objects)), "grasps": int(len(labels))}
 
 
-def _percentiles(values, confidence: float) -> tuple[float, float]:
-    tail = 100 * (1 - confidence) / 2
-    low, high = np.percentile(values, [tail, 100 - tail])
-    return float(low), float(high)
-
-
-def bootstrap_interval(per_object: np.ndarray, seed: int = 0, draws: int = 2000,
-                       confidence: float = 0.95) -> tuple[float, float]:
-    """Percentile interval of the mean of ``per_object`` (objects resampled with replacement)."""
-    if len(per_object) == 0:
-        return 0.0, 0.0
-    rng = np.random.default_rng([seed, 5])
-    means = per_object[rng.integers(0, len(per_object), (draws, len(per_object)))].mean(axis=1)
-    return _percentiles(means, confidence)
 
 
 def ap_interval(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray, seed: int = 0, draws: int = 1000,
@@ -92,7 +80,7 @@ def ap_interval(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray, seed
     for _ in range(draws):
         rows = np.concatenate([members[k] for k in rng.integers(0, len(objects), len(objects))])
         values.append(average_precision(scores[rows], labels[rows]))
-    return _percentiles(values, confidence)
+    return percentile_interval(values, confidence)
 
 
 def arm_summary(runs: list[dict], labels: np.ndarray, groups: np.ndarray, draws: int = 2000, ap_draws: int = 1000,

@@ -1,0 +1,280 @@
+"""Grasp candidates on an observed point cloud (what one depth camera sees), as GPD and PointNetGPD sample them
+(docs/planning.md): normals and a local frame from each sampled point's neighbourhood, approach directions turned
+about the local curvature axis, the hand pushed in from a shallow bite while it stays clear of the cloud; poses
+whose open gripper meets an observed point, or a support plane, are dropped.
+
+Pure numpy (scipy's exact k-d tree for neighbours), the same bits on every CPU: normals and curvature axes come
+from :func:`core.sampling.plane_normals`, rotations from fixed-order products.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from onepiece_dist.core.frames import closing_region_bounds, in_box, pose_from_axes, to_gripper_frame
+from onepiece_dist.core.portable import sin_cos
+from onepiece_dist.core.sampling import collides, gripper_boxes, plane_normals
+from onepiece_dist.core.spatial import box_corners
+from onepiece_dist.spec import GripperSpec
+
+NEIGHBOURS = 16  # points in a normal's neighbourhood
+CURVATURE_NEIGHBOURS = 32  # normals in a curvature axis's neighbourhood
+INITIAL_BITE = 0.01  # m of the object between the fingertips at the shallowest placement (GPD's init_bite)
+BITE_STEP = 0.005  # m the hand is pushed in per step (GPD's deepenHand)
+PLACEMENTS = (0.0, -0.5, 0.5, -0.25, 0.25)  # lateral hand shifts, as shares of half the opening
+PLANE_CLEARANCE = 0.002  # m every gripper box corner keeps above a support plane
+
+
+@dataclass(frozen=True)
+class SupportPlane:
+    """A plane ``normal . x + offset = 0`` (unit normal towards the objects on it); ``inliers`` (m,) bool marks
+    the cloud points that lie on it."""
+
+    normal: np.ndarray
+    offset: float
+    inliers: np.ndarray
+
+    def distance(self, points: np.ndarray) -> np.ndarray:
+        """Signed distance (..., ) of points (..., 3) above the plane."""
+        return points @ self.normal + self.offset
+
+
+@dataclass(frozen=True)
+class CloudCandidates:
+    """poses (n, 4, 4) float64 gripper poses in the cloud's frame; the counts say where the tried poses went:
+    ``sampled`` placements tried, ``collided`` met an observed point at every bite, ``below_plane`` met the support
+    plane, ``empty`` held fewer than ``min_points`` points in the closing region."""
+
+    poses: np.ndarray
+    sampled: int
+    collided: int
+    below_plane: int
+    empty: int
+
+
+def voxel_downsample(points: np.ndarray, cell: float) -> np.ndarray:
+    """(k,) int64 indices of one point per occupied cubic cell of edge ``cell`` (the first in point order),
+    sorted. points (m, 3) float."""
+    if len(points) == 0:
+        return np.zeros(0, dtype=np.int64)
+    keys = np.floor(points / cell).astype(np.int64)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return np.sort(first)
+
+
+def neighbour_indices(points: np.ndarray, query: np.ndarray, count: int) -> np.ndarray:
+    """(k, count) int64: the ``count`` nearest of ``points`` (m, 3) to each of ``query`` (k, 3) (exact k-d tree;
+    fewer points than ``count`` repeat the farthest)."""
+    from scipy.spatial import cKDTree
+
+    count = max(1, min(count, len(points)))
+    _, idx = cKDTree(points).query(query, k=count)
+    return np.asarray(idx, dtype=np.int64).reshape(len(query), count)
+
+
+def cloud_normals(points: np.ndarray, query: np.ndarray, viewpoint: np.ndarray | None) -> np.ndarray:
+    """(k, 3) unit normals at ``query`` (k, 3) from their NEIGHBOURS nearest ``points`` (m, 3), facing the camera
+    at ``viewpoint`` (3,) (what it sees faces it), or, with no viewpoint, away from the cloud's centroid."""
+    near = points[neighbour_indices(points, query, NEIGHBOURS)]
+    normal = plane_normals(near - near.mean(axis=1, keepdims=True))
+    towards = (np.asarray(viewpoint, dtype=np.float64) if viewpoint is not None else points.mean(axis=0)) - query
+    flip = np.sum(normal * towards, axis=1) < 0
+    if viewpoint is None:
+        flip = ~flip
+    return np.where(flip[:, None], -normal, normal)
+
+
+def curvature_axes(points: np.ndarray, normals: np.ndarray, query: np.ndarray, query_normals: np.ndarray
+                   ) -> np.ndarray:
+    """(k, 3) unit axes along which the surface bends least at ``query`` (GPD's curvature axis): the least axis of
+    the sum of n n^T over the CURVATURE_NEIGHBOURS nearest points' ``normals``, made perpendicular to the query's
+    normal (a cylinder's axis on a cylinder)."""
+    near = normals[neighbour_indices(points, query, CURVATURE_NEIGHBOURS)]
+    axis = plane_normals(near)
+    axis = axis - np.sum(axis * query_normals, axis=1, keepdims=True) * query_normals
+    length = np.linalg.norm(axis, axis=1, keepdims=True)
+    fallback = np.cross(query_normals, np.where(np.abs(query_normals[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    axis = np.where(length > 1e-9, axis / np.maximum(length, 1e-300), fallback)
+    return axis / np.linalg.norm(axis, axis=1, keepdims=True)
+
+
+def hand_frames(centres: np.ndarray, normals: np.ndarray, axes: np.ndarray, orientations: int
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Approach and closing directions turned about each curvature axis: ``orientations`` angles spread over
+    (-90, 90) degrees from straight at the surface (approach = -normal). -> (centres, approach, closing), each
+    (k * orientations, 3), point-major."""
+    binormal = np.cross(normals, axes)
+    angles = -np.pi / 2 + (np.arange(orientations) + 0.5) * np.pi / orientations
+    sin, cos = sin_cos(angles)
+    approach = -normals[:, None] * cos[None, :, None] + binormal[:, None] * sin[None, :, None]
+    closing = binormal[:, None] * cos[None, :, None] + normals[:, None] * sin[None, :, None]
+    return np.repeat(centres, orientations, axis=0), approach.reshape(-1, 3), closing.reshape(-1, 3)
+
+
+def bite_depths(gripper: GripperSpec) -> np.ndarray:
+    """Where the sampled point sits along u, shallowest bite first: from INITIAL_BITE short of the fingertips to
+    the palm, in BITE_STEP steps."""
+    first = gripper.finger_length - INITIAL_BITE
+    return first - BITE_STEP * np.arange(int(np.floor(first / BITE_STEP)) + 1)
+
+
+def deepest_free(points: np.ndarray, centres: np.ndarray, approach: np.ndarray, closing: np.ndarray,
+                 gripper: GripperSpec, plane: SupportPlane | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Push each hand in from the shallowest bite while its open gripper stays clear of ``points`` and above
+    ``plane``: the pose at the last free bite (GPD's deepenHand); (n,) bool whether even the shallowest was free;
+    (n,) bool whether the shallowest was clear of the points but met the plane."""
+    depths = bite_depths(gripper)
+    n, levels = len(centres), len(depths)
+    poses = pose_from_axes(np.repeat(centres, levels, axis=0)
+                           - np.repeat(approach, levels, axis=0) * np.tile(depths, n)[:, None],
+                           np.repeat(approach, levels, axis=0), np.repeat(closing, levels, axis=0))
+    hit_points = collides(points, poses, gripper).reshape(n, levels)
+    hit = hit_points.copy()
+    if plane is not None:
+        hit |= ~above_plane(poses, gripper, plane).reshape(n, levels)
+    free_prefix = np.cumprod(~hit, axis=1).sum(axis=1)  # bites free before the first collision
+    chosen = np.maximum(free_prefix - 1, 0)
+    return (poses.reshape(n, levels, 4, 4)[np.arange(n), chosen], free_prefix > 0,
+            (free_prefix == 0) & ~hit_points[:, 0])
+
+
+def best_placement(points: np.ndarray, centres: np.ndarray, approach: np.ndarray, closing: np.ndarray,
+                   gripper: GripperSpec, plane: SupportPlane | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`deepest_free` at each of PLACEMENTS lateral shifts of the hand along its closing axis (GPD's finger
+    placements): per hand the shift that bites deepest, the unshifted one first among equals. Returns the poses,
+    (n,) bool free at some shift, and (n,) bool not free but kept off only by the plane at some shift."""
+    poses, free, below, bite = None, None, None, None
+    for shift in PLACEMENTS:
+        moved = centres + closing * (shift * gripper.max_opening / 2)
+        found, ok, blocked = deepest_free(points, moved, approach, closing, gripper, plane)
+        depth = np.where(ok, _bite(found, moved, approach), -np.inf)
+        if poses is None:
+            poses, free, below, bite = found, ok, blocked, depth
+            continue
+        better = depth > bite
+        poses[better], free, below, bite[better] = found[better], free | ok, below | blocked, depth[better]
+    return poses, free, below & ~free
+
+
+def _bite(poses: np.ndarray, points: np.ndarray, approach: np.ndarray) -> np.ndarray:
+    """How far behind each palm its sampled point lies along the approach (smaller: deeper)."""
+    return -np.sum((points - poses[:, :3, 3]) * approach, axis=1)
+
+
+def above_plane(poses: np.ndarray, gripper: GripperSpec, plane: SupportPlane) -> np.ndarray:
+    """(n,) bool: every corner of the open gripper's palm and fingers lies PLANE_CLEARANCE above ``plane``."""
+    corners = np.concatenate([box_corners(lo, hi) for lo, hi in gripper_boxes(gripper)])  # (24, 3)
+    world = np.einsum("nij,kj->nki", poses[:, :3, :3], corners) + poses[:, None, :3, 3]
+    return np.all(plane.distance(world) > PLANE_CLEARANCE, axis=1)
+
+
+def sample_cloud_grasps(cloud: np.ndarray, count: int, gripper: GripperSpec, rng: np.random.Generator,
+                        viewpoint: np.ndarray | None = None, obstacles: np.ndarray | None = None,
+                        plane: SupportPlane | None = None, orientations: int = 8) -> CloudCandidates:
+    """Up to ``count`` collision-free candidates on ``cloud`` (m, 3) float, the object's observed points.
+
+    obstacles : (q, 3) points the gripper must also stay clear of (a table's observed points), or None
+    plane : a support plane the gripper must stay above, or None
+    Samples ``ceil(count / orientations)`` points, ``orientations`` approach directions each, the deepest free
+    bite of each; keeps those free of every point and above the plane.
+    """
+    points = np.asarray(cloud, dtype=np.float64)
+    if len(points) < NEIGHBOURS:
+        return CloudCandidates(np.zeros((0, 4, 4)), 0, 0, 0, 0)
+    seeds = rng.permutation(len(points))[: -(-count // orientations)]
+    normals = cloud_normals(points, points[seeds], viewpoint)
+    all_normals = cloud_normals(points, points, viewpoint)
+    axes = curvature_axes(points, all_normals, points[seeds], normals)
+    centres, approach, closing = hand_frames(points[seeds], normals, axes, orientations)
+    blockers = points if obstacles is None or len(obstacles) == 0 else np.vstack([points, obstacles])
+    probe = blockers[rng.permutation(len(blockers))]  # random order: the collision cascade's prefixes find most
+    poses, free, below = best_placement(probe, centres, approach, closing, gripper, plane)
+    return CloudCandidates(poses[free][:count], len(centres), int(np.sum(~free & ~below)), int(below.sum()), 0)
+
+
+def fit_support_plane(points: np.ndarray, rng: np.random.Generator, up: np.ndarray | None = None,
+                      tolerance: float = 0.004, iterations: int = 200, min_share: float = 0.15
+                      ) -> SupportPlane | None:
+    """The dominant plane of ``points`` (m, 3) by RANSAC (``iterations`` seeded draws of three points, inliers
+    within ``tolerance`` m), or None when fewer than ``min_share`` of the points lie on it. The normal points
+    along ``up`` (3,) when given, else towards the side that holds most of the other points (the objects)."""
+    if len(points) < 3:
+        return None
+    triples = rng.integers(0, len(points), (iterations, 3))
+    a, b, c = points[triples[:, 0]], points[triples[:, 1]], points[triples[:, 2]]
+    normal = np.cross(b - a, c - a)
+    length = np.linalg.norm(normal, axis=1)
+    valid = length > 1e-12
+    if not valid.any():
+        return None
+    normal, a = normal[valid] / length[valid, None], a[valid]
+    counts = [int(np.sum(np.abs((points - p) @ n) < tolerance)) for n, p in zip(normal, a, strict=True)]
+    best = int(np.argmax(counts))
+    if counts[best] < min_share * len(points):
+        return None
+    n, offset = _refined(points, np.abs((points - a[best]) @ normal[best]) < tolerance)
+    distance = points @ n + offset
+    inliers = np.abs(distance) < tolerance
+    side = np.asarray(up, dtype=np.float64) @ n if up is not None else np.sum(np.sign(distance[~inliers]))
+    if side < 0:
+        n, offset = -n, -offset
+    return SupportPlane(n, offset, inliers)
+
+
+def _refined(points: np.ndarray, inliers: np.ndarray) -> tuple[np.ndarray, float]:
+    """The least-squares plane (unit normal, offset) of the ``inliers`` of ``points``: a three-point plane tilts
+    with the depth buffer's millimetre steps."""
+    chosen = points[inliers]
+    centre = chosen.mean(axis=0)
+    normal = plane_normals((chosen - centre)[None])[0]
+    return normal, -float(normal @ centre)
+
+
+def suppress_near(poses: np.ndarray, scores: np.ndarray, gripper: GripperSpec, distance: float = 0.01,
+                  angle_deg: float = 30.0, keep: int | None = None) -> np.ndarray:
+    """Pose-distance non-maximum suppression: indices of ``poses`` (n, 4, 4) in order of ``scores`` (n,), best
+    first, each kept only when every better kept pose is at least ``distance`` m away (closing-region centres) or
+    turned by more than ``angle_deg`` (the gripper's 180-degree turn about its approach counts as the same pose).
+    Stops at ``keep`` poses."""
+    order = np.argsort(-np.asarray(scores), kind="stable")
+    centres = poses[:, :3, 3] + poses[:, :3, 0] * gripper.closing_depth / 2
+    cos_limit = float(np.cos(np.radians(angle_deg)))
+    kept: list[int] = []
+    for i in order:
+        if kept:
+            near = np.linalg.norm(centres[kept] - centres[i], axis=1) < distance
+            same_u = np.sum(poses[kept, :3, 0] * poses[i, :3, 0], axis=1) > cos_limit
+            same_v = np.abs(np.sum(poses[kept, :3, 1] * poses[i, :3, 1], axis=1)) > cos_limit
+            if np.any(near & same_u & same_v):
+                continue
+        kept.append(int(i))
+        if keep is not None and len(kept) >= keep:
+            break
+    return np.array(kept, dtype=np.int64)
+
+
+def antipodal_scores(points: np.ndarray, normals: np.ndarray, poses: np.ndarray, gripper: GripperSpec,
+                     min_points: int = 1) -> np.ndarray:
+    """An analytic score of each pose (n, 4, 4) from the observed ``points`` (m, 3) and their ``normals``: the
+    contacts are the points inside the closing region nearest each finger (the largest and the smallest v); the
+    score is the smaller cosine between a contact's normal and the line joining the contacts (1: antipodal, so
+    force closure at any friction; force closure at friction mu when it is at least 1 / sqrt(1 + mu^2)). 0 when
+    fewer than ``min_points`` points are inside."""
+    lower, upper = closing_region_bounds(gripper.closing_depth, gripper.closing_width, gripper.closing_height)
+    scores = np.zeros(len(poses))
+    for k, pose in enumerate(poses):
+        local = to_gripper_frame(points, pose[None])[0]
+        inside = np.flatnonzero(in_box(local, lower, upper))
+        if len(inside) < max(min_points, 1):
+            continue
+        right, left = inside[np.argmax(local[inside, 1])], inside[np.argmin(local[inside, 1])]
+        line = points[right] - points[left]
+        norm = np.linalg.norm(line)
+        if norm < 1e-6:
+            continue
+        line = line / norm
+        scores[k] = min(abs(float(normals[right] @ line)), abs(float(normals[left] @ line)))
+    return scores
