@@ -31,12 +31,14 @@ from onepiece_dist.cli_common import (
     spec_overrides,
 )
 from onepiece_dist.cli_jobs import register as register_job_commands
+from onepiece_dist.cli_plan import register as register_plan_commands
 from onepiece_dist.cli_study import study_app
 from onepiece_dist.errors import JobError, JobNotFound, SourceError, SpecError, StoreError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE grasp-dataset generation.",
                   epilog=EXIT_TABLE)
 register_job_commands(app)
+register_plan_commands(app)
 app.add_typer(study_app, name="study")
 _err = err
 
@@ -115,6 +117,7 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
         _err(f"held-out: {e.objects} unseen objects, {e.grasps} candidates (positive rate {e.positive_rate:.2f}): "
              f"top-1 success {e.top1:.2f} against random choice {e.random_choice:.2f}, AP {e.ap:.2f} against "
              f"{e.positive_rate:.2f} for random scores")
+        _err(f"held-out protocol: {e.protocol}; {e.verdict}")
     typer.echo(status.model_dump_json() if as_json else status.output)
 
 

@@ -68,3 +68,8 @@ class VersionMismatch(OnePieceError, ValueError):
 
 class DriverGone(JobError):
     """The process that drove a job ended without finishing it (killed, or its machine went down)."""
+
+
+class CloudRejected(OnePieceError, ValueError):
+    """An observed point cloud, depth image or checkpoint cannot be planned on; the message names the file, what is
+    wrong and the fix."""

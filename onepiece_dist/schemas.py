@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from onepiece_dist.objects.supplement import SupplementReport, SupplementSpec
+from onepiece_dist.plan_spec import PickSpec, PlanSpec
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.layout import ARRAYS, DatasetAttributes
@@ -14,7 +15,7 @@ from onepiece_dist.study.spec import StudySpec
 
 MODELS = {"job_spec": JobSpec, "job_status": JobStatus, "dataset_layout": DatasetAttributes,
           "supplement_spec": SupplementSpec, "supplement_report": SupplementReport, "study_spec": StudySpec,
-          "study_result": StudyResult}
+          "study_result": StudyResult, "plan_spec": PlanSpec, "pick_spec": PickSpec}
 
 
 def render_schemas() -> dict[str, str]:

@@ -25,23 +25,28 @@ BASE = {"errors", "spec"}
 LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "errors": (set(), set()),
     "spec": ({"errors"}, {"pydantic", "yaml"}),
+    "plan_spec": ({"errors", "spec"}, {"pydantic"}),
     "core": (BASE, {"numpy", "open3d", "scipy"}),  # imported where used: open3d's ray casts, scipy's N-d qhull
     "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic"}),
     "sim": (BASE | {"core", "objects"}, {"numpy", "pybullet", "pybullet_data"}),
     "store": ({"errors"}, {"numpy", "zarr", "pydantic"}),
     "learn": ({"errors", "spec", "store"}, {"numpy", "torch", "zarr"}),
-    "service": (BASE | {"core", "objects", "sim", "store", "learn"},
+    # planning on a camera's cloud: candidates, crops as the training's, the network's scores, the picture
+    "plan": (BASE | {"plan_spec", "core", "learn"}, {"numpy", "torch", "open3d", "matplotlib"}),
+    "service": (BASE | {"plan_spec", "core", "objects", "sim", "store", "learn", "plan"},
                 {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
                  "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
     "api": (BASE | {"objects", "service", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
     "study": (BASE | {"api", "service", "learn", "store", "core", "objects"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
-    "schemas": (BASE | {"objects", "service", "store", "study"}, {"pydantic", "yaml"}),
+    "schemas": (BASE | {"plan_spec", "objects", "service", "store", "study"}, {"pydantic", "yaml"}),
     "cli_common": (BASE, {"typer", "rich"}),
     "cli_jobs": (BASE | {"api", "service", "cli_common"}, {"typer", "yaml"}),
     "cli_study": (BASE | {"study", "cli_common"}, {"typer"}),
-    "cli": (BASE | {"api", "objects", "sim", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study"},
+    "cli_plan": (BASE | {"plan_spec", "plan", "service", "cli_common"}, {"typer", "yaml", "numpy"}),
+    "cli": (BASE | {"api", "objects", "sim", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study",
+                    "cli_plan"},
             {"typer", "rich", "yaml", "pydantic"}),
 }
 STDLIB = set(sys.stdlib_module_names)

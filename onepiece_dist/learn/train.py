@@ -95,8 +95,10 @@ def evaluate(model: torch.nn.Module, dataset: GraspDataset) -> dict:
 
 
 def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir: str | os.PathLike,
-                seed: int = 0) -> TrainResult:
-    """Fit ``spec.model`` on the labelled grasps; resumes from ``checkpoint_dir/last.pt`` if present."""
+                seed: int = 0, crop: dict | None = None) -> TrainResult:
+    """Fit ``spec.model`` on the labelled grasps; resumes from ``checkpoint_dir/last.pt`` if present. ``crop``
+    (plain values: the gripper, voxel and point count the crops were cut with) is kept in every checkpoint, so a
+    planner crops a camera's cloud the same way and refuses another gripper."""
     torch.manual_seed(seed)
     device = resolve_device(spec.device)
     folder = Path(checkpoint_dir)
@@ -118,7 +120,7 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
         metrics = {"epoch": epoch, "train_loss": train_loss, **{f"val_{k}": v for k, v in
                                                                  evaluate(model, val_set).items()}}
         state["metrics"].append(metrics)
-        state = _after_epoch(folder, spec, model, optimiser, state, metrics)
+        state = _after_epoch(folder, spec, model, optimiser, state, metrics, crop)
         if state["bad_epochs"] >= spec.patience:
             return TrainResult(state["metrics"], folder / BEST, True, device.type)
     return TrainResult(state["metrics"], folder / BEST, False, device.type)
@@ -184,13 +186,14 @@ def _resume(folder: Path, model, optimiser) -> dict:
     return state
 
 
-def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, metrics: dict) -> dict:
+def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, metrics: dict,
+                 crop: dict | None = None) -> dict:
     improved = metrics["val_loss"] < state["best_loss"]
     state = {**state, "epoch": metrics["epoch"] + 1, "bad_epochs": 0 if improved else state["bad_epochs"] + 1,
              "best_loss": min(state["best_loss"], metrics["val_loss"])}
     weights = {name: tensor.detach().cpu() for name, tensor in model.state_dict().items()}  # loads anywhere
     checkpoint = {"model": spec.model, "state_dict": weights, "optimiser": optimiser.state_dict(),
-                  "rng": torch.get_rng_state(), **state}
+                  "rng": torch.get_rng_state(), **state, **({"crop": crop} if crop else {})}
     if improved:
         torch.save(checkpoint, folder / BEST)
     save_atomically(checkpoint, folder / LAST)

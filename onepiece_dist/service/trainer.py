@@ -23,6 +23,13 @@ def checkpoint_dir(spec: JobSpec) -> Path:
     return Path(f"{Path(spec.output)}.train")
 
 
+def crop_record(spec: JobSpec) -> dict:
+    """What a checkpoint keeps of how its training crops were cut (plain values, loadable with weights_only):
+    the gripper, the voxel grid, the points per grasp and where the crops came from."""
+    return {"gripper": spec.gripper.model_dump(mode="json"), "voxel": spec.voxel.model_dump(mode="json"),
+            "points_per_grasp": spec.sim.points_per_grasp, "views": spec.views.model_dump(mode="json")}
+
+
 class Trainer:
     """Plain class; :class:`TrainerClient` runs it as an actor."""
 
@@ -30,7 +37,7 @@ class Trainer:
         from onepiece_dist.learn.train import train_model
         from onepiece_dist.store.dataset import write_group
 
-        result = train_model(spec.output, spec.train, checkpoint_dir(spec), seed=spec.seed)
+        result = train_model(spec.output, spec.train, checkpoint_dir(spec), seed=spec.seed, crop=crop_record(spec))
         keys = [k for k in result.metrics[0] if k != "epoch"] if result.metrics else []
         arrays = {k: np.array([m[k] for m in result.metrics], dtype=np.float32) for k in keys}
         report = TrainingReport(model=spec.train.model, data=spec.train.data, epochs=len(result.metrics),
@@ -45,12 +52,12 @@ class Trainer:
         """The job's trained network (its best checkpoint) scored on the labelled held-out ``dataset``."""
         from onepiece_dist.errors import JobError
         from onepiece_dist.learn.train import BEST
-        from onepiece_dist.service.evaluate import score_heldout
+        from onepiece_dist.service.evaluate import evaluation_spec, protocol_of, score_heldout
 
         checkpoint = checkpoint_dir(spec) / BEST
         if not checkpoint.is_file():
             raise JobError(f"evaluate needs a trained network: {checkpoint} is missing (run the 'train' stage)")
-        return score_heldout(checkpoint, dataset, spec.train.device, objects)
+        return score_heldout(checkpoint, dataset, spec.train.device, objects, protocol_of(evaluation_spec(spec)))
 
     def fit_steps(self, run: StepRun) -> StepResult:
         """One training run with a budget in gradient steps (a study's arm and seed), scored on its held-out set;

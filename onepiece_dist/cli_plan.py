@@ -1,0 +1,167 @@
+"""`onepiece grasp` (grasps planned on a camera's cloud) and `onepiece pick` (the simulated pick benchmark)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from onepiece_dist.cli_common import EXIT_USAGE, Address, err
+from onepiece_dist.errors import CloudRejected, OnePieceError, SourceError, SpecError
+
+
+def _floats(text: str | None, count: int, name: str) -> list[float] | None:
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != count:
+        err(f"error: {name}={text!r}: give {count} comma-separated numbers")
+        raise typer.Exit(EXIT_USAGE)
+    return values
+
+
+def _gripper(path: Path | None):
+    if path is None:
+        return None
+    import yaml
+
+    from onepiece_dist.spec import GripperSpec
+
+    try:
+        return GripperSpec.model_validate(yaml.safe_load(path.read_text()) or {})
+    except (OSError, yaml.YAMLError, ValueError) as error:
+        err(f"error: {path}: not a gripper spec: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+
+
+def _observation(cloud: Path, intrinsics: str | None, viewpoint: str | None):
+    import numpy as np
+
+    from onepiece_dist.plan import depth_to_cloud, read_cloud
+
+    view = _floats(viewpoint, 3, "--viewpoint")
+    if intrinsics is None:
+        return read_cloud(cloud, None if view is None else np.array(view))
+    fx, fy, cx, cy = _floats(intrinsics, 4, "--intrinsics")
+    if cloud.suffix.lower() != ".npy" or not cloud.is_file():
+        raise CloudRejected(f"{cloud}: a depth image is an (H, W) .npy of metres")
+    return depth_to_cloud(np.load(cloud, allow_pickle=False), fx, fy, cx, cy, source=str(cloud))
+
+
+def register(app: typer.Typer) -> None:
+    app.command()(grasp)
+    app.command()(pick)
+
+
+def grasp(
+    cloud: Annotated[Path, typer.Argument(help="Point cloud (PLY, PCD, or NPY of (N, 3) metres), or with "
+                                               "--intrinsics a depth image (NPY of (H, W) metres).")],
+    checkpoint: Annotated[Path, typer.Option(help="The network (best.pt of a train stage).")],
+    out: Annotated[Path, typer.Option(help="Folder for grasps.json and grasps.png.")] = Path("onepiece-grasps"),
+    top: Annotated[int, typer.Option(help="Grasps to return.")] = 10,
+    candidates: Annotated[int, typer.Option(help="Candidates sampled on the cloud.")] = 500,
+    intrinsics: Annotated[str | None, typer.Option(help="fx,fy,cx,cy: read CLOUD as a depth image.")] = None,
+    viewpoint: Annotated[str | None, typer.Option(help="x,y,z: the camera's position in the cloud's frame "
+                                                       "(normals face it; default: a depth image's camera, "
+                                                       "else unknown).")] = None,
+    gripper: Annotated[Path | None, typer.Option(help="YAML gripper spec; refused unless the checkpoint was "
+                                                      "trained for it (default: the checkpoint's).")] = None,
+    no_plane: Annotated[bool, typer.Option("--no-plane", help="The cloud is the object alone: no support "
+                                                              "plane.")] = False,
+    seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
+    device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
+    as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
+) -> None:
+    """Plan grasps on a depth camera's cloud: the top grasps by the network, written as JSON and drawn as PNG."""
+    from onepiece_dist.plan import GraspScorer, plan_grasps, write_plan
+    from onepiece_dist.plan_spec import PlanSpec
+
+    try:
+        spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
+                        support_plane="none" if no_plane else "auto")
+        observation = _observation(cloud, intrinsics, viewpoint)
+        scorer = GraspScorer(checkpoint, _gripper(gripper), spec.device)
+        plan = plan_grasps(observation, scorer, spec)
+    except (OnePieceError, ValueError) as error:
+        err(f"error: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+    json_path, png = write_plan(plan, observation, scorer.gripper, out, extra={"checkpoint": str(checkpoint)})
+    if as_json:
+        typer.echo(json_path.read_text())
+    else:
+        _print_plan(plan, json_path, png)
+
+
+def _print_plan(plan, json_path: Path, png: Path | None) -> None:
+    c = plan.counts
+    err(f"{plan.source}: {c['sampled']} placements, {c['collided']} collided, {c['below_plane']} below the "
+        f"plane, {c['too_few_points']} with too few points, {c['scored']} scored in {plan.seconds['total']:.2f} s")
+    for g in plan.grasps:
+        centre = g.pose[:3, 3]
+        err(f"  #{g.rank}  score {g.score:.3f}  palm at ({centre[0]:+.3f}, {centre[1]:+.3f}, {centre[2]:+.3f}) m  "
+            f"approach ({g.pose[0, 0]:+.2f}, {g.pose[1, 0]:+.2f}, {g.pose[2, 0]:+.2f})  {g.points} points")
+    if not plan.grasps:
+        err("  no grasp: every candidate collided with the cloud or the plane, or held too few points")
+    typer.echo(str(json_path))
+    if png is not None:
+        typer.echo(str(png))
+
+
+def pick(
+    checkpoint: Annotated[Path, typer.Argument(help="The network (best.pt of a train stage).")],
+    objects: Annotated[str, typer.Option(help="Held-out objects: built-in set, folder or glob.")] = (
+        "pybullet:random_urdfs[500:508]"),
+    out: Annotated[Path, typer.Option(help="Folder for picks.json and pictures/.")] = Path("onepiece-picks"),
+    views: Annotated[int, typer.Option(help="Camera poses per object.")] = 3,
+    attempts: Annotated[int, typer.Option(help="k: ranked grasps tried per view.")] = 3,
+    seed: Annotated[int, typer.Option(help="Seed of drops, cameras and planning.")] = 0,
+    spec_file: Annotated[Path | None, typer.Option("--spec", help="YAML pick spec (PickSpec); options given "
+                                                                  "here override it.")] = None,
+    address: Address = None,
+    in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
+) -> None:
+    """The simulated pick benchmark: objects settled on a table, one depth camera, the planner's best grasp executed
+    with the label protocol; first-attempt and within-k pick success beside three baselines."""
+    from onepiece_dist.plan_spec import parse_pick_spec
+    from onepiece_dist.service.pick_runner import run_picks
+
+    given = _spec_mapping(spec_file)
+    given.update({"checkpoint": str(checkpoint), "objects": objects, "output": str(out), "views": views,
+                  "attempts": attempts, "seed": seed})
+    try:
+        spec = parse_pick_spec(given, str(spec_file or "command line"))
+        report = run_picks(spec, address=address, in_process=in_process,
+                           progress=lambda o: err(f"{o.name}: {o.status} {o.reason}".rstrip()))
+    except (SpecError, SourceError, CloudRejected) as error:
+        err(f"error: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+    if as_json:
+        typer.echo(json.dumps(report.to_json()))
+        return
+    for m in report.methods:
+        err(f"{m.method:<18} first attempt {m.first_attempt:.0%} [{m.first_attempt_interval[0]:.0%}, "
+            f"{m.first_attempt_interval[1]:.0%}]  within {spec.attempts}: {m.within_k:.0%}  ({m.views} views)")
+    err(report.verdict)
+    typer.echo(str(Path(spec.output) / "picks.json"))
+
+
+def _spec_mapping(path: Path | None) -> dict:
+    if path is None:
+        return {}
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except (OSError, yaml.YAMLError) as error:
+        err(f"error: {path}: cannot read the pick spec: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+    if not isinstance(data, dict):
+        err(f"error: {path}: a pick spec is a mapping of fields")
+        raise typer.Exit(EXIT_USAGE)
+    return data

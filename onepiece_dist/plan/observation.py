@@ -1,0 +1,93 @@
+"""What the camera gives: a point cloud (PLY, PCD or NPY, metres) or a depth image with intrinsics, checked before
+anything is planned on it. Bad input is refused with the file, what is wrong and the fix."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.errors import CloudRejected
+
+MIN_POINTS = 50  # fewer observed points hold no grasp worth planning
+MAX_DIAGONAL = 5.0  # m: a larger cloud is in other units (millimetres give 1000x)
+MIN_DIAGONAL = 0.005  # m
+CLOUD_SUFFIXES = (".ply", ".pcd", ".npy")
+
+
+@dataclass(frozen=True)
+class Observation:
+    """points (m, 3) float64 in the frame grasps are returned in (metres); viewpoint (3,) the camera's position in
+    that frame (normals face it), or None when unknown; source names where it came from."""
+
+    points: np.ndarray
+    viewpoint: np.ndarray | None
+    source: str
+
+
+def check_cloud(points: np.ndarray, source: str) -> np.ndarray:
+    """(m, 3) float64 ``points`` if they can be planned on; else :class:`CloudRejected` naming ``source``."""
+    points = np.asarray(points)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise CloudRejected(f"{source}: expected (N, 3) points, got an array of shape {points.shape}")
+    if len(points) == 0:
+        raise CloudRejected(f"{source}: the cloud is empty: nothing was observed (is the object in view?)")
+    points = points.astype(np.float64)
+    bad = ~np.all(np.isfinite(points), axis=1)
+    if bad.any():
+        raise CloudRejected(f"{source}: {int(bad.sum())} of {len(points)} points are NaN or infinite: drop them "
+                            "before planning (a depth image's missing pixels are dropped when it is read as a depth "
+                            "image)")
+    if len(points) < MIN_POINTS:
+        raise CloudRejected(f"{source}: only {len(points)} points; at least {MIN_POINTS} are needed to plan on")
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    if diagonal > MAX_DIAGONAL:
+        raise CloudRejected(f"{source}: the cloud spans {diagonal:.1f} (diagonal): wrong units? Points must be in "
+                            f"metres (millimetres: scale by 0.001, giving {diagonal / 1000:.3f} m)")
+    if diagonal < MIN_DIAGONAL:
+        raise CloudRejected(f"{source}: the cloud spans only {diagonal:.2g} m: wrong units? Points must be in metres")
+    return points
+
+
+def read_cloud(path: str | Path, viewpoint: np.ndarray | None = None) -> Observation:
+    """A cloud file as an :class:`Observation`. PLY and PCD through open3d; NPY as an (N, 3) float array (nothing
+    unpickled). ``viewpoint`` (3,): the camera's position in the cloud's frame (a camera-frame cloud: the origin)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in CLOUD_SUFFIXES:
+        raise CloudRejected(f"{path}: unknown cloud format {suffix!r}: give one of {', '.join(CLOUD_SUFFIXES)}")
+    if not path.is_file():
+        raise CloudRejected(f"{path}: no such file")
+    if suffix == ".npy":
+        try:
+            points = np.load(path, allow_pickle=False)
+        except ValueError as err:
+            raise CloudRejected(f"{path}: not a plain numeric .npy array ({err})") from None
+    else:
+        import open3d as o3d
+
+        points = np.asarray(o3d.io.read_point_cloud(str(path), remove_nan_points=False,
+                                                    remove_infinite_points=False).points)
+    view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
+    return Observation(check_cloud(points, str(path)), view, str(path))
+
+
+def depth_to_cloud(depth: np.ndarray, fx: float, fy: float, cx: float, cy: float, source: str = "depth image",
+                   camera_pose: np.ndarray | None = None) -> Observation:
+    """A depth image (H, W) in metres (0, NaN or inf: no return) with pinhole intrinsics, back-projected in the
+    OpenCV camera frame (x right, y down, z forward), or in the frame of ``camera_pose`` (4, 4) camera-to-frame.
+    The viewpoint is the camera's position."""
+    depth = np.asarray(depth, dtype=np.float64)
+    if depth.ndim != 2:
+        raise CloudRejected(f"{source}: a depth image is (H, W), got shape {depth.shape}")
+    if min(fx, fy) <= 0:
+        raise CloudRejected(f"{source}: focal lengths fx={fx}, fy={fy} must be positive (pixels)")
+    rows, cols = np.nonzero(np.isfinite(depth) & (depth > 0))
+    z = depth[rows, cols]
+    points = np.stack([(cols - cx) * z / fx, (rows - cy) * z / fy, z], axis=1)
+    viewpoint = np.zeros(3)
+    if camera_pose is not None:
+        pose = np.asarray(camera_pose, dtype=np.float64)
+        points, viewpoint = points @ pose[:3, :3].T + pose[:3, 3], pose[:3, 3].copy()
+    return Observation(check_cloud(points, source), viewpoint, source)

@@ -1,0 +1,143 @@
+"""Grasps planned on an observed cloud: find the support plane, sample candidates on the object's points (GPD
+style, core.cloud_grasps), cut each candidate's crop as the training crops are cut, score them with the network,
+rank with pose-distance non-maximum suppression. Typed results, JSON-ready."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from onepiece_dist.core.cloud_grasps import (
+    CloudCandidates,
+    SupportPlane,
+    fit_support_plane,
+    sample_cloud_grasps,
+    suppress_near,
+    voxel_downsample,
+)
+from onepiece_dist.core.hand_frames import to_panda
+from onepiece_dist.plan.observation import Observation
+from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
+from onepiece_dist.plan_spec import PlanSpec
+
+
+@dataclass(frozen=True)
+class PlannedGrasp:
+    """One ranked grasp: ``pose`` (4, 4) ours (gripper frame to the cloud's frame, docs/gripper_frame.md),
+    ``panda_pose`` (4, 4) the same grasp as a Franka Panda hand transform (ACRONYM's and GraspGen's convention),
+    ``opening`` the opening to approach with (m), ``observed_width`` the observed points' extent between the
+    fingers (m), ``score`` the network's success probability, ``points`` observed points in the closing region."""
+
+    rank: int
+    pose: np.ndarray
+    panda_pose: np.ndarray
+    opening: float
+    observed_width: float
+    score: float
+    points: int
+
+    def to_json(self) -> dict:
+        return {"rank": self.rank, "score": round(self.score, 6), "opening": self.opening,
+                "observed_width": round(self.observed_width, 6), "points": self.points,
+                "pose": np.round(self.pose, 9).tolist(), "panda_pose": np.round(self.panda_pose, 9).tolist()}
+
+
+@dataclass(frozen=True)
+class Proposals:
+    """The candidates of one observation before ranking: poses (n, 4, 4), their crops, the object's points (the
+    cloud less the support plane), the plane (or None), where the tried candidates went, the seconds each step
+    took and the camera's position (or None)."""
+
+    poses: np.ndarray
+    crops: Crops
+    object_points: np.ndarray
+    plane: SupportPlane | None
+    counts: dict[str, int]
+    seconds: dict[str, float] = field(default_factory=dict)
+    viewpoint: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """The ranked grasps of one observation, with the counts and timings that produced them."""
+
+    source: str
+    grasps: tuple[PlannedGrasp, ...]
+    counts: dict[str, int]
+    plane: SupportPlane | None
+    seconds: dict[str, float]
+
+    def to_json(self) -> dict:
+        plane = None if self.plane is None else {"normal": np.round(self.plane.normal, 9).tolist(),
+                                                 "offset": round(self.plane.offset, 9),
+                                                 "points": int(self.plane.inliers.sum())}
+        return {"source": self.source, "frame": "the cloud's frame; pose: ours (u approach, v closing, origin at the "
+                "palm centre); panda_pose: the Franka Panda hand (z approach, x closing, origin at the hand base)",
+                "counts": self.counts, "support_plane": plane,
+                "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
+                "grasps": [g.to_json() for g in self.grasps]}
+
+
+def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: np.random.Generator) -> Proposals:
+    """Support plane, candidates on the object's points, and their crops (those with fewer than
+    ``spec.min_points`` observed points inside dropped)."""
+    clock = time.perf_counter()
+    points, gripper = observation.points, record.gripper
+    plane = None
+    if spec.support_plane == "auto":
+        up = None if observation.viewpoint is None else observation.viewpoint - points.mean(axis=0)
+        plane = fit_support_plane(points, rng, up=up)
+    objects = points[~plane.inliers] if plane is not None else points
+    table = points[plane.inliers] if plane is not None else np.zeros((0, 3))
+    thin, thin_table = _thin(objects, spec.downsample), _thin(table, spec.downsample)
+    found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,
+                                spec.orientations)
+    sampled = time.perf_counter()
+    crops = cut_crops(objects, found.poses, record, rng)
+    keep = crops.counts >= spec.min_points
+    crops = Crops(crops.codes[keep], crops.counts[keep], crops.points[keep])
+    return Proposals(found.poses[keep], crops, objects, plane, _counts(found, int(np.sum(~keep))),
+                     {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint)
+
+
+def _thin(points: np.ndarray, cell: float) -> np.ndarray:
+    return points[voxel_downsample(points, cell)] if cell > 0 and len(points) else points
+
+
+def _counts(found: CloudCandidates, empty: int) -> dict[str, int]:
+    return {"sampled": found.sampled, "collided": found.collided, "below_plane": found.below_plane,
+            "too_few_points": empty, "candidates": len(found.poses) - empty}
+
+
+def rank(proposals: Proposals, scores: np.ndarray, record: CropRecord, spec: PlanSpec,
+         keep: int | None = None) -> tuple[PlannedGrasp, ...]:
+    """The best ``keep`` (default ``spec.top_k``) proposals by ``scores`` (n,) after non-maximum suppression."""
+    gripper = record.gripper
+    chosen = suppress_near(proposals.poses, scores, gripper, spec.nms_distance, spec.nms_angle_deg,
+                           keep or spec.top_k)
+    panda = to_panda(proposals.poses[chosen], gripper.finger_length) if len(chosen) else np.zeros((0, 4, 4))
+    return tuple(PlannedGrasp(rank + 1, proposals.poses[i], panda[rank], gripper.max_opening,
+                              _observed_width(proposals.crops.points[i]), float(scores[i]),
+                              int(proposals.crops.counts[i])) for rank, i in enumerate(chosen))
+
+
+def _observed_width(points: np.ndarray) -> float:
+    v = points[:, 1].astype(np.float64)
+    return float(v.max() - v.min()) if len(v) else 0.0
+
+
+def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None) -> GraspPlan:
+    """The ranked grasps on ``observation`` by ``scorer``'s network (seeded by ``spec.seed``; default PlanSpec)."""
+    spec = spec or PlanSpec()
+    rng = np.random.default_rng([spec.seed, 49])
+    proposals = propose(observation, scorer.record, spec, rng)
+    clock = time.perf_counter()
+    scores = scorer.score(proposals.crops, spec.batch_size)
+    scored = time.perf_counter()
+    grasps = rank(proposals, scores, scorer.record, spec)
+    seconds = {**proposals.seconds, "score": scored - clock, "rank": time.perf_counter() - scored}
+    seconds["total"] = sum(seconds.values())
+    return GraspPlan(observation.source, grasps, {**proposals.counts, "scored": len(scores)}, proposals.plane,
+                     seconds)

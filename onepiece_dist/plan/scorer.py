@@ -1,0 +1,107 @@
+"""A trained network as a planner uses it: the checkpoint (loaded with ``weights_only``), the crop it was trained on
+(gripper, voxel grid, points per grasp), and scoring of crops cut from an observed cloud, in batches, on a GPU
+when there is one."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from onepiece_dist.core.mesh import resample_crops
+from onepiece_dist.core.voxel import canonical_codes, crop_regions, unpack_codes
+from onepiece_dist.errors import CloudRejected
+from onepiece_dist.spec import GripperSpec, VoxelSpec
+
+
+@dataclass(frozen=True)
+class CropRecord:
+    """How a network's training crops were cut: by ``gripper`` at ``voxel``, ``points_per_grasp`` points each."""
+
+    gripper: GripperSpec
+    voxel: VoxelSpec
+    points_per_grasp: int
+    model: str
+
+    def grid_shape(self) -> tuple[int, int, int]:
+        return self.voxel.grid_shape(self.gripper)
+
+
+@dataclass(frozen=True)
+class Crops:
+    """Crops of n poses: codes (n, B) uint8, counts (n,) int64 observed points inside, points (n, P, 3) float16."""
+
+    codes: np.ndarray
+    counts: np.ndarray
+    points: np.ndarray
+
+
+def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.random.Generator) -> Crops:
+    """Each pose's crop of ``cloud`` (m, 3), exactly as a job's extraction cuts its training crops: the closing
+    region's points in the gripper frame (core.voxel.crop_regions), resampled to P (core.mesh.resample_crops),
+    and the voxel code (canonical when the training's was)."""
+    grid = record.grid_shape()
+    codes, counts, inside = crop_regions(cloud, poses, grid, record.voxel.resolution, keep_points=True)
+    if record.voxel.canonical:
+        codes = canonical_codes(codes, grid)
+    return Crops(codes, counts, resample_crops(inside or [], max(record.points_per_grasp, 1), rng))
+
+
+class GraspScorer:
+    """A checkpoint ready to score crops. ``gripper``: the gripper the caller plans for; a checkpoint trained for
+    another is refused (its crops would mean other shapes)."""
+
+    def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto"):
+        from onepiece_dist.learn.models import MODELS
+        from onepiece_dist.learn.train import load_checkpoint, resolve_device
+
+        self.path = str(checkpoint)
+        try:
+            saved = load_checkpoint(self.path)
+        except (OSError, RuntimeError, EOFError) as err:
+            raise CloudRejected(f"{self.path}: not a readable checkpoint ({type(err).__name__}: {err})") from None
+        self.record = _crop_record(saved, self.path, gripper)
+        self.device = resolve_device(device)
+        self.model = MODELS[saved["model"]]()
+        self.model.load_state_dict(saved["state_dict"])
+        self.model.to(self.device).eval()
+
+    @property
+    def gripper(self) -> GripperSpec:
+        return self.record.gripper
+
+    def score(self, crops: Crops, batch_size: int = 256) -> np.ndarray:
+        """(n,) float64 success probabilities of the crops."""
+        import torch
+
+        scores = []
+        grid = self.record.grid_shape()
+        with torch.inference_mode():
+            for start in range(0, len(crops.counts), batch_size):
+                stop = start + batch_size
+                if self.record.model == "voxel":
+                    code = unpack_codes(crops.codes[start:stop], grid).astype(np.float32)
+                    batch = {"code": torch.from_numpy(code).to(self.device)}
+                else:
+                    batch = {"points": torch.from_numpy(crops.points[start:stop].astype(np.float32)).to(self.device)}
+                scores.append(torch.sigmoid(self.model(batch)).float().cpu().numpy())
+        return np.concatenate(scores).astype(np.float64) if scores else np.zeros(0)
+
+
+def _crop_record(saved: dict, path: str, gripper: GripperSpec | None) -> CropRecord:
+    if not isinstance(saved, dict) or "model" not in saved or "state_dict" not in saved:
+        raise CloudRejected(f"{path}: not a grasp-network checkpoint (no model and state_dict)")
+    crop = saved.get("crop")
+    if crop is None:
+        if gripper is None:
+            raise CloudRejected(f"{path}: the checkpoint does not say which gripper it was trained for (trained "
+                                "before checkpoints kept their crop): name the gripper (--gripper FILE)")
+        return CropRecord(gripper, VoxelSpec(), 750, saved["model"])
+    trained = GripperSpec.model_validate(crop["gripper"])
+    if gripper is not None and gripper != trained:
+        differs = [name for name in GripperSpec.model_fields if getattr(gripper, name) != getattr(trained, name)]
+        raise CloudRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
+                            f"{', '.join(differs)}: trained {', '.join(f'{n}={getattr(trained, n)}' for n in differs)}"
+                            "): plan with the checkpoint's gripper, or train a network for this one")
+    return CropRecord(trained, VoxelSpec.model_validate(crop["voxel"]), int(crop["points_per_grasp"]), saved["model"])

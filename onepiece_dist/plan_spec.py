@@ -1,0 +1,102 @@
+"""Frozen specs of planning grasps on a camera's cloud (PlanSpec) and of the simulated pick benchmark (PickSpec):
+parsed once at the boundary, the one description that reaches every worker (docs/planning.md, docs/picks.md)."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import Field, ValidationError, model_validator
+
+from onepiece_dist.errors import SpecError
+from onepiece_dist.spec import GripperSpec, JobSpec, SamplerSpec, SimSpec, VoxelSpec, _Frozen, describe_validation_error
+
+
+class PlanSpec(_Frozen):
+    """Grasps planned on one observed cloud: candidates sampled on it (GPD-style), cropped as the training crops
+    are, scored by the network, ranked with pose-distance non-maximum suppression."""
+
+    candidates: int = Field(500, ge=1, le=100_000, description="Candidate poses sampled on the cloud (at most).")
+    orientations: int = Field(8, ge=1, le=64, description="Approach directions turned about each sampled point's "
+                              "curvature axis, over (-90, 90) degrees from straight at the surface.")
+    downsample: float = Field(0.003, ge=0, le=0.05, description="Voxel edge (m) the cloud is thinned to before "
+                              "sampling (0 keeps every point).")
+    min_points: int = Field(10, ge=1, le=10_000, description="Observed points a candidate's closing region must "
+                            "hold (PointNetGPD keeps those with more than 10).")
+    support_plane: Literal["auto", "none"] = Field("auto", description="Find the dominant plane (a table) by "
+                                                   "RANSAC, crop without it and keep the gripper above it; none: "
+                                                   "the cloud is the object alone.")
+    top_k: int = Field(10, ge=1, le=1000, description="Grasps returned after non-maximum suppression.")
+    nms_distance: float = Field(0.01, ge=0, le=1, description="Grasps whose closing centres are nearer (m) ...")
+    nms_angle_deg: float = Field(30.0, ge=0, le=180, description="... and whose axes differ by less (degrees) than "
+                                 "a better one are suppressed.")
+    batch_size: int = Field(256, ge=1, le=65_536, description="Crops scored per network call.")
+    device: Literal["auto", "cpu", "cuda"] = Field("auto", description="Where the network scores: a CUDA GPU when "
+                                                   "there is one (auto), else the CPU.")
+    seed: int = Field(0, ge=0, lt=2**63, description="Seed of the sampling and of the crops' resampling.")
+
+
+class CameraSpec(_Frozen):
+    """Where the pick benchmark's depth camera looks from: a seeded pose per view on a sphere around the object."""
+
+    distance: tuple[float, float] = Field((0.5, 0.8), description="Camera distance from the object (m), drawn "
+                                          "uniformly.")
+    elevation_deg: tuple[float, float] = Field((30.0, 70.0), description="Elevation above the table (degrees), "
+                                               "drawn uniformly; the azimuth is uniform.")
+    image_size: int = Field(320, ge=32, le=2048, description="Square depth image size (pixels).")
+    fov_deg: float = Field(45.0, gt=1, lt=150, description="Vertical field of view (degrees).")
+    depth_noise: float = Field(0.0, ge=0, le=0.05, description="Gaussian depth noise (m) added per pixel.")
+
+    @model_validator(mode="after")
+    def _ranges_ordered(self) -> CameraSpec:
+        for name in ("distance", "elevation_deg"):
+            low, high = getattr(self, name)
+            if not 0 < low <= high:
+                raise ValueError(f"camera.{name}={(low, high)} must satisfy 0 < low <= high")
+        if self.elevation_deg[1] > 90:
+            raise ValueError(f"camera.elevation_deg={self.elevation_deg}: at most 90 (straight down)")
+        return self
+
+
+PICK_SIM = SimSpec(label_trials=4, success="every_trial")
+METHODS = ("network", "random", "analytic", "network_full_mesh")
+
+
+class PickSpec(_Frozen):
+    """The simulated pick benchmark (docs/picks.md): each object settled on a table, seen by one depth camera from
+    ``views`` seeded poses; the planner's best grasp executed by the label protocol, up to ``attempts`` tries."""
+
+    objects: str = Field("pybullet:random_urdfs[500:508]", description="Held-out objects (a source as a job's).")
+    checkpoint: str = Field(..., description="The network's checkpoint (best.pt of a train stage).")
+    output: str = Field("onepiece-out/picks", description="Folder for picks.json and the pictures.")
+    views: int = Field(3, ge=1, le=64, description="Camera poses per object.")
+    attempts: int = Field(3, ge=1, le=20, description="k: the ranked grasps tried per view, one after another.")
+    seed: int = Field(0, ge=0, lt=2**63, description="Seed of the drops, the camera poses and the planning.")
+    methods: tuple[Literal["network", "random", "analytic", "network_full_mesh"], ...] = Field(
+        METHODS, min_length=1, description="What chooses the grasp: the network on the view, a random collision-free "
+        "candidate, the analytic antipodal score on the view's cloud, the network ranking candidates sampled on the "
+        "full mesh (what held-out top-1 measures).")
+    mesh_candidates: int = Field(200, ge=1, le=100_000, description="Candidates sampled on the full mesh "
+                                 "(network_full_mesh).")
+    pictures: int = Field(4, ge=0, le=64, description="Views drawn as PNG with their planned grasps.")
+    workers: int | None = Field(None, ge=1, description="Worker actors on Ray (default: the cluster's CPUs).")
+    gripper: GripperSpec | None = Field(None, description="The gripper; default: the checkpoint's.")
+    plan: PlanSpec = PlanSpec()
+    camera: CameraSpec = CameraSpec()
+    sim: SimSpec = Field(PICK_SIM, description="The label protocol every pick is executed with (K trials, "
+                         "every_trial: a pick succeeds when all K hold).")
+    sampler: SamplerSpec = SamplerSpec()
+    max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
+
+    def object_job(self, gripper: GripperSpec, voxel: VoxelSpec) -> JobSpec:
+        """The job-shaped spec the object loader and the full-mesh sampler read (file limits, extents, physics)."""
+        return JobSpec(objects=self.objects, gripper=gripper, voxel=voxel, sampler=self.sampler, sim=self.sim,
+                       max_file_bytes=self.max_file_bytes, seed=self.seed)
+
+
+def parse_pick_spec(data: dict[str, Any], source: str = "<pick spec>") -> PickSpec:
+    """Validate a mapping into a :class:`PickSpec`; errors name the field, the value and the rule."""
+    try:
+        return PickSpec.model_validate(data)
+    except ValidationError as err:
+        raise SpecError(describe_validation_error(err, source).replace("invalid job spec", "invalid pick spec")) \
+            from None

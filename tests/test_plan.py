@@ -1,0 +1,181 @@
+"""Planning grasps on what a depth camera sees (issue 49): the planner's crops are the training crops, candidates
+that meet the cloud or the table are dropped, the Panda convention turns back into ours, bad input is refused."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+from typer.testing import CliRunner
+
+from onepiece_dist.core.cloud_grasps import above_plane, fit_support_plane, sample_cloud_grasps, suppress_near
+from onepiece_dist.core.hand_frames import from_panda
+from onepiece_dist.core.mesh import box_mesh, cylinder_mesh, resample_crops
+from onepiece_dist.core.sampling import collides
+from onepiece_dist.errors import CloudRejected
+from onepiece_dist.plan import GraspScorer, Observation, depth_to_cloud, plan_grasps, read_cloud
+from onepiece_dist.plan.scorer import cut_crops
+from onepiece_dist.plan_spec import PlanSpec
+from onepiece_dist.spec import GripperSpec, JobSpec
+
+pytestmark = pytest.mark.sim
+
+
+def seen_cloud(mesh, eye=(0.35, 0.1, 0.3)) -> Observation:
+    """What one camera at ``eye`` sees of ``mesh`` (pybullet's TinyRenderer, back-projected)."""
+    from onepiece_dist.sim.views import camera_at, views_from
+
+    camera = camera_at(np.array(eye), np.zeros(3), 192, 45)
+    return Observation(views_from(mesh.vertices, mesh.faces, [camera]).cloud(0).astype(np.float64),
+                       camera.pose[:3, 3], mesh.name)
+
+
+def save_checkpoint(path, spec: JobSpec | None = None, seed: int = 0):
+    """A PointNet checkpoint as the train stage writes it (weights and the crop record), weights from ``seed``."""
+    from onepiece_dist.learn.models import PointNetGrasp
+    from onepiece_dist.service.trainer import crop_record
+
+    torch.manual_seed(seed)
+    record = crop_record(spec or JobSpec())
+    torch.save({"model": "pointnet", "state_dict": PointNetGrasp().state_dict(), "crop": record}, path)
+    return path
+
+
+def test_a_planned_grasps_crop_is_the_training_crop_of_the_same_pose_and_view(tmp_path):
+    """A job with partial-view crops stores, per grasp, the points and code cut from the view nearest its approach;
+    the planner's crop of that view's cloud at that pose is the same code and the same points."""
+    from onepiece_dist.plan.scorer import CropRecord
+    from onepiece_dist.service.extract import crop_codes_from, extract_arrays
+    from onepiece_dist.sim.views import camera_for_grasps
+
+    spec = JobSpec(grasps_per_object=12, sim={"physics": False, "collision": "hull", "points_per_grasp": 64},
+                   views={"count": 4, "crop": "partial", "image_size": 96})
+    mesh = box_mesh((0.04, 0.03, 0.06))
+    with pytest.warns(UserWarning, match="convex hull"):
+        arrays, _ = extract_arrays(spec, mesh, tmp_path)
+    record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, "pointnet")
+    views = camera_for_grasps(arrays["view_camera"], arrays["pose"])
+    for i, (pose, view) in enumerate(zip(arrays["pose"], views, strict=True)):
+        cloud = arrays["view_points"][arrays["view_of_point"] == view]
+        crops = cut_crops(cloud, pose[None], record, np.random.default_rng(i))
+        assert np.array_equal(crops.codes[0], arrays["code"][i])
+        stored, planned = {tuple(p) for p in arrays["points"][i]}, {tuple(p) for p in crops.points[0]}
+        _, _, inside = crop_codes_from([cloud], np.zeros(1, np.int64), pose[None], spec.grid_shape(),
+                                       spec.voxel.resolution, keep_points=True)
+        every_inside = {tuple(p) for p in inside[0].astype(np.float16)}
+        assert stored <= every_inside and planned <= every_inside  # the same region, frame and points
+    again = cut_crops(cloud, arrays["pose"][-1:], record, np.random.default_rng(7))
+    expected = resample_crops(inside, spec.sim.points_per_grasp, np.random.default_rng(7))
+    assert np.array_equal(again.points, expected)  # and the same resampling for the same draws
+
+
+def test_candidates_that_meet_the_cloud_or_the_table_are_dropped():
+    gripper = GripperSpec()
+    seen = seen_cloud(cylinder_mesh(0.02, 0.08))
+    cloud = seen.points
+    wall = np.stack(np.meshgrid(np.linspace(-0.06, 0.06, 40), [0.035], np.linspace(-0.05, 0.05, 40)),
+                    axis=-1).reshape(-1, 3)  # a wall of observed points beside the object
+    free = sample_cloud_grasps(cloud, 400, gripper, np.random.default_rng(0), seen.viewpoint)
+    walled = sample_cloud_grasps(cloud, 400, gripper, np.random.default_rng(0), seen.viewpoint, obstacles=wall)
+    assert len(free.poses) > 50 and 0 < len(walled.poses) < len(free.poses)
+    assert not collides(np.vstack([cloud, wall]), walled.poses, gripper).any()
+    assert collides(wall, free.poses, gripper).any()  # the wall would have been hit without the check
+    table = fit_support_plane(np.vstack([cloud, _floor(-0.04)]), np.random.default_rng(1), up=np.array([0, 0, 1.0]))
+    assert table is not None and abs(table.normal @ [0, 0, 1]) > 0.999 and abs(table.offset - 0.04) < 1e-3
+    on_table = sample_cloud_grasps(cloud, 400, gripper, np.random.default_rng(0), seen.viewpoint, plane=table)
+    assert on_table.below_plane > 0 and above_plane(on_table.poses, gripper, table).all()
+    assert not above_plane(free.poses, gripper, table).all()
+
+
+def _floor(z: float) -> np.ndarray:
+    grid = np.linspace(-0.15, 0.15, 80)
+    return np.stack(np.meshgrid(grid, grid, [z]), axis=-1).reshape(-1, 3)
+
+
+def test_a_grasp_in_the_panda_convention_turned_back_is_our_pose(tmp_path):
+    checkpoint = save_checkpoint(tmp_path / "net.pt")
+    plan = plan_grasps(seen_cloud(cylinder_mesh(0.02, 0.08)), GraspScorer(checkpoint, device="cpu"),
+                       PlanSpec(support_plane="none", candidates=200, top_k=5))
+    assert len(plan.grasps) == 5
+    finger = GripperSpec().finger_length
+    for grasp in plan.grasps:
+        np.testing.assert_allclose(from_panda(grasp.panda_pose, finger), grasp.pose, atol=1e-12)
+        np.testing.assert_allclose(grasp.panda_pose[:3, 2], grasp.pose[:3, 0], atol=1e-12)  # Panda z = our u
+        np.testing.assert_allclose(grasp.panda_pose[:3, 0], grasp.pose[:3, 1], atol=1e-12)  # Panda x = our v
+    written = plan.to_json()["grasps"][0]
+    np.testing.assert_allclose(from_panda(np.array(written["panda_pose"]), finger), written["pose"], atol=1e-8)
+    assert [g.score for g in plan.grasps] == sorted((g.score for g in plan.grasps), reverse=True)
+
+
+def test_non_maximum_suppression_keeps_one_of_two_near_poses():
+    pose = np.eye(4)
+    near = pose.copy()
+    near[:3, 3] = [0.003, 0.0, 0.0]
+    turned = np.array([[1.0, 0, 0, 0], [0, -1.0, 0, 0], [0, 0, -1.0, 0], [0, 0, 0, 1]])  # 180 deg about u: the same
+    far = pose.copy()
+    far[:3, 3] = [0.0, 0.05, 0.0]
+    kept = suppress_near(np.stack([pose, near, turned, far]), np.array([0.9, 0.8, 0.7, 0.6]), GripperSpec())
+    assert kept.tolist() == [0, 3]
+
+
+@pytest.mark.parametrize("points, reason", [
+    (np.zeros((0, 3)), "empty"),
+    (np.full((200, 3), np.nan), "NaN"),
+    (np.random.default_rng(0).normal(0, 40.0, (200, 3)), "millimetres"),
+    (np.random.default_rng(0).normal(0, 0.02, (20, 3)), "at least 50"),
+    (np.zeros((200, 2)), "shape"),
+])
+def test_bad_clouds_are_refused_with_reasons(tmp_path, points, reason):
+    path = tmp_path / "cloud.npy"
+    np.save(path, points)
+    with pytest.raises(CloudRejected, match=reason) as refused:
+        read_cloud(path)
+    assert str(path) in str(refused.value)
+
+
+def test_a_pickled_cloud_and_an_unknown_format_are_refused(tmp_path):
+    pickled = tmp_path / "cloud.npy"
+    np.save(pickled, np.array([{"x": 1}], dtype=object), allow_pickle=True)
+    with pytest.raises(CloudRejected, match="plain numeric"):
+        read_cloud(pickled)
+    with pytest.raises(CloudRejected, match="unknown cloud format"):
+        read_cloud(tmp_path / "cloud.xyz")
+
+
+def test_a_depth_image_drops_missing_pixels_and_a_checkpoint_for_another_gripper_is_refused(tmp_path):
+    depth = np.full((40, 40), 0.6)
+    depth[:5] = 0.0
+    depth[5:8] = np.nan
+    seen = depth_to_cloud(depth, 50.0, 50.0, 20.0, 20.0)
+    assert len(seen.points) == 32 * 40 and np.allclose(seen.points[:, 2], 0.6)
+    checkpoint = save_checkpoint(tmp_path / "net.pt")
+    wider = GripperSpec(max_opening=0.085, closing_width=0.08)
+    with pytest.raises(CloudRejected, match="another gripper .*max_opening"):
+        GraspScorer(checkpoint, wider, device="cpu")
+    torch.save({"model": "pointnet", "state_dict": {}}, tmp_path / "old.pt")
+    with pytest.raises(CloudRejected, match="--gripper"):
+        GraspScorer(tmp_path / "old.pt", device="cpu")
+
+
+def test_onepiece_grasp_writes_json_and_a_picture_and_refuses_bad_input(tmp_path):
+    from onepiece_dist.cli import app
+
+    checkpoint = save_checkpoint(tmp_path / "net.pt")
+    seen = seen_cloud(box_mesh((0.04, 0.03, 0.06)))
+    cloud = tmp_path / "cloud.npy"
+    np.save(cloud, np.vstack([seen.points, _floor(-0.03)]))
+    out = tmp_path / "grasps"
+    runner = CliRunner()
+    ran = runner.invoke(app, ["grasp", str(cloud), "--checkpoint", str(checkpoint), "--out", str(out),
+                              "--viewpoint", ",".join(map(str, seen.viewpoint)), "--top", "4"])
+    assert ran.exit_code == 0, ran.output
+    written = json.loads((out / "grasps.json").read_text())
+    assert len(written["grasps"]) == 4 and 80 * 80 <= written["support_plane"]["points"] < 80 * 80 + 100
+    assert (out / "grasps.png").read_bytes()[:4] == b"\x89PNG"
+    poses = np.array([g["pose"] for g in written["grasps"]])
+    assert not collides(np.vstack([seen.points, _floor(-0.03)]), poses, GripperSpec()).any()
+    np.save(cloud, seen.points * 1000)  # millimetres
+    refused = runner.invoke(app, ["grasp", str(cloud), "--checkpoint", str(checkpoint), "--out", str(out)])
+    assert refused.exit_code == 2 and "scale by 0.001" in refused.output
