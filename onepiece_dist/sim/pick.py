@@ -1,0 +1,189 @@
+"""Picks from a table in pybullet (docs/picks.md): the object dropped on a table and settled, seen by one depth
+camera, a chosen grasp executed as a robot would: open at a pregrasp 5 cm back along the approach, approach, close,
+then the label protocol's lift and shake (sim.trials), the table there throughout and gravity on.
+
+The table is a static box whose top is the plane z = 0; the object's frame is its mesh frame; grasp poses are
+gripper-to-world.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as pb
+
+from onepiece_dist.core.frames import compose_poses, perturb_pose, transform_points
+from onepiece_dist.sim.trials import LabelNoise, close_fingers, finger_contacts, lift_and_shake, move_gripper
+from onepiece_dist.sim.views import Camera, _depth_image, back_project, camera_at
+from onepiece_dist.sim.world import SimWorld, matrix_from_pose, quat_from_matrix
+from onepiece_dist.spec import GripperSpec
+
+TABLE_HALF = 0.5  # m: the table's half width
+TABLE_THICKNESS = 0.02
+PARK_HEIGHT = 1.0  # m: where the gripper waits above the table while the object settles
+DROP_CLEARANCE = 0.005  # m between the table and the object's lowest point when it is dropped
+SETTLE_SECONDS, SETTLE_CHECK, SETTLE_SPEED = 3.0, 24, 0.01  # at most; steps between checks; m/s and rad/s at rest
+PREGRASP = 0.05  # m back along the approach (VGN's)
+APPROACH_STEP = 0.002  # m per approach step (VGN's)
+WORKSPACE = 0.15  # m: the cloud kept around the object's resting place (VGN's workspace is a 0.3 m cube)
+START_TOLERANCE = 1e-3  # m of penetration at the pregrasp that counts as a collision
+
+
+class PickWorld(SimWorld):
+    """A :class:`SimWorld` with a table; the gripper waits above it while the object settles."""
+
+    def _connect(self) -> None:
+        super()._connect()
+        c = self.client
+        table = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2],
+                                        physicsClientId=c)
+        self.table = pb.createMultiBody(baseMass=0, baseCollisionShapeIndex=table,
+                                        basePosition=[0, 0, -TABLE_THICKNESS / 2], physicsClientId=c)
+        pb.changeDynamics(self.table, -1, lateralFriction=1.0, physicsClientId=c)
+        self.park()
+
+    def park(self) -> None:
+        pose = np.eye(4)
+        pose[2, 3] = PARK_HEIGHT
+        move_gripper(self, pose, reset=True)
+
+    def set_object_pose(self, pose: np.ndarray) -> None:
+        """Put the object's mesh frame at ``pose`` (4, 4) in the world, at rest."""
+        com_world = transform_points(self.com[None], pose)[0]
+        pb.resetBasePositionAndOrientation(self.obj, com_world.tolist(), quat_from_matrix(pose[:3, :3]),
+                                           physicsClientId=self.client)
+        pb.resetBaseVelocity(self.obj, [0, 0, 0], [0, 0, 0], physicsClientId=self.client)
+
+    def settle(self, rng: np.random.Generator, vertices: np.ndarray) -> np.ndarray:
+        """Drop the object in a seeded random orientation just above the table centre and let it come to rest
+        (gravity on, the gripper parked). ``vertices`` (V, 3) the mesh's. Returns its mesh-frame world pose."""
+        self.park()
+        pose = np.eye(4)
+        pose[:3, :3] = _random_rotation(rng)
+        lowest = float(transform_points(vertices, pose)[:, 2].min())
+        pose[2, 3] = DROP_CLEARANCE - lowest
+        self.set_object_pose(pose)
+        pb.setGravity(0, 0, -9.81, physicsClientId=self.client)
+        for _ in range(int(SETTLE_SECONDS / self.physics.time_step / SETTLE_CHECK)):
+            for _ in range(SETTLE_CHECK):
+                pb.stepSimulation(physicsClientId=self.client)
+            linear, angular = pb.getBaseVelocity(self.obj, physicsClientId=self.client)
+            if max(np.abs(linear).max(), np.abs(angular).max()) < SETTLE_SPEED:
+                break
+        return self.object_pose()
+
+
+def _random_rotation(rng: np.random.Generator) -> np.ndarray:
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    return matrix_from_pose([0, 0, 0], q.tolist())[:3, :3]
+
+
+def pick_camera(target: np.ndarray, rng: np.random.Generator, distance: tuple[float, float],
+                elevation_deg: tuple[float, float], size: int, fov_deg: float) -> Camera:
+    """A camera looking at ``target`` (3,) from a seeded distance, elevation above the table and azimuth."""
+    d = rng.uniform(*distance)
+    elevation, azimuth = np.radians(rng.uniform(*elevation_deg)), rng.uniform(0, 2 * np.pi)
+    eye = target + d * np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
+                                 np.sin(elevation)])
+    return camera_at(eye, target, size, fov_deg)
+
+
+def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, camera: Camera,
+            rng: np.random.Generator, depth_noise: float = 0.0) -> np.ndarray:
+    """(m, 3) world points the camera sees of the object at ``object_pose`` on the table, kept within WORKSPACE
+    of the object's resting place (a workspace crop), with Gaussian ``depth_noise`` (m) along each ray."""
+    client = pb.connect(pb.DIRECT)
+    try:
+        world_vertices = transform_points(vertices, object_pose)
+        shape = pb.createVisualShape(pb.GEOM_MESH, vertices=world_vertices.tolist(),
+                                     indices=np.asarray(faces, int).ravel().tolist(), physicsClientId=client)
+        pb.createMultiBody(baseVisualShapeIndex=shape, physicsClientId=client)
+        table = pb.createVisualShape(pb.GEOM_BOX, halfExtents=[TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2],
+                                     physicsClientId=client)
+        pb.createMultiBody(baseVisualShapeIndex=table, basePosition=[0, 0, -TABLE_THICKNESS / 2],
+                           physicsClientId=client)
+        points = back_project(_depth_image(pb, client, camera), camera)
+    finally:
+        pb.disconnect(client)
+    if depth_noise > 0 and len(points):
+        rays = points - camera.pose[:3, 3]
+        rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+        points = points + rays * rng.normal(0, depth_noise, (len(points), 1))
+    centre = object_pose[:3, 3]
+    near = np.all(np.abs(points[:, :2] - centre[:2]) < WORKSPACE, axis=1) & (points[:, 2] > -0.005)
+    return points[near]
+
+
+@dataclass(frozen=True)
+class PickOutcome:
+    """One executed grasp: ``success`` (every trial held, or the nominal one), ``trials`` held of ``tried``, and
+    why the first failing trial failed ('' when none): start_collision, no_contact, dropped."""
+
+    success: bool
+    held: int
+    tried: int
+    failure: str
+
+
+def execute_pick(world: PickWorld, grasp: np.ndarray, resting: np.ndarray, noise: LabelNoise,
+                 rng: np.random.Generator) -> PickOutcome:
+    """Execute ``grasp`` (4, 4, gripper-to-world) on the object resting at ``resting`` by the label protocol:
+    the nominal trial and ``noise.trials - 1`` perturbed ones (pose and friction noise), each from the object at
+    rest; with ``noise.every_trial`` the pick succeeds when every trial held (it stops at the first that fails),
+    else when the nominal one held."""
+    held, failure = 0, ""
+    base_friction = world.spec.friction
+    for trial in range(noise.trials):
+        pose = grasp if trial == 0 else perturb_pose(grasp, rng, noise.translation, noise.rotation)
+        friction = base_friction if trial == 0 else base_friction * max(0.05, 1 + rng.normal(0, noise.friction))
+        world.set_finger_friction(friction)
+        try:
+            failure = _one_pick(world, pose, resting)
+        finally:
+            world.set_finger_friction(base_friction)
+        held += failure == ""
+        if failure and (noise.every_trial or trial == 0):
+            return PickOutcome(False, held, trial + 1, failure)
+    return PickOutcome(True, held, noise.trials, "")
+
+
+def _one_pick(world: PickWorld, pose: np.ndarray, resting: np.ndarray) -> str:
+    """One trial: '' when the object is held after lifting and shaking, else why not."""
+    c = world.client
+    world.set_object_pose(resting)
+    pb.setGravity(0, 0, -9.81, physicsClientId=c)
+    back = np.eye(4)
+    back[0, 3] = -PREGRASP
+    pregrasp = compose_poses(pose, back)
+    move_gripper(world, pregrasp, reset=True)
+    for link in (0, 1):
+        pb.resetJointState(world.gripper, link, 0.0, 0.0, physicsClientId=c)
+        pb.setJointMotorControl2(world.gripper, link, pb.VELOCITY_CONTROL, targetVelocity=0, force=0,
+                                 physicsClientId=c)
+    pb.performCollisionDetection(physicsClientId=c)
+    if any(p[8] < -START_TOLERANCE for body in (world.obj, world.table)
+           for p in pb.getContactPoints(world.gripper, body, physicsClientId=c)):
+        return "start_collision"
+    steps = int(round(PREGRASP / APPROACH_STEP))
+    for k in range(1, steps + 1):
+        step = pregrasp.copy()
+        step[:3, 3] = pregrasp[:3, 3] + (pose[:3, 3] - pregrasp[:3, 3]) * k / steps
+        move_gripper(world, step)
+        pb.stepSimulation(physicsClientId=c)
+    close_fingers(world)
+    if not all(finger_contacts(world)):
+        return "no_contact"
+    held, _ = lift_and_shake(world, world.gripper_pose())
+    return "" if held else "dropped"
+
+
+_WORLDS: dict[GripperSpec, PickWorld] = {}
+
+
+def pick_world(gripper: GripperSpec) -> PickWorld:
+    """This process's one pick world for ``gripper`` (created on first use, then reused)."""
+    if gripper not in _WORLDS:
+        _WORLDS[gripper] = PickWorld(gripper)
+    return _WORLDS[gripper]

@@ -1,0 +1,130 @@
+"""The simulated pick benchmark (issue 49): the pick protocol on a table, the report and its verdict, and the
+benchmark end to end in process and on the embedded Ray (the local multi-node cluster: test_resume_and_cluster)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from onepiece_dist.core.frames import pose_from_axes
+from onepiece_dist.core.mesh import box_mesh
+from onepiece_dist.plan_spec import PickSpec
+from onepiece_dist.service.pick import ObjectPicks, ViewPicks
+from onepiece_dist.service.pick_runner import run_picks, summarise
+from onepiece_dist.spec import GripperSpec
+from tests.test_plan import save_checkpoint
+
+pytestmark = pytest.mark.sim
+
+
+@pytest.fixture(scope="module")
+def box_on_table():
+    from onepiece_dist.sim.pick import PickWorld
+    from onepiece_dist.sim.trials import LabelNoise
+    from onepiece_dist.spec import SimSpec
+
+    mesh = box_mesh((0.04, 0.03, 0.06))
+    world = PickWorld(GripperSpec())
+    world.load_object([mesh.vertices], 0.04 * 0.03 * 0.06, 400)
+    resting = world.settle(np.random.default_rng(3), mesh.vertices)
+    yield world, resting, LabelNoise.from_spec(SimSpec(label_trials=3, success="every_trial"))
+    world.close()
+
+
+def top_down(resting: np.ndarray, height: float, closing_axis: int = 1) -> np.ndarray:
+    """A gripper pose straight down onto the object's resting place, closing along its ``closing_axis``."""
+    centre = resting[:3, 3].copy()
+    closing = resting[:3, closing_axis]
+    closing = closing - closing[2] * np.array([0, 0, 1.0])
+    return pose_from_axes(np.array([[centre[0], centre[1], height]]), np.array([[0, 0, -1.0]]), closing[None])[0]
+
+
+def test_a_box_on_the_table_is_settled_and_picked_from_above(box_on_table):
+    from onepiece_dist.sim.pick import execute_pick
+
+    world, resting, noise = box_on_table
+    sizes = np.array([0.04, 0.03, 0.06])
+    vertical = int(np.argmax(np.abs(resting[2, :3])))
+    assert abs(abs(resting[2, vertical]) - 1) < 1e-3  # it rests on a face
+    assert abs(resting[2, 3] - sizes[vertical] / 2) < 2e-3  # on the table, not in it
+    across = min((k for k in range(3) if k != vertical), key=lambda k: sizes[k])
+    grasp = top_down(resting, resting[2, 3] + sizes[vertical] / 2 + 0.015, across)
+    picked = execute_pick(world, grasp, resting, noise, np.random.default_rng(0))
+    assert picked.success and picked.held == noise.trials and picked.failure == ""
+
+
+def test_a_pick_that_starts_inside_the_object_or_misses_it_fails_with_its_reason(box_on_table):
+    from onepiece_dist.sim.pick import execute_pick
+
+    world, resting, noise = box_on_table
+    rng = np.random.default_rng(0)
+    inside = top_down(resting, float(resting[2, 3]) + 0.04)
+    inside[:3, 3] = resting[:3, 3] + [0, 0, 0.045]  # the pregrasp, 5 cm back up, still meets the object
+    inside[:3, :3] = pose_from_axes(np.zeros((1, 3)), np.array([[1.0, 0, 0]]), np.array([[0, 0, 1.0]]))[0, :3, :3]
+    started = execute_pick(world, inside, resting, noise, rng)
+    missed = execute_pick(world, top_down(resting + _shift(0.2), 0.12), resting, noise, rng)
+    assert (started.success, started.failure) == (False, "start_collision")
+    assert (missed.success, missed.failure, missed.tried) == (False, "no_contact", 1)
+
+
+def _shift(dx: float) -> np.ndarray:
+    out = np.zeros((4, 4))
+    out[0, 3] = dx
+    return out
+
+
+def view(attempts: dict[str, tuple[bool, ...]]) -> ViewPicks:
+    return ViewPicks(0, 0.6, 45.0, 1000, 50, attempts, {m: tuple("" if a else "dropped" for a in v)
+                                                       for m, v in attempts.items()})
+
+
+def test_the_report_rates_objects_and_says_when_a_guess_cannot_be_told_from_a_network(tmp_path):
+    spec = PickSpec(checkpoint="net.pt", methods=("network", "random"), attempts=2)
+    objects = [ObjectPicks(0, "a", "ok", (view({"network": (True,), "random": (False, True)}),
+                                          view({"network": (False, True), "random": (False, False)}))),
+               ObjectPicks(1, "b", "ok", (view({"network": (True,), "random": (True,)}),)),
+               ObjectPicks(2, "c", "rejected", reason="too big")]
+    report = summarise(spec, objects)
+    network, random = report.method("network"), report.method("random")
+    assert network.first_attempt == pytest.approx(0.75) and network.within_k == 1.0
+    assert random.first_attempt == pytest.approx(0.5) and random.within_k == pytest.approx(0.75)
+    assert network.first_attempt_interval[0] <= 0.75 <= network.first_attempt_interval[1]
+    assert report.separable is True
+    easy = [ObjectPicks(k, str(k), "ok", (view({"network": (True,), "random": (True,)}),)) for k in range(5)]
+    assert summarise(spec, easy).separable is False and "cannot separate" in summarise(spec, easy).verdict
+    assert summarise(spec.model_copy(update={"methods": ("network",)}), easy).separable is None
+    json.dumps(report.to_json())  # plain data
+
+
+SMALL = {"objects": "primitives[0:2]", "views": 2, "attempts": 2, "pictures": 1, "mesh_candidates": 60,
+         "plan": {"candidates": 160}, "sim": {"label_trials": 2, "success": "every_trial"}}
+
+
+@pytest.mark.slow
+def test_the_pick_benchmark_runs_in_process_and_writes_its_report(tmp_path):
+    checkpoint = save_checkpoint(tmp_path / "net.pt")
+    spec = PickSpec(**SMALL, checkpoint=str(checkpoint), output=str(tmp_path / "picks"))
+    report = run_picks(spec, in_process=True)
+    assert [o.status for o in report.objects] == ["ok", "ok"]
+    assert all(len(o.views) == 2 for o in report.objects)
+    assert {m.method for m in report.methods} == set(spec.methods)
+    for picks in report.objects:
+        for seen in picks.views:
+            assert seen.points > 100 and seen.candidates > 0
+            assert all(0 < len(seen.attempts[m]) <= 2 for m in spec.methods)
+    written = json.loads((tmp_path / "picks" / "picks.json").read_text())
+    assert written["methods"][0]["method"] == "network" and len(written["objects"]) == 2
+    assert (tmp_path / "picks" / "pictures" / "box_40x30x60-view0.png").is_file()
+
+
+@pytest.mark.slow
+@pytest.mark.ray
+def test_the_pick_benchmark_on_the_embedded_ray_gives_the_in_process_picks(tmp_path):
+    checkpoint = save_checkpoint(tmp_path / "net.pt")
+    quiet = {**SMALL, "pictures": 0, "checkpoint": str(checkpoint)}
+    here = run_picks(PickSpec(**quiet, output=str(tmp_path / "here")), in_process=True)
+    on_ray = run_picks(PickSpec(**quiet, output=str(tmp_path / "ray"), workers=2))
+    assert [o.views for o in on_ray.objects] == [o.views for o in here.objects]
+    assert any(o.node for o in on_ray.objects)  # ran in Ray workers
