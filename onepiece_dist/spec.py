@@ -304,6 +304,9 @@ class EvaluateSpec(_Frozen):
                          "'objects'); none should be a train object.")
     grasps_per_object: int = Field(32, ge=1, le=100_000, description="Candidates sampled and labelled per held-out "
                                    "object.")
+    label_trials: int = Field(4, ge=1, le=32, description="K: label trials per held-out candidate; a candidate is a "
+                              "success when every one of the K held (the robust rule, sim.success: every_trial), so "
+                              "the held-out labels separate good grasps from lucky ones.")
 
 
 class JobSpec(_Frozen):

@@ -179,3 +179,15 @@ def test_onepiece_grasp_writes_json_and_a_picture_and_refuses_bad_input(tmp_path
     np.save(cloud, seen.points * 1000)  # millimetres
     refused = runner.invoke(app, ["grasp", str(cloud), "--checkpoint", str(checkpoint), "--out", str(out)])
     assert refused.exit_code == 2 and "scale by 0.001" in refused.output
+
+
+def test_the_evaluation_judges_by_the_robust_rule_and_says_when_it_cannot_separate():
+    from onepiece_dist.service.evaluate import evaluation_spec, protocol_of, verdict
+
+    heldout = evaluation_spec(JobSpec(evaluate={"label_trials": 6}))
+    assert (heldout.sim.label, heldout.sim.label_trials, heldout.sim.success) == (True, 6, "every_trial")
+    assert protocol_of(heldout) == "6 label trials per candidate, every one must hold"
+    easy, hard, fair = verdict(0.95, 1.0, 0.95), verdict(0.04, 0.0, 0.04), verdict(0.5, 0.8, 0.5)
+    assert easy[0] is False and "cannot separate a network from a guess" in easy[1] and "95%" in easy[1]
+    assert hard[0] is False and "fail" in hard[1]
+    assert fair == (True, "50% of the held-out candidates succeed: top-1 0.80 against random 0.50")

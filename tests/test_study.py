@@ -343,12 +343,16 @@ def test_a_job_that_trains_also_evaluates_on_unseen_objects_and_says_so(tmp_path
     run = subprocess.run([*ONEPIECE, "run", str(spec), "--in-process", "--out", str(tmp_path / "d.zarr")],
                          capture_output=True, text=True, timeout=600, cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-3000:]
-    last = run.stderr.strip().splitlines()[-1]
-    assert last.startswith("held-out: 2 unseen objects") and "top-1 success" in last and "random choice" in last
+    scores, protocol = run.stderr.strip().splitlines()[-2:]
+    assert scores.startswith("held-out: 2 unseen objects") and "top-1 success" in scores and "random choice" in scores
+    assert protocol.startswith("held-out protocol: 4 label trials per candidate, every one must hold; ")
     evaluation = open_dataset(tmp_path / "d.zarr").attrs["evaluation"]
     assert evaluation["objects"] == 2 and 0 <= evaluation["top1"] <= 1 and evaluation["grasps"] > 0
+    assert evaluation["separable"] == (0.1 <= evaluation["positive_rate"] <= 0.9) and evaluation["verdict"] in protocol
     heldout = open_dataset(evaluation["dataset"])
     assert heldout.attrs["job_spec"]["objects"] == "pybullet:random_urdfs[500:502]"
+    assert (heldout.attrs["job_spec"]["sim"]["label_trials"], heldout.attrs["job_spec"]["sim"]["success"]) == (
+        4, "every_trial")
     assert len(heldout["grasps/success"]) == evaluation["grasps"]
 
 

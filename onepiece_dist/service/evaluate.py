@@ -12,18 +12,48 @@ import numpy as np
 from onepiece_dist.service.status import EvaluationReport
 from onepiece_dist.spec import JobSpec
 
+SEPARABLE = (0.1, 0.9)  # held-out positive rates outside this range leave a ranking nothing to separate
+
+
+def heldout_sim(spec: JobSpec):
+    """The job's physics with the evaluation's label protocol: every candidate labelled, K = evaluate.label_trials
+    trials, a success only when every trial held."""
+    return spec.sim.model_copy(update={"label": True, "label_trials": spec.evaluate.label_trials,
+                                       "success": "every_trial"})
+
 
 def evaluation_spec(spec: JobSpec) -> JobSpec:
     """The job that labels every candidate of ``spec.evaluate.objects`` (seed + 1, beside the dataset), with the
-    job's physics and label protocol; no assembly, training or evaluation of its own."""
+    job's physics and the evaluation's label protocol (:func:`heldout_sim`); no assembly, training or evaluation
+    of its own."""
     return spec.model_copy(update={
         "objects": spec.evaluate.objects, "grasps_per_object": spec.evaluate.grasps_per_object,
         "seed": spec.seed + 1, "output": f"{Path(spec.output)}.eval.zarr", "cache_dir": None,
-        "stages": ("ingest", "extract", "dedup"), "sim": spec.sim.model_copy(update={"label": True})})
+        "stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
 
 
-def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, objects: int) -> EvaluationReport:
-    """The network at ``checkpoint`` scored on every labelled grasp of ``dataset`` (on ``device``)."""
+def protocol_of(spec: JobSpec) -> str:
+    sim = spec.sim
+    return (f"{sim.label_trials} label trial{'s' * (sim.label_trials > 1)} per candidate, "
+            f"{'every one must hold' if sim.success == 'every_trial' else 'the nominal one decides'}")
+
+
+def verdict(positive_rate: float, top1: float, random_choice: float) -> tuple[bool, str]:
+    """Whether held-out candidates with this positive rate can separate a network from a guess, and why."""
+    low, high = SEPARABLE
+    if positive_rate > high or positive_rate < low:
+        side = "succeed" if positive_rate > high else "fail"
+        return False, (f"{positive_rate:.0%} of the held-out candidates {side}: this evaluation cannot separate a "
+                       f"network from a guess (top-1 {top1:.2f} against random {random_choice:.2f} says nothing); "
+                       "raise evaluate.label_trials or use harder objects")
+    return True, (f"{positive_rate:.0%} of the held-out candidates succeed: top-1 {top1:.2f} against random "
+                  f"{random_choice:.2f}")
+
+
+def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, objects: int,
+                  protocol: str = "") -> EvaluationReport:
+    """The network at ``checkpoint`` scored on every labelled grasp of ``dataset`` (on ``device``), judged by
+    ``protocol`` (said in the report, with whether the positive rate lets it separate a network from a guess)."""
     from onepiece_dist.learn.dataset import GraspDataset
     from onepiece_dist.learn.train import average_precision, load_model, predict, resolve_device
 
@@ -31,11 +61,13 @@ def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, obje
     scores = predict(load_model(checkpoint), labelled, device=resolve_device(device))
     labels = labelled.labels()
     top, random = top_ranked_success(scores, labels, labelled.groups)
-    return EvaluationReport(objects=objects, grasps=int(len(labels)),
-                            positive_rate=float(labels.mean()) if len(labels) else 0.0, top1=top,
+    positive = float(labels.mean()) if len(labels) else 0.0
+    separable, sentence = verdict(positive, top, random)
+    return EvaluationReport(objects=objects, grasps=int(len(labels)), positive_rate=positive, top1=top,
                             random_choice=random, ap=average_precision(scores, labels),
                             accuracy=float(np.mean((scores > 0.5) == (labels > 0.5))) if len(labels) else 0.0,
-                            checkpoint=str(checkpoint), dataset=dataset)
+                            checkpoint=str(checkpoint), dataset=dataset, protocol=protocol, separable=separable,
+                            verdict=sentence)
 
 
 def record_evaluation(spec: JobSpec, report: EvaluationReport) -> EvaluationReport:
@@ -50,11 +82,10 @@ def evaluate_model(model_path: str | os.PathLike, spec: JobSpec) -> dict:
     """Label the candidates of ``spec.objects`` in simulation (in process), then score the model on them."""
     from onepiece_dist.service.local import run_local
 
-    labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"),
-                                       "sim": spec.sim.model_copy(update={"label": True})})
+    labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
     status = run_local(labelled, job_id="evaluate")
     report = score_heldout(model_path, labelled.output, spec.train.device,
-                           status.progress.objects_done - len(status.rejections))
+                           status.progress.objects_done - len(status.rejections), protocol_of(labelled))
     return {**report.model_dump(), "top_ranked_success": report.top1, "random_choice_success": report.random_choice,
             "label_positive_rate": report.positive_rate}
 

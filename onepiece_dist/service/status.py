@@ -141,6 +141,10 @@ class EvaluationReport(_Report):
     accuracy: float = Field(description="Share of candidates whose score is on the label's side of one half.")
     checkpoint: str
     dataset: str = Field(description="The labelled held-out dataset.")
+    protocol: str = Field("", description="The label protocol the held-out candidates were judged by.")
+    separable: bool | None = Field(None, description="False when the held-out positive rate is above 90% or below "
+                                   "10%: then a network's top-1 cannot be told from a random choice's.")
+    verdict: str = Field("", description="What the evaluation can and cannot say, in a sentence.")
 
 
 class JobStatus(BaseModel):
