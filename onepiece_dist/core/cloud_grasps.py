@@ -120,48 +120,57 @@ def bite_depths(gripper: GripperSpec) -> np.ndarray:
     return first - BITE_STEP * np.arange(int(np.floor(first / BITE_STEP)) + 1)
 
 
+def _poses_at(centres: np.ndarray, approach: np.ndarray, closing: np.ndarray, depth: float) -> np.ndarray:
+    return pose_from_axes(centres - approach * depth, approach, closing)
+
+
+def _blocked(points: np.ndarray, poses: np.ndarray, gripper: GripperSpec,
+             plane: SupportPlane | None) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) bool meeting a point, (n,) bool meeting the point or below the plane."""
+    hit_points = collides(points, poses, gripper)
+    hit = hit_points if plane is None else hit_points | ~above_plane(poses, gripper, plane)
+    return hit_points, hit
+
+
 def deepest_free(points: np.ndarray, centres: np.ndarray, approach: np.ndarray, closing: np.ndarray,
                  gripper: GripperSpec, plane: SupportPlane | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Push each hand in from the shallowest bite while its open gripper stays clear of ``points`` and above
     ``plane``: the pose at the last free bite (GPD's deepenHand); (n,) bool whether even the shallowest was free;
-    (n,) bool whether the shallowest was clear of the points but met the plane."""
+    (n,) bool whether the shallowest was clear of the points but met the plane. Each deeper bite is checked only
+    for the hands still free."""
     depths = bite_depths(gripper)
-    n, levels = len(centres), len(depths)
-    poses = pose_from_axes(np.repeat(centres, levels, axis=0)
-                           - np.repeat(approach, levels, axis=0) * np.tile(depths, n)[:, None],
-                           np.repeat(approach, levels, axis=0), np.repeat(closing, levels, axis=0))
-    hit_points = collides(points, poses, gripper).reshape(n, levels)
-    hit = hit_points.copy()
-    if plane is not None:
-        hit |= ~above_plane(poses, gripper, plane).reshape(n, levels)
-    free_prefix = np.cumprod(~hit, axis=1).sum(axis=1)  # bites free before the first collision
-    chosen = np.maximum(free_prefix - 1, 0)
-    return (poses.reshape(n, levels, 4, 4)[np.arange(n), chosen], free_prefix > 0,
-            (free_prefix == 0) & ~hit_points[:, 0])
+    poses = _poses_at(centres, approach, closing, depths[0])
+    hit_points, hit = _blocked(points, poses, gripper, plane)
+    free, below = ~hit, hit & ~hit_points
+    going = np.flatnonzero(free)
+    for depth in depths[1:]:
+        if len(going) == 0:
+            break
+        deeper = _poses_at(centres[going], approach[going], closing[going], depth)
+        clear = ~_blocked(points, deeper, gripper, plane)[1]
+        poses[going[clear]] = deeper[clear]
+        going = going[clear]
+    return poses, free, below
 
 
 def best_placement(points: np.ndarray, centres: np.ndarray, approach: np.ndarray, closing: np.ndarray,
                    gripper: GripperSpec, plane: SupportPlane | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`deepest_free` at each of PLACEMENTS lateral shifts of the hand along its closing axis (GPD's finger
-    placements): per hand the shift that bites deepest, the unshifted one first among equals. Returns the poses,
-    (n,) bool free at some shift, and (n,) bool not free but kept off only by the plane at some shift."""
-    poses, free, below, bite = None, None, None, None
+    """:func:`deepest_free` at the first of PLACEMENTS lateral shifts of the hand along its closing axis (GPD's
+    finger placements) whose shallowest bite is free; hands no shift frees are tried at the next. Returns the
+    poses, (n,) bool free at some shift, and (n,) bool not free but kept off only by the plane at some shift."""
+    poses = np.zeros((len(centres), 4, 4))
+    free, below = np.zeros(len(centres), bool), np.zeros(len(centres), bool)
+    todo = np.arange(len(centres))
     for shift in PLACEMENTS:
-        moved = centres + closing * (shift * gripper.max_opening / 2)
-        found, ok, blocked = deepest_free(points, moved, approach, closing, gripper, plane)
-        depth = np.where(ok, _bite(found, moved, approach), -np.inf)
-        if poses is None:
-            poses, free, below, bite = found, ok, blocked, depth
-            continue
-        better = depth > bite
-        poses[better], free, below, bite[better] = found[better], free | ok, below | blocked, depth[better]
+        if len(todo) == 0:
+            break
+        moved = centres[todo] + closing[todo] * (shift * gripper.max_opening / 2)
+        found, ok, blocked = deepest_free(points, moved, approach[todo], closing[todo], gripper, plane)
+        poses[todo[ok]], free[todo[ok]] = found[ok], True
+        below[todo] |= blocked
+        todo = todo[~ok]
     return poses, free, below & ~free
-
-
-def _bite(poses: np.ndarray, points: np.ndarray, approach: np.ndarray) -> np.ndarray:
-    """How far behind each palm its sampled point lies along the approach (smaller: deeper)."""
-    return -np.sum((points - poses[:, :3, 3]) * approach, axis=1)
 
 
 def above_plane(poses: np.ndarray, gripper: GripperSpec, plane: SupportPlane) -> np.ndarray:

@@ -15,6 +15,9 @@ from onepiece_dist.errors import CloudRejected
 from onepiece_dist.spec import GripperSpec, VoxelSpec
 
 
+CPU_BATCH, GPU_BATCH = 16, 512  # crops per call: 16 scored fastest on one core (0.45 s for 211 crops, 256: 0.68 s)
+
+
 @dataclass(frozen=True)
 class CropRecord:
     """How a network's training crops were cut: by ``gripper`` at ``voxel``, ``points_per_grasp`` points each."""
@@ -71,10 +74,12 @@ class GraspScorer:
     def gripper(self) -> GripperSpec:
         return self.record.gripper
 
-    def score(self, crops: Crops, batch_size: int = 256) -> np.ndarray:
-        """(n,) float64 success probabilities of the crops."""
+    def score(self, crops: Crops, batch_size: int | None = None) -> np.ndarray:
+        """(n,) float64 success probabilities of the crops, ``batch_size`` at a time (default: CPU_BATCH on a CPU,
+        GPU_BATCH on a GPU)."""
         import torch
 
+        batch_size = batch_size or (GPU_BATCH if self.device.type == "cuda" else CPU_BATCH)
         scores = []
         grid = self.record.grid_shape()
         with torch.inference_mode():

@@ -28,6 +28,8 @@ PREGRASP = 0.05  # m back along the approach (VGN's)
 APPROACH_STEP = 0.002  # m per approach step (VGN's)
 WORKSPACE = 0.15  # m: the cloud kept around the object's resting place (VGN's workspace is a 0.3 m cube)
 START_TOLERANCE = 1e-3  # m of penetration at the pregrasp that counts as a collision
+ROLLING_FRICTION = 0.002  # a table's resistance to rolling: a can on its side stops instead of leaving the table
+DROPS = 5  # drops tried until the object comes to rest within WORKSPACE of the table centre
 
 
 class PickWorld(SimWorld):
@@ -40,7 +42,8 @@ class PickWorld(SimWorld):
                                         physicsClientId=c)
         self.table = pb.createMultiBody(baseMass=0, baseCollisionShapeIndex=table,
                                         basePosition=[0, 0, -TABLE_THICKNESS / 2], physicsClientId=c)
-        pb.changeDynamics(self.table, -1, lateralFriction=1.0, physicsClientId=c)
+        pb.changeDynamics(self.table, -1, lateralFriction=1.0, rollingFriction=ROLLING_FRICTION,
+                          spinningFriction=ROLLING_FRICTION, physicsClientId=c)
         self.park()
 
     def park(self) -> None:
@@ -57,7 +60,15 @@ class PickWorld(SimWorld):
 
     def settle(self, rng: np.random.Generator, vertices: np.ndarray) -> np.ndarray:
         """Drop the object in a seeded random orientation just above the table centre and let it come to rest
-        (gravity on, the gripper parked). ``vertices`` (V, 3) the mesh's. Returns its mesh-frame world pose."""
+        (gravity on, the gripper parked); dropped again (up to DROPS times) while it rolls out of the workspace.
+        ``vertices`` (V, 3) the mesh's. Returns its mesh-frame world pose."""
+        for _ in range(DROPS):
+            resting = self._drop(rng, vertices)
+            if np.all(np.abs(resting[:2, 3]) < WORKSPACE / 2) and resting[2, 3] > -TABLE_THICKNESS:
+                break
+        return resting
+
+    def _drop(self, rng: np.random.Generator, vertices: np.ndarray) -> np.ndarray:
         self.park()
         pose = np.eye(4)
         pose[:3, :3] = _random_rotation(rng)
