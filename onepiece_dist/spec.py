@@ -155,11 +155,23 @@ class ViewSpec(_Frozen):
     crop: Literal["full", "partial"] = Field("full", description="Crop each grasp's points and code from the "
                                              "full surface, or from the depth view of the camera whose viewing "
                                              "direction is nearest the grasp's approach (what a robot sees).")
+    sampling: Literal["mesh", "view"] = Field("mesh", description="Where candidates are sampled: on the mesh "
+                                              "(antipodal or normal sampler), or as the planner samples a camera's "
+                                              "cloud (docs/planning.md): on each view's cloud, cropped from that "
+                                              "view, the points (grasps/points) at the candidate pose, before the "
+                                              "fingers close, so training crops are the kind `onepiece grasp` "
+                                              "scores (needs crop: partial).")
+    distance: float | None = Field(None, gt=0, le=5, description="Camera distance from the object's centre (m); "
+                                   "default: as near as frames the whole object. The pick benchmark's camera is "
+                                   "0.5-0.8 m away: 0.65 with image_size 320 gives its point density.")
 
     @model_validator(mode="after")
     def _partial_needs_views(self) -> ViewSpec:
         if self.crop == "partial" and self.count < 1:
             raise ValueError(f"crop='partial' needs depth views: count={self.count} must be at least 1")
+        if self.sampling == "view" and self.crop != "partial":
+            raise ValueError("sampling='view' crops each candidate from the view it was sampled on: set crop: "
+                             "partial (and count >= 1)")
         return self
 
 

@@ -10,7 +10,13 @@ import pytest
 import torch
 from typer.testing import CliRunner
 
-from onepiece_dist.core.cloud_grasps import above_plane, fit_support_plane, sample_cloud_grasps, suppress_near
+from onepiece_dist.core.cloud_grasps import (
+    above_plane,
+    fit_support_plane,
+    sample_cloud_grasps,
+    suppress_near,
+    voxel_downsample,
+)
 from onepiece_dist.core.hand_frames import from_panda
 from onepiece_dist.core.mesh import box_mesh, cylinder_mesh, resample_crops
 from onepiece_dist.core.sampling import collides
@@ -191,3 +197,29 @@ def test_the_evaluation_judges_by_the_robust_rule_and_says_when_it_cannot_separa
     assert easy[0] is False and "cannot separate a network from a guess" in easy[1] and "95%" in easy[1]
     assert hard[0] is False and "fail" in hard[1]
     assert fair == (True, "50% of the held-out candidates succeed: top-1 0.80 against random 0.50")
+
+
+def test_a_job_sampling_on_views_trains_on_the_planners_crops(tmp_path):
+    """views.sampling: view samples candidates as the planner samples a camera's cloud: each grasp is free of the
+    view it was sampled on, and its stored code and points are that view's crop at its pose."""
+    from onepiece_dist.plan.scorer import CropRecord
+    from onepiece_dist.service.extract import extract_arrays
+
+    spec = JobSpec(grasps_per_object=16, sim={"physics": False, "collision": "hull", "points_per_grasp": 32},
+                   views={"count": 3, "crop": "partial", "sampling": "view", "image_size": 160, "distance": 0.4})
+    with pytest.warns(UserWarning, match="convex hull"):
+        arrays, meta = extract_arrays(spec, cylinder_mesh(0.025, 0.09), tmp_path)
+    assert 8 <= len(arrays["pose"]) <= 18 and meta["candidates_tried"] >= len(arrays["pose"])
+    record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, "pointnet")
+    clouds = [arrays["view_points"][arrays["view_of_point"] == k].astype(np.float64) for k in range(3)]
+    thinned = [cloud[voxel_downsample(cloud, PlanSpec().downsample)] for cloud in clouds]  # what sampling checks
+    exact = 0
+    for i, pose in enumerate(arrays["pose"].astype(np.float64)):  # stored in float32: boundary points may move
+        differ = [int(np.bitwise_count(cut_crops(cloud, pose[None], record, np.random.default_rng(0)).codes[0]
+                                       ^ arrays["code"][i]).sum())
+                  for k, cloud in enumerate(clouds) if not collides(thinned[k], pose[None], spec.gripper)[0]]
+        assert differ and min(differ) <= 2, f"grasp {i} is no view's crop"
+        exact += min(differ) == 0
+    assert exact >= len(arrays["pose"]) // 2
+    with pytest.raises(ValueError, match="crop: partial"):
+        JobSpec(views={"count": 2, "sampling": "view"})

@@ -49,19 +49,28 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
     """Candidates, their simulated settled poses and the codes cropped there; empty crops dropped."""
     rng = object_rng(mesh.content_id, spec.seed)
     points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
-    cands = sample_candidates(mesh, points, normals, spec.grasps_per_object, spec.gripper, spec.sampler, rng)
+    views = _render_views(spec, mesh)
+    if spec.views.sampling == "view":
+        cands, sampled_on = view_candidates(spec, views, rng)
+    else:
+        cands, sampled_on = sample_candidates(mesh, points, normals, spec.grasps_per_object, spec.gripper,
+                                              spec.sampler, rng), None
     if len(cands.poses) == 0:
-        raise MeshRejected(mesh.name, f"no collision-free antipodal grasp narrower than max_opening="
+        raise MeshRejected(mesh.name, f"no collision-free {_sampler_name(spec)} grasp narrower than max_opening="
                                       f"{spec.gripper.max_opening} m among {cands.tried} tried: "
                                       "the object cannot fit the gripper")
     pieces = _collision_pieces(spec, mesh, collision_dir)
-    grasps, meta = _simulate(spec, mesh, cands, pieces)
-    views = _render_views(spec, mesh)
-    clouds, source = crop_sources(spec, points, views, grasps["pose"])
+    grasps, meta, held = _simulate(spec, mesh, cands, pieces)
+    clouds, source = crop_sources(spec, points, views, grasps["pose"],
+                                  None if sampled_on is None else sampled_on[held])
     grid, res = spec.grid_shape(), spec.voxel.resolution
     codes, counts, inside = crop_codes_from(clouds, source, grasps["pose"], grid, res, keep_points=True)
-    static, _, _ = crop_codes_from(clouds, source, grasps["candidate_pose"], grid, res)
+    planned = spec.views.sampling == "view"  # the network scores what the camera shows before the fingers close
+    static, static_counts, seen = crop_codes_from(clouds, source, grasps["candidate_pose"], grid, res, planned)
     keep = counts > 0
+    if planned:
+        keep &= static_counts > 0
+        inside = seen
     grasps = {name: value[keep] for name, value in grasps.items()}
     codes, static = codes[keep], static[keep]
     if spec.voxel.canonical:
@@ -103,11 +112,44 @@ def _collision_pieces(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) ->
     return convex_pieces(mesh, collision_dir, spec.sim.collision)
 
 
+def _sampler_name(spec: JobSpec) -> str:
+    return "view-sampled" if spec.views.sampling == "view" else spec.sampler.method
+
+
+def view_candidates(spec: JobSpec, views, rng: np.random.Generator) -> tuple[GraspCandidates, np.ndarray]:
+    """Candidates as the planner samples a camera's cloud (plan.planner.propose: GPD-style placements, at least
+    its min_points observed points in the closing region), ``ceil(grasps_per_object / views)`` on each view's
+    cloud; and (n,) int64 the view each was sampled on (its crop's cloud)."""
+    from onepiece_dist.plan.observation import Observation
+    from onepiece_dist.plan.planner import propose
+    from onepiece_dist.plan.scorer import CropRecord
+    from onepiece_dist.plan_spec import PlanSpec
+
+    record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, spec.train.model)
+    per_view = -(-spec.grasps_per_object // len(views.cameras))
+    plan = PlanSpec(candidates=per_view, support_plane="none")
+    poses, sampled_on, tried = [], [], 0
+    for k, camera in enumerate(views.cameras.astype(np.float64)):
+        cloud = views.cloud(k).astype(np.float64)
+        if len(cloud) < 50:
+            continue
+        found = propose(Observation(cloud, camera[:3, 3], f"view {k}"), record, plan, rng)
+        poses.append(found.poses)
+        sampled_on.append(np.full(len(found.poses), k, dtype=np.int64))
+        tried += found.counts["sampled"]
+    poses = np.concatenate(poses) if poses else np.zeros((0, 4, 4))
+    widths = np.full(len(poses), spec.gripper.max_opening)
+    return (GraspCandidates(poses, widths, tried, tried - len(poses)),
+            np.concatenate(sampled_on) if sampled_on else np.zeros(0, dtype=np.int64))
+
+
 def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
-              pieces: list[np.ndarray]) -> tuple[dict[str, np.ndarray], dict]:
-    """Run the extract (and label) protocol; keep the trials whose fingers hold the object."""
+              pieces: list[np.ndarray]) -> tuple[dict[str, np.ndarray], dict, np.ndarray]:
+    """Run the extract (and label) protocol; keep the trials whose fingers hold the object (and say which: the
+    (n,) bool mask over the candidates)."""
     if not spec.sim.physics:
-        return {"pose": cands.poses, "candidate_pose": cands.poses, "width": cands.widths}, {"trials": 0}
+        return ({"pose": cands.poses, "candidate_pose": cands.poses, "width": cands.widths}, {"trials": 0},
+                np.ones(len(cands.poses), dtype=bool))
     from onepiece_dist.sim.trials import OUTCOMES, LabelNoise, run_trials
     from onepiece_dist.sim.world import process_world
 
@@ -124,7 +166,7 @@ def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
         grasps["quality"] = batch.quality[ok]
         grasps["slip"] = batch.slip[ok]
     dropped = {f"dropped_{name}": int(np.sum(batch.outcome == k)) for k, name in enumerate(OUTCOMES) if k}
-    return grasps, {"trials": len(cands.poses), **dropped}
+    return grasps, {"trials": len(cands.poses), **dropped}, ok
 
 
 def _render_views(spec: JobSpec, mesh: TriangleMesh):
@@ -133,17 +175,21 @@ def _render_views(spec: JobSpec, mesh: TriangleMesh):
         return None
     from onepiece_dist.sim.views import object_views
 
-    return object_views(mesh.vertices, mesh.faces, spec.views.count, spec.views.image_size, spec.views.fov_deg)
+    views = spec.views
+    return object_views(mesh.vertices, mesh.faces, views.count, views.image_size, views.fov_deg, views.distance)
 
 
-def crop_sources(spec: JobSpec, points: np.ndarray, views, poses: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+def crop_sources(spec: JobSpec, points: np.ndarray, views, poses: np.ndarray,
+                 sampled_on: np.ndarray | None = None) -> tuple[list[np.ndarray], np.ndarray]:
     """The clouds grasps are cropped from, and (N,) int64 which one per pose: the full surface (n, 3) for all, or
-    with ``views.crop='partial'`` the depth view of the camera nearest each grasp's approach direction."""
+    with ``views.crop='partial'`` the depth view each grasp was sampled on (``sampled_on``, view sampling), else
+    the view of the camera nearest its approach direction."""
     if views is None or spec.views.crop == "full":
         return [points], np.zeros(len(poses), dtype=np.int64)
     from onepiece_dist.sim.views import camera_for_grasps
 
-    return [views.cloud(k) for k in range(len(views.cameras))], camera_for_grasps(views.cameras, poses)
+    source = camera_for_grasps(views.cameras, poses) if sampled_on is None else sampled_on
+    return [views.cloud(k) for k in range(len(views.cameras))], source
 
 
 def crop_codes_from(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndarray, grid: tuple[int, int, int],

@@ -50,12 +50,13 @@ def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
     return pose
 
 
-def orbit_cameras(vertices: np.ndarray, count: int, size: int, fov_deg: float, margin: float = 1.2) -> list[Camera]:
-    """``count`` cameras on a sphere around the mesh's bounding-box centre, far enough that the whole object
-    fits the field of view with ``margin``. vertices (V, 3) float."""
+def orbit_cameras(vertices: np.ndarray, count: int, size: int, fov_deg: float, margin: float = 1.2,
+                  distance: float | None = None) -> list[Camera]:
+    """``count`` cameras on a sphere around the mesh's bounding-box centre, ``distance`` away or (None) far enough
+    that the whole object fits the field of view with ``margin``. vertices (V, 3) float."""
     lower, upper = vertices.min(axis=0), vertices.max(axis=0)
     centre, radius = (lower + upper) / 2, float(np.linalg.norm(upper - lower)) / 2
-    distance = framing_distance(radius, fov_deg, margin)
+    distance = distance or framing_distance(radius, fov_deg, margin)
     return [camera_at(centre + distance * d, centre, size, fov_deg) for d in sphere_directions(count)]
 
 
@@ -126,9 +127,11 @@ class ObjectViews:
         return self.points[self.point_view == view]
 
 
-def object_views(vertices: np.ndarray, faces: np.ndarray, count: int, size: int, fov_deg: float) -> ObjectViews:
-    """Render ``count`` orbit views of a mesh and back-project them. vertices (V, 3), faces (F, 3)."""
-    cameras = orbit_cameras(vertices, count, size, fov_deg)
+def object_views(vertices: np.ndarray, faces: np.ndarray, count: int, size: int, fov_deg: float,
+                 distance: float | None = None) -> ObjectViews:
+    """Render ``count`` orbit views of a mesh (``distance`` away, or framing it) and back-project them.
+    vertices (V, 3), faces (F, 3)."""
+    cameras = orbit_cameras(vertices, count, size, fov_deg, distance=distance)
     return views_from(vertices, faces, cameras)
 
 

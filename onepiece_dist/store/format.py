@@ -21,8 +21,9 @@ GRASP_ARRAYS: tuple[tuple[str, str, str, str], ...] = (
     ("width", "float32", "()", "finger opening after closing (m)"),
     ("shift", "float32", "()", "object displacement during closing (m)"),
     ("candidate_code", "uint8", "(B,)", "code at the nominal candidate pose"),
-    ("points", "float16", "(P, 3)", "gripper-frame points in the closing region, resampled to P (in grasps/, "
-     "every grasp's only without the label stage or with keep_all_points: else unique/points)"),
+    ("points", "float16", "(P, 3)", "gripper-frame points in the closing region, resampled to P, at the settled "
+     "pose (at the candidate pose with views.sampling: view) (in grasps/, every grasp's only without the label stage "
+     "or with keep_all_points: else unique/points)"),
     ("success", "uint8", "()", "label protocol outcome (only when labelled)"),
     ("quality", "float32", "()", "success fraction over label trials (only when labelled)"),
     ("slip", "float32", "()", "object motion in the gripper frame while lifting and shaking (m)"),
