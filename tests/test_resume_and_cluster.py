@@ -314,6 +314,42 @@ def test_a_study_on_the_local_multi_node_cluster_gives_the_in_process_result(loc
 
 @pytest.mark.cluster
 @pytest.mark.slow
+def test_the_pick_benchmark_on_the_local_multi_node_cluster_gives_the_in_process_picks(local_cluster, tmp_path,
+                                                                                        record_figure):
+    """``onepiece pick --address``: one task per object on the cluster's worker nodes, the same picks as in
+    process."""
+    from onepiece_dist.plan_spec import PickSpec
+    from onepiece_dist.service.pick_runner import run_picks
+    from tests.test_picks import SMALL
+    from tests.test_plan import save_checkpoint
+
+    checkpoint = save_checkpoint(tmp_path / "net.pt")
+    ran = onepiece("pick", str(checkpoint), "--objects", SMALL["objects"], "--views", "2", "--attempts", "2",
+                   "--out", str(tmp_path / "cluster"), "--address", "127.0.0.1:6390", "--json",
+                   "--spec", str(_pick_spec_file(tmp_path)), cwd=tmp_path, timeout=600)
+    assert ran.returncode == 0, ran.stderr[-3000:]
+    on_cluster = json.loads(ran.stdout)
+    here = run_picks(PickSpec(**{**SMALL, "pictures": 0}, checkpoint=str(checkpoint), output=str(tmp_path / "here")),
+                     in_process=True)
+    assert [o["views"] for o in on_cluster["objects"]] == [json.loads(json.dumps(o))["views"]
+                                                          for o in here.to_json()["objects"]]
+    nodes = {o["node"] for o in on_cluster["objects"]}
+    assert all(nodes) and len(nodes) >= 1
+    record_figure(f"picks on the cluster: {len(on_cluster['objects'])} objects on {len(nodes)} worker node(s), "
+                  "the in-process picks")
+
+
+def _pick_spec_file(folder: Path) -> Path:
+    from tests.test_picks import SMALL
+
+    path = folder / "pick.json"
+    path.write_text(json.dumps({key: value for key, value in SMALL.items() if key in ("mesh_candidates", "plan",
+                                                                                       "sim")} | {"pictures": 0}))
+    return path
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
 def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, fault_free, record_figure):
     out = tmp_path / "lost_node.zarr"
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}:{os.environ.get('PATH', '')}"}
