@@ -4,6 +4,9 @@
     handle = Client().submit(JobSpec(objects="pybullet:random_urdfs[0:8]"))
     print(handle.wait().progress)
 
+    from onepiece_dist.api import PickSpec, run_picks   # the pick benchmark (docs/planning.md)
+    report = run_picks(PickSpec(checkpoint="data/x.zarr.train/best.pt", objects="meshes/"))
+
 ``Client(address=None)`` runs jobs on an embedded Ray (loopback only) in a background thread of this process;
 ``Client(address="http://127.0.0.1:8265")`` submits them to a cluster through the Ray Jobs API, where they keep
 running when the submitter goes away.
@@ -29,15 +32,17 @@ from onepiece_dist.errors import (
     VersionMismatch,
 )
 from onepiece_dist.objects import resolve_source
+from onepiece_dist.plan_spec import PickSpec, PlanSpec
 from onepiece_dist.service.local import run_local
+from onepiece_dist.service.pick_runner import PickReport, run_picks
 from onepiece_dist.service.pipeline import ProgressFn
 from onepiece_dist.service.registry import CLUSTER_INFO_MARK, package_version
 from onepiece_dist.service.status import JobStatus, status_path
 from onepiece_dist.spec import JobSpec, default_job_id
 from onepiece_dist.store import DatasetReader, open_dataset
 
-__all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "open_dataset",
-           "run_job"]
+__all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "PickReport",
+           "PickSpec", "PlanSpec", "open_dataset", "run_job", "run_picks"]
 
 TERMINAL = ("succeeded", "failed", "cancelled")
 _RAY_JOB_STATES = {"PENDING": "pending", "RUNNING": "running", "SUCCEEDED": "succeeded", "FAILED": "failed",

@@ -36,7 +36,7 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "service": (BASE | {"plan_spec", "core", "objects", "sim", "store", "learn", "plan"},
                 {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
                  "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
-    "api": (BASE | {"objects", "service", "store"}, {"ray"}),
+    "api": (BASE | {"plan_spec", "objects", "service", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
     "study": (BASE | {"api", "service", "learn", "store", "core", "objects"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
