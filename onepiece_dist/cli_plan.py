@@ -30,10 +30,10 @@ def _gripper(path: Path | None):
         return None
     import yaml
 
-    from onepiece_dist.spec import GripperSpec
+    from onepiece_dist.spec import GripperSpec, gripper_fields
 
     try:
-        return GripperSpec.model_validate(yaml.safe_load(path.read_text()) or {})
+        return GripperSpec.model_validate(gripper_fields(yaml.safe_load(path.read_text()) or {}))
     except (OSError, yaml.YAMLError, ValueError) as error:
         err(f"error: {path}: not a gripper spec: {error}")
         raise typer.Exit(EXIT_USAGE) from None
@@ -69,8 +69,9 @@ def grasp(
     viewpoint: Annotated[str | None, typer.Option(help="x,y,z: the camera's position in the cloud's frame "
                                                        "(normals face it; default: a depth image's camera, "
                                                        "else unknown).")] = None,
-    gripper: Annotated[Path | None, typer.Option(help="YAML gripper spec; refused unless the checkpoint was "
-                                                      "trained for it (default: the checkpoint's).")] = None,
+    gripper: Annotated[Path | None, typer.Option(help="YAML gripper spec (its fields, or preset: panda | "
+                                                      "robotiq_2f85 | robotiq_2f140); refused unless the checkpoint "
+                                                      "was trained for it (default: the checkpoint's).")] = None,
     no_plane: Annotated[bool, typer.Option("--no-plane", help="The cloud is the object alone: no support "
                                                               "plane.")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,

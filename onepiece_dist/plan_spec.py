@@ -5,10 +5,19 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.spec import GripperSpec, JobSpec, SamplerSpec, SimSpec, VoxelSpec, _Frozen, describe_validation_error
+from onepiece_dist.spec import (
+    GripperSpec,
+    JobSpec,
+    SamplerSpec,
+    SimSpec,
+    VoxelSpec,
+    _Frozen,
+    describe_validation_error,
+    gripper_fields,
+)
 
 
 class PlanSpec(_Frozen):
@@ -87,6 +96,11 @@ class PickSpec(_Frozen):
                          "every_trial: a pick succeeds when all K hold).")
     sampler: SamplerSpec = SamplerSpec()
     max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
+
+    @field_validator("gripper", mode="before")
+    @classmethod
+    def _preset(cls, value: Any) -> Any:
+        return gripper_fields(value)
 
     def object_job(self, gripper: GripperSpec, voxel: VoxelSpec) -> JobSpec:
         """The job-shaped spec the object loader and the full-mesh sampler read (file limits, extents, physics)."""

@@ -36,6 +36,8 @@ class GripperSpec(_Frozen):
     |v| < closing_width / 2, |t| < closing_height / 2.
     """
 
+    name: str = Field("onepiece_box", description="What the gripper is called: a preset's name (franka_panda, "
+                      "robotiq_2f_85, robotiq_2f_140) or yours; datasets and exports name it.")
     max_opening: float = Field(0.08, gt=0, le=0.5, description="Largest distance between the finger pads (m).")
     finger_length: float = Field(0.04, gt=0, le=0.3, description="Finger extent along u (m).")
     finger_thickness: float = Field(0.01, gt=0, le=0.1, description="Finger extent along v (m).")
@@ -345,7 +347,9 @@ class JobSpec(_Frozen):
                                   "keeps points only for the representatives (unique/points) and the labelled "
                                   "grasps (assembled/grasps/points): per extracted grasp a few hundred bytes, "
                                   "not 4.5 kB.")
-    gripper: GripperSpec = GripperSpec()
+    gripper: GripperSpec = Field(GripperSpec(), description="The gripper: its fields, or a preset's name (panda, "
+                                 "robotiq_2f85, robotiq_2f140; onepiece_dist/gripper_presets.py), or a mapping "
+                                 "with preset: NAME and fields that differ from it.")
     voxel: VoxelSpec = VoxelSpec()
     sampler: SamplerSpec = SamplerSpec()
     sim: SimSpec = SimSpec()
@@ -355,6 +359,11 @@ class JobSpec(_Frozen):
     evaluate: EvaluateSpec = EvaluateSpec()
     budget: BudgetSpec = BudgetSpec()
     adaptive: AdaptiveSpec = AdaptiveSpec()
+
+    @field_validator("gripper", mode="before")
+    @classmethod
+    def _preset(cls, value: Any) -> Any:
+        return gripper_fields(value)
 
     @model_validator(mode="after")
     def _adaptive_labels_in_rounds(self) -> JobSpec:
@@ -410,6 +419,19 @@ class JobSpec(_Frozen):
                                                          "sampler", "sim", "views", "closure"})
         relevant["results_revision"] = RESULTS_REVISION
         return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
+
+
+def gripper_fields(value: Any) -> Any:
+    """A gripper given as a preset's name, or as a mapping with ``preset: NAME`` and overrides, as its fields."""
+    from onepiece_dist.gripper_presets import PRESETS
+
+    name = value if isinstance(value, str) else value.get("preset") if isinstance(value, dict) else None
+    if name is None:
+        return value
+    if name not in PRESETS:
+        raise ValueError(f"unknown gripper preset {name!r}: expected one of {', '.join(sorted(PRESETS))}")
+    overrides = {k: v for k, v in value.items() if k != "preset"} if isinstance(value, dict) else {}
+    return {**PRESETS[name], **overrides}
 
 
 def default_job_id(spec: JobSpec) -> str:

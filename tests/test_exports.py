@@ -224,6 +224,23 @@ def test_exports_without_what_they_need_are_refused_with_the_reason(tmp_path):
 def test_names_become_safe_unique_file_names_and_nothing_is_written_outside():
     assert safe_names(["random_urdfs/000", "../../etc", "a b", "a_b", ".hidden", ""]) == [
         "random_urdfs_000", "_.._etc", "a_b", "a_b-2", "hidden", "object"]
+    assert safe_names(["mug.obj", "mug.OBJ", "box.stl", "my.mug"]) == ["mug", "mug-2", "box", "my.mug"]  # one suffix
+
+
+def test_exports_name_the_gripper_as_acronym_and_graspgen_do(acronym, labelled_both, tmp_path):
+    import h5py
+
+    from onepiece_dist.spec import JobSpec
+
+    with h5py.File(next((acronym / "grasps").glob("*.h5")), "r") as h5:
+        assert h5["gripper/type"][()].decode() == "onepiece_box"  # the job's gripper, by name
+    assert export(labelled_both, "graspgen", tmp_path / "gg").exit_code == 0
+    record = json.loads(next((tmp_path / "gg" / "grasps").glob("*.json")).read_text())
+    assert record["gripper"] == "onepiece_box"
+    assert JobSpec(gripper="panda").gripper.name == "franka_panda"
+    assert JobSpec(gripper={"preset": "robotiq_2f85", "friction": 0.6}).gripper.max_opening == 0.085
+    with pytest.raises(ValueError, match="unknown gripper preset 'ur5'.*panda"):
+        JobSpec(gripper="ur5")
 
 
 def test_nothing_is_written_outside_the_export_folder(tmp_path):

@@ -24,7 +24,8 @@ PACKAGE = ROOT / "onepiece_dist"
 BASE = {"errors", "spec"}
 LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "errors": (set(), set()),
-    "spec": ({"errors"}, {"pydantic", "yaml"}),
+    "gripper_presets": (set(), set()),
+    "spec": ({"errors", "gripper_presets"}, {"pydantic", "yaml"}),
     "plan_spec": ({"errors", "spec"}, {"pydantic"}),
     "core": (BASE, {"numpy", "open3d", "scipy"}),  # imported where used: open3d's ray casts, scipy's N-d qhull
     "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic"}),

@@ -14,7 +14,6 @@ from onepiece_dist.core.voxel import canonical_codes, crop_regions, unpack_codes
 from onepiece_dist.errors import CloudRejected
 from onepiece_dist.spec import GripperSpec, VoxelSpec
 
-
 CPU_BATCH, GPU_BATCH = 16, 512  # crops per call: 16 scored fastest on one core (0.45 s for 211 crops, 256: 0.68 s)
 
 
@@ -106,6 +105,9 @@ def _crop_record(saved: dict, path: str, gripper: GripperSpec | None) -> CropRec
     trained = GripperSpec.model_validate(crop["gripper"])
     if gripper is not None and gripper != trained:
         differs = [name for name in GripperSpec.model_fields if getattr(gripper, name) != getattr(trained, name)]
+        if differs == ["name"]:  # the same hand under another name
+            return CropRecord(trained, VoxelSpec.model_validate(crop["voxel"]), int(crop["points_per_grasp"]),
+                              saved["model"])
         raise CloudRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
                             f"{', '.join(differs)}: trained {', '.join(f'{n}={getattr(trained, n)}' for n in differs)}"
                             "): plan with the checkpoint's gripper, or train a network for this one")

@@ -115,11 +115,13 @@ def source_meshes(spec: JobSpec, names: list[str], ids: list[str]) -> dict[str, 
 
 
 def safe_names(names: list[str]) -> list[str]:
-    """A file stem per name: letters, digits, '.', '_' and '-' only, no leading dot, at most 80 characters, each
-    unique (a clash gets '-2', '-3', ...)."""
+    """A file stem per name: letters, digits, '.', '_' and '-' only, no leading dot, no mesh file extension (a
+    'mug.obj' object's mesh is meshes/mug.obj, not mug.obj.obj), at most 80 characters, each unique (a clash gets
+    '-2', '-3', ...)."""
     out, taken = [], set()
     for name in names:
-        stem = re.sub(r"[^A-Za-z0-9._-]", "_", name).lstrip(".")[:80] or "object"
+        bare = re.sub(r"\.(obj|stl|ply|glb|urdf)$", "", name, flags=re.IGNORECASE)
+        stem = re.sub(r"[^A-Za-z0-9._-]", "_", bare).lstrip(".")[:80] or "object"
         candidate, n = stem, 1
         while candidate.lower() in taken:
             n += 1
@@ -178,7 +180,7 @@ def export_acronym(path: str | os.PathLike, out: str | os.PathLike) -> list[Path
             h5.create_dataset("object/scale", data=1.0)
             h5.create_dataset("object/density", data=spec.sim.density)
             h5.create_dataset("object/friction", data=spec.gripper.friction)
-            h5.create_dataset("gripper/type", data="panda", dtype=h5py.string_dtype())
+            h5.create_dataset("gripper/type", data=spec.gripper.name, dtype=h5py.string_dtype())
             h5.create_dataset("grasps/transforms", data=to_panda(grasp_set.poses, spec.gripper.finger_length))
             h5.create_dataset("grasps/qualities/flex/object_in_gripper", data=grasp_set.held.astype(np.int64))
             h5.create_dataset("onepiece/pose", data=grasp_set.poses)
@@ -202,7 +204,7 @@ def export_graspgen(path: str | os.PathLike, out: str | os.PathLike, valid_fract
     splits: dict[str, list[str]] = {"train": [], "valid": []}
     for stem, grasp_set in zip(safe_names([s.name for s in sets]), sets, strict=True):
         mesh = folder.write_mesh(stem, grasp_set)
-        record = {"object": {"file": mesh, "scale": 1.0},
+        record = {"object": {"file": mesh, "scale": 1.0}, "gripper": spec.gripper.name,
                   "grasps": {"transforms": to_panda(grasp_set.poses, spec.gripper.finger_length).tolist(),
                              "object_in_gripper": grasp_set.held.tolist()},
                   "onepiece": {"pose": grasp_set.poses.tolist(),
