@@ -73,9 +73,11 @@ def run(
     spec_json: Annotated[str | None, typer.Option(hidden=True, help="The whole spec as JSON (used by submit).")] = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the final status as JSON on stdout.")] = False,
+    units: Annotated[str | None, typer.Option(help="Units of the object files: m, cm or mm (default: m).")] = None,
+    scale: Annotated[float | None, typer.Option(help="A further scale of the object files (default: 1).")] = None,
 ) -> None:
     """Run a job end to end (embedded Ray on 127.0.0.1 unless --address) and print the dataset path."""
-    overrides = spec_overrides(objects, out, grasps, seed, stages)
+    overrides = {**spec_overrides(objects, out, grasps, seed, stages), "units": units, "scale": scale}
     spec = spec_or_exit(spec_file, overrides, spec_json)
     _run_and_report(spec, address, job_id, workers, in_process, as_json)
 

@@ -342,6 +342,10 @@ class JobSpec(_Frozen):
     similar_radius: int = Field(0, ge=0, le=64, description="Merge codes that differ in at most this many voxels "
                                 "(0 = exact dedup only); unique/ then holds one representative per cluster.")
     max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
+    units: Literal["m", "cm", "mm"] = Field("m", description="Units of the mesh and URDF files the objects source "
+                                           "names (pybullet's built-in sets know theirs); a file clearly in other "
+                                           "units is refused with the units that fit, never rescaled silently.")
+    scale: float = Field(1.0, gt=0, le=1000, description="A further scale of those files (after units).")
     keep_all_points: bool = Field(False, description="Store every extracted grasp's points in grasps/points. By "
                                   "default a job that labels on the one object (stage 'label', sim.label false) "
                                   "keeps points only for the representatives (unique/points) and the labelled "
@@ -398,6 +402,10 @@ class JobSpec(_Frozen):
 
     def grid_shape(self) -> tuple[int, int, int]:
         return self.voxel.grid_shape(self.gripper)
+
+    def unit_scale(self) -> float:
+        """What the source's file coordinates are multiplied by to be metres."""
+        return {"m": 1.0, "cm": 0.01, "mm": 0.001}[self.units] * self.scale
 
     def runs(self, stage: Stage) -> bool:
         """Whether this job runs ``stage``."""

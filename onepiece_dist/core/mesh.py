@@ -46,6 +46,21 @@ def make_mesh(vertices: np.ndarray, faces: np.ndarray, source: str, scale: float
     return TriangleMesh(vertices, faces, name=source, content_id=content_id(vertices, faces))
 
 
+def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The volume the faces enclose, negative when they are wound inwards (clockwise seen from outside)."""
+    tri = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)]
+    return float(np.sum(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2]))) / 6.0)
+
+
+def wound_outwards(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, bool]:
+    """``faces`` (F, 3) wound outwards: reversed (``faces[:, ::-1]``) when their signed volume is negative; and
+    whether they were. The antipodal sampler casts rays along the inward normal, so an inward-wound mesh would
+    yield no grasp at all."""
+    if signed_volume(vertices, faces) < 0:
+        return np.ascontiguousarray(np.asarray(faces)[:, ::-1]), True
+    return faces, False
+
+
 def validate_arrays(vertices: np.ndarray, faces: np.ndarray, source: str) -> None:
     """Reject what would crash or silently poison a simulator."""
     if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) < 3:

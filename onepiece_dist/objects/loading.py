@@ -16,6 +16,8 @@ from onepiece_dist.core.mesh import (
     make_mesh,
     merge_meshes,
     sphere_mesh,
+    validate_arrays,
+    wound_outwards,
 )
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_mesh_bytes
@@ -27,8 +29,11 @@ from onepiece_dist.spec import JobSpec
 
 @dataclass(frozen=True)
 class LoadedObject:
+    """A loaded object and what was repaired on the way (e.g. 'faces wound inwards: flipped')."""
+
     ref: ObjectRef
     mesh: TriangleMesh
+    repairs: tuple[str, ...] = ()
 
     @property
     def content_id(self) -> str:
@@ -36,19 +41,28 @@ class LoadedObject:
 
 
 def load_object(ref: ObjectRef, spec: JobSpec) -> LoadedObject:
-    """Parse, validate and check that the object can meet the gripper. Raises :class:`MeshRejected`."""
+    """Parse, validate, repair what is safe to repair (said in ``repairs``) and check that the object can meet
+    the gripper. A job's ``units`` and ``scale`` apply to files it names (not to pybullet_data's sets). Raises
+    :class:`MeshRejected`."""
+    scale = ref.scale * (1.0 if ref.builtin else spec.unit_scale())
     if ref.kind == "primitive":
-        mesh = _primitive(*ref.primitive, name=ref.name)
-    elif ref.kind == "urdf":
-        mesh = _load_urdf(ref, spec.max_file_bytes)
+        return _checked(LoadedObject(ref, _primitive(*ref.primitive, name=ref.name)), spec)
+    if ref.kind == "urdf":
+        vertices, faces = _load_urdf(ref, spec.max_file_bytes)
     elif ref.kind == "mesh":
         vertices, faces = _read_mesh(Path(ref.path), Path(ref.root), ref.name, spec.max_file_bytes)
-        mesh = make_mesh(vertices, faces, ref.name, ref.scale)
     else:
         raise MeshRejected(ref.name, f"unsupported file extension {Path(ref.path).suffix!r}; expected "
                                      ".obj, .stl, .ply, .glb or .urdf")
-    check_graspable(mesh, spec)
-    return LoadedObject(ref, mesh)
+    validate_arrays(np.asarray(vertices, dtype=np.float64), np.asarray(faces), ref.name)
+    faces, flipped = wound_outwards(vertices, faces)
+    repairs = ("faces wound inwards (negative enclosed volume): flipped",) if flipped else ()
+    return _checked(LoadedObject(ref, make_mesh(vertices, faces, ref.name, scale), repairs), spec)
+
+
+def _checked(loaded: LoadedObject, spec: JobSpec) -> LoadedObject:
+    check_graspable(loaded.mesh, spec)
+    return loaded
 
 
 def read_confined(path: Path, root: Path, source: str, max_bytes: int) -> bytes:
@@ -69,7 +83,7 @@ def _read_mesh(path: Path, root: Path, source: str, max_bytes: int) -> tuple[np.
     return parse_mesh_bytes(data, path.suffix.lower(), source)
 
 
-def _load_urdf(ref: ObjectRef, max_bytes: int) -> TriangleMesh:
+def _load_urdf(ref: ObjectRef, max_bytes: int) -> tuple[np.ndarray, np.ndarray]:
     path = Path(ref.path)
     text = read_confined(path, Path(ref.root), ref.name, max_bytes).decode("utf-8", errors="replace")
     visual, collision = parse_urdf(text, confined(path, ref.root, ref.name), ref.name, Path(ref.root))
@@ -79,7 +93,7 @@ def _load_urdf(ref: ObjectRef, max_bytes: int) -> TriangleMesh:
             continue
         try:
             parts = [_element_arrays(e, Path(ref.root), ref.name, max_bytes) for e in elements]  # paths confined
-            return make_mesh(*merge_meshes(parts), ref.name, ref.scale)
+            return merge_meshes(parts)
         except MeshRejected as err:
             first_error = first_error or err
     raise first_error or MeshRejected(ref.name, "URDF link has no visual or collision geometry")
@@ -111,7 +125,22 @@ def check_graspable(mesh: TriangleMesh, spec: JobSpec) -> None:
     if diagonal > spec.sampler.max_object_extent:
         raise MeshRejected(mesh.name, f"bounding-box diagonal {diagonal:.3g} m exceeds "
                                       f"sampler.max_object_extent={spec.sampler.max_object_extent} m "
-                                      "(wrong units?)")
+                                      f"(wrong units?{_fitting_units(diagonal, spec)})")
     if diagonal < spec.voxel.resolution:
         raise MeshRejected(mesh.name, f"bounding-box diagonal {diagonal:.3g} m is below one voxel "
                                       f"({spec.voxel.resolution} m)")
+
+
+UNIT_FACTORS = {"cm": 0.01, "mm": 0.001}
+HAND_SIZED = (0.01, 0.5)  # m: the bounding-box diagonals of objects a parallel gripper picks
+
+
+def _fitting_units(diagonal: float, spec: JobSpec) -> str:
+    """' the file looks like centimetres: ...' when a unit's scale brings ``diagonal`` (m, as read at the job's
+    units) to a hand-held size; '' when none does."""
+    for unit, factor in UNIT_FACTORS.items():
+        fitted = diagonal * factor
+        if HAND_SIZED[0] <= fitted <= min(HAND_SIZED[1], spec.sampler.max_object_extent):
+            return (f" the file looks like {unit}: set units: {unit} (--units {unit}; scale {factor:g}), which "
+                    f"gives a {fitted:.3g} m diagonal")
+    return ""

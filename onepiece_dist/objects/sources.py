@@ -58,6 +58,7 @@ class ObjectRef:
     root: str = ""
     scale: float = 1.0
     primitive: tuple = ()
+    builtin: bool = False  # pybullet_data's sets: their units are known, a job's units do not apply
 
 
 def resolve_source(source: str) -> list[ObjectRef]:
@@ -103,14 +104,14 @@ def _pybullet_root() -> Path:
 
 def _pybullet_named() -> list[ObjectRef]:
     root = _pybullet_root()
-    return [ObjectRef(name, _kind(Path(rel)), str(root / rel), str((root / rel).parent), scale)
+    return [ObjectRef(name, _kind(Path(rel)), str(root / rel), str((root / rel).parent), scale, builtin=True)
             for name, (rel, scale) in sorted(PYBULLET_NAMED.items())]
 
 
 def _pybullet_random() -> list[ObjectRef]:
     root = _pybullet_root() / "random_urdfs"
     urdfs = sorted(root.glob("[0-9][0-9][0-9]/[0-9][0-9][0-9].urdf"))
-    return [ObjectRef(f"random_urdfs/{p.stem}", "urdf", str(p), str(p.parent)) for p in urdfs]
+    return [ObjectRef(f"random_urdfs/{p.stem}", "urdf", str(p), str(p.parent), builtin=True) for p in urdfs]
 
 
 def folder_refs(folder: Path) -> list[ObjectRef]:

@@ -7,6 +7,7 @@ part, and returns a small :class:`ObjectResult` (no large arrays travel back).
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -29,9 +30,10 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
         loaded = load_object(ref, spec)
     except MeshRejected as err:
         return ObjectResult(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    key = part_key(loaded.content_id, spec.result_key())
+    key, repairs = part_key(loaded.content_id, spec.result_key()), "; ".join(loaded.repairs)
     if parts.is_committed(key):
-        return _from_meta(index, ref.name, key, parts.read_meta(key), reused=True, start=start)
+        return replace(_from_meta(index, ref.name, key, parts.read_meta(key), reused=True, start=start),
+                       repairs=repairs)
     try:
         arrays, meta = extract_arrays(spec, loaded.mesh, parts.folder / "collision")
     except MeshRejected as err:
@@ -42,7 +44,8 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
                             content_id=loaded.content_id, seconds=time.perf_counter() - start)
     parts.write(key, arrays, {"name": ref.name, "content_id": loaded.content_id, **meta,
                               "made_seconds": time.perf_counter() - start})
-    return _from_meta(index, ref.name, key, parts.read_meta(key), reused=False, start=start)
+    return replace(_from_meta(index, ref.name, key, parts.read_meta(key), reused=False, start=start),
+                   repairs=repairs)
 
 
 def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tuple[dict[str, np.ndarray], dict]:

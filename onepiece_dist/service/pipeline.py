@@ -169,8 +169,9 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
 def record_result(status: JobStatus, result: ObjectResult) -> None:
     """Fold one object's result into the job's progress."""
     status.progress.objects_done += 1
-    log.info("job %s: extract %d/%d objects (%s: %s, %d grasps)", status.job_id, status.progress.objects_done,
-             status.progress.objects_total, result.name, result.status, result.grasps)
+    log.info("job %s: extract %d/%d objects (%s: %s, %d grasps%s)", status.job_id, status.progress.objects_done,
+             status.progress.objects_total, result.name, result.status, result.grasps,
+             f"; repaired: {result.repairs}" if result.repairs else "")
     status.worker_seconds += result.seconds
     status.part_seconds += result.made_seconds
     if result.node and result.node not in status.nodes:

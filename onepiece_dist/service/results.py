@@ -25,6 +25,7 @@ class ObjectResult:
     seconds: float = 0.0
     node: str = ""
     made_seconds: float = 0.0  # what the part cost to make when first made (a reused part: its original time)
+    repairs: str = ""  # what loading repaired ("; "-joined), e.g. faces wound inwards, flipped
 
     def to_dict(self) -> dict:
         return asdict(self)
