@@ -408,6 +408,8 @@ def render() -> str:
 def main() -> None:
     from benchmarks.assembly_page import PAGE as ASSEMBLY_PAGE
     from benchmarks.assembly_page import render_assembly_page
+    from benchmarks.picks_page import PAGE as PICKS_PAGE
+    from benchmarks.picks_page import render_picks_page
     from benchmarks.reliability_page import PAGE as RELIABILITY_PAGE
     from benchmarks.reliability_page import render_reliability_page
     from benchmarks.scaling_page import PAGE as SCALING_PAGE
@@ -420,7 +422,8 @@ def main() -> None:
     RELIABILITY_PAGE.write_text(render_reliability_page())
     SCALING_PAGE.write_text(render_scaling_page())
     TRIALS_PAGE.write_text(render_trials_page())
-    print(PAGE, ASSEMBLY_PAGE, RELIABILITY_PAGE, SCALING_PAGE, TRIALS_PAGE)
+    PICKS_PAGE.write_text(render_picks_page())
+    print(PAGE, ASSEMBLY_PAGE, RELIABILITY_PAGE, SCALING_PAGE, TRIALS_PAGE, PICKS_PAGE)
 
 
 if __name__ == "__main__":

@@ -161,7 +161,8 @@ class ViewSpec(_Frozen):
                                               "(antipodal or normal sampler), or as the planner samples a camera's "
                                               "cloud (docs/planning.md): on each view's cloud, cropped from that "
                                               "view, the points (grasps/points) at the candidate pose, before the "
-                                              "fingers close, so training crops are the kind `onepiece grasp` "
+                                              "fingers close, and candidates whose fingers close on nothing kept "
+                                              "(a success never), so training crops are the kind `onepiece grasp` "
                                               "scores (needs crop: partial).")
     distance: float | None = Field(None, gt=0, le=5, description="Camera distance from the object's centre (m); "
                                    "default: as near as frames the whole object. The pick benchmark's camera is "

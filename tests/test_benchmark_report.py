@@ -31,6 +31,17 @@ def test_the_assembly_figures_are_the_rendered_ones():
         "docs/assembly.md figures are stale: run `python -m benchmarks.report`"
 
 
+def test_the_picks_page_is_the_rendered_one_and_answers_first():
+    from benchmarks.picks_page import PAGE, render_picks_page
+
+    page = render_picks_page()
+    assert PAGE.read_text() == page, "docs/picks.md is stale: run `python -m benchmarks.report`"
+    first = page.split("\n")[4]
+    assert first.startswith("On 6 real household meshes") and ("**met**" in first or "**not met**" in first)
+    for picture in (line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")):
+        assert (ROOT / "docs" / picture).is_file(), picture
+
+
 def test_the_scaling_plan_is_the_rendered_one():
     from benchmarks.scaling_page import PAGE, render_scaling_page
 

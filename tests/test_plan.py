@@ -223,3 +223,23 @@ def test_a_job_sampling_on_views_trains_on_the_planners_crops(tmp_path):
     assert exact >= len(arrays["pose"]) // 2
     with pytest.raises(ValueError, match="crop: partial"):
         JobSpec(views={"count": 2, "sampling": "view"})
+
+
+def test_a_view_sampled_job_keeps_candidates_that_close_on_nothing():
+    """The planner meets candidates whose fingers close on nothing; a view-sampled job keeps them (width 0, never
+    a success), a mesh-sampled one drops them as before."""
+    from onepiece_dist.core.frames import pose_from_axes
+    from onepiece_dist.core.sampling import GraspCandidates
+    from onepiece_dist.service.extract import _simulate
+
+    mesh = box_mesh((0.04, 0.03, 0.06))
+    held = pose_from_axes(np.array([[-0.05, 0.0, 0.0]]), np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+    beside = pose_from_axes(np.array([[-0.05, 0.0, 0.2]]), np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+    cands = GraspCandidates(np.concatenate([held, beside]), np.full(2, 0.08), 2, 0)
+    views = {"count": 2, "crop": "partial", "sampling": "view"}
+    kept = {}
+    for sampling, spec in (("view", JobSpec(views=views, sim={"label": True})), ("mesh", JobSpec(sim={"label": True}))):
+        grasps, meta, ok = _simulate(spec, mesh, cands, [mesh.vertices])
+        kept[sampling] = (ok.tolist(), grasps["width"].tolist(), grasps["success"].tolist(), meta["dropped_no_contact"])
+    assert kept["view"][0] == [True, True] and kept["view"][1][1] == 0.0 and kept["view"][2][1] == 0
+    assert kept["mesh"][0] == [True, False] and kept["view"][3] == kept["mesh"][3] == 1

@@ -162,7 +162,10 @@ def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
     batch = run_trials(world, cands.poses, label=spec.sim.label, noise=noise,
                        rng=object_rng(mesh.content_id, spec.seed, stream=1))
     ok = batch.outcome == 0
-    grasps = {"pose": batch.settled_pose[ok], "candidate_pose": cands.poses[ok], "width": batch.width[ok],
+    if spec.views.sampling == "view":  # the planner meets candidates whose fingers close on nothing: keep them
+        ok |= batch.outcome == OUTCOMES.index("no_contact")  # as what they are (labelled: never a success)
+    width = np.where(np.isfinite(batch.width), batch.width, 0.0)  # no contact: the fingers closed fully
+    grasps = {"pose": batch.settled_pose[ok], "candidate_pose": cands.poses[ok], "width": width[ok],
               "shift": batch.shift[ok]}
     if batch.success is not None:
         grasps["success"] = batch.success[ok].astype(np.uint8)
