@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.ceiling import threshold_ap
 from onepiece_dist.core.dedup import unique_codes
 from onepiece_dist.core.selection import one_grasp_per_key
 from onepiece_dist.study.result import KeyLookup, LookupRanking
-from onepiece_dist.study.stats import threshold_ap
 
 
 def key_ids(train_keys: np.ndarray, test_keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.ceiling import threshold_ap  # noqa: F401 - the study's AP over tied scores
 from onepiece_dist.core.intervals import bootstrap_interval, percentile_interval
 
 
@@ -23,19 +24,6 @@ def average_precision(scores: np.ndarray, labels: np.ndarray) -> float:
     hits = labels[order]
     precision = np.cumsum(hits) / np.arange(1, len(hits) + 1)
     return float(np.sum(precision * hits) / positives)
-
-
-def threshold_ap(scores: np.ndarray, labels: np.ndarray) -> float:
-    """Average precision over the distinct score thresholds: grasps with equal scores count together (a lookup
-    gives every grasp of a key one score, and their order must not decide the figure). 0 without a positive."""
-    labels = np.asarray(labels, dtype=bool)
-    if not labels.any():
-        return 0.0
-    order = np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable")
-    ranked, hits = np.asarray(scores)[order], np.cumsum(labels[order])
-    ends = np.r_[np.flatnonzero(ranked[1:] != ranked[:-1]), len(ranked) - 1]  # last grasp of each tie group
-    precision, recall = hits[ends] / (ends + 1), hits[ends] / hits[-1]
-    return float(np.sum(np.diff(np.r_[0.0, recall]) * precision))
 
 
 def per_object_top(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray,

@@ -1,0 +1,38 @@
+"""The label's own ceiling from repeated draws (issue 51, item 3): a deterministic label reaches 1, pure noise stays
+at its floor, a label with per-grasp probabilities lands between."""
+
+import numpy as np
+import pytest
+
+from onepiece_dist.core.ceiling import label_ceiling
+
+
+def test_the_ceiling_of_a_deterministic_label_is_one():
+    rng = np.random.default_rng(0)
+    draws = np.repeat((rng.random(500) < 0.3)[:, None], 4, axis=1)
+    ceiling = label_ceiling(draws)
+    assert (ceiling.agreement, ceiling.ceiling_ap) == (1.0, 1.0)
+    assert ceiling.positive_rate == pytest.approx(draws.mean())
+    assert ceiling.share_of_way(ceiling.positive_rate) == 0.0 and ceiling.share_of_way(1.0) == 1.0
+
+
+def test_a_label_of_pure_noise_has_its_ceiling_at_its_floor():
+    draws = np.random.default_rng(1).random((4000, 4)) < 0.3
+    ceiling = label_ceiling(draws)
+    assert ceiling.ceiling_ap == pytest.approx(ceiling.positive_rate, abs=0.02)
+    assert ceiling.agreement == pytest.approx(0.3**2 + 0.7**2, abs=0.02)
+
+
+def test_a_label_with_per_grasp_odds_lies_between_and_its_estimate_never_flatters_it():
+    """Leave-one-out scores from few draws rank worse than the true odds: the estimate is conservative and rises
+    towards the true ceiling (ranking by the odds themselves) as draws are added."""
+    from onepiece_dist.core.ceiling import threshold_ap
+
+    rng = np.random.default_rng(2)
+    p = rng.random(3000)
+    few, many = (label_ceiling(rng.random((3000, r)) < p[:, None]) for r in (3, 12))
+    true = np.mean([threshold_ap(p, rng.random(3000) < p) for _ in range(20)])
+    assert few.positive_rate + 0.1 < few.ceiling_ap < many.ceiling_ap < true + 0.01
+    assert many.ceiling_ap == pytest.approx(true, abs=0.06)
+    with pytest.raises(ValueError, match="at least 2 draws"):
+        label_ceiling(np.ones((5, 1), bool))
