@@ -42,7 +42,7 @@ from onepiece_dist.spec import JobSpec, default_job_id
 from onepiece_dist.store import DatasetReader, open_dataset
 
 __all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "PickReport",
-           "PickSpec", "PlanSpec", "open_dataset", "run_job", "run_picks"]
+           "PickSpec", "PlanSpec", "evaluate_model", "open_dataset", "run_job", "run_picks"]
 
 TERMINAL = ("succeeded", "failed", "cancelled")
 _RAY_JOB_STATES = {"PENDING": "pending", "RUNNING": "running", "SUCCEEDED": "succeeded", "FAILED": "failed",
@@ -70,6 +70,19 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
         if started_here:
             with contextlib.suppress(Exception):  # a runtime that died under the job may not shut down cleanly
                 ray.shutdown()
+
+
+def evaluate_model(model_path: str | Path, spec: JobSpec) -> dict:
+    """Label the candidates of ``spec.objects`` in simulation (in process, by the evaluation's protocol), then
+    score the model on them (``onepiece evaluate``)."""
+    from onepiece_dist.service.evaluate import heldout_sim, protocol_of, score_heldout
+
+    labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
+    status = run_local(labelled, job_id="evaluate")
+    report = score_heldout(model_path, labelled.output, spec.train.device,
+                           status.progress.objects_done - len(status.rejections), protocol_of(labelled))
+    return {**report.model_dump(), "top_ranked_success": report.top1, "random_choice_success": report.random_choice,
+            "label_positive_rate": report.positive_rate}
 
 
 def _connect_or_raise(connect, address: str | None) -> None:

@@ -251,11 +251,11 @@ def evaluate(
     as_json: Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")] = False,
 ) -> None:
     """Accuracy and AP on unseen objects, and simulated success of the top-ranked grasp versus a random one."""
-    from onepiece_dist.service.evaluate import evaluate_model
+    import onepiece_dist.api as api
 
     spec = spec_or_exit(None, {"objects": objects, "output": out, "grasps_per_object": grasps, "seed": seed})
     try:
-        report = evaluate_model(model, spec)
+        report = api.evaluate_model(model, spec)
     except (SourceError, StoreError, FileNotFoundError, ValueError) as error:
         _err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None

@@ -180,13 +180,13 @@ def test_run_refuses_a_jobs_api_url_from_the_environment():
 
 
 def test_a_failed_evaluation_exits_1_without_a_traceback(monkeypatch, tmp_path):
+    from onepiece_dist import api
     from onepiece_dist.errors import JobError
-    from onepiece_dist.service import evaluate
 
     def failing(model, spec):
         raise JobError("job job-eval failed: the simulator crashed")  # the fault injected
 
-    monkeypatch.setattr(evaluate, "evaluate_model", failing)
+    monkeypatch.setattr(api, "evaluate_model", failing)
     result = runner.invoke(app, ["evaluate", str(tmp_path / "best.pt"), "--objects", "primitives[0:1]"])
     assert result.exit_code == 1 and "evaluation failed" in result.output
     assert result.exception is None or isinstance(result.exception, SystemExit)

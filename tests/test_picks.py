@@ -103,28 +103,21 @@ SMALL = {"objects": "primitives[0:2]", "views": 2, "attempts": 2, "pictures": 1,
 
 
 @pytest.mark.slow
-def test_the_pick_benchmark_runs_in_process_and_writes_its_report(tmp_path):
+@pytest.mark.ray
+def test_the_pick_benchmark_runs_in_process_and_on_the_embedded_ray_with_the_same_picks(tmp_path):
     checkpoint = save_checkpoint(tmp_path / "net.pt")
-    spec = PickSpec(**SMALL, checkpoint=str(checkpoint), output=str(tmp_path / "picks"))
-    report = run_picks(spec, in_process=True)
-    assert [o.status for o in report.objects] == ["ok", "ok"]
-    assert all(len(o.views) == 2 for o in report.objects)
-    assert {m.method for m in report.methods} == set(spec.methods)
-    for picks in report.objects:
+    spec = PickSpec(**SMALL, checkpoint=str(checkpoint), output=str(tmp_path / "here"))
+    here = run_picks(spec, in_process=True)
+    assert [o.status for o in here.objects] == ["ok", "ok"]
+    assert {m.method for m in here.methods} == set(spec.methods)
+    for picks in here.objects:
+        assert len(picks.views) == 2
         for seen in picks.views:
             assert seen.points > 100 and seen.candidates > 0
             assert all(0 < len(seen.attempts[m]) <= 2 for m in spec.methods)
-    written = json.loads((tmp_path / "picks" / "picks.json").read_text())
+    written = json.loads((tmp_path / "here" / "picks.json").read_text())
     assert written["methods"][0]["method"] == "network" and len(written["objects"]) == 2
-    assert (tmp_path / "picks" / "pictures" / "box_40x30x60-view0.png").is_file()
-
-
-@pytest.mark.slow
-@pytest.mark.ray
-def test_the_pick_benchmark_on_the_embedded_ray_gives_the_in_process_picks(tmp_path):
-    checkpoint = save_checkpoint(tmp_path / "net.pt")
-    quiet = {**SMALL, "pictures": 0, "checkpoint": str(checkpoint)}
-    here = run_picks(PickSpec(**quiet, output=str(tmp_path / "here")), in_process=True)
-    on_ray = run_picks(PickSpec(**quiet, output=str(tmp_path / "ray"), workers=2))
+    assert (tmp_path / "here" / "pictures" / "box_40x30x60-view0.png").is_file()
+    on_ray = run_picks(spec.model_copy(update={"output": str(tmp_path / "ray"), "pictures": 0, "workers": 2}))
     assert [o.views for o in on_ray.objects] == [o.views for o in here.objects]
-    assert any(o.node for o in on_ray.objects)  # ran in Ray workers
+    assert all(o.node for o in on_ray.objects)  # ran in Ray workers

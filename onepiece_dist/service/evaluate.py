@@ -78,18 +78,6 @@ def record_evaluation(spec: JobSpec, report: EvaluationReport) -> EvaluationRepo
     return report
 
 
-def evaluate_model(model_path: str | os.PathLike, spec: JobSpec) -> dict:
-    """Label the candidates of ``spec.objects`` in simulation (in process), then score the model on them."""
-    from onepiece_dist.service.local import run_local
-
-    labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
-    status = run_local(labelled, job_id="evaluate")
-    report = score_heldout(model_path, labelled.output, spec.train.device,
-                           status.progress.objects_done - len(status.rejections), protocol_of(labelled))
-    return {**report.model_dump(), "top_ranked_success": report.top1, "random_choice_success": report.random_choice,
-            "label_positive_rate": report.positive_rate}
-
-
 def top_ranked_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[float, float]:
     """Success rate of executing each object's best-scored grasp, and the expected rate of a random one."""
     objects = np.unique(groups)

@@ -64,7 +64,11 @@ _SCORERS: dict[tuple[str, str], GraspScorer] = {}
 
 
 def process_scorer(spec: PickSpec) -> GraspScorer:
-    """This process's scorer of ``spec.checkpoint`` (loaded once), on the CPU: each worker holds one core."""
+    """This process's scorer of ``spec.checkpoint`` (loaded once), on the CPU with one thread: each worker holds
+    one core."""
+    import torch
+
+    torch.set_num_threads(1)  # one core per worker; and the same sums, so the same ranking, in every process
     key = (spec.checkpoint, spec.gripper.model_dump_json() if spec.gripper else "")
     if key not in _SCORERS:
         _SCORERS[key] = GraspScorer(spec.checkpoint, spec.gripper, device="cpu")
