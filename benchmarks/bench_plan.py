@@ -41,7 +41,7 @@ def scenes():
         world.load_object([mesh.vertices], enclosed_volume(mesh), 400.0)
         rng = np.random.default_rng([k, 49])
         resting = world.settle(rng, mesh.vertices)
-        camera = pick_camera(resting[:3, 3], rng, (0.5, 0.8), (30.0, 70.0), 320, 45.0)
+        camera = pick_camera(resting[:3, 3], rng, (0.5, 0.8), (30.0, 70.0), 320, 45.0).camera
         cloud = observe(mesh.vertices, mesh.faces, resting, camera, rng)
         if len(cloud) < 50:
             continue

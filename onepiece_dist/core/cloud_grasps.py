@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.frames import closing_region_bounds, in_box, pose_from_axes, to_gripper_frame
+from onepiece_dist.core.frames import apply_rotation, closing_region_bounds, in_box, pose_from_axes, to_gripper_frame
 from onepiece_dist.core.portable import sin_cos
 from onepiece_dist.core.sampling import collides, gripper_boxes, plane_normals
 from onepiece_dist.core.spatial import box_corners
@@ -27,6 +27,12 @@ PLACEMENTS = (0.0, -0.5, 0.5, -0.25, 0.25)  # lateral hand shifts, as shares of 
 PLANE_CLEARANCE = 0.002  # m every gripper box corner keeps above a support plane
 
 
+def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot products over the last axis of (..., 3) arrays, in one fixed order of products and sums: a matrix
+    product would leave the last bits (and which points lie within a tolerance) to the CPU's BLAS kernel."""
+    return (a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]) + a[..., 2] * b[..., 2]
+
+
 @dataclass(frozen=True)
 class SupportPlane:
     """A plane ``normal . x + offset = 0`` (unit normal towards the objects on it); ``inliers`` (m,) bool marks
@@ -38,7 +44,7 @@ class SupportPlane:
 
     def distance(self, points: np.ndarray) -> np.ndarray:
         """Signed distance (..., ) of points (..., 3) above the plane."""
-        return points @ self.normal + self.offset
+        return dot3(points, self.normal) + self.offset
 
 
 @dataclass(frozen=True)
@@ -176,7 +182,7 @@ def best_placement(points: np.ndarray, centres: np.ndarray, approach: np.ndarray
 def above_plane(poses: np.ndarray, gripper: GripperSpec, plane: SupportPlane) -> np.ndarray:
     """(n,) bool: every corner of the open gripper's palm and fingers lies PLANE_CLEARANCE above ``plane``."""
     corners = np.concatenate([box_corners(lo, hi) for lo, hi in gripper_boxes(gripper)])  # (24, 3)
-    world = np.einsum("nij,kj->nki", poses[:, :3, :3], corners) + poses[:, None, :3, 3]
+    world = apply_rotation(poses[:, None, :3, :3], corners[None]) + poses[:, None, :3, 3]
     return np.all(plane.distance(world) > PLANE_CLEARANCE, axis=1)
 
 
@@ -220,14 +226,14 @@ def fit_support_plane(points: np.ndarray, rng: np.random.Generator, up: np.ndarr
     if not valid.any():
         return None
     normal, a = normal[valid] / length[valid, None], a[valid]
-    counts = [int(np.sum(np.abs((points - p) @ n) < tolerance)) for n, p in zip(normal, a, strict=True)]
+    counts = [int(np.sum(np.abs(dot3(points - p, n)) < tolerance)) for n, p in zip(normal, a, strict=True)]
     best = int(np.argmax(counts))
     if counts[best] < min_share * len(points):
         return None
-    n, offset = _refined(points, np.abs((points - a[best]) @ normal[best]) < tolerance)
-    distance = points @ n + offset
+    n, offset = _refined(points, np.abs(dot3(points - a[best], normal[best])) < tolerance)
+    distance = dot3(points, n) + offset
     inliers = np.abs(distance) < tolerance
-    side = np.asarray(up, dtype=np.float64) @ n if up is not None else np.sum(np.sign(distance[~inliers]))
+    side = dot3(np.asarray(up, dtype=np.float64), n) if up is not None else np.sum(np.sign(distance[~inliers]))
     if side < 0:
         n, offset = -n, -offset
     return SupportPlane(n, offset, inliers)
@@ -239,7 +245,7 @@ def _refined(points: np.ndarray, inliers: np.ndarray) -> tuple[np.ndarray, float
     chosen = points[inliers]
     centre = chosen.mean(axis=0)
     normal = plane_normals((chosen - centre)[None])[0]
-    return normal, -float(normal @ centre)
+    return normal, -float(dot3(normal, centre))
 
 
 def suppress_near(poses: np.ndarray, scores: np.ndarray, gripper: GripperSpec, distance: float = 0.01,
@@ -250,11 +256,12 @@ def suppress_near(poses: np.ndarray, scores: np.ndarray, gripper: GripperSpec, d
     Stops at ``keep`` poses."""
     order = np.argsort(-np.asarray(scores), kind="stable")
     centres = poses[:, :3, 3] + poses[:, :3, 0] * gripper.closing_depth / 2
-    cos_limit = float(np.cos(np.radians(angle_deg)))
+    cos_limit = float(sin_cos(np.array([angle_deg * np.pi / 180]))[1][0])
     kept: list[int] = []
     for i in order:
         if kept:
-            near = np.linalg.norm(centres[kept] - centres[i], axis=1) < distance
+            gap = centres[kept] - centres[i]
+            near = np.sqrt(dot3(gap, gap)) < distance
             same_u = np.sum(poses[kept, :3, 0] * poses[i, :3, 0], axis=1) > cos_limit
             same_v = np.abs(np.sum(poses[kept, :3, 1] * poses[i, :3, 1], axis=1)) > cos_limit
             if np.any(near & same_u & same_v):
@@ -281,9 +288,9 @@ def antipodal_scores(points: np.ndarray, normals: np.ndarray, poses: np.ndarray,
             continue
         right, left = inside[np.argmax(local[inside, 1])], inside[np.argmin(local[inside, 1])]
         line = points[right] - points[left]
-        norm = np.linalg.norm(line)
+        norm = float(np.sqrt(dot3(line, line)))
         if norm < 1e-6:
             continue
         line = line / norm
-        scores[k] = min(abs(float(normals[right] @ line)), abs(float(normals[left] @ line)))
+        scores[k] = min(abs(float(dot3(normals[right], line))), abs(float(dot3(normals[left], line))))
     return scores

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.frames import transform_points
 from onepiece_dist.errors import CloudRejected
 
 MIN_POINTS = 50  # fewer observed points hold no grasp worth planning
@@ -89,5 +90,5 @@ def depth_to_cloud(depth: np.ndarray, fx: float, fy: float, cx: float, cy: float
     viewpoint = np.zeros(3)
     if camera_pose is not None:
         pose = np.asarray(camera_pose, dtype=np.float64)
-        points, viewpoint = points @ pose[:3, :3].T + pose[:3, 3], pose[:3, 3].copy()
+        points, viewpoint = transform_points(points, pose), pose[:3, 3].copy()
     return Observation(check_cloud(points, source), viewpoint, source)

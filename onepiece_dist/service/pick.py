@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.cloud_grasps import SupportPlane, antipodal_scores, cloud_normals
-from onepiece_dist.core.frames import compose_poses
+from onepiece_dist.core.frames import compose_poses, transform_points
 from onepiece_dist.core.mesh import enclosed_volume, sample_surface
 from onepiece_dist.core.sampling import object_rng, sample_candidates
 from onepiece_dist.errors import MeshRejected
@@ -101,11 +101,9 @@ def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> V
     rng = object_rng(mesh.content_id, spec.seed, stream=100 + view)
     resting = world.settle(rng, mesh.vertices)
     cam = spec.camera
-    camera = pick_camera(resting[:3, 3], rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
-    cloud = observe(mesh.vertices, mesh.faces, resting, camera, rng, cam.depth_noise)
-    eye = camera.pose[:3, 3]
-    geometry = (float(np.linalg.norm(eye - resting[:3, 3])),
-                float(np.degrees(np.arcsin((eye[2] - resting[2, 3]) / np.linalg.norm(eye - resting[:3, 3])))))
+    drawn = pick_camera(resting[:3, 3], rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
+    cloud = observe(mesh.vertices, mesh.faces, resting, drawn.camera, rng, cam.depth_noise)
+    eye, geometry = drawn.camera.pose[:3, 3], (drawn.distance, drawn.elevation_deg)
     if len(cloud) < 50:
         return ViewPicks(view, *geometry, len(cloud), 0, {m: () for m in spec.methods}, {m: () for m in spec.methods})
     observation = Observation(cloud, eye, f"{mesh.name} view {view}")
@@ -154,7 +152,7 @@ def _full_mesh_choice(spec: PickSpec, scorer: GraspScorer, mesh, resting: np.nda
     poses = compose_poses(resting[None], found.poses)
     table = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(0, bool))
     poses = poses[above_plane(poses, gripper, table)]
-    world_surface = surface @ resting[:3, :3].T + resting[:3, 3]
+    world_surface = transform_points(surface, resting)
     crops = cut_crops(world_surface, poses, scorer.record, rng)
     keep = crops.counts >= spec.plan.min_points
     if not keep.any():

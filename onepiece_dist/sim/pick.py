@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as pb
 
+from onepiece_dist.core import portable
 from onepiece_dist.core.frames import compose_poses, perturb_pose, transform_points
 from onepiece_dist.sim.trials import LabelNoise, close_fingers, finger_contacts, lift_and_shake, move_gripper
 from onepiece_dist.sim.views import Camera, _depth_image, back_project, camera_at
@@ -87,18 +88,27 @@ class PickWorld(SimWorld):
 
 def _random_rotation(rng: np.random.Generator) -> np.ndarray:
     q = rng.normal(size=4)
-    q /= np.linalg.norm(q)
+    q /= np.sqrt(np.sum(q * q))
     return matrix_from_pose([0, 0, 0], q.tolist())[:3, :3]
 
 
+@dataclass(frozen=True)
+class PickCamera:
+    """The view's camera, and the distance (m) and elevation (degrees) it was drawn at."""
+
+    camera: Camera
+    distance: float
+    elevation_deg: float
+
+
 def pick_camera(target: np.ndarray, rng: np.random.Generator, distance: tuple[float, float],
-                elevation_deg: tuple[float, float], size: int, fov_deg: float) -> Camera:
-    """A camera looking at ``target`` (3,) from a seeded distance, elevation above the table and azimuth."""
-    d = rng.uniform(*distance)
-    elevation, azimuth = np.radians(rng.uniform(*elevation_deg)), rng.uniform(0, 2 * np.pi)
-    eye = target + d * np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
-                                 np.sin(elevation)])
-    return camera_at(eye, target, size, fov_deg)
+                elevation_deg: tuple[float, float], size: int, fov_deg: float) -> PickCamera:
+    """A camera looking at ``target`` (3,) from a seeded distance, elevation above the table and azimuth (portable
+    sines: the same camera on every CPU)."""
+    d, elevation, azimuth = rng.uniform(*distance), rng.uniform(*elevation_deg), rng.uniform(0, 2 * np.pi)
+    sin, cos = portable.sin_cos(np.array([elevation * np.pi / 180, azimuth]))
+    eye = target + d * np.array([cos[0] * cos[1], cos[0] * sin[1], sin[0]])
+    return PickCamera(camera_at(eye, target, size, fov_deg), float(d), float(elevation))
 
 
 def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, camera: Camera,

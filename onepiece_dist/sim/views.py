@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from onepiece_dist.core import portable
+from onepiece_dist.core.frames import transform_points
 
 NEAR_FRACTION = 0.05  # near plane as a fraction of the camera distance
 FAR_FACTOR = 3.0  # far plane as a multiple of the camera distance
@@ -39,12 +40,17 @@ def sphere_directions(count: int) -> np.ndarray:
     return np.stack([r * cos, r * sin, z], axis=1)
 
 
+def _length(vector: np.ndarray) -> float:
+    """|vector| of a (3,) vector in one fixed order (np.linalg.norm of a vector is a BLAS dot product)."""
+    return float(np.sqrt((vector[0] * vector[0] + vector[1] * vector[1]) + vector[2] * vector[2]))
+
+
 def look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
     """(4, 4) camera-to-object pose of a camera at ``eye`` looking at ``target`` (OpenGL axes)."""
-    back = (eye - target) / np.linalg.norm(eye - target)
+    back = (eye - target) / _length(eye - target)
     helper = np.array([0.0, 0.0, 1.0]) if abs(back[2]) < 0.95 else np.array([0.0, 1.0, 0.0])
     right = np.cross(helper, back)
-    right /= np.linalg.norm(right)
+    right /= _length(right)
     pose = np.eye(4)
     pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = right, np.cross(back, right), back, eye
     return pose
@@ -55,7 +61,7 @@ def orbit_cameras(vertices: np.ndarray, count: int, size: int, fov_deg: float, m
     """``count`` cameras on a sphere around the mesh's bounding-box centre, ``distance`` away or (None) far enough
     that the whole object fits the field of view with ``margin``. vertices (V, 3) float."""
     lower, upper = vertices.min(axis=0), vertices.max(axis=0)
-    centre, radius = (lower + upper) / 2, float(np.linalg.norm(upper - lower)) / 2
+    centre, radius = (lower + upper) / 2, _length(upper - lower) / 2
     distance = distance or framing_distance(radius, fov_deg, margin)
     return [camera_at(centre + distance * d, centre, size, fov_deg) for d in sphere_directions(count)]
 
@@ -67,7 +73,7 @@ def framing_distance(radius: float, fov_deg: float, margin: float = 1.2) -> floa
 
 def camera_at(eye: np.ndarray, target: np.ndarray, size: int, fov_deg: float) -> Camera:
     """A camera at ``eye`` looking at ``target``, clip planes scaled to their distance."""
-    distance = float(np.linalg.norm(np.asarray(eye) - target))
+    distance = _length(np.asarray(eye, dtype=np.float64) - target)
     return Camera(look_at(np.asarray(eye, float), np.asarray(target, float)), size, fov_deg,
                   NEAR_FRACTION * distance, FAR_FACTOR * distance)
 
@@ -110,7 +116,7 @@ def back_project(depth: np.ndarray, camera: Camera) -> np.ndarray:
     x = (2.0 * cols / size - 1.0) * half * distance
     y = (1.0 - 2.0 * (rows + 1.0) / size) * half * distance
     local = np.stack([x, y, -distance], axis=1)
-    return local @ camera.pose[:3, :3].T + camera.pose[:3, 3]
+    return transform_points(local, camera.pose)  # fixed-order products: the same points on every CPU
 
 
 @dataclass(frozen=True)
@@ -149,4 +155,5 @@ def camera_for_grasps(cameras: np.ndarray, poses: np.ndarray) -> np.ndarray:
     grasp's approach axis, i.e. the camera a robot approaching that way would look through."""
     viewing = -cameras[:, :3, 2]  # cameras look along their -z
     approach = poses[:, :3, 0]
-    return np.argmax(approach @ viewing.T, axis=1)
+    a, v = approach[:, None, :], viewing[None, :, :]
+    return np.argmax((a[..., 0] * v[..., 0] + a[..., 1] * v[..., 1]) + a[..., 2] * v[..., 2], axis=1)
