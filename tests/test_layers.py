@@ -28,7 +28,7 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "spec": ({"errors", "gripper_presets"}, {"pydantic", "yaml"}),
     "plan_spec": ({"errors", "spec"}, {"pydantic"}),
     "core": (BASE, {"numpy", "open3d", "scipy"}),  # imported where used: open3d's ray casts, scipy's N-d qhull
-    "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic"}),
+    "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic", "yaml"}),
     "sim": (BASE | {"core", "objects"}, {"numpy", "pybullet", "pybullet_data"}),
     "store": ({"errors"}, {"numpy", "zarr", "pydantic"}),
     "learn": ({"errors", "spec", "store"}, {"numpy", "torch", "zarr"}),

@@ -133,3 +133,48 @@ def test_ros_package_paths_resolve_through_the_package_map_inside_the_input_root
         "robot/unmapped.urdf"].reason
     assert "'..'" in results["robot/leaky.urdf"].reason
     assert not [p for p in opened if os.path.realpath(p).startswith(os.path.realpath(outside))]
+
+
+def test_a_folder_manifest_gives_units_scale_mass_and_friction_per_object(tmp_path):
+    import pybullet as pb
+
+    from onepiece_dist.core.mesh import box_mesh
+    from onepiece_dist.service.extract import extract_object
+    from onepiece_dist.store import PartStore
+
+    box = box_mesh((4.0, 3.0, 6.0))  # centimetres
+    for name in ("a.obj", "b.obj"):
+        (tmp_path / name).write_text("".join(f"v {x} {y} {z}\n" for x, y, z in box.vertices)
+                                     + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in box.faces))
+    (tmp_path / "objects.yaml").write_text("units: cm\nobjects:\n  b.obj: {scale: 0.5, mass: 0.3, friction: 0.7}\n")
+    a, b = resolve_source(str(tmp_path))  # the manifest itself is no object
+    spec = JobSpec(units="mm", grasps_per_object=8)  # the manifest's units win for its folder
+    loaded_a, loaded_b = load_object(a, spec), load_object(b, spec)
+    assert np.allclose(loaded_a.mesh.extents, [0.04, 0.03, 0.06]) and np.allclose(loaded_b.mesh.extents,
+                                                                                   [0.02, 0.015, 0.03])
+    twin = load_object(b.__class__(**{**b.__dict__, "mass": None, "friction": None}), spec)
+    assert loaded_b.content_id != twin.content_id == twin.mesh.content_id  # other physics: another object
+    result = extract_object(spec, b, 0, PartStore(tmp_path / "parts"))
+    meta = PartStore(tmp_path / "parts").read_meta(result.part_key)
+    assert meta["density"] == pytest.approx(0.3 / meta["volume"]) and meta["friction"] == 0.7
+    from onepiece_dist.sim.world import process_world
+
+    world = process_world(spec.gripper)
+    assert pb.getDynamicsInfo(world.obj, -1, physicsClientId=world.client)[1] == pytest.approx(0.7)
+
+
+@pytest.mark.parametrize("manifest, reason", [
+    ("objects:\n  missing.obj: {scale: 2}\n", "names 'missing.obj', which is not a file"),
+    ("objects:\n  a.obj: {colour: red}\n", "objects.a.obj: give a mapping of scale, mass, density, friction"),
+    ("objects:\n  a.obj: {mass: 1, density: 300}\n", "mass or density, not both"),
+    ("units: inch\n", "units='inch': give m, cm or mm"),
+    ("objects:\n  a.obj: {scale: -1}\n", "a positive number"),
+])
+def test_a_bad_manifest_is_refused_naming_itself_and_the_fix(tmp_path, manifest, reason):
+    from onepiece_dist.errors import SourceError
+
+    (tmp_path / "a.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    (tmp_path / "objects.yaml").write_text(manifest)
+    with pytest.raises(SourceError, match=reason) as refused:
+        resolve_source(str(tmp_path))
+    assert "objects.yaml" in str(refused.value)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,14 +38,31 @@ class LoadedObject:
 
     @property
     def content_id(self) -> str:
-        return self.mesh.content_id
+        """The mesh's content id, or with a manifest's mass, density or friction, a hash of it and them: the same
+        mesh with other physics is another object (its own parts)."""
+        physics = (self.ref.mass, self.ref.density, self.ref.friction)
+        if physics == (None, None, None):
+            return self.mesh.content_id
+        text = f"{self.mesh.content_id}:{physics!r}".encode()
+        return hashlib.blake2b(text, digest_size=16).hexdigest()
+
+    def density(self, default: float, volume: float) -> float:
+        """kg/m^3 of the simulated body: the manifest's density, or its mass over ``volume``, else ``default``."""
+        if self.ref.mass is not None:
+            return self.ref.mass / max(volume, 1e-12)
+        return self.ref.density if self.ref.density is not None else default
+
+    @property
+    def friction(self) -> float:
+        """The object's own friction coefficient (1: the pads' alone)."""
+        return 1.0 if self.ref.friction is None else self.ref.friction
 
 
 def load_object(ref: ObjectRef, spec: JobSpec) -> LoadedObject:
     """Parse, validate, repair what is safe to repair (said in ``repairs``) and check that the object can meet
     the gripper. A job's ``units`` and ``scale`` apply to files it names (not to pybullet_data's sets). Raises
-    :class:`MeshRejected`."""
-    scale = ref.scale * (1.0 if ref.builtin else spec.unit_scale())
+    :class:`MeshRejected`. A folder's objects.yaml (objects.manifest) may name its units and each object's scale."""
+    scale = ref.scale * (1.0 if ref.units_known else spec.unit_scale())
     if ref.kind == "primitive":
         return _checked(LoadedObject(ref, _primitive(*ref.primitive, name=ref.name)), spec)
     if ref.kind == "urdf":

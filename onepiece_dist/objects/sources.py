@@ -9,10 +9,11 @@ from __future__ import annotations
 import glob
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from onepiece_dist.errors import SourceError
+from onepiece_dist.objects.manifest import MANIFEST, Manifest, ObjectSettings, read_manifest
 from onepiece_dist.objects.paths import PACKAGE_MAP, package_folders
 from onepiece_dist.objects.urdf import mesh_filenames
 
@@ -58,7 +59,10 @@ class ObjectRef:
     root: str = ""
     scale: float = 1.0
     primitive: tuple = ()
-    builtin: bool = False  # pybullet_data's sets: their units are known, a job's units do not apply
+    units_known: bool = False  # pybullet_data's sets, or a folder whose manifest names its units: a job's do not apply
+    mass: float | None = None  # kg, from the folder's manifest (objects.yaml); None: density x volume
+    density: float | None = None  # kg/m^3, from the manifest; None: the job's sim.density
+    friction: float | None = None  # the object's own coefficient, from the manifest; None: 1 (the pads' alone)
 
 
 def resolve_source(source: str) -> list[ObjectRef]:
@@ -104,14 +108,15 @@ def _pybullet_root() -> Path:
 
 def _pybullet_named() -> list[ObjectRef]:
     root = _pybullet_root()
-    return [ObjectRef(name, _kind(Path(rel)), str(root / rel), str((root / rel).parent), scale, builtin=True)
+    return [ObjectRef(name, _kind(Path(rel)), str(root / rel), str((root / rel).parent), scale,
+                      units_known=True)
             for name, (rel, scale) in sorted(PYBULLET_NAMED.items())]
 
 
 def _pybullet_random() -> list[ObjectRef]:
     root = _pybullet_root() / "random_urdfs"
     urdfs = sorted(root.glob("[0-9][0-9][0-9]/[0-9][0-9][0-9].urdf"))
-    return [ObjectRef(f"random_urdfs/{p.stem}", "urdf", str(p), str(p.parent), builtin=True) for p in urdfs]
+    return [ObjectRef(f"random_urdfs/{p.stem}", "urdf", str(p), str(p.parent), units_known=True) for p in urdfs]
 
 
 def folder_refs(folder: Path) -> list[ObjectRef]:
@@ -120,13 +125,24 @@ def folder_refs(folder: Path) -> list[ObjectRef]:
     that it gets a rejection with a reason."""
     files = sorted(p for p in folder.rglob("*") if p.is_file() or p.is_symlink())
     claimed = _urdf_claimed_meshes((f for f in files if f.suffix.lower() == ".urdf"), folder)
+    manifest = read_manifest(folder)
     refs = []
     for path in files:
-        if path.suffix.lower() in COMPANION_SUFFIXES or path.name == PACKAGE_MAP or \
+        if path.suffix.lower() in COMPANION_SUFFIXES or path.name in (PACKAGE_MAP, MANIFEST) or \
                 Path(os.path.normpath(path)) in claimed:
             continue
-        refs.append(_file_ref(path, folder))
+        refs.append(_with_manifest(_file_ref(path, folder), manifest))
     return refs
+
+
+def _with_manifest(ref: ObjectRef, manifest: Manifest | None) -> ObjectRef:
+    """``ref`` with its folder manifest's units and its own settings (none: as it was)."""
+    if manifest is None:
+        return ref
+    own = manifest.objects.get(ref.name, ObjectSettings())
+    units = manifest.unit_scale
+    return replace(ref, scale=ref.scale * own.scale * (units or 1.0), units_known=units is not None,
+                   mass=own.mass, density=own.density, friction=own.friction)
 
 
 def _glob_refs(pattern: str) -> list[ObjectRef]:

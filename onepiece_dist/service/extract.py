@@ -35,7 +35,7 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
         return replace(_from_meta(index, ref.name, key, parts.read_meta(key), reused=True, start=start),
                        repairs=repairs)
     try:
-        arrays, meta = extract_arrays(spec, loaded.mesh, parts.folder / "collision")
+        arrays, meta = extract_arrays(spec, loaded.mesh, parts.folder / "collision", loaded)
     except MeshRejected as err:
         return ObjectResult(index, ref.name, "rejected", reason=err.reason, content_id=loaded.content_id,
                             seconds=time.perf_counter() - start)
@@ -48,8 +48,10 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
                    repairs=repairs)
 
 
-def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tuple[dict[str, np.ndarray], dict]:
-    """Candidates, their simulated settled poses and the codes cropped there; empty crops dropped."""
+def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path,
+                   loaded=None) -> tuple[dict[str, np.ndarray], dict]:
+    """Candidates, their simulated settled poses and the codes cropped there; empty crops dropped. ``loaded`` (a
+    LoadedObject) carries a folder manifest's density and friction (None: the job's)."""
     rng = object_rng(mesh.content_id, spec.seed)
     points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
     views = _render_views(spec, mesh)
@@ -63,7 +65,9 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
                                       f"{spec.gripper.max_opening} m among {cands.tried} tried: "
                                       "the object cannot fit the gripper")
     pieces = _collision_pieces(spec, mesh, collision_dir)
-    grasps, meta, held = _simulate(spec, mesh, cands, pieces)
+    volume = enclosed_volume(mesh)
+    physics = (loaded.density(spec.sim.density, volume), loaded.friction) if loaded else (spec.sim.density, 1.0)
+    grasps, meta, held = _simulate(spec, mesh, cands, pieces, physics)
     clouds, source = crop_sources(spec, points, views, grasps["pose"],
                                   None if sampled_on is None else sampled_on[held])
     grid, res = spec.grid_shape(), spec.voxel.resolution
@@ -88,7 +92,7 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> tu
     arrays.update({"object_surface": points, "object_piece_vertices": np.vstack(pieces),  # patches are cut from these
                    "object_piece_sizes": np.array([len(p) for p in pieces], dtype=np.int64)})
     meta.update({"grasps": int(keep.sum()), "empty_crops": int((~keep).sum()), "candidates_tried": cands.tried,
-                 "volume": enclosed_volume(mesh),
+                 "volume": volume, "density": physics[0], "friction": physics[1],
                  "collisions": cands.rejected_collision,
                  "settled_code_differs": int(np.any(codes != static, axis=1).sum())})
     return arrays, meta
@@ -146,8 +150,8 @@ def view_candidates(spec: JobSpec, views, rng: np.random.Generator) -> tuple[Gra
             np.concatenate(sampled_on) if sampled_on else np.zeros(0, dtype=np.int64))
 
 
-def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
-              pieces: list[np.ndarray]) -> tuple[dict[str, np.ndarray], dict, np.ndarray]:
+def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates, pieces: list[np.ndarray],
+              physics: tuple[float, float] | None = None) -> tuple[dict[str, np.ndarray], dict, np.ndarray]:
     """Run the extract (and label) protocol; keep the trials whose fingers hold the object (and say which: the
     (n,) bool mask over the candidates)."""
     if not spec.sim.physics:
@@ -157,7 +161,8 @@ def _simulate(spec: JobSpec, mesh: TriangleMesh, cands: GraspCandidates,
     from onepiece_dist.sim.world import process_world
 
     world = process_world(spec.gripper)
-    world.load_object(pieces, enclosed_volume(mesh), spec.sim.density)
+    density, friction = physics or (spec.sim.density, 1.0)
+    world.load_object(pieces, enclosed_volume(mesh), density, friction)
     noise = LabelNoise.from_spec(spec.sim)
     batch = run_trials(world, cands.poses, label=spec.sim.label, noise=noise,
                        rng=object_rng(mesh.content_id, spec.seed, stream=1))

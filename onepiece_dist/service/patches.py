@@ -185,5 +185,7 @@ def source_geometry(reader: DatasetReader, parts: PartStore, obj: int) -> dict:
                          "it (run the extract stage again with the same spec to recreate it)")
     arrays = {n: parts.read_array(key, n) for n in (SURFACE, PIECE_VERTICES, PIECE_SIZES)}
     sizes = arrays[PIECE_SIZES].astype(np.int64)
-    return {"surface": arrays[SURFACE].astype(np.float64), "volume": float(parts.read_meta(key)["volume"]),
+    meta = parts.read_meta(key)
+    return {"surface": arrays[SURFACE].astype(np.float64), "volume": float(meta["volume"]),
+            "density": meta.get("density"), "friction": float(meta.get("friction", 1.0)),
             "pieces": np.split(arrays[PIECE_VERTICES].astype(np.float64), np.cumsum(sizes)[:-1])}

@@ -89,7 +89,8 @@ def pick_object(spec: PickSpec, ref: ObjectRef, index: int) -> ObjectPicks:
     mesh = loaded.mesh
     world = pick_world(scorer.gripper)
     pieces = convex_pieces(mesh, Path(spec.output) / "collision", spec.sim.collision)
-    world.load_object(pieces, enclosed_volume(mesh), spec.sim.density)
+    volume = enclosed_volume(mesh)
+    world.load_object(pieces, volume, loaded.density(spec.sim.density, volume), loaded.friction)
     views = tuple(_pick_view(spec, scorer, world, mesh, view) for view in range(spec.views))
     return ObjectPicks(index, ref.name, "ok", views, seconds=time.perf_counter() - start)
 

@@ -81,6 +81,7 @@ class SimWorld:
         self._connect()  # also sets self.obj: int | None
         self._hulls: str | None = None  # the loaded object's hulls file (kept while it is loaded)
         self._shape, self._centroid, self._mass, self._pieces = -1, np.zeros(3), 0.0, []
+        self.object_friction = 1.0
 
     def _connect(self) -> None:
         self.client = pb.connect(pb.DIRECT)
@@ -128,7 +129,7 @@ class SimWorld:
         for link in (0, 1):
             pb.changeDynamics(self.gripper, link, lateralFriction=friction, physicsClientId=self.client)
 
-    def load_object(self, pieces: list[np.ndarray], volume: float, density: float) -> None:
+    def load_object(self, pieces: list[np.ndarray], volume: float, density: float, friction: float = 1.0) -> None:
         """Replace the object by one rigid body whose collision shape is the compound of convex ``pieces``
         ((k, 3) vertex arrays in the mesh frame; each piece is the hull of its points), of mass ``density`` (kg/m^3)
         times ``volume`` (m^3) clipped to [MIN_MASS, MAX_MASS].
@@ -138,9 +139,11 @@ class SimWorld:
         tests/test_sim.py holds the cut box to the whole one).
 
         The object's own friction coefficient is 1: Bullet multiplies the two bodies' coefficients at a contact,
-        so each finger contact has the pads' coefficient (``gripper.friction``), as the spec says.
+        so each finger contact has the pads' coefficient (``gripper.friction``), as the spec says; an object's own
+        ``friction`` (a folder manifest's) multiplies it.
         """
         self._unload()
+        self.object_friction = friction
         if self._rebuilds > PAYLOAD_REBUILDS_PER_CLIENT:
             pb.disconnect(physicsClientId=self.client)
             self._connect()
@@ -183,7 +186,7 @@ class SimWorld:
                                       baseInertialFramePosition=(com - self._centroid).tolist(),
                                       useMaximalCoordinates=True, physicsClientId=c)
         self.com = com
-        pb.changeDynamics(self.obj, -1, lateralFriction=1.0, physicsClientId=c)
+        pb.changeDynamics(self.obj, -1, lateralFriction=self.object_friction, physicsClientId=c)
         if inertia is not None:
             # with the mass: alone, the inertia leaves a maximal-coordinates body with mass 0 (static)
             pb.changeDynamics(self.obj, -1, mass=mass, localInertiaDiagonal=[inertia] * 3, physicsClientId=c)
