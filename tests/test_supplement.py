@@ -1,6 +1,7 @@
 """`onepiece supplement`: scans become watertight object meshes, degenerate scans are refused."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import open3d as o3d
@@ -110,3 +111,16 @@ def test_the_supplemented_mesh_drops_into_a_job(spec_factory, tmp_path):
     final = run_local(spec)
     assert final.state == "succeeded"
     assert final.progress.objects_done == 1 and not final.rejections and final.progress.grasps > 0
+
+
+@pytest.mark.slow
+def test_the_same_scan_gives_the_same_bytes_and_a_watertight_report_holds(tmp_path):
+    """Issue 50 item 6: Poisson reconstruction on one thread; before, each run of this torus gave other bytes."""
+    import hashlib
+
+    scan = tmp_path / "torus.xyz"
+    np.savetxt(scan, noisy_scan(torus_mesh(), np.random.default_rng(5)))
+    reports = [supplement_scan(scan, tmp_path / f"out{k}") for k in range(2)]
+    digests = {hashlib.sha256(Path(r.mesh).read_bytes()).hexdigest() for r in reports}
+    assert len(digests) == 1
+    assert reports[0].watertight and read_result(reports[0].mesh).is_watertight

@@ -244,7 +244,8 @@ def reconstruct(points: np.ndarray, normals: np.ndarray, source: str,
 def _poisson(cloud, spec: SupplementSpec):
     import open3d as o3d
 
-    mesh, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(cloud, depth=spec.poisson_depth)
+    # one thread: its threads add in an order that changes from run to run, and so did the mesh (issue 50)
+    mesh, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(cloud, depth=spec.poisson_depth, n_threads=1)
     spacing = mean_spacing(np.asarray(cloud.points))
     vertices = o3d.geometry.PointCloud(mesh.vertices)
     distance = np.asarray(vertices.compute_point_cloud_distance(cloud))
