@@ -32,8 +32,9 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
         return ObjectResult(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
     key, repairs = part_key(loaded.content_id, spec.result_key()), "; ".join(loaded.repairs)
     if parts.is_committed(key):
-        return replace(_from_meta(index, ref.name, key, parts.read_meta(key), reused=True, start=start),
-                       repairs=repairs)
+        meta = parts.read_meta(key)
+        return replace(_from_meta(index, ref.name, key, meta, reused=True, start=start), repairs=repairs,
+                       shortfall=shortfall(meta, spec.grasps_per_object))
     try:
         arrays, meta = extract_arrays(spec, loaded.mesh, parts.folder / "collision", loaded)
     except MeshRejected as err:
@@ -44,8 +45,9 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
                             content_id=loaded.content_id, seconds=time.perf_counter() - start)
     parts.write(key, arrays, {"name": ref.name, "content_id": loaded.content_id, **meta,
                               "made_seconds": time.perf_counter() - start})
-    return replace(_from_meta(index, ref.name, key, parts.read_meta(key), reused=False, start=start),
-                   repairs=repairs)
+    meta = parts.read_meta(key)
+    return replace(_from_meta(index, ref.name, key, meta, reused=False, start=start), repairs=repairs,
+                   shortfall=shortfall(meta, spec.grasps_per_object))
 
 
 def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path,
@@ -216,6 +218,22 @@ def crop_codes_from(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndar
         for row, points in zip(rows, found or [], strict=False):
             inside[row] = points
     return codes, counts, inside if keep_points else None
+
+
+def shortfall(meta: dict, asked: int) -> str:
+    """Why an object kept fewer than half the grasps asked for, from its part's counts ('' when it kept enough):
+    candidates whose open gripper met the object, whose fingers started in it or closed on nothing, that flew off,
+    or whose crop held no point."""
+    kept = int(meta["grasps"])
+    if kept >= asked / 2:
+        return ""
+    causes = [(meta.get("collisions", 0), "met the object with the open gripper while sampled"),
+              (meta.get("dropped_start_collision", 0), "started in collision"),
+              (meta.get("dropped_no_contact", 0), "closed on nothing (too wide, or the object slipped out)"),
+              (meta.get("dropped_invalid", 0), "sent the object flying"),
+              (meta.get("empty_crops", 0), "held no surface point in the closing region")]
+    said = [f"{n} {what}" for n, what in sorted(causes, key=lambda c: -c[0]) if n]
+    return f"{kept} of {asked} grasps kept: " + ("; ".join(said) if said else "too few candidates could be sampled")
 
 
 def _from_meta(index: int, name: str, key: str, meta: dict, reused: bool, start: float) -> ObjectResult:

@@ -171,7 +171,8 @@ def record_result(status: JobStatus, result: ObjectResult) -> None:
     status.progress.objects_done += 1
     log.info("job %s: extract %d/%d objects (%s: %s, %d grasps%s)", status.job_id, status.progress.objects_done,
              status.progress.objects_total, result.name, result.status, result.grasps,
-             f"; repaired: {result.repairs}" if result.repairs else "")
+             (f"; repaired: {result.repairs}" if result.repairs else "")
+             + (f"; {result.shortfall}" if result.shortfall else ""))
     status.worker_seconds += result.seconds
     status.part_seconds += result.made_seconds
     if result.node and result.node not in status.nodes:

@@ -26,6 +26,7 @@ class ObjectResult:
     node: str = ""
     made_seconds: float = 0.0  # what the part cost to make when first made (a reused part: its original time)
     repairs: str = ""  # what loading repaired ("; "-joined), e.g. faces wound inwards, flipped
+    shortfall: str = ""  # why fewer than half the grasps asked for were kept ('' when enough were)
 
     def to_dict(self) -> dict:
         return asdict(self)
