@@ -51,13 +51,12 @@ class SupportPlane:
 class CloudCandidates:
     """poses (n, 4, 4) float64 gripper poses in the cloud's frame; the counts say where the tried poses went:
     ``sampled`` placements tried, ``collided`` met an observed point at every bite, ``below_plane`` met the support
-    plane, ``empty`` held fewer than ``min_points`` points in the closing region."""
+    plane (the planner counts those with too few points in the closing region)."""
 
     poses: np.ndarray
     sampled: int
     collided: int
     below_plane: int
-    empty: int
 
 
 def voxel_downsample(points: np.ndarray, cell: float) -> np.ndarray:
@@ -198,16 +197,16 @@ def sample_cloud_grasps(cloud: np.ndarray, count: int, gripper: GripperSpec, rng
     """
     points = np.asarray(cloud, dtype=np.float64)
     if len(points) < NEIGHBOURS:
-        return CloudCandidates(np.zeros((0, 4, 4)), 0, 0, 0, 0)
+        return CloudCandidates(np.zeros((0, 4, 4)), 0, 0, 0)
     seeds = rng.permutation(len(points))[: -(-count // orientations)]
-    normals = cloud_normals(points, points[seeds], viewpoint)
-    all_normals = cloud_normals(points, points, viewpoint)
+    all_normals = cloud_normals(points, points, viewpoint)  # row by row: the seeds' are among them
+    normals = all_normals[seeds]
     axes = curvature_axes(points, all_normals, points[seeds], normals)
     centres, approach, closing = hand_frames(points[seeds], normals, axes, orientations)
     blockers = points if obstacles is None or len(obstacles) == 0 else np.vstack([points, obstacles])
     probe = blockers[rng.permutation(len(blockers))]  # random order: the collision cascade's prefixes find most
     poses, free, below = best_placement(probe, centres, approach, closing, gripper, plane)
-    return CloudCandidates(poses[free][:count], len(centres), int(np.sum(~free & ~below)), int(below.sum()), 0)
+    return CloudCandidates(poses[free][:count], len(centres), int(np.sum(~free & ~below)), int(below.sum()))
 
 
 def fit_support_plane(points: np.ndarray, rng: np.random.Generator, up: np.ndarray | None = None,

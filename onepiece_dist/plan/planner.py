@@ -95,9 +95,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,
                                 spec.orientations)
     sampled = time.perf_counter()
-    crops = cut_crops(objects, found.poses, record, rng)
-    keep = crops.counts >= spec.min_points
-    crops = Crops(crops.codes[keep], crops.counts[keep], crops.points[keep])
+    crops, keep = cut_crops(objects, found.poses, record, rng).holding(spec.min_points)
     return Proposals(found.poses[keep], crops, objects, plane, _counts(found, int(np.sum(~keep))),
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint)
 

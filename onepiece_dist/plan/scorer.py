@@ -39,6 +39,11 @@ class Crops:
     counts: np.ndarray
     points: np.ndarray
 
+    def holding(self, min_points: int) -> tuple[Crops, np.ndarray]:
+        """The crops with at least ``min_points`` observed points inside, and (n,) bool which they were."""
+        keep = self.counts >= min_points
+        return Crops(self.codes[keep], self.counts[keep], self.points[keep]), keep
+
 
 def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.random.Generator) -> Crops:
     """Each pose's crop of ``cloud`` (m, 3), exactly as a job's extraction cuts its training crops: the closing

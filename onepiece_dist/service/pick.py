@@ -22,7 +22,7 @@ from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import PlannedGrasp, Proposals, propose, rank
-from onepiece_dist.plan.scorer import Crops, GraspScorer, cut_crops
+from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.plan_spec import PickSpec
 
 
@@ -154,11 +154,9 @@ def _full_mesh_choice(spec: PickSpec, scorer: GraspScorer, mesh, resting: np.nda
     table = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(0, bool))
     poses = poses[above_plane(poses, gripper, table)]
     world_surface = transform_points(surface, resting)
-    crops = cut_crops(world_surface, poses, scorer.record, rng)
-    keep = crops.counts >= spec.plan.min_points
+    crops, keep = cut_crops(world_surface, poses, scorer.record, rng).holding(spec.plan.min_points)
     if not keep.any():
         return ()
-    crops = Crops(crops.codes[keep], crops.counts[keep], crops.points[keep])
     proposals = Proposals(poses[keep], crops, world_surface, plane, {})
     scores = scorer.score(crops, spec.plan.batch_size)
     return rank(proposals, scores, scorer.record, spec.plan, keep=spec.attempts)
@@ -167,10 +165,12 @@ def _full_mesh_choice(spec: PickSpec, scorer: GraspScorer, mesh, resting: np.nda
 def _draw(spec: PickSpec, scorer: GraspScorer, observation: Observation, proposals: Proposals, ranked, name: str,
           view: int, outcomes) -> None:
     """The view's cloud with the network's ranked grasps, for the benchmark's page."""
-    try:
-        from onepiece_dist.plan.drawing import draw_plan
-    except ImportError:  # pragma: no cover - matplotlib is the plots extra
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:  # the plots extra: no pictures without it
         return
+    from onepiece_dist.plan.drawing import draw_plan
+
     result = ", ".join("picked" if o.success else o.failure for o in outcomes) or "no grasp"
     safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name)
     picture = Path(spec.output) / "pictures" / f"{safe}-view{view}.png"
