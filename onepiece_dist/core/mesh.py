@@ -55,8 +55,11 @@ def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
 def wound_outwards(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, bool]:
     """``faces`` (F, 3) wound outwards: reversed (``faces[:, ::-1]``) when their signed volume is negative; and
     whether they were. The antipodal sampler casts rays along the inward normal, so an inward-wound mesh would
-    yield no grasp at all."""
-    if signed_volume(vertices, faces) < 0:
+    yield no grasp at all. An open surface's holes are capped first (core.repair.closed_volume): its plain
+    signed volume depends on where the origin lies."""
+    from onepiece_dist.core.repair import closed_volume
+
+    if closed_volume(vertices, faces)[0] < 0:
         return np.ascontiguousarray(np.asarray(faces)[:, ::-1]), True
     return faces, False
 
@@ -171,9 +174,11 @@ def merge_meshes(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray
 
 
 def enclosed_volume(mesh: TriangleMesh) -> float:
-    """Volume by the divergence theorem (exact for closed meshes); half the bounding box when that gives ~0."""
-    tri = mesh.vertices[mesh.faces]
-    volume = abs(float(np.sum(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2]))) / 6.0))
+    """Volume by the divergence theorem (exact for closed meshes), an open surface's holes capped first
+    (core.repair.closed_volume); half the bounding box when that gives ~0."""
+    from onepiece_dist.core.repair import closed_volume
+
+    volume = abs(closed_volume(mesh.vertices, mesh.faces)[0])
     return volume if volume > 1e-9 else 0.5 * float(np.prod(np.maximum(mesh.extents, 1e-3)))
 
 

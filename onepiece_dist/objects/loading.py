@@ -20,6 +20,7 @@ from onepiece_dist.core.mesh import (
     validate_arrays,
     wound_outwards,
 )
+from onepiece_dist.core.repair import boundary_edges, closed_volume, connected_pieces, weld
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_mesh_bytes
 from onepiece_dist.objects.paths import confined
@@ -73,9 +74,29 @@ def load_object(ref: ObjectRef, spec: JobSpec) -> LoadedObject:
         raise MeshRejected(ref.name, f"unsupported file extension {Path(ref.path).suffix!r}; expected "
                                      ".obj, .stl, .ply, .glb or .urdf")
     validate_arrays(np.asarray(vertices, dtype=np.float64), np.asarray(faces), ref.name)
-    faces, flipped = wound_outwards(vertices, faces)
-    repairs = ("faces wound inwards (negative enclosed volume): flipped",) if flipped else ()
+    vertices, faces, repairs = repaired(np.asarray(vertices, dtype=np.float64), np.asarray(faces))
     return _checked(LoadedObject(ref, make_mesh(vertices, faces, ref.name, scale), repairs), spec)
+
+
+def repaired(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Vertices welded, faces wound outwards, and what was done or found, in words (core.repair). Disconnected
+    pieces stay parts of one rigid object; an open surface keeps its holes (the gripper crops what is there)
+    and its mass comes from the volume with the holes capped (core.mesh.enclosed_volume)."""
+    notes = []
+    vertices, faces, merged = weld(vertices, faces)
+    if merged:
+        notes.append(f"{merged} vertices split at UV seams or duplicated: welded ({len(vertices)} remain)")
+    faces, flipped = wound_outwards(vertices, faces)
+    if flipped:
+        notes.append("faces wound inwards (negative enclosed volume): flipped")
+    pieces = connected_pieces(faces, len(vertices))
+    if pieces > 1:
+        notes.append(f"{pieces} disconnected pieces: kept as parts of one rigid object")
+    _, holes = closed_volume(vertices, faces)
+    if holes:
+        notes.append(f"open surface ({len(boundary_edges(faces))} rim edges, {holes} holes): mass from the "
+                     "volume with its holes capped")
+    return vertices, faces, tuple(notes)
 
 
 def _checked(loaded: LoadedObject, spec: JobSpec) -> LoadedObject:
