@@ -114,8 +114,9 @@ class SimSpec(_Frozen):
 
     physics: bool = Field(True, description="Simulate each candidate (extract protocol) and crop at the settled "
                           "pose; false crops at the static candidate pose.")
-    collision: Literal["vhacd", "hull"] = Field("vhacd", description="Object collision geometry: convex "
-                                                "decomposition (default) or the plain convex hull.")
+    collision: Literal["vhacd", "coacd", "hull"] = Field("vhacd", description="Object collision geometry: "
+        "convex decomposition by VHACD (default) or CoACD (extra 'decompose'; docs/decomposition.md), or the "
+        "plain convex hull.")
     density: float = Field(400.0, gt=10, le=20_000, description="Object density (kg/m^3) over the mesh's enclosed "
                            "volume; mass clipped to 0.05-2 kg (docs/trials.md).")
     label: bool = Field(False, description="Also lift and shake each grasp and store success labels.")
@@ -354,7 +355,8 @@ class JobSpec(_Frozen):
                                   "not 4.5 kB.")
     gripper: GripperSpec = Field(GripperSpec(), description="The gripper: its fields, or a preset's name (panda, "
                                  "robotiq_2f85, robotiq_2f140; onepiece_dist/gripper_presets.py), or a mapping "
-                                 "with preset: NAME and fields that differ from it.")
+                                 "with preset: NAME, or urdf: PATH (read from its finger links), and fields that "
+                                 "differ from it.")
     voxel: VoxelSpec = VoxelSpec()
     sampler: SamplerSpec = SamplerSpec()
     sim: SimSpec = SimSpec()
@@ -431,9 +433,14 @@ class JobSpec(_Frozen):
 
 
 def gripper_fields(value: Any) -> Any:
-    """A gripper given as a preset's name, or as a mapping with ``preset: NAME`` and overrides, as its fields."""
+    """A gripper given as a preset's name, or as a mapping with ``preset: NAME`` or ``urdf: PATH`` (its finger
+    links, gripper_urdf) and overrides, as its fields."""
     from onepiece_dist.gripper_presets import PRESETS
 
+    if isinstance(value, dict) and "urdf" in value:
+        from onepiece_dist.gripper_urdf import gripper_from_urdf
+
+        return {**gripper_from_urdf(value["urdf"]), **{k: v for k, v in value.items() if k != "urdf"}}
     name = value if isinstance(value, str) else value.get("preset") if isinstance(value, dict) else None
     if name is None:
         return value

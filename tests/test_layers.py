@@ -25,7 +25,8 @@ BASE = {"errors", "spec"}
 LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "errors": (set(), set()),
     "gripper_presets": (set(), set()),
-    "spec": ({"errors", "gripper_presets"}, {"pydantic", "yaml"}),
+    "gripper_urdf": ({"errors"}, {"numpy", "trimesh"}),  # a gripper from a URDF's finger links
+    "spec": ({"errors", "gripper_presets", "gripper_urdf"}, {"pydantic", "yaml"}),
     "plan_spec": ({"errors", "spec"}, {"pydantic"}),
     "core": (BASE, {"numpy", "open3d", "scipy"}),  # imported where used: open3d's ray casts, scipy's N-d qhull
     "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic", "yaml"}),

@@ -1,7 +1,10 @@
-"""Collision geometry for dynamic objects: a convex decomposition (pybullet's VHACD), computed once per object
-content id and cached as an OBJ of convex pieces; the plain convex hull only when asked (with a warning).
+"""Collision geometry for dynamic objects: a convex decomposition, computed once per object content id and
+cached as an OBJ of convex pieces; the plain convex hull only when asked (with a warning).
 
-VHACD runs in a child process: it segfaults on some meshes, and a crash there must not take the worker down.
+Two decompositions: pybullet's VHACD (the default) and CoACD (collision-aware, Wei et al. 2022; the registry
+package ``coacd``, extra ``decompose``), which cuts along concave features instead of voxelizing. Both run in a
+child process: they crash on some meshes, and a crash there must not take the worker down.
+docs/decomposition.md measures them side by side (benchmarks/decomposition.py).
 """
 
 from __future__ import annotations
@@ -22,16 +25,41 @@ import sys, pybullet as p
 p.connect(p.DIRECT)
 p.vhacd(sys.argv[1], sys.argv[2], sys.argv[3], resolution=int(sys.argv[4]), maxNumVerticesPerCH=32)
 """
+# CoACD in one thread with a fixed seed: its pieces are the same on every run (threads would race its search).
+_COACD_SCRIPT = """
+import os, sys
+os.environ["OMP_NUM_THREADS"] = "1"
+import coacd, numpy as np
+coacd.set_log_level("error")
+data = np.load(sys.argv[1], allow_pickle=False)
+parts = coacd.run_coacd(coacd.Mesh(data["vertices"], data["faces"]), threshold=float(sys.argv[3]), seed=0)
+offset = 0
+with open(sys.argv[2], "w") as out:
+    for k, (vertices, faces) in enumerate(parts):
+        out.write(f"o piece{k}\\n" + "".join(f"v {x!r} {y!r} {z!r}\\n" for x, y, z in vertices.tolist()))
+        out.write("".join(f"f {a} {b} {c}\\n" for a, b, c in (faces + offset + 1).tolist()))
+        offset += len(vertices)
+"""
+COACD_THRESHOLD = 0.05  # CoACD's concavity threshold (its default): lower cuts finer and runs longer
 
 
 def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
-                  resolution: int = 50_000) -> list[np.ndarray]:
-    """Convex pieces of ``mesh`` as a list of (k, 3) float64 vertex arrays (each the hull of its points)."""
+                  resolution: int = 50_000, threshold: float = COACD_THRESHOLD) -> list[np.ndarray]:
+    """Convex pieces of ``mesh`` as a list of (k, 3) float64 vertex arrays (each the hull of its points), by
+    ``method`` vhacd (at ``resolution`` voxels), coacd (at concavity ``threshold``) or hull."""
     if method == "hull":
         warnings.warn(f"{mesh.name}: collision geometry is the convex hull; grasps on concave parts are distorted",
                       stacklevel=2)
         return [mesh.vertices]
     cache_dir.mkdir(parents=True, exist_ok=True)
+    if method == "coacd":
+        out = cache_dir / f"{mesh.content_id}-coacd{threshold:g}.obj"
+        if not out.is_file():
+            _run_coacd(mesh, cache_dir, out, threshold)
+        if out.is_file():
+            return _split_pieces(out.read_bytes(), mesh.name)
+        warnings.warn(f"{mesh.name}: CoACD failed (is the 'coacd' package installed? pip install "
+                      "'onepiece-dist[decompose]'); using VHACD", stacklevel=2)
     out = cache_dir / f"{mesh.content_id}-vhacd{resolution}.obj"
     if not out.is_file():
         _run_vhacd(mesh, cache_dir, out, resolution)
@@ -48,6 +76,22 @@ def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) 
     try:
         subprocess.run([sys.executable, "-c", _VHACD_SCRIPT, str(source), str(tmp_out), os.devnull,
                         str(resolution)], capture_output=True, timeout=120, check=False)
+        if tmp_out.is_file() and tmp_out.stat().st_size > 0:
+            os.replace(tmp_out, out)
+    except subprocess.TimeoutExpired:
+        pass
+    finally:
+        for path in (source, tmp_out):
+            path.unlink(missing_ok=True)
+
+
+def _run_coacd(mesh: TriangleMesh, cache_dir: Path, out: Path, threshold: float) -> None:
+    source = cache_dir / f"{mesh.content_id}.{os.getpid()}.src.npz"
+    np.savez(source, vertices=mesh.vertices, faces=mesh.faces)
+    tmp_out = out.with_suffix(f".{os.getpid()}.part")
+    try:
+        subprocess.run([sys.executable, "-c", _COACD_SCRIPT, str(source), str(tmp_out), str(threshold)],
+                       capture_output=True, timeout=600, check=False)
         if tmp_out.is_file() and tmp_out.stat().st_size > 0:
             os.replace(tmp_out, out)
     except subprocess.TimeoutExpired:
