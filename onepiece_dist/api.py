@@ -37,12 +37,14 @@ from onepiece_dist.service.local import run_local
 from onepiece_dist.service.pick_runner import PickReport, run_picks
 from onepiece_dist.service.pipeline import ProgressFn
 from onepiece_dist.service.registry import CLUSTER_INFO_MARK, package_version
+from onepiece_dist.service.relabel import RelabelReport, relabel_report, relabel_spec
 from onepiece_dist.service.status import JobStatus, status_path
 from onepiece_dist.spec import JobSpec, default_job_id
 from onepiece_dist.store import DatasetReader, open_dataset
 
 __all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "PickReport",
-           "PickSpec", "PlanSpec", "evaluate_model", "open_dataset", "run_job", "run_picks"]
+           "PickSpec", "PlanSpec", "RelabelReport", "evaluate_model", "open_dataset", "relabel_report",
+           "relabel_spec", "resolve_source", "run_job", "run_picks"]
 
 TERMINAL = ("succeeded", "failed", "cancelled")
 _RAY_JOB_STATES = {"PENDING": "pending", "RUNNING": "running", "SUCCEEDED": "succeeded", "FAILED": "failed",

@@ -31,6 +31,7 @@ from onepiece_dist.cli_common import (
     spec_overrides,
 )
 from onepiece_dist.cli_jobs import register as register_job_commands
+from onepiece_dist.cli_label import register as register_label_commands
 from onepiece_dist.cli_plan import register as register_plan_commands
 from onepiece_dist.cli_study import study_app
 from onepiece_dist.errors import JobError, JobNotFound, SourceError, SpecError, StoreError
@@ -39,6 +40,7 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE gr
                   epilog=EXIT_TABLE)
 register_job_commands(app)
 register_plan_commands(app)
+register_label_commands(app)
 app.add_typer(study_app, name="study")
 _err = err
 

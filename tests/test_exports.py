@@ -3,6 +3,8 @@ GraspGen (json, its documented fields, grasps[mask]), a URDF per patch in pybull
 
 import json
 import os
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -291,3 +293,83 @@ def test_the_example_reader_crops_as_the_package_does(labelled_both):
         assert np.array_equal(found, expected)
     out = subprocess.run([sys.executable, str(script), str(labelled_both)], capture_output=True, text=True, check=True)
     assert "PointNetGPD crops of 64 labelled grasps" in out.stdout
+
+
+def relabel(files, out, spec_file=None, *extra):
+    args = ["label", *[a for f in files for a in ("--grasps", str(f))], "--out", str(out), "--in-process", *extra]
+    result = CliRunner().invoke(app, args + (["--spec", str(spec_file)] if spec_file else []))
+    assert result.exit_code == 0, (result.output, result.exception)
+    return json.loads(Path(result.output.strip().splitlines()[-1]).read_text())
+
+
+def test_our_exports_brought_back_in_are_the_same_grasps_and_get_our_labels_again(acronym, labelled_both,
+                                                                                 tmp_path):
+    """ACRONYM's .h5 and GraspGen's .json, read back (onepiece label --grasps) and labelled by the exporting
+    job's own protocol: the same poses come back (from our onepiece/pose, or through the Panda frame when a file
+    has only the Panda's transforms), and the labels repeat for most grasps (they start at the settled pose). With
+    the converter's usual slip (the Panda's origin taken for our palm centre) most grasps close on nothing."""
+    import h5py
+
+    assert export(labelled_both, "graspgen", tmp_path / "gg").exit_code == 0
+    same = tmp_path / "same.yaml"
+    same.write_text("sim: {label: true, label_trials: 1, success: nominal, points_per_grasp: 64}\n")
+    stems = ("duck", "random_urdfs_000", "random_urdfs_001")
+    files = [acronym / "grasps" / f"{s}.h5" for s in stems] + [tmp_path / "gg" / "grasps" / f"{s}.json" for s in stems]
+    report = relabel(files, tmp_path / "back.zarr", same)
+    tables = [row["table"] for row in report["files"]]
+    assert [row["format"] for row in report["files"]] == ["acronym"] * 3 + ["graspgen"] * 3
+    assert tables[:3] == tables[3:] and report["overall"]["grasps"] == 2 * 59
+    assert report["overall"]["agreement"] >= 0.9, report["overall"]
+    back = open_dataset(tmp_path / "back.zarr")
+    assert back.attrs["gripper"]["name"] == "onepiece_box"
+    with h5py.File(files[0], "r") as h5:
+        exported, transforms = h5["onepiece/pose"][:], h5["grasps/transforms"][:]
+    rows = slice(0, int(back["objects/grasp_count"][0]))
+    np.testing.assert_allclose(back["grasps/candidate_pose"][rows], exported[back["grasps/source_row"][rows]],
+                               atol=1e-6)
+    bare, slipped = (tmp_path / "t" / "grasps" / "bare.h5", tmp_path / "t" / "grasps" / "slipped.h5")
+    bare.parent.mkdir(parents=True)
+    shutil.copytree(acronym / "meshes", tmp_path / "t" / "meshes")
+    for path, shift in ((bare, 0.0), (slipped, PANDA_FINGERTIP_Z - 0.04)):
+        with h5py.File(files[0], "r") as source, h5py.File(path, "w") as h5:
+            for key in ("object/file", "object/scale", "gripper/type", "grasps/qualities/flex/object_in_gripper"):
+                h5[key] = source[key][()]
+            moved = transforms.copy()
+            moved[:, :3, 3] += shift * transforms[:, :3, 2]  # along the Panda's approach axis
+            h5["grasps/transforms"] = moved
+    converted = relabel([bare, slipped], tmp_path / "bare.zarr", same)["files"]
+    bare_back = open_dataset(tmp_path / "bare.zarr")
+    rows = slice(0, int(bare_back["objects/grasp_count"][0]))
+    np.testing.assert_allclose(bare_back["grasps/candidate_pose"][rows],
+                               exported[bare_back["grasps/source_row"][rows]], atol=1e-6)
+    assert converted[0]["table"] == tables[0]
+    assert converted[1]["table"]["agreement"] < tables[0]["agreement"] - 0.3, converted[1]
+
+
+def test_grasp_files_that_cannot_be_brought_in_are_refused_naming_the_file_and_the_fix(tmp_path):
+    from onepiece_dist.errors import SourceError
+    from onepiece_dist.objects.foreign import read_foreign_grasps
+    from onepiece_dist.service.relabel import relabel_spec
+
+    (tmp_path / "grasps").mkdir()
+    (tmp_path / "meshes").mkdir()
+    (tmp_path / "meshes" / "box.obj").write_text("v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\n"
+                                                 "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    good = {"object": {"file": "meshes/box.obj", "scale": 1.0}, "gripper": "franka_panda",
+            "grasps": {"transforms": [np.eye(4).tolist()], "object_in_gripper": [True]}}
+    cases = {"missing.json": ({"object": good["object"]}, r"not a GraspGen grasp file \(KeyError: 'grasps'\)"),
+             "escape.json": ({**good, "object": {"file": "../../etc/passwd"}}, r"lies outside"),
+             "absent.json": ({**good, "object": {"file": "meshes/none.obj"}}, r"is not a file under"),
+             "skewed.json": ({**good, "grasps": {"transforms": [(2 * np.eye(4)).tolist()],
+                                                 "object_in_gripper": [1]}}, r"1 grasp transforms are not rigid")}
+    for name, (record, why) in cases.items():
+        (tmp_path / "grasps" / name).write_text(json.dumps(record))
+        with pytest.raises(SourceError, match=rf"{name}: .*{why}"):
+            read_foreign_grasps(tmp_path / "grasps" / name)
+    (tmp_path / "grasps" / "ur.json").write_text(json.dumps({**good, "gripper": "ur_hand"}))
+    with pytest.raises(SourceError, match=r"gripper 'ur_hand' is none of ours .* give the gripper"):
+        relabel_spec([tmp_path / "grasps" / "ur.json"], tmp_path / "out.zarr")
+    (tmp_path / "grasps" / "ok.json").write_text(json.dumps(good))
+    spec = relabel_spec([tmp_path / "grasps" / "ok.json"], tmp_path / "out.zarr")
+    assert spec.gripper.name == "franka_panda" and (spec.sim.label_trials, spec.sim.success) == (4, "every_trial")
+    assert spec.stages == ("ingest", "extract") and spec.objects == f"grasps:{tmp_path / 'grasps' / 'ok.json'}"

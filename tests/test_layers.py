@@ -29,7 +29,8 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "spec": ({"errors", "gripper_presets", "gripper_urdf"}, {"pydantic", "yaml"}),
     "plan_spec": ({"errors", "spec"}, {"pydantic"}),
     "core": (BASE, {"numpy", "open3d", "scipy"}),  # imported where used: open3d's ray casts, scipy's N-d qhull
-    "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic", "yaml"}),
+    "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic", "yaml",
+                                  "h5py"}),  # h5py: ACRONYM grasp files brought in (objects.foreign)
     "sim": (BASE | {"core", "objects"}, {"numpy", "pybullet", "pybullet_data"}),
     "store": ({"errors"}, {"numpy", "zarr", "pydantic"}),
     "learn": ({"errors", "spec", "store"}, {"numpy", "torch", "zarr"}),
@@ -47,8 +48,9 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "cli_jobs": (BASE | {"api", "service", "cli_common"}, {"typer", "yaml"}),
     "cli_study": (BASE | {"study", "cli_common"}, {"typer"}),
     "cli_plan": (BASE | {"plan_spec", "plan", "service", "cli_common"}, {"typer", "yaml", "numpy"}),
+    "cli_label": (BASE | {"api", "cli_common"}, {"typer"}),
     "cli": (BASE | {"api", "objects", "sim", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study",
-                    "cli_plan"},
+                    "cli_plan", "cli_label"},
             {"typer", "rich", "yaml", "pydantic"}),
 }
 STDLIB = set(sys.stdlib_module_names)

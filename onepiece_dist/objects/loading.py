@@ -39,12 +39,13 @@ class LoadedObject:
 
     @property
     def content_id(self) -> str:
-        """The mesh's content id, or with a manifest's mass, density or friction, a hash of it and them: the same
-        mesh with other physics is another object (its own parts)."""
+        """The mesh's content id, or with a manifest's mass, density or friction or a grasp file's grasps, a hash
+        of it and them: the same mesh with other physics or other grasps is another object (its own parts)."""
         physics = (self.ref.mass, self.ref.density, self.ref.friction)
-        if physics == (None, None, None):
+        if physics == (None, None, None) and not self.ref.grasps_digest:
             return self.mesh.content_id
-        text = f"{self.mesh.content_id}:{physics!r}".encode()
+        given = f":{self.ref.grasps_digest}" if self.ref.grasps_digest else ""  # its grasps are another object's
+        text = f"{self.mesh.content_id}:{physics!r}{given}".encode()
         return hashlib.blake2b(text, digest_size=16).hexdigest()
 
     def density(self, default: float, volume: float) -> float:

@@ -63,6 +63,8 @@ class ObjectRef:
     mass: float | None = None  # kg, from the folder's manifest (objects.yaml); None: density x volume
     density: float | None = None  # kg/m^3, from the manifest; None: the job's sim.density
     friction: float | None = None  # the object's own coefficient, from the manifest; None: 1 (the pads' alone)
+    grasps: str = ""  # a grasp file made elsewhere (objects.foreign): its grasps are labelled, none sampled
+    grasps_digest: str = ""  # of that file's bytes
 
 
 def resolve_source(source: str) -> list[ObjectRef]:
@@ -84,6 +86,8 @@ def _resolve_one(part: str) -> list[ObjectRef]:
         return _pybullet_random()[window]
     if base == "primitives":
         return [ObjectRef(name, "primitive", primitive=(kind, dims)) for name, kind, dims in PRIMITIVES][window]
+    if base.startswith("grasps:"):
+        return [foreign_ref(base[len("grasps:"):])]
     if base.startswith("pybullet:"):
         raise SourceError(f"unknown built-in set {base!r}; known: pybullet:named, pybullet:random_urdfs[a:b]")
     if os.path.isdir(part):
@@ -152,6 +156,16 @@ def _glob_refs(pattern: str) -> list[ObjectRef]:
     if not files:
         raise SourceError(f"glob {pattern!r} matches no files")
     return [_file_ref(p, root) for p in files]
+
+
+def foreign_ref(path: str) -> ObjectRef:
+    """The object of an ACRONYM or GraspGen grasp file (``grasps:PATH``): its mesh at the file's scale, with the
+    file's grasps to label instead of sampled ones (objects.foreign)."""
+    from onepiece_dist.objects.foreign import read_foreign_grasps
+
+    found = read_foreign_grasps(path)
+    return ObjectRef(found.path.stem, _kind(found.mesh), str(found.mesh), str(found.root), scale=found.scale,
+                     units_known=True, grasps=str(found.path), grasps_digest=found.digest)
 
 
 def _file_ref(path: Path, root: Path) -> ObjectRef:

@@ -57,7 +57,10 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path,
     rng = object_rng(mesh.content_id, spec.seed)
     points, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
     views = _render_views(spec, mesh)
-    if spec.views.sampling == "view":
+    given = loaded is not None and bool(loaded.ref.grasps)
+    if given:
+        cands, sampled_on = given_candidates(spec, loaded.ref), None
+    elif spec.views.sampling == "view":
         cands, sampled_on = view_candidates(spec, views, rng)
     else:
         cands, sampled_on = sample_candidates(mesh, points, normals, spec.grasps_per_object, spec.gripper,
@@ -85,6 +88,8 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path,
     if spec.voxel.canonical:
         codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
     arrays = grasp_arrays({**grasps, "code": codes, "candidate_code": static})
+    if given:  # which of the file's grasps each kept one is (the rest did not hold: our label says fail)
+        arrays["source_row"] = grasp_arrays({"source_row": np.flatnonzero(held)[keep]})["source_row"]
     if spec.sim.points_per_grasp:
         arrays["points"] = resample_crops([inside[i] for i in np.flatnonzero(keep)], spec.sim.points_per_grasp, rng)
     if spec.closure.enabled:
@@ -119,6 +124,17 @@ def _collision_pieces(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) ->
     from onepiece_dist.sim.collision import convex_pieces
 
     return convex_pieces(mesh, collision_dir, spec.sim.collision)
+
+
+def given_candidates(spec: JobSpec, ref: ObjectRef) -> GraspCandidates:
+    """The grasps of the object's grasp file (objects.foreign) in our frame for the job's gripper, fingers open."""
+    from onepiece_dist.objects.foreign import read_foreign_grasps
+
+    found = read_foreign_grasps(ref.grasps)
+    if found.digest != ref.grasps_digest:
+        raise MeshRejected(ref.name, f"{ref.grasps} changed while the job ran: run it again")
+    poses = found.poses(spec.gripper.finger_length)
+    return GraspCandidates(poses, np.full(len(poses), spec.gripper.max_opening), len(poses), 0)
 
 
 def _sampler_name(spec: JobSpec) -> str:

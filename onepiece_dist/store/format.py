@@ -42,6 +42,8 @@ GRASP_ARRAYS: tuple[tuple[str, str, str, str], ...] = (
      "label (force closure, or both)"),
     ("fc_contacts", "int8", "()", "pad contacts: 0 two, 1 a pad met nothing, 2 one point (only with "
      "closure.enabled)"),
+    ("source_row", "int64", "()", "grasps brought in (onepiece label --grasps) only: the row of the grasp file "
+     "each grasp came from; the file's rows not here did not hold"),
 )
 GRASP_DTYPES: dict[str, np.dtype] = {name: np.dtype(dtype) for name, dtype, _, _ in GRASP_ARRAYS}
 # What every extraction part holds, with or without physics and labels.
