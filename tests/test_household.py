@@ -58,8 +58,8 @@ def test_every_household_mesh_is_accepted_in_metres_and_yields_grasps(panda_acro
 
     reader = open_dataset(panda_acronym / "d.zarr")
     assert len(reader.object_names) == 6 and reader.attrs["stats"]["objects_rejected"] == 0
-    assert all(int(n) > 0 for n in reader["objects/grasp_count"]), dict(zip(reader.object_names,
-                                                                            reader["objects/grasp_count"]))
+    counts = dict(zip(reader.object_names, reader["objects/grasp_count"].tolist(), strict=True))
+    assert all(n > 0 for n in counts.values()), counts
 
 
 # The Franka hand in its own frame (ACRONYM's franka_gripper_collision_mesh.stl, bounds read at NVlabs/acronym
