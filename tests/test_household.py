@@ -60,6 +60,8 @@ def test_every_household_mesh_is_accepted_in_metres_and_yields_grasps(panda_acro
     assert len(reader.object_names) == 6 and reader.attrs["stats"]["objects_rejected"] == 0
     counts = dict(zip(reader.object_names, reader["objects/grasp_count"].tolist(), strict=True))
     assert all(n > 0 for n in counts.values()), counts
+    repairs = {row["name"]: row["repairs"] for row in reader.attrs["ingest"]}  # the scan's seams, recorded
+    assert repairs["can.obj"] == "38 vertices split at UV seams or duplicated: welded (480 remain)", repairs
 
 
 # The Franka hand in its own frame (ACRONYM's franka_gripper_collision_mesh.stl, bounds read at NVlabs/acronym

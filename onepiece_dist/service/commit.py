@@ -40,6 +40,8 @@ def dataset_attrs(spec: JobSpec, results: list[ObjectResult]) -> dict:
         "pose_convention": "gripper-to-object (4, 4); columns u=approach, v=closing, t=u x v; origin palm centre",
         "provenance": {"package_version": package_version(), "seed": spec.seed, "result_key": spec.result_key()},
         "rejected": [{"name": r.name, "reason": r.reason} for r in results if r.status == "rejected"],
+        "ingest": [{"name": r.name, "repairs": r.repairs, "shortfall": r.shortfall} for r in results
+                   if r.status == "ok" and (r.repairs or r.shortfall)],
         "stats": _stats(results),
     }
 

@@ -105,6 +105,9 @@ class DatasetAttributes(BaseModel):
     pose_convention: str = Field(description="What grasps/pose holds: gripper-to-object 4x4, columns u, v, t.")
     provenance: dict = Field(description="package_version, seed, result_key.")
     rejected: list[dict] = Field(description="Objects rejected with a reason: {name, reason}.")
+    ingest: list[dict] = Field(default_factory=list, description="Objects accepted with repairs or few grasps: "
+                               "{name, repairs (what loading repaired: UV seams welded, faces flipped, holes "
+                               "capped for the mass), shortfall (why fewer than half the grasps asked were kept)}.")
     stats: dict = Field(description="Extraction counts: objects total, ok and rejected, grasps, empty crops, "
                                     "candidates tried, collisions, settled codes that differ from the nominal.")
     assembly: dict | None = Field(None, description="The assemble stage's report (AssemblyReport in "
