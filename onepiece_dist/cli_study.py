@@ -32,6 +32,8 @@ def run(
                                          "only in its arms or targets (radii, static_radii, budgets, adaptive, "
                                          "keys, targets): its jobs and runs are reused, its result replaced.")
                       ] = False,
+    judge: Annotated[str | None, typer.Option(help="candidates, picks or both: what decides (default: the "
+                                              "study's, candidates).")] = None,
     as_json: AsJson = False,
 ) -> None:
     """Run a study (or finish one cut short: every finished job and training run is reused) and print the path of
@@ -44,7 +46,7 @@ def run(
             f"API URL {address}")
         raise typer.Exit(EXIT_USAGE)
     with exit_codes(address):
-        spec = load_study_spec(study_file, {"train": train, "heldout": heldout}, quick=quick)
+        spec = load_study_spec(study_file, {"train": train, "heldout": heldout, "judge": judge}, quick=quick)
         result = run_study(spec, out, Where(address=address, in_process=in_process, workers=workers), say=err,
                            extend=extend)
     _show(result, out, as_json)
@@ -64,8 +66,8 @@ def report(
 
 
 def _show(result, folder: Path, as_json: bool) -> None:
-    from onepiece_dist.study.page import verdict
+    from onepiece_dist.study.page import picks_lines, verdict
 
-    for line in verdict(result):
+    for line in picks_lines(result) + verdict(result):
         err(line.replace("**", ""))
     typer.echo(result.model_dump_json(indent=2) if as_json else str(folder / "study.md"))

@@ -41,7 +41,7 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
                  "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
     "api": (BASE | {"plan_spec", "objects", "service", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
-    "study": (BASE | {"api", "service", "learn", "store", "core", "objects"},
+    "study": (BASE | {"plan_spec", "api", "service", "learn", "store", "core", "objects"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
     "schemas": (BASE | {"plan_spec", "objects", "service", "store", "study"}, {"pydantic", "yaml"}),
     "cli_common": (BASE, {"typer", "rich"}),

@@ -41,7 +41,7 @@ def seen_cloud(mesh, eye=(0.35, 0.1, 0.3)) -> Observation:
 def save_checkpoint(path, spec: JobSpec | None = None, seed: int = 0):
     """A PointNet checkpoint as the train stage writes it (weights and the crop record), weights from ``seed``."""
     from onepiece_dist.learn.models import PointNetGrasp
-    from onepiece_dist.service.trainer import crop_record
+    from onepiece_dist.learn.train import crop_record
 
     torch.manual_seed(seed)
     record = crop_record(spec or JobSpec())

@@ -176,12 +176,15 @@ def test_a_study_extended_with_an_arm_reuses_every_job_and_run_and_only_with_ext
     assert StudySpec.model_validate_json((tmp_path / "study.spec.json").read_text()) == more
 
 
+TINY_BOTH = {**TINY, "judge": "both", "picks": {"views": 1}}
+
+
 @pytest.fixture(scope="module")
 def tiny_study(tmp_path_factory):
     from onepiece_dist.study.runner import Where, run_study
 
-    folder = tmp_path_factory.mktemp("study")
-    return folder, run_study(StudySpec(**TINY), folder, Where(in_process=True))
+    folder = tmp_path_factory.mktemp("study")  # judged by picks and by candidates (issue 51)
+    return folder, run_study(StudySpec(**TINY_BOTH), folder, Where(in_process=True))
 
 
 @pytest.mark.sim
@@ -199,13 +202,26 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
         assert len(arm.heldout.seeds) == 2 and arm.heldout.top1.interval[0] <= arm.heldout.top1.interval[1]
         assert 0 <= arm.heldout.ap.mean <= 1 and arm.cost.core_seconds > 0
     assert result.arms[3].cost.labelled_grasps == b.cost.labelled_grasps  # R of B's size
+    picks, ceiling = result.picks, result.ceiling  # issue 51: judged by picks too, against the label's ceiling
+    assert [arm.name for arm in picks.arms] == [arm.name for arm in result.arms] and picks.objects == 3
+    assert picks.cheapest in {arm.name for arm in picks.arms if arm.within_a}
+    assert all(0 <= arm.first_attempt.interval[0] <= arm.first_attempt.mean <= arm.first_attempt.interval[1] <= 1
+               for arm in picks.arms)
+    assert sorted((folder / "runs" / "weights").glob("A-s*-lr*.pt")) and len(picks.b_beats_random) == 1
+    assert ceiling.draws == 3 and ceiling.grasps == result.heldout.grasps <= 256  # every held-out candidate here
+    assert ceiling.positive_rate <= ceiling.ceiling_ap <= 1 and 0.5 <= ceiling.agreement <= 1
+    page = (folder / "study.md").read_text().splitlines()
+    assert page[2].startswith("**Judged by picks.**")
+    assert any("of the way from the floor to the ceiling" in line for line in page[:12])
+    assert "## Judged by picks and by candidates" in page
     k = result.lookup  # the study's own code as a lookup, no network
     assert list(k.ranked) == ["A", "B", "R", "S"] and k.ranked["A"].labels == a.cost.labelled_grasps
     assert k.ranked["B"].labels == k.ranked["R"].labels == k.train_codes and 0 < k.coverage <= 1
     assert k.ranked["A"].coverage == pytest.approx(k.coverage, abs=1e-4)
     assert result.decision.cheapest in {arm.name for arm in result.arms if arm.within_a}
     page = (folder / "study.md").read_text()
-    assert page.splitlines()[2].startswith("**Answer.**") and f"{100 * a.heldout.top1.mean:.1f}%" in page
+    first = page.splitlines()[2:8]  # the picks' judgement, then the candidates'
+    assert any(line.startswith("**Answer.**") for line in first) and f"{100 * a.heldout.top1.mean:.1f}%" in page
     assert "## The code as a lookup (no network)" in page and f"{k.ranked['B'].ap:.3f}" in page
     (folder / "study.md").unlink()
     shown = subprocess.run([*ONEPIECE, "study", "report", str(folder)], capture_output=True, text=True, timeout=120)
@@ -315,7 +331,7 @@ def test_a_force_closure_study_trains_on_closure_and_judges_by_physics(tmp_path)
 def test_a_study_killed_mid_way_finishes_with_the_same_result(tiny_study, tmp_path):
     folder = tmp_path / "killed"
     study = tmp_path / "tiny.json"
-    study.write_text(json.dumps(TINY))
+    study.write_text(json.dumps(TINY_BOTH))
     command = [*ONEPIECE, "study", "run", str(study), "--out", str(folder), "--in-process"]
     driver = subprocess.Popen(command, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 300

@@ -13,7 +13,7 @@ from torch.utils.data import DataLoader
 
 from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate
 from onepiece_dist.learn.models import MODELS
-from onepiece_dist.spec import TrainSpec
+from onepiece_dist.spec import JobSpec, TrainSpec
 
 LAST, BEST = "last.pt", "best.pt"
 
@@ -286,13 +286,29 @@ def fit_steps(run: StepRun) -> StepResult:
     seconds = time.perf_counter() - start
     model.load_state_dict(best_state)
     if run.save_to is not None:
-        save_weights(run.model, best_state, Path(run.save_to))
+        save_weights(run.model, best_state, Path(run.save_to), crop=dataset_crop(run.path))
     scores = predict(model, GraspDataset(run.heldout_path, "grasps", inputs=inputs, labelled=run.heldout_labelled))
     return StepResult(scores.astype(np.float32), curve, min(curve, key=lambda c: c["val_loss"])["step"],
                       round(seconds, 1), len(train), len(val), device.type)
 
 
-def save_weights(model: str, state_dict: dict, path: Path) -> None:
-    """A checkpoint of the network alone (name and weights), written atomically."""
+def save_weights(model: str, state_dict: dict, path: Path, crop: dict | None = None) -> None:
+    """A checkpoint of the network (name and weights, and with ``crop`` how its crops were cut: a planner's
+    GraspScorer reads it), written atomically."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    save_atomically({"model": model, "state_dict": {n: t.detach().cpu() for n, t in state_dict.items()}}, path)
+    saved = {"model": model, "state_dict": {n: t.detach().cpu() for n, t in state_dict.items()}}
+    save_atomically(saved if crop is None else {**saved, "crop": crop}, path)
+
+
+def crop_record(spec: JobSpec) -> dict:
+    """What a checkpoint keeps of how its training crops were cut (plain values, loadable with weights_only):
+    the gripper, the voxel grid, the points per grasp and where the crops came from."""
+    return {"gripper": spec.gripper.model_dump(mode="json"), "voxel": spec.voxel.model_dump(mode="json"),
+            "points_per_grasp": spec.sim.points_per_grasp, "views": spec.views.model_dump(mode="json")}
+
+
+def dataset_crop(path: str) -> dict:
+    """The crop record of the job that made the dataset at ``path``."""
+    import zarr
+
+    return crop_record(JobSpec.model_validate(zarr.open_group(str(path), mode="r").attrs["job_spec"]))

@@ -23,18 +23,11 @@ def checkpoint_dir(spec: JobSpec) -> Path:
     return Path(f"{Path(spec.output)}.train")
 
 
-def crop_record(spec: JobSpec) -> dict:
-    """What a checkpoint keeps of how its training crops were cut (plain values, loadable with weights_only):
-    the gripper, the voxel grid, the points per grasp and where the crops came from."""
-    return {"gripper": spec.gripper.model_dump(mode="json"), "voxel": spec.voxel.model_dump(mode="json"),
-            "points_per_grasp": spec.sim.points_per_grasp, "views": spec.views.model_dump(mode="json")}
-
-
 class Trainer:
     """Plain class; :class:`TrainerClient` runs it as an actor."""
 
     def fit(self, spec: JobSpec) -> TrainingReport:
-        from onepiece_dist.learn.train import train_model
+        from onepiece_dist.learn.train import crop_record, train_model
         from onepiece_dist.store.dataset import write_group
 
         result = train_model(spec.output, spec.train, checkpoint_dir(spec), seed=spec.seed, crop=crop_record(spec))

@@ -219,17 +219,36 @@ class LabelNoise:
 
 def label_quality(world: SimWorld, pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> float:
     """Success fraction over ``noise.trials - 1`` perturbed label trials (friction and pose noise)."""
-    wins = 0
+    return sum(perturbed_trial(world, pose, rng, noise) for _ in range(noise.trials - 1))
+
+
+def perturbed_trial(world: SimWorld, pose: np.ndarray, rng: np.random.Generator, noise: LabelNoise) -> bool:
+    """One label trial at ``pose`` with pose and friction noise drawn from ``rng``: closed, lifted and shaken."""
     base_friction = world.spec.friction
-    for _ in range(noise.trials - 1):
-        friction = base_friction * max(0.05, 1 + rng.normal(0, noise.friction))
-        world.set_finger_friction(friction)
-        try:
-            if extract_trial(world, perturb_pose(pose, rng, noise.translation, noise.rotation))[0] == 0:
-                wins += lift_and_shake(world, world.gripper_pose())[0]
-        finally:
-            world.set_finger_friction(base_friction)
-    return wins
+    world.set_finger_friction(base_friction * max(0.05, 1 + rng.normal(0, noise.friction)))
+    try:
+        if extract_trial(world, perturb_pose(pose, rng, noise.translation, noise.rotation))[0] == 0:
+            return bool(lift_and_shake(world, world.gripper_pose())[0])
+        return False
+    finally:
+        world.set_finger_friction(base_friction)
+
+
+def label_draws(world: SimWorld, poses: np.ndarray, rngs: list[np.random.Generator], noise: LabelNoise,
+                draws: int) -> np.ndarray:
+    """(n, draws) bool: the label of each candidate ``poses[i]`` drawn ``draws`` times again, each draw a new
+    execution of the protocol (its nominal trial perturbed too, so a repeat is not the same execution), with
+    grasp i's draws from ``rngs[i]``: the label's own repeatability (core.ceiling). The object itself is lifted
+    (a payload label, sim.load: grasp, is not drawn again here)."""
+    out = np.zeros((len(poses), draws), dtype=bool)
+    for i, pose in enumerate(poses):
+        for j in range(draws):
+            first = perturbed_trial(world, pose, rngs[i], noise)
+            if noise.every_trial:
+                out[i, j] = first and label_quality(world, pose, rngs[i], noise) == noise.trials - 1
+            else:
+                out[i, j] = first
+    return out
 
 
 def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False, noise: LabelNoise | None = None,

@@ -26,6 +26,7 @@ def verdict(result: StudyResult) -> list[str]:
              f"objects, {label_words(result)}, A (every candidate labelled) reaches held-out top-1 "
              f"{measure(a.heldout.top1, True)} and AP {measure(a.heldout.ap, False)} ({conf} intervals over held-out "
              "objects)."]
+    lines += ceiling_lines(result)
     if d.cheapest is None or d.cheapest == "A":
         lines.append("No cheaper plan reaches A's intervals: **label everything (A)**.")
     else:
@@ -54,6 +55,57 @@ def verdict(result: StudyResult) -> list[str]:
                      f"{pct(p.patch_vs_every_grasp)} (floor {pct(p.shuffled_patches)}); the code decides "
                      f"{pct(p.share_decided)} of the label's headroom over chance.")
     return lines
+
+
+def picks_lines(result: StudyResult) -> list[str]:
+    """The decision made on picks (spec.judge: picks or both), first."""
+    p = result.picks
+    if p is None:
+        return []
+    a = next(arm for arm in p.arms if arm.name == "A")
+    guess = (f"a random candidate picks {measure(p.random, True)}"
+             + ("" if p.separable else ": **the picks cannot separate a network from a guess** (below 10% or "
+                "above 90%)"))
+    cheapest = next(arm for arm in p.arms if arm.name == p.cheapest)
+    by_how_much = ("" if p.cheapest == "A" else f", {pct(cheapest.first_attempt.mean)} against A's "
+                   f"{pct(a.first_attempt.mean)} ({100 * (cheapest.first_attempt.mean - a.first_attempt.mean):+.0f} "
+                   "points)")
+    lines = [f"**Judged by picks.** From one depth view of each of {p.objects} held-out objects ({p.views} views "
+             f"each; {p.label}), A's networks pick {measure(a.first_attempt, True)} at the first attempt; {guess}. "
+             f"The cheapest plan inside A's interval by pick success is **{p.cheapest}**{by_how_much}."]
+    lines += [f"By picks, {name} {'beats' if beats else 'does not beat'} random labels of its size (R ~{name})."
+              for name, beats in p.b_beats_random.items()]
+    return lines
+
+
+def picks_table(result: StudyResult) -> list[str]:
+    p = result.picks
+    if p is None:
+        return []
+    held = {arm.name: arm for arm in result.arms}
+    return ["## Judged by picks and by candidates", "",
+            "Pick success: each seed's network plans on the camera's cloud and its first choice is executed by the "
+            "label protocol (the pick benchmark, docs/picks.md); candidates: held-out top-1 and AP among candidates "
+            "sampled on the full mesh.", "",
+            "| arm | pick success (first attempt) | inside A (picks) | held-out top-1 | held-out AP | inside A "
+            "(candidates) |", "| --- | --- | --- | --- | --- | --- |",
+            *(f"| {arm.name} | {measure(arm.first_attempt, True)} | {'yes' if arm.within_a else 'no'} | "
+              f"{measure(held[arm.name].heldout.top1, True)} | {measure(held[arm.name].heldout.ap, False)} | "
+              f"{'yes' if held[arm.name].within_a else 'no'} |" for arm in p.arms if arm.name in held), ""]
+
+
+def ceiling_lines(result: StudyResult) -> list[str]:
+    """Where A (and every arm) stands between the label's floor and its own ceiling (spec.ceiling_grasps)."""
+    c = result.ceiling
+    if c is None:
+        return []
+    share = lambda arm: c.share_of_way(arm.heldout.ap.mean)  # noqa: E731
+    way = lambda value: "n/a (the ceiling is the floor)" if value is None else pct(value)  # noqa: E731
+    return [f"The label's own ceiling ({c.grasps} held-out candidates, {c.draws} fresh executions each): two "
+            f"executions of one grasp agree {pct(c.agreement)}; the best AP a predictor could reach against one "
+            f"execution is {c.ceiling_ap:.3f}, the floor (positive rate) {c.positive_rate:.3f}. A's AP is "
+            f"**{way(share(result.arms[0]))} of the way from the floor to the ceiling**; "
+            + ", ".join(f"{arm.name} {way(share(arm))}" for arm in result.arms[1:]) + "."]
 
 
 def adaptive_target_lines(result: StudyResult, u) -> list[str]:
@@ -156,7 +208,7 @@ def arm_row(arm: Arm) -> str:
 
 def render_page(result: StudyResult, plot: str | None = None) -> str:
     s, h = result.spec, result.heldout
-    lines = [f"# Study {result.digest}", "", *verdict(result), ""]
+    lines = [f"# Study {result.digest}", "", *picks_lines(result), *verdict(result), ""]
     if plot:
         lines += [f"![held-out top-1 and AP against labelled grasps]({plot})", ""]
     lines += ["## Arms", "",
@@ -178,6 +230,7 @@ def render_page(result: StudyResult, plot: str | None = None) -> str:
               f"{h.objects} objects, {h.grasps:,} candidates, every one labelled; positive rate "
               f"{pct(h.positive_rate)}; a random candidate per object succeeds {pct(h.random_choice)}, an oracle "
               f"{pct(h.oracle)}.", ""]
+    lines += picks_table(result)
     if result.premise:
         lines += ["## The premise", "",
                   "B's one label per patch against A's labels of the same candidates on their own objects.", "",
@@ -221,6 +274,9 @@ def plot_curves(result: StudyResult, path: Path) -> bool:
                                                       [v.interval[1] - v.mean for v in m]],
                         fmt=marker + ("-" if kind == "R" else ""), capsize=3, label=kind)
         ax.plot([a.cost.labelled_grasps], [getattr(a.heldout, name).mean], "k*", markersize=10, label="A")
+        if name == "ap" and result.ceiling is not None:
+            ax.axhline(result.ceiling.ceiling_ap, color="tab:red", ls="--", label="the label's ceiling")
+            ax.axhline(result.ceiling.positive_rate, color="0.5", ls=":", label="floor (positive rate)")
         ax.set_xscale("log")
         ax.set_xlabel("labelled grasps")
         ax.set_ylabel(label)

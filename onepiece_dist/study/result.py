@@ -193,6 +193,45 @@ class KeyMeasure(_Frozen):
     lookup: KeyLookup
 
 
+class Ceiling(_Frozen):
+    """The label's own ceiling on a seeded sample of held-out candidates (core.ceiling): draws per grasp, the
+    positive rate (the floor: a constant predictor's AP), the chance two draws of one grasp agree, and the best AP
+    a predictor could reach against one draw."""
+
+    grasps: int
+    draws: int
+    positive_rate: float
+    agreement: float
+    ceiling_ap: float
+
+    def share_of_way(self, ap: float) -> float | None:
+        """Where ``ap`` stands from the floor (0) to the ceiling (1); None when the ceiling is the floor."""
+        span = self.ceiling_ap - self.positive_rate
+        return None if span <= 1e-12 else (ap - self.positive_rate) / span
+
+
+class ArmPicks(_Frozen):
+    """An arm judged by picks: each seed's network's first choice per view, the per-object share picked (over
+    views and seeds), its mean over objects with a bootstrap interval over objects."""
+
+    name: str
+    first_attempt: Measure
+    within_a: bool = Field(description="Its mean lies inside A's interval.")
+
+
+class PicksJudgement(_Frozen):
+    """The arms judged by pick success from one depth view (spec.judge: picks or both)."""
+
+    objects: int
+    views: int
+    label: str = Field(description="The protocol each pick is executed with.")
+    random: Measure = Field(description="A random collision-free candidate per view (the guess).")
+    separable: bool = Field(description="Whether the guess's rate leaves room to rank (10% to 90%).")
+    arms: list[ArmPicks]
+    cheapest: str | None = Field(description="The cheapest arm (core-seconds) inside A's interval.")
+    b_beats_random: dict[str, bool] = Field(description="B r against R ~B r: its mean at least R's.")
+
+
 class StudyResult(_Frozen):
     """A study's result: ``study.json``."""
 
@@ -217,3 +256,5 @@ class StudyResult(_Frozen):
     label_fit: LabelFit | None = Field(None, description="The train label against the held-out truth (force-closure "
                                        "studies).")
     decision: Decision
+    ceiling: Ceiling | None = Field(None, description="The label's own ceiling (spec.ceiling_grasps > 0).")
+    picks: PicksJudgement | None = Field(None, description="The arms judged by picks (spec.judge: picks, both).")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import json
 import os
 import platform
 import time
@@ -25,9 +26,19 @@ from onepiece_dist.errors import SourceError, SpecError
 from onepiece_dist.learn.train import StepResult, StepRun
 from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
+from onepiece_dist.study.costs import arm_costs
 from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
-from onepiece_dist.study.jobs import JobRecord, StudyJobs, core_seconds, run_or_reuse, study_jobs
-from onepiece_dist.study.result import AdaptiveRound, ArmCost, Baselines, HeldoutScore, Measure, SeedRun, StudyResult
+from onepiece_dist.study.jobs import JobRecord, StudyJobs, run_or_reuse, study_jobs
+from onepiece_dist.study.picks import judge_by_picks, judges_picks, weights_base
+from onepiece_dist.study.result import (
+    AdaptiveRound,
+    Baselines,
+    Ceiling,
+    HeldoutScore,
+    Measure,
+    SeedRun,
+    StudyResult,
+)
 from onepiece_dist.study.spec import StudySpec
 from onepiece_dist.study.training import ArmRun, RunStore, train_arms
 
@@ -185,10 +196,33 @@ def run_study(spec: StudySpec, folder: str | Path, where: Where = Where(), say: 
         if spec.adaptive is not None:
             rounds, more = train_adaptive(spec, jobs, search, store, where, prefix, say)
             trained += more
+    ceiling = label_ceiling_of(spec, jobs, folder, say)
     result = assemble_result(spec, jobs, records, trained, start, store.reused, rounds)
+    picks = judge_by_picks(spec, folder, trained, result.arms, say) if judges_picks(spec) else None
+    result = result.model_copy(update={"ceiling": ceiling, "picks": picks})
     write_result(result, folder)
     say(f"study: done in {result.wall_seconds:.0f} s: {folder / RESULT_FILE}")
     return result
+
+
+def label_ceiling_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> Ceiling | None:
+    """The held-out label's own ceiling (service.ceiling), kept in ``ceiling.json`` so a study run again reuses
+    it; None when the spec asks for none."""
+    if not spec.ceiling_grasps:
+        return None
+    path = folder / "ceiling.json"
+    asked = {"grasps": spec.ceiling_grasps, "draws": spec.ceiling_draws, "seed": spec.seed}
+    if path.is_file():
+        kept = json.loads(path.read_text())
+        if kept["asked"] == asked:
+            return Ceiling.model_validate(kept["ceiling"])
+    from onepiece_dist.service.ceiling import heldout_ceiling
+
+    say(f"study: the label's ceiling: {spec.ceiling_grasps} held-out candidates x {spec.ceiling_draws} draws")
+    found = heldout_ceiling(jobs.heldout, jobs.heldout.output, spec.ceiling_grasps, spec.ceiling_draws, spec.seed)
+    ceiling = Ceiling(**dataclasses.asdict(found))
+    path.write_text(json.dumps({"asked": asked, "ceiling": ceiling.model_dump(mode="json")}) + "\n")
+    return ceiling
 
 
 def check_jobs(records: dict[str, JobRecord]) -> None:
@@ -221,7 +255,10 @@ def arm_runs(spec: StudySpec, jobs: StudyJobs, arm: str, path: str, group: str,
     weighting = t.b_weighting if group == "assembled/grasps" else "none"
     base = StepRun(path, group, rows, jobs.heldout.output, t.model, t.steps, t.batch_size, t.learning_rates[0],
                    t.validation, 0, t.evaluations, weighting=weighting, device=t.device)
-    return [ArmRun(arm, seed, t.learning_rates[0], dataclasses.replace(base, seed=seed)) for seed in range(t.seeds)]
+    folder = Path(jobs.a.output).parent.parent  # picks need each run's weights: kept in the study's folder
+    return [ArmRun(arm, seed, t.learning_rates[0], dataclasses.replace(
+        base, seed=seed, save_to=weights_base(folder, arm, seed) if judges_picks(spec) else None))
+        for seed in range(t.seeds)]
 
 
 def plan_runs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord]) -> list[ArmRun]:
@@ -291,7 +328,8 @@ def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobReco
 def arm_drafts(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
                trained: list[tuple[ArmRun, StepResult]], labels: np.ndarray, groups: np.ndarray,
                adaptive_labels: int | None = None) -> list[ArmDraft]:
-    costs = arm_costs(spec, jobs, records, adaptive_labels)
+    costs = arm_costs(spec, jobs, records, random_arms(spec, records, records["A"].status.progress.grasps),
+                      adaptive_labels)
     drafts = []
     for name, cost in costs.items():
         runs = [(job, result) for job, result in trained if job.arm == name]
@@ -320,54 +358,6 @@ def heldout_score(spec: StudySpec, runs: list[tuple[ArmRun, StepResult]], labels
 
     return HeldoutScore(top1=m("top1"), top5=m("top5"), ap=m("ap"), accuracy=m("accuracy"),
                         learning_rate=runs[0][0].learning_rate, seeds=[SeedRun(**s) for s in summary["seeds"]])
-
-
-def arm_costs(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
-              adaptive_labels: int | None = None) -> dict[str, ArmCost]:
-    """Each arm's cost. B's extraction (shared by the radii through the parts cache) is charged in full to each
-    radius; R labels its candidates on their own objects, at A's cost per candidate. U extracts every candidate
-    (it picks by code and by the network's score of each crop: B's extraction) and labels its picks at A's label
-    cost per candidate (A's cost beyond that extraction); its rounds' training is compute, not labels, and is not
-    counted."""
-    from onepiece_dist.store.dataset import delivered_bytes, disk_bytes
-
-    k = spec.label_trials if spec.label == "physics" else 0  # force closure labels A without lifting anything
-    a = records["A"].status
-    a_stages = core_seconds(a)
-    a_cost = ArmCost(core_seconds=round(sum(a_stages.values()), 2), stages=a_stages,
-                     label_trials=a.progress.grasps * k, labelled_grasps=a.progress.grasps,
-                     labelled_bytes=disk_bytes(Path(jobs.a.output) / "grasps"),
-                     dataset_bytes=disk_bytes(Path(jobs.a.output)), delivered_bytes=delivered_bytes(jobs.a.output))
-    costs = {"A": a_cost}
-    extract = {}  # the arms of one parts cache share one extraction: each is charged all of it
-    for name, job in jobs.b.items():
-        seconds = core_seconds(records[name].status).get("extract", 0.0)
-        extract[job.cache_dir] = max(extract.get(job.cache_dir, 0.0), seconds)
-    b_extract = max((extract[job.cache_dir] for job in jobs.settled_b().values()), default=0.0)
-    for name, job in jobs.b.items():
-        status = records[name].status
-        stages = {**core_seconds(status), "extract": extract[job.cache_dir]}
-        labelled = Path(job.output) / "assembled" / "grasps"
-        costs[name] = ArmCost(
-            core_seconds=round(sum(stages.values()), 2), stages=stages,
-            label_trials=status.labels.label_trials if status.labels else 0,
-            labelled_grasps=status.labels.labelled_grasps if status.labels else 0,
-            labelled_bytes=disk_bytes(labelled) if labelled.exists() else 0, dataset_bytes=disk_bytes(Path(job.output)),
-            delivered_bytes=delivered_bytes(job.output))
-    shares = random_arms(spec, records, a.progress.grasps)
-    if adaptive_labels is not None:
-        shares += [("U", adaptive_labels), ("R ~U", adaptive_labels)]
-    for name, count in shares:
-        share = count / max(a.progress.grasps, 1)
-        stages = {stage: round(share * seconds, 2) for stage, seconds in a_stages.items()}
-        if name == "U":  # U needs every candidate's code and crop: B's extraction, then A's label cost per label
-            per_label = max(a_cost.core_seconds - b_extract, 0.0) / max(a.progress.grasps, 1)
-            stages = {"extract": round(b_extract, 2), "label": round(count * per_label, 2)}
-        costs[name] = ArmCost(core_seconds=round(sum(stages.values()), 2), stages=stages, label_trials=count * k,
-                              labelled_grasps=count, labelled_bytes=int(share * a_cost.labelled_bytes),
-                              dataset_bytes=int(share * a_cost.dataset_bytes),
-                              delivered_bytes=int(share * a_cost.delivered_bytes))
-    return costs
 
 
 def write_result(result: StudyResult, folder: Path) -> None:

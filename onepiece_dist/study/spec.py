@@ -80,6 +80,14 @@ class StudyKey(_Frozen):
         return self
 
 
+class StudyPicks(_Frozen):
+    """How picks judge the arms (judge: picks or both): the pick benchmark's views of the held-out objects, each
+    network's first choice executed by the study's label protocol (docs/picks.md)."""
+
+    views: int = Field(2, ge=1, le=64, description="Camera poses per held-out object.")
+    objects: str | None = Field(None, description="The objects picked (default: the held-out objects).")
+
+
 class StudyTargets(_Frozen):
     """What the report decides with: A's intervals and the cost targets a plan must meet to be called cheap."""
 
@@ -133,6 +141,15 @@ class StudySpec(_Frozen):
                                                     "along the surface normal).")
     views: int = Field(0, ge=0, le=256, description="0: every arm crops from the object's full surface; N: from "
                        "the nearest of N depth views per object, what a robot sees (docs/views.md).")
+    judge: Literal["candidates", "picks", "both"] = Field("candidates", description="What decides: held-out top-1 "
+        "and AP among candidates on the full mesh (candidates), pick success from one depth view (picks: every "
+        "seed's network plans on the camera's cloud and its first choice is executed), or both side by side.")
+    picks: StudyPicks = StudyPicks()
+    ceiling_grasps: int = Field(256, ge=0, le=100_000, description="Held-out candidates (a seeded sample) "
+                                "labelled again to measure the label's own ceiling: its self-agreement, its "
+                                "positive-rate floor and the best AP against one draw (0: none; docs/study.md).")
+    ceiling_draws: int = Field(3, ge=2, le=32, description="Fresh draws of each such candidate's label, each a new "
+                               "execution of the protocol (its nominal trial perturbed too).")
     training: StudyTraining = StudyTraining()
     adaptive: StudyAdaptive | None = Field(None, description="Add the adaptive arm U (labels chosen by the "
                                            "network in rounds); none by default.")
@@ -183,7 +200,7 @@ class StudySpec(_Frozen):
 
 
 QUICK = {"grasps_per_object": 96, "heldout_grasps": 48, "radii": (0, 1), "budgets": (0.1, 0.25, 0.5),
-         "label_trials": 2, "points_per_grasp": 128,
+         "label_trials": 2, "points_per_grasp": 128, "ceiling_grasps": 48,
          "training": {"model": "voxel", "steps": 200, "batch_size": 32, "learning_rates": (1e-3, 3e-3), "seeds": 3,
                       "evaluations": 5},
          "targets": {"bootstrap_draws": 1000, "ap_draws": 300}}  # --quick: minutes on two cores

@@ -57,7 +57,14 @@ def search_rates(jobs: Sequence[Job], rates: Sequence[float], train: Train,
 
 
 def with_rate(job: ArmRun) -> StepRun:
-    return dataclasses.replace(job.run, learning_rate=job.learning_rate)
+    """The run at the job's rate; a run that keeps its weights keeps them in a file of that rate's."""
+    run = dataclasses.replace(job.run, learning_rate=job.learning_rate)
+    return dataclasses.replace(run, save_to=weights_at(run.save_to, job.learning_rate)) if run.save_to else run
+
+
+def weights_at(base: str, rate: float) -> str:
+    """Where a run saved under ``base`` (``.../NAME.pt``) at learning rate ``rate`` keeps its weights."""
+    return f"{base.removesuffix('.pt')}-lr{rate:g}.pt"
 
 
 # StepRun fields added after runs were first stored: left out of a run's key while at their defaults, so a run

@@ -1,0 +1,72 @@
+"""The label's own ceiling on a held-out dataset (core.ceiling): a seeded sample of its candidates labelled again,
+each several times, every draw a new execution of the job's label protocol (sim.trials.label_draws).
+
+Runs where it is called, its simulation in a pinned process (service.pinned_child): one object at a time, each
+grasp's draws from its own generator ([seed, row]), so the draws do not depend on the sample's order or size.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.core.ceiling import LabelCeiling, label_ceiling
+from onepiece_dist.core.mesh import enclosed_volume
+from onepiece_dist.objects import ObjectRef, load_object, resolve_source
+from onepiece_dist.spec import JobSpec
+
+
+def sample_rows(count: int, sample: int, seed: int) -> np.ndarray:
+    """(min(sample, count),) sorted rows of a dataset's ``count`` grasps, seeded."""
+    rng = np.random.default_rng([seed, 0x5EED])
+    return np.sort(rng.choice(count, size=min(sample, count), replace=False))
+
+
+def object_draws(job: JobSpec, ref: ObjectRef, poses: np.ndarray, rows: np.ndarray, draws: int, seed: int,
+                 collision_dir: str) -> np.ndarray:
+    """(n, draws) bool: ``draws`` fresh labels of each candidate ``poses`` (n, 4, 4) of the object ``ref``."""
+    from onepiece_dist.sim.collision import convex_pieces
+    from onepiece_dist.sim.trials import LabelNoise, label_draws
+    from onepiece_dist.sim.world import process_world
+
+    loaded = load_object(ref, job)
+    volume = enclosed_volume(loaded.mesh)
+    world = process_world(job.gripper)
+    world.load_object(convex_pieces(loaded.mesh, Path(collision_dir), job.sim.collision), volume,
+                      loaded.density(job.sim.density, volume), loaded.friction)
+    rngs = [np.random.default_rng([seed, int(row)]) for row in rows]
+    return label_draws(world, poses, rngs, LabelNoise.from_spec(job.sim), draws)
+
+
+def heldout_ceiling(job: JobSpec, dataset: str, sample: int, draws: int, seed: int) -> LabelCeiling:
+    """The ceiling of ``job``'s label on a seeded sample of the candidates of its dataset at ``dataset`` (the
+    objects matched to ``job.objects`` by content id)."""
+    from onepiece_dist.service.pinned_child import PinnedSimulation
+    from onepiece_dist.store import open_dataset
+
+    reader = open_dataset(dataset)
+    owner = reader["grasps/object"].astype(np.int64)
+    rows = sample_rows(len(owner), sample, seed)
+    poses = reader["grasps/candidate_pose"][...].astype(np.float64)
+    ids = [bytes(row).hex() for row in reader["objects/id"]]
+    refs = {load_object(ref, job).content_id: ref for ref in resolve_source(job.objects) if _loads(ref, job)}
+    simulate, found = PinnedSimulation(), []
+    try:
+        for k in np.unique(owner[rows]):
+            mine = rows[owner[rows] == k]
+            found.append(simulate(object_draws, job, refs[ids[k]], poses[mine], mine, draws, seed,
+                                  str(Path(job.parts_folder()) / "collision")))
+    finally:
+        simulate.close()
+    return label_ceiling(np.concatenate(found))
+
+
+def _loads(ref: ObjectRef, job: JobSpec) -> bool:
+    from onepiece_dist.errors import MeshRejected
+
+    try:
+        load_object(ref, job)
+        return True
+    except MeshRejected:
+        return False

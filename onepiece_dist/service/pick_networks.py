@@ -1,0 +1,116 @@
+"""Many networks judged by the same picks (a study judged by picks, docs/study.md): each held-out object settled on
+the table and seen once per view exactly as the pick benchmark does (service.pick), the planner's candidates
+proposed once per view, and every network's top-ranked candidate executed by the label protocol.
+
+Every network meets the same views and the same candidates; a candidate's execution draws its perturbations from
+a generator of its own ([content id, seed, view, candidate]), so its outcome does not depend on which network chose
+it or in what order: one execution per distinct chosen candidate serves every network that chose it. A random
+collision-free candidate per view (seeded) gives the guess's rate, to say whether the picks can separate a network
+from a guess.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.core.mesh import enclosed_volume
+from onepiece_dist.core.sampling import object_rng
+from onepiece_dist.errors import MeshRejected
+from onepiece_dist.objects import ObjectRef, load_object, resolve_source
+from onepiece_dist.plan.observation import Observation
+from onepiece_dist.plan.planner import propose, rank
+from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.plan_spec import PickSpec
+
+
+@dataclass(frozen=True)
+class NetworkPicks:
+    """One object: per view, whether each network's first choice was picked (views x networks) and whether the
+    random candidate was; ``status`` 'ok' or 'rejected' with ``reason``."""
+
+    index: int
+    name: str
+    status: str
+    picked: tuple[tuple[bool, ...], ...] = ()
+    random: tuple[bool, ...] = ()
+    reason: str = ""
+    seconds: float = 0.0
+
+
+def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: ObjectRef, index: int) -> NetworkPicks:
+    """Every view of one object, every network's first choice executed (a bad object: a rejected result)."""
+    import torch
+
+    from onepiece_dist.sim.collision import convex_pieces
+    from onepiece_dist.sim.pick import pick_world
+
+    torch.set_num_threads(1)
+    start = time.perf_counter()
+    scorers = [GraspScorer(path, spec.gripper, device="cpu") for path in checkpoints]
+    record = scorers[0].record
+    try:
+        loaded = load_object(ref, spec.object_job(record.gripper, record.voxel))
+    except MeshRejected as err:
+        return NetworkPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
+    mesh = loaded.mesh
+    world = pick_world(record.gripper)
+    volume = enclosed_volume(mesh)
+    world.load_object(convex_pieces(mesh, Path(spec.output) / "collision", spec.sim.collision), volume,
+                      loaded.density(spec.sim.density, volume), loaded.friction)
+    views = [_view(spec, scorers, world, mesh, view) for view in range(spec.views)]
+    return NetworkPicks(index, ref.name, "ok", tuple(v[0] for v in views), tuple(v[1] for v in views),
+                        seconds=time.perf_counter() - start)
+
+
+def _view(spec: PickSpec, scorers: list[GraspScorer], world, mesh, view: int) -> tuple[tuple[bool, ...], bool]:
+    from onepiece_dist.sim.pick import execute_pick, observe, pick_camera
+    from onepiece_dist.sim.trials import LabelNoise
+
+    rng = object_rng(mesh.content_id, spec.seed, stream=100 + view)
+    resting = world.settle(rng, mesh.vertices)
+    cam = spec.camera
+    drawn = pick_camera(resting[:3, 3], rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
+    cloud = observe(mesh.vertices, mesh.faces, resting, drawn.camera, rng, cam.depth_noise)
+    if len(cloud) < 50:
+        return (False,) * len(scorers), False
+    proposals = propose(Observation(cloud, drawn.camera.pose[:3, 3], f"{mesh.name} view {view}"), scorers[0].record,
+                        spec.plan, rng)
+    if len(proposals.poses) == 0:
+        return (False,) * len(scorers), False
+    noise, executed = LabelNoise.from_spec(spec.sim), {}
+
+    def picked(candidate: int) -> bool:
+        if candidate not in executed:
+            own = np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, candidate])
+            executed[candidate] = execute_pick(world, proposals.poses[candidate], resting, noise, own).success
+        return executed[candidate]
+
+    choices = []
+    for scorer in scorers:
+        best = rank(proposals, scorer.score(proposals.crops, spec.plan.batch_size), scorer.record, spec.plan, keep=1)
+        choices.append(picked(_index_of(proposals.poses, best[0].pose)) if best else False)
+    guess = int(np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view]).integers(len(proposals.poses)))
+    return tuple(choices), picked(guess)
+
+
+def _index_of(poses: np.ndarray, pose: np.ndarray) -> int:
+    """The candidate a ranked grasp is (rank returns the pose itself)."""
+    return int(np.argmin(np.abs(poses - pose).reshape(len(poses), -1).max(axis=1)))
+
+
+def run_network_picks(spec: PickSpec, checkpoints: tuple[str, ...]) -> list[NetworkPicks]:
+    """Every object of ``spec.objects``, one at a time in a pinned simulation process (service.pinned_child)."""
+    from onepiece_dist.service.pinned_child import PinnedSimulation
+
+    Path(spec.output).mkdir(parents=True, exist_ok=True)
+    simulate, results = PinnedSimulation(), []
+    try:
+        for index, ref in enumerate(resolve_source(spec.objects)):
+            results.append(simulate(pick_with_networks, spec, checkpoints, ref, index))
+    finally:
+        simulate.close()
+    return results
