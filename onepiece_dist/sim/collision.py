@@ -70,28 +70,24 @@ def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
 
 
 def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) -> None:
-    source = cache_dir / f"{mesh.content_id}.src.obj"
+    source = cache_dir / f"{mesh.content_id}.{os.getpid()}.src.obj"
     write_obj(mesh.vertices, mesh.faces, source)
-    tmp_out = out.with_suffix(f".{os.getpid()}.part")
-    try:
-        subprocess.run([sys.executable, "-c", _VHACD_SCRIPT, str(source), str(tmp_out), os.devnull,
-                        str(resolution)], capture_output=True, timeout=120, check=False)
-        if tmp_out.is_file() and tmp_out.stat().st_size > 0:
-            os.replace(tmp_out, out)
-    except subprocess.TimeoutExpired:
-        pass
-    finally:
-        for path in (source, tmp_out):
-            path.unlink(missing_ok=True)
+    _run_child(_VHACD_SCRIPT, source, out, (os.devnull, str(resolution)), timeout=120)
 
 
 def _run_coacd(mesh: TriangleMesh, cache_dir: Path, out: Path, threshold: float) -> None:
     source = cache_dir / f"{mesh.content_id}.{os.getpid()}.src.npz"
     np.savez(source, vertices=mesh.vertices, faces=mesh.faces)
+    _run_child(_COACD_SCRIPT, source, out, (str(threshold),), timeout=600)
+
+
+def _run_child(script: str, source: Path, out: Path, args: tuple[str, ...], timeout: float) -> None:
+    """``script SOURCE TMP ARGS...`` in a child Python; its output moved to ``out`` when it wrote one (a crash or
+    a timeout leaves none); the source and any partial output removed."""
     tmp_out = out.with_suffix(f".{os.getpid()}.part")
     try:
-        subprocess.run([sys.executable, "-c", _COACD_SCRIPT, str(source), str(tmp_out), str(threshold)],
-                       capture_output=True, timeout=600, check=False)
+        subprocess.run([sys.executable, "-c", script, str(source), str(tmp_out), *args], capture_output=True,
+                       timeout=timeout, check=False)
         if tmp_out.is_file() and tmp_out.stat().st_size > 0:
             os.replace(tmp_out, out)
     except subprocess.TimeoutExpired:

@@ -206,8 +206,9 @@ class Ceiling(_Frozen):
 
     def share_of_way(self, ap: float) -> float | None:
         """Where ``ap`` stands from the floor (0) to the ceiling (1); None when the ceiling is the floor."""
-        span = self.ceiling_ap - self.positive_rate
-        return None if span <= 1e-12 else (ap - self.positive_rate) / span
+        from onepiece_dist.core.ceiling import LabelCeiling
+
+        return LabelCeiling(**self.model_dump()).share_of_way(ap)
 
 
 class ArmPicks(_Frozen):
