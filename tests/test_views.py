@@ -106,4 +106,5 @@ def test_views_are_stored_in_the_object_frame_of_each_object(spec_factory, tmp_p
         mesh = load_object(ref, spec).mesh
         mine = np.isin(data["views/point_camera"], np.flatnonzero(data["views/camera_object"] == k))
         cloud = data["views/points"][mine]
+        assert len(cloud) > 100  # an empty cloud would pass the bounds below
         assert np.all(cloud >= mesh.vertices.min(axis=0) - 1e-3) and np.all(cloud <= mesh.vertices.max(axis=0) + 1e-3)
