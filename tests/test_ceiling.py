@@ -36,3 +36,20 @@ def test_a_label_with_per_grasp_odds_lies_between_and_its_estimate_never_flatter
     assert many.ceiling_ap == pytest.approx(true, abs=0.06)
     with pytest.raises(ValueError, match="at least 2 draws"):
         label_ceiling(np.ones((5, 1), bool))
+
+
+def test_the_fitted_ceiling_finds_the_odds_ceiling_from_three_draws_and_keeps_both_ends():
+    """Ranking by the true odds is the ceiling; three draws per grasp are too coarse to show it directly (the
+    leave-one-out figure stays well below), but the odds' spread fitted to their counts finds it."""
+    from onepiece_dist.core.ceiling import ap_against_draws, fitted_ceiling, threshold_ap
+
+    rng = np.random.default_rng(3)
+    for odds in (rng.random(3000), rng.beta(0.5, 2.0, 3000)):
+        draws = rng.random((3000, 3)) < odds[:, None]
+        true = np.mean([threshold_ap(odds, rng.random(3000) < odds) for _ in range(20)])
+        ceiling = label_ceiling(draws)
+        assert ceiling.fitted_ap == pytest.approx(true, abs=0.04) and ceiling.ceiling_ap < true - 0.1
+        assert ap_against_draws(odds, draws) == pytest.approx(true, abs=0.03)  # the odds against these draws
+    assert fitted_ceiling(np.repeat((rng.random(400) < 0.3)[:, None], 3, axis=1)) == 1.0
+    noise = rng.random((4000, 3)) < 0.3
+    assert fitted_ceiling(noise) == pytest.approx(noise.mean(), abs=0.02)

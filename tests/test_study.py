@@ -99,6 +99,9 @@ def test_a_study_with_views_crops_every_job_from_depth_views_and_refuses_keys_of
     spec = StudySpec(**{**TINY, "views": 8})
     jobs = [spec.job_spec(spec.train, 4, 0, "a.zarr"), spec.job_spec(spec.heldout, 4, 1, "h.zarr")]
     assert all(job.views.crop == "partial" and job.views.count == 8 for job in jobs)
+    assert all(job.views.sampling == "view" for job in jobs)  # proposed as the planner proposes (issue 51)
+    mesh = StudySpec(**{**TINY, "views": 8, "view_sampling": "mesh"}).job_spec(spec.train, 4, 0, "a.zarr")
+    assert mesh.views.sampling == "mesh" and mesh.views.crop == "partial"
     assert StudySpec(**TINY).job_spec(spec.train, 4, 0, "a.zarr").views.crop == "full"
     with pytest.raises(SpecError, match="keys are computed from crops of the full surface"):
         load_study_spec(None, {**TINY, "views": 8, "keys": [{"name": "k", "kind": "occupancy"}]})
@@ -210,6 +213,8 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
     assert sorted((folder / "runs" / "weights").glob("A-s*-lr*.pt")) and len(picks.b_beats_random) == 1
     assert ceiling.draws == 3 and ceiling.grasps == result.heldout.grasps <= 256  # every held-out candidate here
     assert ceiling.positive_rate <= ceiling.ceiling_ap <= 1 and 0.5 <= ceiling.agreement <= 1
+    assert ceiling.ceiling_ap <= ceiling.fitted_ap + 0.05 and set(ceiling.arm_ap) == {arm.name for arm in result.arms}
+    assert json.loads((folder / "ceiling.json").read_text())["rows"]  # the draws are kept: a rerun reuses them
     page = (folder / "study.md").read_text().splitlines()
     assert page[2].startswith("**Judged by picks.**")
     assert any("of the way from the floor to the ceiling" in line for line in page[:12])
@@ -502,3 +507,26 @@ def test_a_stored_run_keeps_its_key_when_step_runs_gain_fields_at_their_defaults
     store = RunStore(tmp_path)
     assert store.key(run) == "cbd9dfa5940d47f6102337d0"
     assert store.key(dataclasses.replace(run, warm_start="round-0.pt")) != store.key(run)
+
+
+def test_the_committed_picks_study_answers_by_picks_and_against_the_label_ceiling_first(tmp_path):
+    """Issue 51: the committed study on held-out household meshes, judged by picks and by candidates; its page's
+    first lines give the cheapest plan inside A by pick success, by how much, and where A stands against the
+    label's ceiling. Its spec is the example's but for the held-out objects (a folder of this machine's)."""
+    import shutil
+
+    from onepiece_dist.study.runner import report_study
+
+    committed = ROOT / "docs" / "studies" / "picks"
+    shutil.copy(committed / "study.json", tmp_path / "study.json")
+    result = report_study(tmp_path)
+    page = (tmp_path / "study.md").read_text()
+    assert page == (committed / "study.md").read_text()
+    spec = result.spec
+    assert spec == load_study_spec(ROOT / "examples" / "studies" / "picks.yaml", {"heldout": spec.heldout})
+    assert "household" in spec.heldout and result.heldout.objects == 32 and result.train_objects >= 60
+    first = page.splitlines()[2]
+    assert first.startswith("**Judged by picks.**") and f"is **{result.picks.cheapest}**" in first
+    assert result.picks.cheapest == "A" or "points)" in first  # by how much
+    assert any("**" in line and "of the way from the floor to the ceiling" in line for line in page.splitlines()[:12])
+    assert {arm.name for arm in result.picks.arms} == {arm.name for arm in result.arms}

@@ -32,13 +32,16 @@ def threshold_ap(scores: np.ndarray, labels: np.ndarray) -> float:
 @dataclass(frozen=True)
 class LabelCeiling:
     """grasps and draws per grasp; positive_rate (the floor: the AP of a constant predictor); agreement, the chance
-    that two draws of one grasp agree; ceiling_ap, the best AP against one draw (leave-one-out)."""
+    that two draws of one grasp agree; ceiling_ap, the best AP against one draw as the draws alone show it
+    (leave-one-out: a lower bound with few draws); fitted_ap, the best AP with the grasps' odds spread as the draws
+    say (a beta distribution of the odds fitted to the draws' counts; see fitted_ceiling)."""
 
     grasps: int
     draws: int
     positive_rate: float
     agreement: float
     ceiling_ap: float
+    fitted_ap: float = float("nan")
 
     def share_of_way(self, ap: float) -> float | None:
         """Where ``ap`` stands from the floor (0) to the ceiling (1); None when the ceiling is the floor."""
@@ -56,4 +59,33 @@ def label_ceiling(draws: np.ndarray) -> LabelCeiling:
     agreement = float(np.mean((wins * (wins - 1) + (r - wins) * (r - wins - 1)) / (r * (r - 1))))
     others = (wins[:, None] - draws) / (r - 1)  # each draw's grasp, scored by its other draws
     ceiling = float(np.mean([threshold_ap(others[:, j], draws[:, j]) for j in range(r)]))
-    return LabelCeiling(n, r, float(draws.mean()), agreement, ceiling)
+    return LabelCeiling(n, r, float(draws.mean()), agreement, ceiling, fitted_ceiling(draws))
+
+
+def fitted_ceiling(draws: np.ndarray, samples: int = 200_000, seed: int = 0) -> float:
+    """The AP of ranking by the true odds against one draw, with the odds of the grasps spread as a beta
+    distribution whose mean and variance are those the draws' counts give (method of moments: the variance of
+    the per-grasp success shares, less what r draws add by themselves). A deterministic label (odds 0 or 1) gives
+    1; draws independent of the grasp (no spread of odds) give the floor. Seeded: the same draws give the same
+    figure."""
+    draws = np.asarray(draws, dtype=bool)
+    n, r = draws.shape
+    mean = float(draws.mean())
+    if mean in (0.0, 1.0):
+        return mean
+    shares = draws.mean(axis=1)
+    seen, by_chance = float(shares.var(ddof=1)), mean * (1 - mean) / r
+    spread = (seen - by_chance) / (1 - 1 / r)  # the odds' own variance
+    if seen - by_chance <= 2 * seen * np.sqrt(2 / max(n - 1, 1)):  # within two standard errors of none
+        return mean
+    if spread >= mean * (1 - mean) * (1 - 1e-9):
+        return 1.0
+    total = mean * (1 - mean) / spread - 1  # a + b of the beta
+    rng = np.random.default_rng([seed, 51])
+    odds = rng.beta(mean * total, (1 - mean) * total, samples)
+    return threshold_ap(odds, rng.random(samples) < odds)
+
+
+def ap_against_draws(scores: np.ndarray, draws: np.ndarray) -> float:
+    """The mean AP of ``scores`` (n,) against each of the draws (n, r) of the same grasps' label."""
+    return float(np.mean([threshold_ap(scores, draws[:, j]) for j in range(draws.shape[1])]))

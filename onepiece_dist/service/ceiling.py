@@ -39,9 +39,10 @@ def object_draws(job: JobSpec, ref: ObjectRef, poses: np.ndarray, rows: np.ndarr
     return label_draws(world, poses, rngs, LabelNoise.from_spec(job.sim), draws)
 
 
-def heldout_ceiling(job: JobSpec, dataset: str, sample: int, draws: int, seed: int) -> LabelCeiling:
-    """The ceiling of ``job``'s label on a seeded sample of the candidates of its dataset at ``dataset`` (the
-    objects matched to ``job.objects`` by content id)."""
+def heldout_label_draws(job: JobSpec, dataset: str, sample: int, draws: int, seed: int) -> tuple[np.ndarray,
+                                                                                                 np.ndarray]:
+    """A seeded sample of the rows of ``job``'s dataset at ``dataset`` (its objects matched to ``job.objects`` by
+    content id), and (rows, draws) bool: each one's label drawn ``draws`` times again by ``job``'s protocol."""
     from onepiece_dist.service.pinned_child import PinnedSimulation
     from onepiece_dist.store import open_dataset
 
@@ -59,7 +60,12 @@ def heldout_ceiling(job: JobSpec, dataset: str, sample: int, draws: int, seed: i
                                   str(Path(job.parts_folder()) / "collision")))
     finally:
         simulate.close()
-    return label_ceiling(np.concatenate(found))
+    return rows, np.concatenate(found)
+
+
+def heldout_ceiling(job: JobSpec, dataset: str, sample: int, draws: int, seed: int) -> LabelCeiling:
+    """The ceiling of ``job``'s label on a seeded sample of its dataset's candidates (heldout_label_draws)."""
+    return label_ceiling(heldout_label_draws(job, dataset, sample, draws, seed)[1])
 
 
 def _loads(ref: ObjectRef, job: JobSpec) -> bool:

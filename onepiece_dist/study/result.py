@@ -194,21 +194,24 @@ class KeyMeasure(_Frozen):
 
 
 class Ceiling(_Frozen):
-    """The label's own ceiling on a seeded sample of held-out candidates (core.ceiling): draws per grasp, the
-    positive rate (the floor: a constant predictor's AP), the chance two draws of one grasp agree, and the best AP
-    a predictor could reach against one draw."""
+    """The label's own ceiling on a seeded sample of held-out candidates (core.ceiling), each labelled again by
+    fresh executions: draws per grasp, their positive rate (the floor: a constant predictor's AP), the chance two
+    executions of one grasp agree, the best AP against one execution as the draws alone show it (leave one out: a
+    lower bound with few draws) and with the odds' spread fitted to the draws (the ceiling); and each arm's
+    networks (seed-averaged scores) against the same executions."""
 
     grasps: int
     draws: int
     positive_rate: float
     agreement: float
-    ceiling_ap: float
+    ceiling_ap: float = Field(description="Leave-one-out: at least this.")
+    fitted_ap: float = Field(description="The ceiling: ranking by the odds, their spread fitted to the draws.")
+    arm_ap: dict[str, float] = Field(default_factory=dict, description="Each arm's AP against the executions.")
 
     def share_of_way(self, ap: float) -> float | None:
-        """Where ``ap`` stands from the floor (0) to the ceiling (1); None when the ceiling is the floor."""
-        from onepiece_dist.core.ceiling import LabelCeiling
-
-        return LabelCeiling(**self.model_dump()).share_of_way(ap)
+        """Where ``ap`` stands from the floor (0) to the fitted ceiling (1); None when the ceiling is the floor."""
+        span = self.fitted_ap - self.positive_rate
+        return None if span <= 1e-12 else (ap - self.positive_rate) / span
 
 
 class ArmPicks(_Frozen):

@@ -196,33 +196,44 @@ def run_study(spec: StudySpec, folder: str | Path, where: Where = Where(), say: 
         if spec.adaptive is not None:
             rounds, more = train_adaptive(spec, jobs, search, store, where, prefix, say)
             trained += more
-    ceiling = label_ceiling_of(spec, jobs, folder, say)
+    drawn = label_draws_of(spec, jobs, folder, say)
     result = assemble_result(spec, jobs, records, trained, start, store.reused, rounds)
     picks = judge_by_picks(spec, folder, trained, result.arms, say) if judges_picks(spec) else None
-    result = result.model_copy(update={"ceiling": ceiling, "picks": picks})
+    result = result.model_copy(update={"ceiling": drawn and ceiling_of(*drawn, trained), "picks": picks})
     write_result(result, folder)
     say(f"study: done in {result.wall_seconds:.0f} s: {folder / RESULT_FILE}")
     return result
 
 
-def label_ceiling_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> Ceiling | None:
-    """The held-out label's own ceiling (service.ceiling), kept in ``ceiling.json`` so a study run again reuses
-    it; None when the spec asks for none."""
+def label_draws_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> tuple[np.ndarray, np.ndarray] | None:
+    """The held-out label drawn again on a seeded sample (service.ceiling): (rows, (rows, draws) bool), kept in
+    ``ceiling.json`` so a study run again reuses them; None when the spec asks for none."""
     if not spec.ceiling_grasps:
         return None
     path = folder / "ceiling.json"
     asked = {"grasps": spec.ceiling_grasps, "draws": spec.ceiling_draws, "seed": spec.seed}
     if path.is_file():
         kept = json.loads(path.read_text())
-        if kept["asked"] == asked:
-            return Ceiling.model_validate(kept["ceiling"])
-    from onepiece_dist.service.ceiling import heldout_ceiling
+        if kept["asked"] == asked and "draws" in kept:
+            return np.asarray(kept["rows"], dtype=np.int64), np.asarray(kept["draws"], dtype=bool)
+    from onepiece_dist.service.ceiling import heldout_label_draws
 
     say(f"study: the label's ceiling: {spec.ceiling_grasps} held-out candidates x {spec.ceiling_draws} draws")
-    found = heldout_ceiling(jobs.heldout, jobs.heldout.output, spec.ceiling_grasps, spec.ceiling_draws, spec.seed)
-    ceiling = Ceiling(**dataclasses.asdict(found))
-    path.write_text(json.dumps({"asked": asked, "ceiling": ceiling.model_dump(mode="json")}) + "\n")
-    return ceiling
+    rows, draws = heldout_label_draws(jobs.heldout, jobs.heldout.output, spec.ceiling_grasps, spec.ceiling_draws,
+                                      spec.seed)
+    path.write_text(json.dumps({"asked": asked, "rows": rows.tolist(), "draws": draws.astype(int).tolist()}) + "\n")
+    return rows, draws
+
+
+def ceiling_of(rows: np.ndarray, draws: np.ndarray, trained: list[tuple[ArmRun, StepResult]]) -> Ceiling:
+    """The label's ceiling from the draws, and each arm's seed-averaged scores against the same executions."""
+    from onepiece_dist.core.ceiling import ap_against_draws, label_ceiling
+
+    scores: dict[str, list[np.ndarray]] = {}
+    for job, result in trained:
+        scores.setdefault(job.arm, []).append(result.scores[rows])
+    arm_ap = {arm: round(ap_against_draws(np.mean(found, axis=0), draws), 4) for arm, found in scores.items()}
+    return Ceiling(**dataclasses.asdict(label_ceiling(draws)), arm_ap=arm_ap)
 
 
 def check_jobs(records: dict[str, JobRecord]) -> None:

@@ -139,8 +139,11 @@ class StudySpec(_Frozen):
     points_per_grasp: int = Field(256, ge=16, le=4096, description="Gripper-frame points stored per grasp.")
     sampler: Literal["antipodal", "normal"] = Field("normal", description="Candidate sampler (the paper samples "
                                                     "along the surface normal).")
-    views: int = Field(0, ge=0, le=256, description="0: every arm crops from the object's full surface; N: from "
-                       "the nearest of N depth views per object, what a robot sees (docs/views.md).")
+    views: int = Field(0, ge=0, le=256, description="0: every arm crops from the object's full surface; N: N depth "
+                       "views per object, what a robot sees (docs/views.md), each crop from one view.")
+    view_sampling: Literal["mesh", "view"] = Field("view", description="With views: candidates proposed on each "
+        "view's cloud as the planner proposes them, each cropped from its view (view: what the camera gives), or "
+        "sampled on the mesh and cropped from the nearest view (mesh).")
     judge: Literal["candidates", "picks", "both"] = Field("candidates", description="What decides: held-out top-1 "
         "and AP among candidates on the full mesh (candidates), pick success from one depth view (picks: every "
         "seed's network plans on the camera's cloud and its first choice is executed), or both side by side.")
@@ -194,7 +197,7 @@ class StudySpec(_Frozen):
         sim = {"label_trials": self.label_trials, "success": self.success, "perturbations_per_patch": 0,
                "load": self.load, "load_mass": self.load_mass, "transfer_codes": 0,
                "points_per_grasp": self.points_per_grasp, **update.pop("sim", {})}
-        views = {"count": self.views, "crop": "partial"} if self.views else {}
+        views = {"count": self.views, "crop": "partial", "sampling": self.view_sampling} if self.views else {}
         return JobSpec(objects=objects, grasps_per_object=grasps, seed=seed, output=output,
                        sampler={"method": self.sampler}, sim=sim, views=views, **update)
 
