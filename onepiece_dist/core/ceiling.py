@@ -76,7 +76,7 @@ def fitted_ceiling(draws: np.ndarray, samples: int = 200_000, seed: int = 0) -> 
     shares = draws.mean(axis=1)
     seen, by_chance = float(shares.var(ddof=1)), mean * (1 - mean) / r
     spread = (seen - by_chance) / (1 - 1 / r)  # the odds' own variance
-    if seen - by_chance <= 2 * seen * np.sqrt(2 / max(n - 1, 1)):  # within two standard errors of none
+    if seen - by_chance <= seen * np.sqrt(2 / max(n - 1, 1)):  # within a standard error of none
         return mean
     if spread >= mean * (1 - mean) * (1 - 1e-9):
         return 1.0
