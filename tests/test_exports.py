@@ -369,6 +369,11 @@ def test_grasp_files_that_cannot_be_brought_in_are_refused_naming_the_file_and_t
     (tmp_path / "grasps" / "ur.json").write_text(json.dumps({**good, "gripper": "ur_hand"}))
     with pytest.raises(SourceError, match=r"gripper 'ur_hand' is none of ours .* give the gripper"):
         relabel_spec([tmp_path / "grasps" / "ur.json"], tmp_path / "out.zarr")
+    (tmp_path / "grasps" / "acronym.json").write_text(json.dumps({  # ACRONYM's JSON form, as load_grasps reads it
+        "object": "meshes/box.obj", "object_scale": 0.5, "transforms": [np.eye(4).tolist()] * 2,
+        "quality_flex_object_in_gripper": [1, 0]}))
+    found = read_foreign_grasps(tmp_path / "grasps" / "acronym.json")
+    assert (found.format, found.scale, found.held.tolist()) == ("acronym", 0.5, [True, False])
     (tmp_path / "grasps" / "ok.json").write_text(json.dumps(good))
     spec = relabel_spec([tmp_path / "grasps" / "ok.json"], tmp_path / "out.zarr")
     assert spec.gripper.name == "franka_panda" and (spec.sim.label_trials, spec.sim.success) == (4, "every_trial")

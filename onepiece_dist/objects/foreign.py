@@ -5,7 +5,8 @@ Two formats, as their public loaders read them (acronym_tools' load_grasps / loa
   object_in_gripper`` (n,) their success, ``object/file`` (the mesh, relative to the data root: the folder above
   ``grasps/``, as ACRONYM ships ``grasps/`` and ``meshes/`` side by side) and ``object/scale``; ``gripper/type``.
 - GraspGen ``.json``: ``{"object": {"file", "scale"}, "grasps": {"transforms", "object_in_gripper"}, "gripper"}``
-  with the mesh relative to the object root (again the folder above ``grasps/``).
+  with the mesh relative to the object root (again the folder above ``grasps/``); ACRONYM's own ``.json`` form
+  (``object``, ``object_scale``, ``transforms``, ``quality_flex_object_in_gripper``) is read as ACRONYM's.
 Their transforms are the Panda hand's (``core.hand_frames``): converted to ours with the fingertips where theirs
 are. A file our own export wrote keeps our poses under ``onepiece/pose``: those are used as they are. Nothing is
 unpickled; every mesh path stays inside its root.
@@ -109,6 +110,9 @@ def _acronym_fields(path: Path):
 def _graspgen_fields(path: Path, data: bytes):
     try:
         record = json.loads(data)
+        if "quality_flex_object_in_gripper" in record:  # ACRONYM's own JSON form (acronym_tools reads it too)
+            return (record["transforms"], record["quality_flex_object_in_gripper"], str(record["object"]),
+                    float(record.get("object_scale", 1.0)), "franka_panda", None, "acronym")
         grasps, obj = record["grasps"], record["object"]
         own = record.get("onepiece", {}).get("pose")
         return (grasps["transforms"], grasps["object_in_gripper"], obj["file"], obj.get("scale", 1.0),
