@@ -30,7 +30,8 @@ def _gripper(path: Path | None):
         return None
     import yaml
 
-    from onepiece_dist.spec import GripperSpec, gripper_fields
+    from onepiece_dist.gripper_presets import gripper_fields
+    from onepiece_dist.spec import GripperSpec
 
     try:
         return GripperSpec.model_validate(gripper_fields(yaml.safe_load(path.read_text()) or {}))

@@ -13,6 +13,8 @@ The closing region (the crop) is the largest box of whole 1 cm voxels between th
 
 from __future__ import annotations
 
+from typing import Any
+
 PRESETS: dict[str, dict[str, float | str]] = {
     "panda": {"name": "franka_panda", "max_opening": 0.08, "finger_length": 0.046, "finger_thickness": 0.0105,
               "finger_height": 0.0175, "palm_depth": 0.0584, "palm_height": 0.06, "closing_depth": 0.04,
@@ -26,3 +28,19 @@ PRESETS: dict[str, dict[str, float | str]] = {
                       "closing_depth": 0.05, "closing_width": 0.14, "closing_height": 0.02, "closing_force": 60.0,
                       "finger_mass": 0.04},
 }
+
+
+def gripper_fields(value: Any) -> Any:
+    """A gripper given as a preset's name, or as a mapping with ``preset: NAME`` or ``urdf: PATH`` (its finger
+    links, gripper_urdf) and overrides, as its fields."""
+    if isinstance(value, dict) and "urdf" in value:
+        from onepiece_dist.gripper_urdf import gripper_from_urdf
+
+        return {**gripper_from_urdf(value["urdf"]), **{k: v for k, v in value.items() if k != "urdf"}}
+    name = value if isinstance(value, str) else value.get("preset") if isinstance(value, dict) else None
+    if name is None:
+        return value
+    if name not in PRESETS:
+        raise ValueError(f"unknown gripper preset {name!r}: expected one of {', '.join(sorted(PRESETS))}")
+    overrides = {k: v for k, v in value.items() if k != "preset"} if isinstance(value, dict) else {}
+    return {**PRESETS[name], **overrides}

@@ -8,19 +8,19 @@ from typing import Any, Literal
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
+from onepiece_dist.frozen import Frozen
 from onepiece_dist.spec import (
     GripperSpec,
     JobSpec,
     SamplerSpec,
     SimSpec,
     VoxelSpec,
-    _Frozen,
     describe_validation_error,
     gripper_fields,
 )
 
 
-class PlanSpec(_Frozen):
+class PlanSpec(Frozen):
     """Grasps planned on one observed cloud: candidates sampled on it (GPD-style), cropped as the training crops
     are, scored by the network, ranked with pose-distance non-maximum suppression."""
 
@@ -45,7 +45,7 @@ class PlanSpec(_Frozen):
     seed: int = Field(0, ge=0, lt=2**63, description="Seed of the sampling and of the crops' resampling.")
 
 
-class CameraSpec(_Frozen):
+class CameraSpec(Frozen):
     """Where the pick benchmark's depth camera looks from: a seeded pose per view on a sphere around the object."""
 
     distance: tuple[float, float] = Field((0.5, 0.8), description="Camera distance from the object (m), drawn "
@@ -71,7 +71,7 @@ PICK_SIM = SimSpec(label_trials=4, success="every_trial")
 METHODS = ("network", "random", "analytic", "network_full_mesh")
 
 
-class PickSpec(_Frozen):
+class PickSpec(Frozen):
     """The simulated pick benchmark (docs/picks.md): each object settled on a table, seen by one depth camera from
     ``views`` seeded poses; the planner's best grasp executed by the label protocol, up to ``attempts`` tries."""
 

@@ -12,9 +12,12 @@ import math
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
+from onepiece_dist.frozen import Frozen
+from onepiece_dist.gripper_presets import gripper_fields
+from onepiece_dist.spec_labels import AdaptiveSpec, BudgetSpec, EvaluateSpec
 
 RESULTS_REVISION = 4  # bump when code changes what an extraction produces (2: one rigid body, coupled fingers;
 #                      3: parts keep the object's surface points and convex pieces, for patches; 4: fc_epsilon's
@@ -24,11 +27,7 @@ STAGES = ("ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"
 Stage = Literal["ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"]
 
 
-class _Frozen(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class GripperSpec(_Frozen):
+class GripperSpec(Frozen):
     """Parallel-jaw gripper, close to a Franka Panda hand.
 
     Gripper frame (see docs/gripper_frame.md): u = approach (palm to fingertips), v = closing axis,
@@ -66,7 +65,7 @@ class GripperSpec(_Frozen):
         return self
 
 
-class VoxelSpec(_Frozen):
+class VoxelSpec(Frozen):
     """Voxel grid over the closing region; ``resolution`` must divide each region extent."""
 
     resolution: float = Field(0.01, gt=0, le=0.1, description="Voxel edge length (m).")
@@ -87,7 +86,7 @@ class VoxelSpec(_Frozen):
         return (shape[0], shape[1], shape[2])
 
 
-class SamplerSpec(_Frozen):
+class SamplerSpec(Frozen):
     """Grasp candidate sampling."""
 
     method: Literal["antipodal", "normal"] = Field("antipodal",
@@ -109,7 +108,7 @@ class SamplerSpec(_Frozen):
         return self
 
 
-class SimSpec(_Frozen):
+class SimSpec(Frozen):
     """Physics of the extract stage (docs/trials.md)."""
 
     physics: bool = Field(True, description="Simulate each candidate (extract protocol) and crop at the settled "
@@ -148,7 +147,7 @@ class SimSpec(_Frozen):
         return (1 + self.perturbations_per_patch) * self.label_trials
 
 
-class ViewSpec(_Frozen):
+class ViewSpec(Frozen):
     """Depth views rendered in pybullet and partial-view crops (docs/views.md)."""
 
     count: int = Field(0, ge=0, le=256, description="Depth views per object from cameras spread on a sphere "
@@ -179,7 +178,7 @@ class ViewSpec(_Frozen):
         return self
 
 
-class ClosureSpec(_Frozen):
+class ClosureSpec(Frozen):
     """Analytic scores of each grasp at its settled pose (core.closure, docs/trials.md Analytic labels): force
     closure's smallest friction level and the Ferrari-Canny epsilon, on the source meshes and on the one object's
     patches."""
@@ -209,7 +208,7 @@ class ClosureSpec(_Frozen):
 
 
 
-class TrainSpec(_Frozen):
+class TrainSpec(Frozen):
     """The train stage: which network on which labelled grasps."""
 
     model: Literal["pointnet", "voxel"] = Field("pointnet",
@@ -237,95 +236,7 @@ class TrainSpec(_Frozen):
                                   "(docs/performance.md, What would lift B to R).")
 
 
-class BudgetSpec(_Frozen):
-    """Label only a seeded subset of the extracted candidates, on their own objects, spread over every object:
-    the R plan of a study as a job (service/budget.py). Give a count or a fraction, not both; neither labels as
-    the stages say (every candidate with sim.label, or the one object)."""
-
-    count: int | None = Field(None, ge=1, description="Candidates to label in all (at least one per object; more "
-                              "than there are labels them all).")
-    fraction: float | None = Field(None, description="Share of the extracted candidates to label, in (0, 1].")
-
-    @field_validator("fraction")
-    @classmethod
-    def _share(cls, fraction: float | None) -> float | None:
-        if fraction is not None and not 0 < fraction <= 1:
-            raise ValueError(f"{fraction}: a share of the candidates in (0, 1]")
-        return fraction
-
-    @model_validator(mode="after")
-    def _one_of(self) -> BudgetSpec:
-        if self.count is not None and self.fraction is not None:
-            raise ValueError("budget: give a count or a fraction, not both")
-        return self
-
-    @property
-    def enabled(self) -> bool:
-        return self.count is not None or self.fraction is not None
-
-    def size(self, candidates: int) -> int:
-        """How many of ``candidates`` the budget labels."""
-        if self.count is not None:
-            return min(self.count, candidates)
-        return min(candidates, max(1, math.ceil((self.fraction or 0) * candidates - 1e-9)))
-
-
-class RoundsRule(_Frozen):
-    """Labels chosen by a network in rounds: round 0 takes one candidate per voxel code, each later round those it
-    is least sure of; the rounds stop when the validation AP has not risen by more than ``margin`` for
-    ``patience`` rounds, or after ``rounds`` rounds. Shares are of the candidates."""
-
-    first: float = Field(0.02, gt=0, le=1, description="Round 0: this share of the candidates, one per voxel code.")
-    batch: float = Field(0.01, gt=0, le=1, description="Each later round: this share, where the network is least "
-                         "sure, one per code while codes last.")
-    rounds: int = Field(6, ge=0, le=100, description="Rounds after the first, at most.")
-    patience: int = Field(2, ge=1, le=100, description="Stop after this many rounds without a validation AP gain "
-                          "above margin.")
-    margin: float = Field(0.005, ge=0, le=1, description="The validation AP gain that counts as a rise.")
-
-    def count(self, share: float, candidates: int) -> int:
-        """Candidates for ``share`` of ``candidates``: at least one."""
-        return max(1, min(candidates, round(share * candidates)))
-
-    def stale(self, validation_aps: list[float]) -> int:
-        """Rounds since the validation AP last rose by more than ``margin`` over its best before."""
-        best, stale = -math.inf, 0
-        for ap in validation_aps:
-            best, stale = (ap, 0) if ap > best + self.margin else (best, stale + 1)
-        return stale
-
-
-class AdaptiveSpec(RoundsRule):
-    """Adaptive labelling (service/adaptive_job.py): the label stage in rounds. Every candidate is extracted; round
-    0 labels one candidate per voxel code (codes in a seeded order) and a fixed validation set on validation
-    objects held out from the rounds; after each round the trainer trains (warm start from the last round) and
-    scores every candidate; the next round labels those it is least sure of. The rounds also stop at ``limit``."""
-
-    enabled: bool = Field(False, description="Label in rounds chosen by the network (needs stages 'label' and "
-                          "'train', no 'assemble', sim.label false).")
-    limit: float = Field(0.1, gt=0, le=1, description="The label budget: stop before the labels exceed this share "
-                         "of the candidates.")
-    validation: float = Field(0.2, gt=0, lt=1, description="Share of the objects held out from the rounds; their "
-                              "validation_grasps labels measure each round's AP.")
-    validation_grasps: int = Field(16, ge=1, le=100_000, description="Candidates labelled on each validation "
-                                   "object in round 0 (at most its candidates).")
-    steps: int = Field(300, ge=1, le=1_000_000, description="Gradient steps of each round's training.")
-
-
-class EvaluateSpec(_Frozen):
-    """The evaluate stage: the trained network on objects it never saw, every candidate labelled by the same
-    protocol through the worker pool (a job of its own, ``<output>.eval.zarr``)."""
-
-    objects: str = Field("pybullet:random_urdfs[500:504]", description="Held-out objects (a source as in "
-                         "'objects'); none should be a train object.")
-    grasps_per_object: int = Field(32, ge=1, le=100_000, description="Candidates sampled and labelled per held-out "
-                                   "object.")
-    label_trials: int = Field(4, ge=1, le=32, description="K: label trials per held-out candidate; a candidate is a "
-                              "success when every one of the K held (the robust rule, sim.success: every_trial), so "
-                              "the held-out labels separate good grasps from lucky ones.")
-
-
-class JobSpec(_Frozen):
+class JobSpec(Frozen):
     """Everything a job needs. Workers receive exactly this object."""
 
     objects: str = Field("pybullet:named", description="Object source: a built-in set "
@@ -430,24 +341,6 @@ class JobSpec(_Frozen):
                                                          "sampler", "sim", "views", "closure"})
         relevant["results_revision"] = RESULTS_REVISION
         return hashlib.blake2b(json.dumps(relevant, sort_keys=True).encode(), digest_size=8).hexdigest()
-
-
-def gripper_fields(value: Any) -> Any:
-    """A gripper given as a preset's name, or as a mapping with ``preset: NAME`` or ``urdf: PATH`` (its finger
-    links, gripper_urdf) and overrides, as its fields."""
-    from onepiece_dist.gripper_presets import PRESETS
-
-    if isinstance(value, dict) and "urdf" in value:
-        from onepiece_dist.gripper_urdf import gripper_from_urdf
-
-        return {**gripper_from_urdf(value["urdf"]), **{k: v for k, v in value.items() if k != "urdf"}}
-    name = value if isinstance(value, str) else value.get("preset") if isinstance(value, dict) else None
-    if name is None:
-        return value
-    if name not in PRESETS:
-        raise ValueError(f"unknown gripper preset {name!r}: expected one of {', '.join(sorted(PRESETS))}")
-    overrides = {k: v for k, v in value.items() if k != "preset"} if isinstance(value, dict) else {}
-    return {**PRESETS[name], **overrides}
 
 
 def default_job_id(spec: JobSpec) -> str:

@@ -24,10 +24,12 @@ PACKAGE = ROOT / "onepiece_dist"
 BASE = {"errors", "spec"}
 LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "errors": (set(), set()),
-    "gripper_presets": (set(), set()),
+    "frozen": (set(), {"pydantic"}),  # the base of every spec and result model
     "gripper_urdf": ({"errors"}, {"numpy", "trimesh"}),  # a gripper from a URDF's finger links
-    "spec": ({"errors", "gripper_presets", "gripper_urdf"}, {"pydantic", "yaml"}),
-    "plan_spec": ({"errors", "spec"}, {"pydantic"}),
+    "gripper_presets": ({"gripper_urdf"}, set()),
+    "spec_labels": ({"frozen"}, {"pydantic"}),  # budget, adaptive rounds, evaluation
+    "spec": ({"errors", "frozen", "gripper_presets", "spec_labels"}, {"pydantic", "yaml"}),
+    "plan_spec": ({"errors", "frozen", "spec"}, {"pydantic"}),
     "core": (BASE, {"numpy", "open3d", "scipy"}),  # imported where used: open3d's ray casts, scipy's N-d qhull
     "objects": (BASE | {"core"}, {"numpy", "open3d", "trimesh", "pybullet_data", "pydantic", "yaml",
                                   "h5py"}),  # h5py: ACRONYM grasp files brought in (objects.foreign)
@@ -41,13 +43,13 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
                  "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
     "api": (BASE | {"plan_spec", "objects", "service", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
-    "study": (BASE | {"plan_spec", "api", "service", "learn", "store", "core", "objects"},
+    "study": (BASE | {"frozen", "spec_labels", "plan_spec", "api", "service", "learn", "store", "core", "objects"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
     "schemas": (BASE | {"plan_spec", "objects", "service", "store", "study"}, {"pydantic", "yaml"}),
     "cli_common": (BASE, {"typer", "rich"}),
     "cli_jobs": (BASE | {"api", "service", "cli_common"}, {"typer", "yaml"}),
     "cli_study": (BASE | {"study", "cli_common"}, {"typer"}),
-    "cli_plan": (BASE | {"plan_spec", "plan", "service", "cli_common"}, {"typer", "yaml", "numpy"}),
+    "cli_plan": (BASE | {"gripper_presets", "plan_spec", "plan", "service", "cli_common"}, {"typer", "yaml", "numpy"}),
     "cli_label": (BASE | {"api", "cli_common"}, {"typer"}),
     "cli": (BASE | {"api", "objects", "sim", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study",
                     "cli_plan", "cli_label"},

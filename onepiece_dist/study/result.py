@@ -7,18 +7,15 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from onepiece_dist.frozen import Frozen
 from onepiece_dist.study.spec import StudySpec
 
 FORMAT = 1  # bump when a field changes meaning
 
 
-class _Frozen(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class Measure(_Frozen):
+class Measure(Frozen):
     """A held-out measure over training seeds: its mean, its spread and its interval over held-out objects."""
 
     mean: float
@@ -28,7 +25,7 @@ class Measure(_Frozen):
                                           "scores).")
 
 
-class SeedRun(_Frozen):
+class SeedRun(Frozen):
     """One training run of an arm."""
 
     seed: int
@@ -41,7 +38,7 @@ class SeedRun(_Frozen):
     train_grasps: int
 
 
-class HeldoutScore(_Frozen):
+class HeldoutScore(Frozen):
     """An arm's network on the held-out objects: the success of each object's top-ranked grasp, the mean of its 5
     best, AP over every held-out grasp, accuracy at one half."""
 
@@ -53,7 +50,7 @@ class HeldoutScore(_Frozen):
     seeds: list[SeedRun]
 
 
-class ArmCost(_Frozen):
+class ArmCost(Frozen):
     """What an arm's labelled data cost to make. Core-seconds are summed inside the workers (and the central
     actor's stages), so they do not depend on how many workers ran."""
 
@@ -67,7 +64,7 @@ class ArmCost(_Frozen):
                                  "one object and labels, A's labelled grasps (R: its share of A's).")
 
 
-class AdaptiveRound(_Frozen):
+class AdaptiveRound(Frozen):
     """One round of the adaptive arm: its labels so far and the validation AP of the network trained on them."""
 
     round: int
@@ -75,7 +72,7 @@ class AdaptiveRound(_Frozen):
     validation_ap: float
 
 
-class Arm(_Frozen):
+class Arm(Frozen):
     """One arm: A (every candidate labelled on its own object), B (the one object at a similar-shape radius) or R
     (a random subset of A's labels, of a budget's size or of a B arm's size)."""
 
@@ -92,7 +89,7 @@ class Arm(_Frozen):
     within_a: bool = Field(description="Mean top-1 and mean AP both inside A's intervals or above them.")
 
 
-class Baselines(_Frozen):
+class Baselines(Frozen):
     """The held-out set and what needs no network: a random choice per object and an oracle."""
 
     objects: int
@@ -102,7 +99,7 @@ class Baselines(_Frozen):
     oracle: float = Field(description="Top-1 of an oracle (1 where the object has any good candidate).")
 
 
-class Premise(_Frozen):
+class Premise(Frozen):
     """How far a label computed once for a shape holds for the other grasps that share its code (B r<radius>
     against A's labels of the same candidates), and how much the code decides the label."""
 
@@ -119,7 +116,7 @@ class Premise(_Frozen):
                                         "the label's headroom over chance the code decides.")
 
 
-class LabelFit(_Frozen):
+class LabelFit(Frozen):
     """With a force-closure study: how well the train label itself, with no network, predicts the held-out truth
     (physics trials) on the held-out candidates, which carry both."""
 
@@ -135,7 +132,7 @@ class LabelFit(_Frozen):
                         "with the lowest fc_mu; mean over objects.")
 
 
-class LookupRanking(_Frozen):
+class LookupRanking(Frozen):
     """Held-out grasps ranked by the mean train label of their code among ``labels`` train labels."""
 
     labels: int
@@ -144,7 +141,7 @@ class LookupRanking(_Frozen):
     accuracy: float = Field(description="Accuracy of a score above one half.")
 
 
-class KeyLookup(_Frozen):
+class KeyLookup(Frozen):
     """The premise with perfect patches and no network (study.lookup): each held-out grasp looks its code up
     among A's train grasps and takes one train label of that code (B's one label per code) or the code's
     majority; and held-out grasps ranked by such lookups from every train label (A), one label per code (B), as
@@ -159,7 +156,7 @@ class KeyLookup(_Frozen):
     ranked: dict[str, LookupRanking] = Field(description="'A', 'B', 'R', 'S'.")
 
 
-class Decision(_Frozen):
+class Decision(Frozen):
     """The answer, first lines of the page: the cheapest plan as good as A, and whether the one object pays."""
 
     cheapest: str | None = Field(description="The arm with the lowest core-seconds whose top-1 and AP lie within "
@@ -183,7 +180,7 @@ class Decision(_Frozen):
                                          "reaches U's (None: no R arm does).")
 
 
-class KeyMeasure(_Frozen):
+class KeyMeasure(Frozen):
     """One key of spec.keys (study.keys): how many distinct keys A's grasps have and the key as a lookup."""
 
     name: str
@@ -193,7 +190,7 @@ class KeyMeasure(_Frozen):
     lookup: KeyLookup
 
 
-class Ceiling(_Frozen):
+class Ceiling(Frozen):
     """The label's own ceiling on a seeded sample of held-out candidates (core.ceiling), each labelled again by
     fresh executions: draws per grasp, their positive rate (the floor: a constant predictor's AP), the chance two
     executions of one grasp agree, the best AP against one execution as the draws alone show it (leave one out: a
@@ -214,7 +211,7 @@ class Ceiling(_Frozen):
         return None if span <= 1e-12 else (ap - self.positive_rate) / span
 
 
-class ArmPicks(_Frozen):
+class ArmPicks(Frozen):
     """An arm judged by picks: each seed's network's first choice per view, the per-object share picked (over
     views and seeds), its mean over objects with a bootstrap interval over objects."""
 
@@ -223,7 +220,7 @@ class ArmPicks(_Frozen):
     within_a: bool = Field(description="Its mean lies inside A's interval.")
 
 
-class PicksJudgement(_Frozen):
+class PicksJudgement(Frozen):
     """The arms judged by pick success from one depth view (spec.judge: picks or both)."""
 
     objects: int
@@ -236,7 +233,7 @@ class PicksJudgement(_Frozen):
     b_beats_random: dict[str, bool] = Field(description="B r against R ~B r: its mean at least R's.")
 
 
-class StudyResult(_Frozen):
+class StudyResult(Frozen):
     """A study's result: ``study.json``."""
 
     format: int = FORMAT

@@ -10,17 +10,15 @@ import json
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.spec import JobSpec, RoundsRule, describe_validation_error
+from onepiece_dist.frozen import Frozen
+from onepiece_dist.spec import JobSpec, describe_validation_error
+from onepiece_dist.spec_labels import RoundsRule
 
 
-class _Frozen(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class StudyTraining(_Frozen):
+class StudyTraining(Frozen):
     """How every arm's network trains: the same network, the same number of gradient steps, the learning rate its
     own validation split picks (never the held-out objects), several seeds."""
 
@@ -52,7 +50,7 @@ class StudyAdaptive(RoundsRule):
     """The adaptive arm U (study.adaptive): labels chosen by the network in rounds, among A's candidates."""
 
 
-class StudyKey(_Frozen):
+class StudyKey(Frozen):
     """A dedup key measured as a lookup (study.keys): occupancy at a resolution, a contact key (the relief under
     each pad, core.contact), or both concatenated."""
 
@@ -80,7 +78,7 @@ class StudyKey(_Frozen):
         return self
 
 
-class StudyPicks(_Frozen):
+class StudyPicks(Frozen):
     """How picks judge the arms (judge: picks or both): the pick benchmark's views of the held-out objects, each
     network's first choice executed by the study's label protocol (docs/picks.md)."""
 
@@ -88,7 +86,7 @@ class StudyPicks(_Frozen):
     objects: str | None = Field(None, description="The objects picked (default: the held-out objects).")
 
 
-class StudyTargets(_Frozen):
+class StudyTargets(Frozen):
     """What the report decides with: A's intervals and the cost targets a plan must meet to be called cheap."""
 
     confidence: float = Field(0.95, gt=0.5, lt=1, description="Level of the bootstrap intervals over held-out "
@@ -105,7 +103,7 @@ class StudyTargets(_Frozen):
                                   "intervals at no more than this share of A's label cost (core-seconds).")
 
 
-class StudySpec(_Frozen):
+class StudySpec(Frozen):
     """A study: arms A (every candidate labelled on its own object), B (the one object, per similar-shape radius)
     and R (random subsets of A's labels: one per label budget, the learning curve, and one the size of each B arm),
     trained alike and scored on held-out objects whose every candidate is labelled."""
