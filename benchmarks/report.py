@@ -371,7 +371,7 @@ def assembly_scaling_section(r: dict) -> list[str]:
 
 def render() -> str:
     from benchmarks.scaling_page import scaling_section
-    from onepiece_dist.study.experiment_page import static_section, variants_section
+    from onepiece_dist.study.experiment_sections import static_section, variants_section
 
     sections = [("bench_end_to_end", lambda r: end_to_end_section(r, load("sim"))),
                 ("candidates", candidates_section),

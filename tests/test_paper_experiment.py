@@ -122,7 +122,7 @@ def _variant_row(radius: int, variant: str, ap: float, top1: float) -> dict:
 
 
 def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labels_repeat():
-    page = importlib.import_module("onepiece_dist.study.experiment_page")
+    page = importlib.import_module("onepiece_dist.study.experiment_sections")
     rows = [_variant_row(radius, variant, ap, top1) for radius, variant, ap, top1 in (
         (0, "as_trained", 0.69, 0.84), (0, "representatives", 0.692, 0.87), (0, "source_labels", 0.72, 0.90),
         (2, "as_trained", 0.67, 0.83), (2, "representatives", 0.66, 0.82), (2, "source_labels", 0.70, 0.95))]

@@ -11,9 +11,10 @@ from typer.testing import CliRunner
 
 from onepiece_dist.cli import app
 from onepiece_dist.core.mesh import box_mesh, make_mesh, sample_surface
+from onepiece_dist.core.repair import fan_fill
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_mesh_bytes
-from onepiece_dist.objects.supplement import estimate_normals, fan_fill, hausdorff, supplement_scan
+from onepiece_dist.objects.supplement import estimate_normals, hausdorff, supplement_scan
 from onepiece_dist.service.local import run_local
 from tests.factories import noisy_scan, torus_mesh
 

@@ -5,7 +5,9 @@
 - :func:`connected_pieces`: how many disconnected pieces the faces form (kept as parts of one rigid object);
 - :func:`boundary_edges` and :func:`closed_volume`: an open surface's volume with every hole capped by a fan from
   the hole's centroid (a scan open at its base gets its base back), for the object's mass. The surface the gripper
-  crops stays the original one: caps only enter the volume.
+  crops stays the original one: caps only enter the volume;
+- :func:`fan_fill`: the same caps as triangles, for a reconstructed scan that must come out watertight
+  (objects.supplement).
 
 Only additions and products (no transcendental functions), so every CPU gives the same volume.
 """
@@ -88,3 +90,43 @@ def _rim_components(rims: np.ndarray, vertex_count: int) -> tuple[np.ndarray, in
     hole = np.full(vertex_count, -1, dtype=np.int64)
     hole[on_rim] = dense.ravel()
     return hole, len(ids)
+
+
+def fan_fill(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """vertices (V, 3), faces (F, 3) -> the same plus one centroid vertex and a fan per boundary loop,
+    wound to match the surrounding faces."""
+    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
+    n = len(vertices)
+    keys = directed[:, 0] * n + directed[:, 1]
+    boundary = directed[~np.isin(keys, directed[:, 1] * n + directed[:, 0])]
+    if len(boundary) == 0:
+        return vertices, faces
+    following: dict[int, list[int]] = {}
+    for a, b in boundary.tolist():
+        following.setdefault(a, []).append(b)
+    extra_vertices, extra_faces = [], []
+    for loop in _walk_loops(following):
+        centre = n + len(extra_vertices)
+        extra_vertices.append(vertices[loop].mean(axis=0))
+        extra_faces += [[b, a, centre] for a, b in zip(loop, loop[1:] + loop[:1], strict=True)]
+    return np.vstack([vertices, extra_vertices]), np.vstack([faces, np.asarray(extra_faces, dtype=faces.dtype)])
+
+
+def _walk_loops(following: dict[int, list[int]]) -> list[list[int]]:
+    """Closed vertex loops of directed boundary edges {start: [ends]}; a vertex where two loops touch is
+    walked once per loop. Walks that do not close are dropped (the watertight check then refuses)."""
+    loops = []
+    while following:
+        start = next(iter(following))
+        loop, current = [start], start
+        while following.get(current):
+            ends = following[current]
+            following_vertex = ends.pop()
+            if not ends:
+                del following[current]
+            if following_vertex == start:
+                loops.append(loop)
+                break
+            loop.append(following_vertex)
+            current = following_vertex
+    return loops

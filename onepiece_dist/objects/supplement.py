@@ -19,6 +19,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from onepiece_dist.core.mesh import TriangleMesh, make_mesh, min_width
+from onepiece_dist.core.repair import fan_fill
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_mesh_bytes, write_obj
 
@@ -286,46 +287,6 @@ def _fill_holes(mesh):
     filled = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(new_vertices),
                                        o3d.utility.Vector3iVector(new_faces))
     return filled
-
-
-def fan_fill(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """vertices (V, 3), faces (F, 3) -> the same plus one centroid vertex and a fan per boundary loop,
-    wound to match the surrounding faces."""
-    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]).astype(np.int64)
-    n = len(vertices)
-    keys = directed[:, 0] * n + directed[:, 1]
-    boundary = directed[~np.isin(keys, directed[:, 1] * n + directed[:, 0])]
-    if len(boundary) == 0:
-        return vertices, faces
-    following: dict[int, list[int]] = {}
-    for a, b in boundary.tolist():
-        following.setdefault(a, []).append(b)
-    extra_vertices, extra_faces = [], []
-    for loop in _walk_loops(following):
-        centre = n + len(extra_vertices)
-        extra_vertices.append(vertices[loop].mean(axis=0))
-        extra_faces += [[b, a, centre] for a, b in zip(loop, loop[1:] + loop[:1], strict=True)]
-    return np.vstack([vertices, extra_vertices]), np.vstack([faces, np.asarray(extra_faces, dtype=faces.dtype)])
-
-
-def _walk_loops(following: dict[int, list[int]]) -> list[list[int]]:
-    """Closed vertex loops of directed boundary edges {start: [ends]}; a vertex where two loops touch is
-    walked once per loop. Walks that do not close are dropped (the watertight check then refuses)."""
-    loops = []
-    while following:
-        start = next(iter(following))
-        loop, current = [start], start
-        while following.get(current):
-            ends = following[current]
-            following_vertex = ends.pop()
-            if not ends:
-                del following[current]
-            if following_vertex == start:
-                loops.append(loop)
-                break
-            loop.append(following_vertex)
-            current = following_vertex
-    return loops
 
 
 def _boundary_edges(mesh) -> int:
