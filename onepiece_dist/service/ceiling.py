@@ -1,4 +1,4 @@
-"""The label's own ceiling on a held-out dataset (core.ceiling): a seeded sample of its candidates labelled again,
+"""The label drawn again on a held-out dataset, for its own ceiling (core.ceiling): a seeded sample of its candidates,
 each several times, every draw a new execution of the job's label protocol (sim.trials.label_draws).
 
 Runs where it is called, its simulation in a pinned process (service.pinned_child): one object at a time, each
@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.ceiling import LabelCeiling, label_ceiling
 from onepiece_dist.core.mesh import enclosed_volume
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.spec import JobSpec
@@ -51,7 +50,7 @@ def heldout_label_draws(job: JobSpec, dataset: str, sample: int, draws: int, see
     rows = sample_rows(len(owner), sample, seed)
     poses = reader["grasps/candidate_pose"][...].astype(np.float64)
     ids = [bytes(row).hex() for row in reader["objects/id"]]
-    refs = {load_object(ref, job).content_id: ref for ref in resolve_source(job.objects) if _loads(ref, job)}
+    refs = _refs_by_content_id(job)
     simulate, found = PinnedSimulation(), []
     try:
         for k in np.unique(owner[rows]):
@@ -63,16 +62,14 @@ def heldout_label_draws(job: JobSpec, dataset: str, sample: int, draws: int, see
     return rows, np.concatenate(found)
 
 
-def heldout_ceiling(job: JobSpec, dataset: str, sample: int, draws: int, seed: int) -> LabelCeiling:
-    """The ceiling of ``job``'s label on a seeded sample of its dataset's candidates (heldout_label_draws)."""
-    return label_ceiling(heldout_label_draws(job, dataset, sample, draws, seed)[1])
-
-
-def _loads(ref: ObjectRef, job: JobSpec) -> bool:
+def _refs_by_content_id(job: JobSpec) -> dict[str, ObjectRef]:
+    """{content id: reference} of every object of ``job.objects`` that loads (each loaded once)."""
     from onepiece_dist.errors import MeshRejected
 
-    try:
-        load_object(ref, job)
-        return True
-    except MeshRejected:
-        return False
+    found = {}
+    for ref in resolve_source(job.objects):
+        try:
+            found[load_object(ref, job).content_id] = ref
+        except MeshRejected:
+            continue
+    return found
