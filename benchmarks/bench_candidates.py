@@ -44,8 +44,8 @@ from onepiece_dist.core.sampling import (  # noqa: E402
     object_rng,
     sample_candidates,
 )
+from onepiece_dist.job.stages.extract import extract_arrays  # noqa: E402
 from onepiece_dist.objects import load_object, resolve_source  # noqa: E402
-from onepiece_dist.service.extract import extract_arrays  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
 
 OBJECT = "pybullet:random_urdfs[0:1]"
@@ -119,8 +119,8 @@ def profile(spec: JobSpec, mesh) -> dict:
 
 
 def label_profile() -> dict:
-    from onepiece_dist.service.label_one import label_patches, label_tasks
-    from onepiece_dist.service.local import run_local
+    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.job.stages.label_one_object import label_patches, label_tasks
 
     output = str(Path(tempfile.mkdtemp(prefix="onepiece-label-")) / "one.zarr")
     spec = JobSpec(objects="pybullet:random_urdfs[0:4]", grasps_per_object=200, output=output,

@@ -71,7 +71,7 @@ def patch_formula(formula: str) -> None:
 
         sampling.sin_cos = lambda angle: (np.sin(angle), np.cos(angle))
     elif formula == "blas":
-        import onepiece_dist.service.patches as patches
+        import onepiece_dist.job.stages.patches as patches
 
         patches.rotate_points = lambda points, rot: np.asarray(points, dtype=np.float64) @ rot
     elif formula in ("embree", "embree+1ulp"):
@@ -102,7 +102,7 @@ def run_one(job: str, formula: str, keep: Path) -> dict[str, str]:
     """Run ``job`` in this process; save the arrays in SAVED to ``keep`` (.npz). -> {array: digest}"""
     import zarr
 
-    from onepiece_dist.service.local import run_local
+    from onepiece_dist.job.runtime.local import run_local
 
     patch_formula(formula)
     with tempfile.TemporaryDirectory() as scratch:

@@ -83,7 +83,7 @@ def main() -> dict:
                    train={"model": args.train_model, "epochs": args.train_epochs})
     import ray
 
-    from onepiece_dist.service.ray_env import connect
+    from onepiece_dist.job.runtime.ray_env import connect
 
     protocols = ProtocolClock(spec, folder)
     protocols.time()  # before Ray starts: one core, nothing else running
@@ -207,8 +207,8 @@ def patch_ranges(patches: int) -> list[tuple[int, int]]:
 
 def timed_patch_protocol(spec_json: str, dataset: str, ranges: list[tuple[int, int]], start_at: float) -> list[float]:
     """(In the child process) seconds per repeat of labelling the patches of ``ranges`` as the label stage does."""
-    from onepiece_dist.service.label_one import label_patches
-    from onepiece_dist.service.results import LabelTask
+    from onepiece_dist.job.results import LabelTask
+    from onepiece_dist.job.stages.label_one_object import label_patches
 
     spec = JobSpec.model_validate_json(spec_json)
     tasks = [LabelTask(start, stop, dataset, "protocol") for start, stop in ranges]

@@ -53,9 +53,9 @@ def scenes():
 def scorer(folder: Path, device: str = "cpu"):
     import torch
 
+    from onepiece_dist.job.runtime.trainer import crop_record
     from onepiece_dist.learn.models import PointNetGrasp
     from onepiece_dist.plan.scorer import GraspScorer
-    from onepiece_dist.service.trainer import crop_record
     from onepiece_dist.spec import JobSpec
 
     path = folder / "pointnet.pt"

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-from onepiece_dist.service.local import run_local  # noqa: E402
+from onepiece_dist.job.runtime.local import run_local  # noqa: E402
 from onepiece_dist.spec import JobSpec  # noqa: E402
 from onepiece_dist.store import open_dataset  # noqa: E402
 

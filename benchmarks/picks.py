@@ -52,8 +52,8 @@ def training_summary(status) -> dict:
 
 
 def run_set(name: str, objects: str, source: str, checkpoint: Path, folder: Path) -> dict:
+    from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.plan_spec import PickSpec
-    from onepiece_dist.service.pick_runner import run_picks
 
     spec = PickSpec(objects=objects, checkpoint=str(checkpoint), output=str(folder / name), views=VIEWS,
                     attempts=ATTEMPTS, pictures=PICTURES)

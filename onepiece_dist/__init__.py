@@ -1,8 +1,8 @@
 """OnePiece-Dist: cheap grasp datasets by the ONE PIECE method, on Ray.
 
 Layers (imports go downward only; docs/architecture.md, checked by tests/test_layers.py): ``core`` <- ``objects``
-<- ``sim``; ``store`` <- ``learn``; all of them <- ``service`` <- ``api`` <- ``cli``. ``spec`` and ``errors`` are
-under every layer (``store`` uses ``errors`` only).
+<- ``sim``; ``store`` <- ``learn`` <- ``plan``; all of them <- ``job`` <- ``picks`` <- ``api`` <- ``study`` <- ``cli``.
+``spec`` and ``errors`` are under every layer (``store`` uses ``errors`` only).
 
 The names below load on first use, so ``onepiece_dist.learn.dataset`` (the reader) imports with numpy, zarr and
 torch alone.

@@ -47,7 +47,7 @@ _err = err
 
 def _version(value: bool) -> None:
     if value:
-        from onepiece_dist.service.registry import package_version
+        from onepiece_dist.job.runtime.registry import package_version
 
         typer.echo(f"onepiece-dist {package_version()}")
         raise typer.Exit()
@@ -190,7 +190,7 @@ def export(
     """Export the one object (OBJ, PLY, URDF, a URDF per patch) or the labelled grasps in ACRONYM's or GraspGen's
     format (docs/dataset_format.md, Other formats)."""
     from onepiece_dist.errors import MeshRejected
-    from onepiece_dist.service.assemble import export_assembly
+    from onepiece_dist.job.stages.assemble import export_assembly
 
     formats = ("obj", "ply", "urdf", *FOLDER_FORMATS)
     if fmt not in formats:
@@ -198,11 +198,11 @@ def export(
         raise typer.Exit(EXIT_USAGE)
     try:
         if fmt == "acronym":
-            from onepiece_dist.service.exports import export_acronym
+            from onepiece_dist.job.exports.grasp_files import export_acronym
 
             written = export_acronym(dataset, out)
         elif fmt == "graspgen":
-            from onepiece_dist.service.exports import export_graspgen
+            from onepiece_dist.job.exports.grasp_files import export_graspgen
 
             chosen = tuple(name.strip() for name in valid_objects.split(",") if name.strip())
             written = export_graspgen(dataset, out, valid_fraction, chosen)
@@ -211,7 +211,7 @@ def export(
 
             written = [copy_delivered(dataset, out)]
         elif fmt == "urdf-patches":
-            from onepiece_dist.service.patch_export import export_patches
+            from onepiece_dist.job.exports.patch_urdfs import export_patches
 
             written = export_patches(dataset, out)
         else:
@@ -233,7 +233,7 @@ def render(
 ) -> None:
     """Draw the assembled object (patches coloured by plane), optionally labelled grasps with the gripper (green
     held, red dropped), and a gallery of codes with their projections."""
-    from onepiece_dist.service.render import render_assembly
+    from onepiece_dist.job.exports.render import render_assembly
 
     try:
         render_assembly(dataset, out, grasps, hand)

@@ -169,9 +169,9 @@ def list_jobs(
 
 def cluster_info(address: Address = None) -> None:
     """(Run inside the cluster by clients.) Print the package version and the job registry as one marked line."""
-    from onepiece_dist.service.ray_env import connect
-    from onepiece_dist.service.registry import CLUSTER_INFO_MARK
-    from onepiece_dist.service.registry import cluster_info as read_cluster
+    from onepiece_dist.job.runtime.ray_env import connect
+    from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK
+    from onepiece_dist.job.runtime.registry import cluster_info as read_cluster
 
     connect(address or "auto")
     typer.echo(CLUSTER_INFO_MARK + json.dumps(read_cluster()))

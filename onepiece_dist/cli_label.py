@@ -1,5 +1,5 @@
 """`onepiece label --grasps FILE`: grasps made elsewhere (ACRONYM .h5, GraspGen .json), labelled by our protocol on
-their meshes, written as our dataset, with how often our label agrees with theirs (service.relabel)."""
+their meshes, written as our dataset, with how often our label agrees with theirs (job.relabel)."""
 
 from __future__ import annotations
 

@@ -130,8 +130,8 @@ def pick(
 ) -> None:
     """The simulated pick benchmark: objects settled on a table, one depth camera, the planner's best grasp executed
     with the label protocol; first-attempt and within-k pick success beside three baselines."""
+    from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.plan_spec import parse_pick_spec
-    from onepiece_dist.service.pick_runner import run_picks
 
     given = _spec_mapping(spec_file)
     given.update({"checkpoint": str(checkpoint), "objects": objects, "output": str(out), "views": views,

@@ -5,9 +5,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from onepiece_dist.job.status import JobStatus
 from onepiece_dist.objects.supplement import SupplementReport, SupplementSpec
 from onepiece_dist.plan_spec import PickSpec, PlanSpec
-from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.layout import ARRAYS, DatasetAttributes
 from onepiece_dist.study.result import StudyResult

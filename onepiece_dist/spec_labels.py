@@ -12,7 +12,7 @@ from onepiece_dist.frozen import Frozen
 
 class BudgetSpec(Frozen):
     """Label only a seeded subset of the extracted candidates, on their own objects, spread over every object:
-    the R plan of a study as a job (service/budget.py). Give a count or a fraction, not both; neither labels as
+    the R plan of a study as a job (job/stages/label_budget.py). Give a count or a fraction, not both; neither labels as
     the stages say (every candidate with sim.label, or the one object)."""
 
     count: int | None = Field(None, ge=1, description="Candidates to label in all (at least one per object; more "
@@ -69,7 +69,7 @@ class RoundsRule(Frozen):
 
 
 class AdaptiveSpec(RoundsRule):
-    """Adaptive labelling (service/adaptive_job.py): the label stage in rounds. Every candidate is extracted; round
+    """Adaptive labelling (job/stages/label_rounds.py): the label stage in rounds. Every candidate is extracted; round
     0 labels one candidate per voxel code (codes in a seeded order) and a fixed validation set on validation
     objects held out from the rounds; after each round the trainer trains (warm start from the last round) and
     scores every candidate; the next round labels those it is least sure of. The rounds also stop at ``limit``."""

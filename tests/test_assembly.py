@@ -19,9 +19,9 @@ from onepiece_dist.core.layout import (
     region_codes,
 )
 from onepiece_dist.core.spatial import PointGrid
-from onepiece_dist.service.assemble import one_object_points
-from onepiece_dist.service.local import run_local
-from onepiece_dist.service.patches import QUANTUM_LEVELS, read_patches
+from onepiece_dist.job.runtime.local import run_local
+from onepiece_dist.job.stages.assemble import one_object_points
+from onepiece_dist.job.stages.patches import QUANTUM_LEVELS, read_patches
 from onepiece_dist.spec import GripperSpec
 from onepiece_dist.store import open_dataset
 
@@ -130,7 +130,7 @@ def test_format_2_stores_each_source_once_and_derives_the_points_the_label_stage
     import hashlib
 
     from onepiece_dist.core.layout import assembly_geometry, layout_patches
-    from onepiece_dist.service.patches import build_patches
+    from onepiece_dist.job.stages.patches import build_patches
     from onepiece_dist.store import PartStore
 
     spec, out, _ = small_dataset
@@ -171,7 +171,7 @@ def test_a_dataset_of_an_older_format_is_refused_with_its_version_named(small_da
 
 
 def source_surface(spec, out, obj: int) -> np.ndarray:
-    from onepiece_dist.service.results import part_key
+    from onepiece_dist.job.results import part_key
     from onepiece_dist.store import PartStore
 
     content_id = bytes(open_dataset(out)["objects/id"][obj]).hex()
@@ -399,7 +399,7 @@ def test_a_job_that_labels_on_the_one_object_keeps_points_only_for_representativ
 
 
 def test_agreement_counts_equal_outcomes_and_correlates_qualities():
-    from onepiece_dist.service.transfer import agreement
+    from onepiece_dist.job.stages.label_transfer import agreement
 
     pairs = [((1.0, 1.0), (1.0, 0.75)), ((0.0, 0.0), (1.0, 0.25)), ((1.0, 0.5), (1.0, 0.5))]
     result = agreement(pairs)
@@ -425,7 +425,7 @@ def test_point_grid_box_queries_equal_brute_force(count, cell, seed):
 
 @pytest.mark.parametrize("rows", [1, 7, 256])
 def test_the_chamfer_distance_taken_in_row_blocks_is_the_brute_force_one(rows):
-    from onepiece_dist.service.assemble import chamfer_distance
+    from onepiece_dist.job.stages.assemble import chamfer_distance
 
     rng = np.random.default_rng(rows)
     a, b = rng.normal(size=(300, 3)), rng.normal(size=(41, 3)) + 0.5
@@ -464,8 +464,8 @@ def test_the_delivered_copy_leaves_the_extraction_records_and_reads_as_the_origi
 
 
 def test_patches_cut_in_shards_equal_the_ones_cut_in_one_go_and_a_resumed_stage_reuses_its_shards(small_dataset):
-    from onepiece_dist.service.patch_shards import build_patch_shard, merge_patch_shards, patch_tasks
-    from onepiece_dist.service.patches import build_patches
+    from onepiece_dist.job.stages.patch_shards import build_patch_shard, merge_patch_shards, patch_tasks
+    from onepiece_dist.job.stages.patches import build_patches
     from onepiece_dist.store import PartStore
 
     spec, out, _ = small_dataset

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.service.budget import allocate, budget_rows
+from onepiece_dist.job.stages.label_budget import allocate, budget_rows
 from onepiece_dist.spec import JobSpec, parse_job_spec
 from onepiece_dist.store import open_dataset
 from onepiece_dist.store.dataset import content_digest
@@ -45,7 +45,7 @@ def budget_spec(tmp_path, name: str, **budget) -> JobSpec:
 
 @pytest.mark.sim
 def test_a_count_below_the_objects_is_refused_before_any_work(tmp_path):
-    from onepiece_dist.service.local import run_local
+    from onepiece_dist.job.runtime.local import run_local
 
     with pytest.raises(SpecError, match=r"budget\.count=3 is below the job's 4 objects"):
         run_local(budget_spec(tmp_path, "few", count=3))
@@ -55,8 +55,8 @@ def test_a_count_below_the_objects_is_refused_before_any_work(tmp_path):
 @pytest.mark.sim
 @pytest.mark.slow
 def test_a_budget_job_labels_exactly_its_budget_over_every_object_and_again_the_same(tmp_path):
+    from onepiece_dist.job.runtime.local import run_local
     from onepiece_dist.learn.dataset import GraspDataset
-    from onepiece_dist.service.local import run_local
 
     first = run_local(budget_spec(tmp_path, "a", count=10))
     ds = open_dataset(tmp_path / "a.zarr")

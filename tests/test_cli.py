@@ -139,7 +139,7 @@ def test_wait_on_a_path_without_a_status_exits_2(tmp_path):
 
 
 def write_running_status(path: Path, driver: str) -> None:
-    from onepiece_dist.service.status import JobStatus
+    from onepiece_dist.job.status import JobStatus
 
     JobStatus(job_id="job-x", state="running", stage="extract", output=str(path), driver=driver).save(path)
 

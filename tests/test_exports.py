@@ -20,8 +20,8 @@ from onepiece_dist.core.hand_frames import (
     to_panda,
 )
 from onepiece_dist.errors import PathEscape
+from onepiece_dist.job.exports.grasp_files import ExportFolder, safe_names
 from onepiece_dist.learn.dataset import GraspDataset, pointnetgpd_crop
-from onepiece_dist.service.exports import ExportFolder, safe_names
 from onepiece_dist.store import open_dataset
 
 OBJECTS = "pybullet:named[3:4]+pybullet:random_urdfs[0:2]"  # the duck, and names with a '/' in them
@@ -210,7 +210,7 @@ def test_the_per_patch_export_loads_in_pybullet_with_the_label_stages_mass_rule(
 
 
 def test_exports_without_what_they_need_are_refused_with_the_reason(tmp_path):
-    from onepiece_dist.service.local import run_local
+    from onepiece_dist.job.runtime.local import run_local
     from onepiece_dist.spec import JobSpec
 
     bare = tmp_path / "bare.zarr"
@@ -348,8 +348,8 @@ def test_our_exports_brought_back_in_are_the_same_grasps_and_get_our_labels_agai
 
 def test_grasp_files_that_cannot_be_brought_in_are_refused_naming_the_file_and_the_fix(tmp_path):
     from onepiece_dist.errors import SourceError
+    from onepiece_dist.job.relabel import relabel_spec
     from onepiece_dist.objects.foreign import read_foreign_grasps
-    from onepiece_dist.service.relabel import relabel_spec
 
     (tmp_path / "grasps").mkdir()
     (tmp_path / "meshes").mkdir()

@@ -56,8 +56,8 @@ def test_a_finger_mesh_outside_the_urdfs_folder_is_refused(tmp_path, panda_urdf)
 
 @pytest.mark.sim
 def test_a_job_with_the_urdfs_gripper_grasps_a_box(panda_urdf, tmp_path):
+    from onepiece_dist.job.stages.extract import extract_object
     from onepiece_dist.objects import resolve_source
-    from onepiece_dist.service.extract import extract_object
     from onepiece_dist.store import PartStore
 
     spec = JobSpec(gripper={"urdf": str(panda_urdf)}, grasps_per_object=8, output=str(tmp_path / "d.zarr"))

@@ -9,8 +9,8 @@ import pytest
 
 from onepiece_dist.core.mesh import signed_volume
 from onepiece_dist.errors import MeshRejected
+from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.service.extract import extract_object
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 
@@ -143,7 +143,7 @@ def test_a_centimetre_copy_is_refused_with_the_units_that_fit_and_accepted_with_
 
 
 def test_an_object_that_keeps_few_grasps_says_why(household, tmp_path):
-    from onepiece_dist.service.extract import shortfall
+    from onepiece_dist.job.stages.extract import shortfall
 
     spec = JobSpec(grasps_per_object=16, gripper={"max_opening": 0.03, "closing_width": 0.03,
                                                   "finger_thickness": 0.005},

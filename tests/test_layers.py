@@ -38,20 +38,25 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "learn": ({"errors", "spec", "store"}, {"numpy", "torch", "zarr"}),
     # planning on a camera's cloud: candidates, crops as the training's, the network's scores, the picture
     "plan": (BASE | {"plan_spec", "core", "learn"}, {"numpy", "torch", "open3d", "matplotlib"}),
-    "service": (BASE | {"plan_spec", "core", "objects", "sim", "store", "learn", "plan"},
-                {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
-                 "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
-    "api": (BASE | {"plan_spec", "objects", "service", "store"}, {"ray"}),
+    # the job: its pipeline, contracts and status; stages/ (what a worker or the writer does), runtime/ (in process,
+    # a pinned child, Ray), exports/ (files only the CLI writes); job/relabel.py and job/label_draws.py run on it
+    "job": (BASE | {"plan_spec", "core", "objects", "sim", "store", "learn", "plan"},
+            {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
+             "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
+    # the pick benchmark: one object's views and choosers, a task per object on the job's worker pool
+    "picks": (BASE | {"plan_spec", "core", "objects", "sim", "plan", "job"}, {"numpy", "ray", "torch", "pydantic"}),
+    "api": (BASE | {"plan_spec", "objects", "job", "picks", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
-    "study": (BASE | {"frozen", "spec_labels", "plan_spec", "api", "service", "learn", "store", "core", "objects"},
+    "study": (BASE | {"frozen", "spec_labels", "plan_spec", "api", "job", "picks", "learn", "store", "core", "objects"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
-    "schemas": (BASE | {"plan_spec", "objects", "service", "store", "study"}, {"pydantic", "yaml"}),
+    "schemas": (BASE | {"plan_spec", "objects", "job", "picks", "store", "study"}, {"pydantic", "yaml"}),
     "cli_common": (BASE, {"typer", "rich"}),
-    "cli_jobs": (BASE | {"api", "service", "cli_common"}, {"typer", "yaml"}),
+    "cli_jobs": (BASE | {"api", "job", "cli_common"}, {"typer", "yaml"}),
     "cli_study": (BASE | {"study", "cli_common"}, {"typer"}),
-    "cli_plan": (BASE | {"gripper_presets", "plan_spec", "plan", "service", "cli_common"}, {"typer", "yaml", "numpy"}),
+    "cli_plan": (BASE | {"gripper_presets", "plan_spec", "plan", "job", "picks", "cli_common"},
+                 {"typer", "yaml", "numpy"}),
     "cli_label": (BASE | {"api", "cli_common"}, {"typer"}),
-    "cli": (BASE | {"api", "objects", "sim", "service", "store", "schemas", "cli_common", "cli_jobs", "cli_study",
+    "cli": (BASE | {"api", "objects", "sim", "job", "store", "schemas", "cli_common", "cli_jobs", "cli_study",
                     "cli_plan", "cli_label"},
             {"typer", "rich", "yaml", "pydantic"}),
 }
@@ -96,8 +101,8 @@ def test_every_module_imports_only_its_layer_and_those_below(path):
 
 def test_the_layer_guard_sees_a_forbidden_import(tmp_path):
     module = tmp_path / "bad.py"
-    module.write_text("def f():\n    import ray\n    from onepiece_dist.service import pipeline\n")
-    assert imports_of(module) == {"ray", "onepiece_dist.service"}
+    module.write_text("def f():\n    import ray\n    from onepiece_dist.job import pipeline\n")
+    assert imports_of(module) == {"ray", "onepiece_dist.job"}
 
 
 @pytest.mark.parametrize("name", sorted(render_schemas()))

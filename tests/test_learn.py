@@ -14,9 +14,9 @@ from typer.testing import CliRunner
 
 from onepiece_dist.cli import app
 from onepiece_dist.errors import StoreError
+from onepiece_dist.job.stages.evaluate import top_ranked_success
 from onepiece_dist.learn import ChunkBatchSampler, GraspDataset
 from onepiece_dist.learn.train import average_precision, load_checkpoint, load_model, predict, train_model
-from onepiece_dist.service.evaluate import top_ranked_success
 from onepiece_dist.spec import TrainSpec
 from tests.factories import synthetic_labelled_dataset
 
@@ -201,8 +201,8 @@ def test_the_reader_imports_with_numpy_zarr_and_torch_alone(synthetic):
 
 
 def test_device_selection_here_and_for_the_trainer_actor():
+    from onepiece_dist.job.runtime.trainer import trainer_gpus
     from onepiece_dist.learn.train import resolve_device
-    from onepiece_dist.service.trainer import trainer_gpus
 
     assert resolve_device("cpu").type == "cpu"
     assert resolve_device("auto").type == ("cuda" if torch.cuda.is_available() else "cpu")

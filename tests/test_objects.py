@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from onepiece_dist.errors import SourceError
+from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.service.extract import extract_object
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from tests.factories import box_obj_text, broken_inputs_folder, urdf_text
@@ -139,7 +139,7 @@ def test_a_folder_manifest_gives_units_scale_mass_and_friction_per_object(tmp_pa
     import pybullet as pb
 
     from onepiece_dist.core.mesh import box_mesh
-    from onepiece_dist.service.extract import extract_object
+    from onepiece_dist.job.stages.extract import extract_object
     from onepiece_dist.store import PartStore
 
     box = box_mesh((4.0, 3.0, 6.0))  # centimetres

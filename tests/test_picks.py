@@ -10,9 +10,9 @@ import pytest
 
 from onepiece_dist.core.frames import pose_from_axes
 from onepiece_dist.core.mesh import box_mesh
+from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks
+from onepiece_dist.picks.runner import run_picks, summarise
 from onepiece_dist.plan_spec import PickSpec
-from onepiece_dist.service.pick import ObjectPicks, ViewPicks
-from onepiece_dist.service.pick_runner import run_picks, summarise
 from onepiece_dist.spec import GripperSpec
 from tests.test_plan import save_checkpoint
 

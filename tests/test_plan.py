@@ -52,8 +52,8 @@ def save_checkpoint(path, spec: JobSpec | None = None, seed: int = 0):
 def test_a_planned_grasps_crop_is_the_training_crop_of_the_same_pose_and_view(tmp_path):
     """A job with partial-view crops stores, per grasp, the points and code cut from the view nearest its approach;
     the planner's crop of that view's cloud at that pose is the same code and the same points."""
+    from onepiece_dist.job.stages.extract import crop_codes_from, extract_arrays
     from onepiece_dist.plan.scorer import CropRecord
-    from onepiece_dist.service.extract import crop_codes_from, extract_arrays
     from onepiece_dist.sim.views import camera_for_grasps
 
     spec = JobSpec(grasps_per_object=12, sim={"physics": False, "collision": "hull", "points_per_grasp": 64},
@@ -188,7 +188,7 @@ def test_onepiece_grasp_writes_json_and_a_picture_and_refuses_bad_input(tmp_path
 
 
 def test_the_evaluation_judges_by_the_robust_rule_and_says_when_it_cannot_separate():
-    from onepiece_dist.service.evaluate import evaluation_spec, protocol_of, verdict
+    from onepiece_dist.job.stages.evaluate import evaluation_spec, protocol_of, verdict
 
     heldout = evaluation_spec(JobSpec(evaluate={"label_trials": 6}))
     assert (heldout.sim.label, heldout.sim.label_trials, heldout.sim.success) == (True, 6, "every_trial")
@@ -202,8 +202,8 @@ def test_the_evaluation_judges_by_the_robust_rule_and_says_when_it_cannot_separa
 def test_a_job_sampling_on_views_trains_on_the_planners_crops(tmp_path):
     """views.sampling: view samples candidates as the planner samples a camera's cloud: each grasp is free of the
     view it was sampled on, and its stored code and points are that view's crop at its pose."""
+    from onepiece_dist.job.stages.extract import extract_arrays
     from onepiece_dist.plan.scorer import CropRecord
-    from onepiece_dist.service.extract import extract_arrays
 
     spec = JobSpec(grasps_per_object=16, sim={"physics": False, "collision": "hull", "points_per_grasp": 32},
                    views={"count": 3, "crop": "partial", "sampling": "view", "image_size": 160, "distance": 0.4})
@@ -230,7 +230,7 @@ def test_a_view_sampled_job_keeps_candidates_that_close_on_nothing():
     a success), a mesh-sampled one drops them as before."""
     from onepiece_dist.core.frames import pose_from_axes
     from onepiece_dist.core.sampling import GraspCandidates
-    from onepiece_dist.service.extract import _simulate
+    from onepiece_dist.job.stages.extract import _simulate
 
     mesh = box_mesh((0.04, 0.03, 0.06))
     held = pose_from_axes(np.array([[-0.05, 0.0, 0.0]]), np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))

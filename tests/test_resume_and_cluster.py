@@ -14,8 +14,8 @@ import psutil
 import pytest
 
 from onepiece_dist.api import Client, read_status
-from onepiece_dist.service.local import run_local
-from onepiece_dist.service.status import status_path
+from onepiece_dist.job.runtime.local import run_local
+from onepiece_dist.job.status import status_path
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
@@ -89,7 +89,7 @@ def cluster_exposed_sockets() -> list:
 
 
 RAY_DEFAULT_AGENT_PORT = 52365  # what every embedded Ray's agent takes (ray.init has no switch for it)
-EMBEDDED_RAY = ("from onepiece_dist.service.ray_env import connect; connect(None, num_cpus=1); "
+EMBEDDED_RAY = ("from onepiece_dist.job.runtime.ray_env import connect; connect(None, num_cpus=1); "
                 "print('up', flush=True); import sys; sys.stdin.read()")  # holds its Ray until stdin closes
 
 
@@ -318,8 +318,8 @@ def test_the_pick_benchmark_on_the_local_multi_node_cluster_gives_the_in_process
                                                                                         record_figure):
     """``onepiece pick --address``: one task per object on the cluster's worker nodes, the same picks as in
     process."""
+    from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.plan_spec import PickSpec
-    from onepiece_dist.service.pick_runner import run_picks
     from tests.test_picks import SMALL
     from tests.test_plan import save_checkpoint
 

@@ -5,8 +5,8 @@ import pytest
 from onepiece_dist.core.frames import pose_from_axes
 from onepiece_dist.core.mesh import box_mesh, enclosed_volume
 from onepiece_dist.core.voxel import crop_codes
+from onepiece_dist.job.stages.extract import extract_arrays
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.service.extract import extract_arrays
 from onepiece_dist.sim.trials import OUTCOMES, extract_trial, gripper_path, run_trials
 from onepiece_dist.sim.world import SimWorld, matrix_from_pose, process_world
 from onepiece_dist.spec import JobSpec

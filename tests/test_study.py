@@ -129,7 +129,7 @@ def test_quick_is_the_quick_example_study():
 
 
 def test_a_stage_the_pipeline_does_not_run_is_refused_by_the_spec():
-    from onepiece_dist.service import pipeline
+    from onepiece_dist.job import pipeline
     from onepiece_dist.spec import STAGES, parse_job_spec
 
     with pytest.raises(SpecError, match=r"stages\.1 = \"report\""):

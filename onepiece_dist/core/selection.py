@@ -1,6 +1,6 @@
 """Which candidates to label next (pure numpy): one per voxel code first, so the codes give diversity as ONE
 PIECE's dedup intends, then where a network is least sure. Shared by the adaptive labelling job
-(service/adaptive_job.py) and a study's adaptive arm (study/adaptive.py)."""
+(job/stages/label_rounds.py) and a study's adaptive arm (study/adaptive.py)."""
 
 from __future__ import annotations
 

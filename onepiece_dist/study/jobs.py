@@ -12,7 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from onepiece_dist.service.status import JobStatus
+from onepiece_dist.job.status import JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.study.spec import StudySpec
 

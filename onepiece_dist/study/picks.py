@@ -1,5 +1,5 @@
 """A study judged by picks (spec.judge: picks or both): every arm's networks (one per training seed) pick the
-held-out objects from one depth view each (service.pick_networks), and the decision is made on pick success:
+held-out objects from one depth view each (picks.networks), and the decision is made on pick success:
 the cheapest arm whose mean lies inside A's interval, and each one-object arm against random labels of its size.
 
 The picks are kept in ``picks/networks.json`` beside the study with what they were asked, so a study run again
@@ -17,7 +17,7 @@ import numpy as np
 
 from onepiece_dist.core.intervals import bootstrap_interval
 from onepiece_dist.learn.train import StepResult
-from onepiece_dist.service.pick_runner import SEPARABLE
+from onepiece_dist.picks.runner import SEPARABLE
 from onepiece_dist.study.result import Arm, ArmPicks, Measure, PicksJudgement
 from onepiece_dist.study.spec import StudySpec
 from onepiece_dist.study.training import ArmRun, weights_at
@@ -80,7 +80,7 @@ def _measure(rates: np.ndarray, spec: StudySpec) -> Measure:
 
 
 def _picks(spec: StudySpec, folder: Path, checkpoints: tuple[str, ...], say) -> list[dict]:
-    from onepiece_dist.service.pick_networks import run_network_picks
+    from onepiece_dist.picks.networks import run_network_picks
 
     path = folder / "picks" / PICKS_FILE
     asked = {"checkpoints": [str(Path(c).relative_to(folder)) for c in checkpoints],

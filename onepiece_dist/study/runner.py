@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.errors import SourceError, SpecError
+from onepiece_dist.job.status import JobStatus
 from onepiece_dist.learn.train import StepResult, StepRun
-from onepiece_dist.service.status import JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.study.costs import arm_costs
 from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
@@ -127,7 +127,7 @@ def job_runner(where: Where, prefix: str, say: Say) -> Iterator[Callable[[JobSpe
     if not where.in_process:
         import ray
 
-        from onepiece_dist.service.ray_env import connect
+        from onepiece_dist.job.runtime.ray_env import connect
 
         started_here = not ray.is_initialized()
         connect(where.address)
@@ -156,7 +156,7 @@ def job_runner(where: Where, prefix: str, say: Say) -> Iterator[Callable[[JobSpe
 
 def trainer_runner(where: Where, prefix: str, device: str, limit: int):
     """A function that trains step runs in parallel on trainer actors (or in this process)."""
-    from onepiece_dist.service.trainer import Trainer, run_step_runs, trainers_on_ray
+    from onepiece_dist.job.runtime.trainer import Trainer, run_step_runs, trainers_on_ray
 
     def train(runs: list[StepRun], done) -> list[StepResult]:
         if where.in_process:
@@ -206,7 +206,7 @@ def run_study(spec: StudySpec, folder: str | Path, where: Where = Where(), say: 
 
 
 def label_draws_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> tuple[np.ndarray, np.ndarray] | None:
-    """The held-out label drawn again on a seeded sample (service.ceiling): (rows, (rows, draws) bool), kept in
+    """The held-out label drawn again on a seeded sample (job.label_draws): (rows, (rows, draws) bool), kept in
     ``ceiling.json`` so a study run again reuses them; None when the spec asks for none."""
     if not spec.ceiling_grasps:
         return None
@@ -216,7 +216,7 @@ def label_draws_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> 
         kept = json.loads(path.read_text())
         if kept["asked"] == asked and "draws" in kept:
             return np.asarray(kept["rows"], dtype=np.int64), np.asarray(kept["draws"], dtype=bool)
-    from onepiece_dist.service.ceiling import heldout_label_draws
+    from onepiece_dist.job.label_draws import heldout_label_draws
 
     say(f"study: the label's ceiling: {spec.ceiling_grasps} held-out candidates x {spec.ceiling_draws} draws")
     rows, draws = heldout_label_draws(jobs.heldout, jobs.heldout.output, spec.ceiling_grasps, spec.ceiling_draws,
@@ -293,10 +293,10 @@ def random_arms(spec: StudySpec, records: dict[str, JobRecord], a_count: int) ->
 
 
 def random_rows(a_output: str, count: int, seed: int) -> tuple[int, ...]:
-    """The rows of A a budget job with ``count`` labels would label (``service.budget.budget_rows``: spread over
-    every object, at random within each, seeded): R is that plan, its labels A's (the same for every training
+    """The rows of A a budget job with ``count`` labels would label (``job.stages.label_budget.budget_rows``: spread
+    over every object, at random within each, seeded): R is that plan, its labels A's (the same for every training
     seed)."""
-    from onepiece_dist.service.budget import budget_rows
+    from onepiece_dist.job.stages.label_budget import budget_rows
     from onepiece_dist.store import open_dataset
 
     owner = open_dataset(a_output)["grasps/object"].astype(np.int64)
@@ -306,7 +306,7 @@ def random_rows(a_output: str, count: int, seed: int) -> tuple[int, ...]:
 def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
                     trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int,
                     rounds: list[AdaptiveRound] | None = None) -> StudyResult:
-    from onepiece_dist.service.registry import package_version
+    from onepiece_dist.job.runtime.registry import package_version
     from onepiece_dist.store import open_dataset
     from onepiece_dist.study.keys import key_measures
     from onepiece_dist.study.lookup import key_lookup

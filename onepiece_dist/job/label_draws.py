@@ -1,7 +1,7 @@
 """The label drawn again on a held-out dataset, for its own ceiling (core.ceiling): a seeded sample of its candidates,
 each several times, every draw a new execution of the job's label protocol (sim.trials.label_draws).
 
-Runs where it is called, its simulation in a pinned process (service.pinned_child): one object at a time, each
+Runs where it is called, its simulation in a pinned process (job.runtime.pinned_child): one object at a time, each
 grasp's draws from its own generator ([seed, row]), so the draws do not depend on the sample's order or size.
 """
 
@@ -42,7 +42,7 @@ def heldout_label_draws(job: JobSpec, dataset: str, sample: int, draws: int, see
                                                                                                  np.ndarray]:
     """A seeded sample of the rows of ``job``'s dataset at ``dataset`` (its objects matched to ``job.objects`` by
     content id), and (rows, draws) bool: each one's label drawn ``draws`` times again by ``job``'s protocol."""
-    from onepiece_dist.service.pinned_child import PinnedSimulation
+    from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
     from onepiece_dist.store import open_dataset
 
     reader = open_dataset(dataset)

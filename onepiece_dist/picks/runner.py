@@ -16,8 +16,8 @@ import numpy as np
 
 from onepiece_dist.core.intervals import bootstrap_interval
 from onepiece_dist.objects import ObjectRef, resolve_source
+from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan_spec import PickSpec
-from onepiece_dist.service.pick import ObjectPicks, ViewPicks, pick_object
 
 SEPARABLE = (0.1, 0.9)  # a random grasp's pick rate outside this range leaves nothing to rank
 REPORT_FILE = "picks.json"
@@ -110,7 +110,7 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
 
 
 def _run_here(spec: PickSpec, refs: list[ObjectRef], progress) -> list[ObjectPicks]:
-    from onepiece_dist.service.pinned_child import PinnedSimulation
+    from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 
     simulate, results = PinnedSimulation(), []
     try:
@@ -127,7 +127,7 @@ class PickWorker:
     """One pybullet client and one network per actor: picks objects. A plain class, testable without Ray."""
 
     def __init__(self, spec: PickSpec, crashes: str | None = None):
-        from onepiece_dist.service.crashes import CrashLog
+        from onepiece_dist.job.runtime.crashes import CrashLog
 
         self.spec = spec
         self.crash_log = CrashLog(crashes) if crashes else None
@@ -135,7 +135,7 @@ class PickWorker:
     def pick(self, ref: ObjectRef, index: int) -> ObjectPicks:
         if self.crash_log is not None:
             self.crash_log.starting("pick", index)
-        from onepiece_dist.service.ray_runner import _node_id
+        from onepiece_dist.job.runtime.ray_runner import _node_id
 
         return dataclasses.replace(pick_object(self.spec, ref, index), node=_node_id())
 
@@ -155,11 +155,11 @@ def pick_job_id(spec: PickSpec) -> str:
 def _run_on_ray(spec: PickSpec, refs: list[ObjectRef], address: str | None, progress) -> list[ObjectPicks]:
     import ray
 
-    from onepiece_dist.service.actors import restartable_actor
-    from onepiece_dist.service.crashes import crash_folder
-    from onepiece_dist.service.ray_env import connect
-    from onepiece_dist.service.ray_runner import WorkerPool, worker_count
-    from onepiece_dist.service.registry import RegistryClient
+    from onepiece_dist.job.runtime.actors import restartable_actor
+    from onepiece_dist.job.runtime.crashes import crash_folder
+    from onepiece_dist.job.runtime.ray_env import connect
+    from onepiece_dist.job.runtime.ray_runner import WorkerPool, worker_count
+    from onepiece_dist.job.runtime.registry import RegistryClient
 
     started_here = not ray.is_initialized()
     connect(address)

@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.errors import MissingAssembly
-from onepiece_dist.service.assemble import URDF_TEMPLATE, solid_of_pieces, write_pieces_obj
-from onepiece_dist.service.exports import ExportFolder
-from onepiece_dist.service.patches import read_patches
+from onepiece_dist.job.exports.grasp_files import ExportFolder
+from onepiece_dist.job.stages.assemble import URDF_TEMPLATE, solid_of_pieces, write_pieces_obj
+from onepiece_dist.job.stages.patches import read_patches
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader
 

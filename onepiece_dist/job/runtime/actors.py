@@ -31,7 +31,7 @@ def restartable_actor(cls, name: str, **options):
     whichever node it lands, whatever that node was started with."""
     import ray
 
-    from onepiece_dist.service.ray_env import NAMESPACE
+    from onepiece_dist.job.runtime.ray_env import NAMESPACE
     from onepiece_dist.sim.libm import worker_environment
 
     return ray.remote(cls).options(name=name, namespace=NAMESPACE, max_restarts=-1, max_task_retries=0,

@@ -16,9 +16,9 @@ import os
 import numpy as np
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.service.results import LabelShardResult, LabelTask
-from onepiece_dist.service.shards import shard_once
-from onepiece_dist.service.status import LabelReport
+from onepiece_dist.job.results import LabelShardResult, LabelTask
+from onepiece_dist.job.stages.made_once import shard_once
+from onepiece_dist.job.status import LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader, write_group
@@ -105,7 +105,7 @@ def budget_tasks(spec: JobSpec, path: str | os.PathLike) -> list[LabelTask]:
 
 def label_budget_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> LabelShardResult:
     """Label one shard of chosen candidates on their own object into its part (once). Runs in a worker."""
-    from onepiece_dist.service.transfer import label_on_sources
+    from onepiece_dist.job.stages.label_transfer import label_on_sources
 
     def make() -> dict[str, np.ndarray]:
         rows = np.asarray(task.rows, dtype=np.int64)

@@ -17,9 +17,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 from onepiece_dist.errors import JobCancelled, JobError, SourceError, SpecError
-from onepiece_dist.objects import ObjectRef, resolve_source
-from onepiece_dist.service.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
-from onepiece_dist.service.status import (
+from onepiece_dist.job.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
+from onepiece_dist.job.status import (
     AdaptiveReport,
     AssemblyReport,
     EvaluationReport,
@@ -28,6 +27,7 @@ from onepiece_dist.service.status import (
     Rejection,
     TrainingReport,
 )
+from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.spec import JobSpec
 
 if TYPE_CHECKING:  # torch loads where a trainer trains
@@ -41,7 +41,7 @@ log = logging.getLogger("onepiece_dist.job")  # progress lines: the CLI shows th
 
 
 class Central(Protocol):
-    """The central actor's job-facing methods: :class:`~onepiece_dist.service.central.CentralActor` in process,
+    """The central actor's job-facing methods: :class:`~onepiece_dist.job.runtime.writer.CentralActor` in process,
     its client on Ray."""
 
     def commit(self, results: list[ObjectResult]) -> CommitSummary: ...
@@ -124,7 +124,7 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
         refs = resolve_source(spec.objects) if refs is None else refs
         status.progress.objects_total = len(refs)
         if spec.budget.enabled:
-            from onepiece_dist.service.budget import check_budget
+            from onepiece_dist.job.stages.label_budget import check_budget
 
             check_budget(spec, len(refs))
     if spec.runs("extract"):
@@ -148,7 +148,7 @@ def _run_stages(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Repo
                 runtime.prepare("label")  # label workers start up (imports, pybullet) while the one object is built
             status.assembly = runtime.central.assemble(tasks, shards)
     if spec.runs("label") and shapes and spec.adaptive.enabled:
-        from onepiece_dist.service.adaptive_job import label_in_rounds
+        from onepiece_dist.job.stages.label_rounds import label_in_rounds
 
         with stage(status, "label", report):
             status.labels = label_in_rounds(spec, status, runtime.central, runtime.label, runtime.fit_round, report)

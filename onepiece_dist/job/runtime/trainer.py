@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from onepiece_dist.service.actors import ActorClient, restartable_actor
-from onepiece_dist.service.status import EvaluationReport, JobStatus, TrainingReport
+from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
+from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.spec import JobSpec
 
 if TYPE_CHECKING:  # torch loads where a trainer trains, not where a job is described
@@ -44,8 +44,8 @@ class Trainer:
     def score(self, spec: JobSpec, dataset: str, objects: int) -> EvaluationReport:
         """The job's trained network (its best checkpoint) scored on the labelled held-out ``dataset``."""
         from onepiece_dist.errors import JobError
+        from onepiece_dist.job.stages.evaluate import evaluation_spec, protocol_of, score_heldout
         from onepiece_dist.learn.train import BEST
-        from onepiece_dist.service.evaluate import evaluation_spec, protocol_of, score_heldout
 
         checkpoint = checkpoint_dir(spec) / BEST
         if not checkpoint.is_file():

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.service.status import EvaluationReport
+from onepiece_dist.job.status import EvaluationReport
 from onepiece_dist.spec import JobSpec
 
 SEPARABLE = (0.1, 0.9)  # held-out positive rates outside this range leave a ranking nothing to separate

@@ -10,7 +10,7 @@ from importlib.metadata import PackageNotFoundError, version
 import numpy as np
 
 from onepiece_dist.core.dedup import DedupIndex
-from onepiece_dist.service.results import CommitSummary, ObjectResult
+from onepiece_dist.job.results import CommitSummary, ObjectResult
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import GroupAppender, ObjectTable, begin_dataset, finish_dataset

@@ -16,8 +16,8 @@ from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_crop
 from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_candidates
 from onepiece_dist.core.voxel import canonical_codes, crop_regions
 from onepiece_dist.errors import MeshRejected
+from onepiece_dist.job.results import ObjectResult, part_key
 from onepiece_dist.objects import ObjectRef, load_object
-from onepiece_dist.service.results import ObjectResult, part_key
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.format import grasp_arrays

@@ -17,9 +17,17 @@ import os
 import numpy as np
 
 from onepiece_dist.errors import JobError
-from onepiece_dist.service.patches import Patches, _offsets, _split, _stack, as_stored, build_patches, source_geometry
-from onepiece_dist.service.results import LabelShardResult, PatchTask
-from onepiece_dist.service.shards import shard_once
+from onepiece_dist.job.results import LabelShardResult, PatchTask
+from onepiece_dist.job.stages.made_once import shard_once
+from onepiece_dist.job.stages.patches import (
+    Patches,
+    _offsets,
+    _split,
+    _stack,
+    as_stored,
+    build_patches,
+    source_geometry,
+)
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader

@@ -9,17 +9,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from onepiece_dist.job.pipeline import ProgressFn, Runtime, new_status, run_pipeline
+from onepiece_dist.job.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
+from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
+from onepiece_dist.job.runtime.trainer import Trainer, objects_scored
+from onepiece_dist.job.runtime.writer import CentralActor
+from onepiece_dist.job.stages.evaluate import evaluation_spec, record_evaluation
+from onepiece_dist.job.stages.extract import extract_object
+from onepiece_dist.job.stages.label_one_object import label_shard
+from onepiece_dist.job.stages.patch_shards import build_patch_shard
+from onepiece_dist.job.status import EvaluationReport, JobStatus
 from onepiece_dist.objects import ObjectRef
-from onepiece_dist.service.central import CentralActor
-from onepiece_dist.service.evaluate import evaluation_spec, record_evaluation
-from onepiece_dist.service.extract import extract_object
-from onepiece_dist.service.label_one import label_shard
-from onepiece_dist.service.patch_shards import build_patch_shard
-from onepiece_dist.service.pinned_child import PinnedSimulation
-from onepiece_dist.service.pipeline import ProgressFn, Runtime, new_status, run_pipeline
-from onepiece_dist.service.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
-from onepiece_dist.service.status import EvaluationReport, JobStatus
-from onepiece_dist.service.trainer import Trainer, objects_scored
 from onepiece_dist.spec import JobSpec
 
 

@@ -71,7 +71,7 @@ class PairAgreement(_Report):
 
 
 class TransferReport(_Report):
-    """How far a label transfers between grasps that share a code (service/transfer.py)."""
+    """How far a label transfers between grasps that share a code (job/stages/label_transfer.py)."""
 
     codes: int = Field(description="Unique codes sampled (each with two or more source grasps).")
     grasps_labelled: int = Field(description="Source grasps labelled on their own objects for this measure.")
@@ -92,7 +92,7 @@ class LabelReport(_Report):
 
 
 class AdaptiveRound(_Report):
-    """One round of adaptive labelling (service/adaptive_job.py)."""
+    """One round of adaptive labelling (job/stages/label_rounds.py)."""
 
     round: int
     labels: int = Field(description="Candidates labelled so far, the validation set included.")

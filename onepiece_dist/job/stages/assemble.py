@@ -1,5 +1,5 @@
 """The assemble stage (run by the central actor after the dataset is committed): classify every unique code, lay
-its patch (real geometry, service/patches.py) out on the one object, prove the round trip (codes and Chamfer
+its patch (real geometry, job/stages/patches.py) out on the one object, prove the round trip (codes and Chamfer
 distance to the representatives' points), and store it under ``assembled/``; export as OBJ, PLY or URDF."""
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ from onepiece_dist.core.layout import (
 from onepiece_dist.core.mesh import solid_properties
 from onepiece_dist.core.voxel import crop_points
 from onepiece_dist.errors import MissingAssembly
+from onepiece_dist.job.stages.patches import Patches, read_patches
+from onepiece_dist.job.status import AssemblyReport
 from onepiece_dist.objects.meshio import write_obj, write_ply
-from onepiece_dist.service.patches import Patches, read_patches
-from onepiece_dist.service.status import AssemblyReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store.dataset import DatasetReader, write_group
 

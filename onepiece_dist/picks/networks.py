@@ -1,5 +1,5 @@
 """Many networks judged by the same picks (a study judged by picks, docs/study.md): each held-out object settled on
-the table and seen once per view exactly as the pick benchmark does (service.pick), the planner's candidates
+the table and seen once per view exactly as the pick benchmark does (picks.object_picks), the planner's candidates
 proposed once per view, and every network's top-ranked candidate executed by the label protocol.
 
 Every network meets the same views and the same candidates; a candidate's execution draws its perturbations from
@@ -103,8 +103,8 @@ def _index_of(poses: np.ndarray, pose: np.ndarray) -> int:
 
 
 def run_network_picks(spec: PickSpec, checkpoints: tuple[str, ...]) -> list[NetworkPicks]:
-    """Every object of ``spec.objects``, one at a time in a pinned simulation process (service.pinned_child)."""
-    from onepiece_dist.service.pinned_child import PinnedSimulation
+    """Every object of ``spec.objects``, one at a time in a pinned simulation process (job.runtime.pinned_child)."""
+    from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     simulate, results = PinnedSimulation(), []

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from onepiece_dist.service.results import LabelShardResult
+from onepiece_dist.job.results import LabelShardResult
 from onepiece_dist.store import PartStore
 
 

@@ -52,7 +52,7 @@ class LabelTask:
     """A shard of the label stage: patches [start, stop) of the one object at ``dataset``, whose patches and
     label-relevant spec hash to ``label_key``; its labelled grasps go to the part ``part_key`` (so a re-run, or a
     resumed job, finds the shard done). With ``rows``: a budget shard, those rows of grasps/ (one object's) labelled
-    on their own object, [start, stop) their positions among the job's chosen rows (service/budget.py)."""
+    on their own object, [start, stop) their positions among the job's chosen rows (job/stages/label_budget.py)."""
 
     start: int
     stop: int
@@ -69,7 +69,7 @@ class LabelTask:
 @dataclass(frozen=True)
 class PatchTask:
     """A shard of the assemble stage's patch cutting: patches [start, stop), in source-object order
-    (service/patch_shards.py), of the committed dataset at ``dataset``; its part is keyed by ``patch_key``."""
+    (job/stages/patch_shards.py), of the committed dataset at ``dataset``; its part is keyed by ``patch_key``."""
 
     start: int
     stop: int

@@ -2,7 +2,7 @@
 around it, so the labelled data cover each unique shape's neighbourhood (docs/assembly.md).
 
 A trial at one patch must not depend on the rest of the assembly, so each patch is simulated as its own body:
-its convex pieces (real geometry clipped from the source object, service/patches.py), with the source object's
+its convex pieces (real geometry clipped from the source object, job/stages/patches.py), with the source object's
 mass (the mass rule: the fingers lift and shake what they lifted and shook on the source; with ``sim.load: grasp``
 every trial, here and on the sources, lifts the same payload at the grasp centre instead). Crops for codes and
 points come from the patch's real surface points. Results go to ``assembled/grasps/`` in the same layout as
@@ -21,10 +21,10 @@ from onepiece_dist.core.frames import compose_poses, perturb_pose
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_regions
-from onepiece_dist.service.patches import Patches, read_patches
-from onepiece_dist.service.results import LabelShardResult, LabelTask
-from onepiece_dist.service.shards import shard_once
-from onepiece_dist.service.status import LabelReport
+from onepiece_dist.job.results import LabelShardResult, LabelTask
+from onepiece_dist.job.stages.made_once import shard_once
+from onepiece_dist.job.stages.patches import Patches, read_patches
+from onepiece_dist.job.status import LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader, write_group
@@ -82,7 +82,7 @@ def label_key(spec: JobSpec, reader: DatasetReader) -> str:
 def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> LabelShardResult:
     """Label one shard into its part (once: a committed part is reused). Runs in a worker."""
     if task.rows is not None:
-        from onepiece_dist.service.budget import label_budget_shard
+        from onepiece_dist.job.stages.label_budget import label_budget_shard
 
         return label_budget_shard(spec, task, index, parts)
     return shard_once(parts, task.part_key, index, lambda: label_patches(spec, task),
@@ -131,7 +131,7 @@ def _score_closure(rows, pieces: list[np.ndarray], batch, spec: JobSpec) -> None
     """Force closure and epsilon of the held trials on the patch's real geometry (its convex pieces as one mesh,
     in the patch frame where the settled poses are)."""
     from onepiece_dist.core.clip import pieces_mesh
-    from onepiece_dist.service.extract import closure_labelled
+    from onepiece_dist.job.stages.extract import closure_labelled
 
     ok = batch.outcome == 0
     if ok.any():

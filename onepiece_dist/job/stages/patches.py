@@ -18,7 +18,7 @@ from onepiece_dist.core.clip import clip_to_box
 from onepiece_dist.core.frames import rotate_points
 from onepiece_dist.core.layout import patch_box
 from onepiece_dist.errors import StoreError
-from onepiece_dist.service.results import part_key
+from onepiece_dist.job.results import part_key
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
 

@@ -9,7 +9,7 @@ nearest one half), one per code while codes last. The rounds stop when the valid
 than ``adaptive.margin`` for ``adaptive.patience`` rounds, after ``adaptive.rounds`` rounds, at ``adaptive.limit``,
 or when every candidate is labelled.
 
-Labels run in shards on the worker pool (service/budget.py's shards, one part each); each round's network and
+Labels run in shards on the worker pool (job/stages/label_budget.py's shards, one part each); each round's network and
 scores are parts too, keyed by the labelled rows they were trained on. A job killed mid-round finds every shard
 and round it finished and resumes at the round it was in, with the same result: the choices are seeded and each
 round's training is deterministic given its rows and the last round's network.
@@ -27,9 +27,9 @@ import numpy as np
 
 from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.errors import JobError, SpecError
-from onepiece_dist.service.budget import labels_key, row_shards
-from onepiece_dist.service.results import LabelShardResult, LabelTask
-from onepiece_dist.service.status import AdaptiveReport, AdaptiveRound, JobStatus
+from onepiece_dist.job.results import LabelShardResult, LabelTask
+from onepiece_dist.job.stages.label_budget import labels_key, row_shards
+from onepiece_dist.job.status import AdaptiveReport, AdaptiveRound, JobStatus
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader

@@ -1,1 +1,0 @@
-"""Job execution: per-object extraction, the central commit (dedup + dataset), runners and status."""
