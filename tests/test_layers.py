@@ -164,3 +164,61 @@ def edits_sys_path(node: ast.AST) -> bool:
     return (isinstance(target, ast.Attribute) and target.attr in ("insert", "append", "extend")
             and isinstance(target.value, ast.Attribute) and target.value.attr == "path"
             and isinstance(target.value.value, ast.Name) and target.value.value.id == "sys")
+
+
+def package_import_graph() -> dict[str, set[str]]:
+    """{module: the package's modules it imports, lazy ones too}, as dotted names under ``onepiece_dist``; ``from
+    onepiece_dist.a import b`` counts as importing ``a.b`` where that is a module, else ``a``."""
+    modules = {".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): p
+               for p in PACKAGE.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        found = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("onepiece_"):
+                found |= {f"{node.module}.{a.name}" if f"{node.module}.{a.name}" in modules else node.module
+                          for a in node.names}
+            elif isinstance(node, ast.Import):
+                found |= {a.name for a in node.names if a.name in modules}
+        graph[name] = found & modules.keys() - {name}
+    return graph
+
+
+def circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """One path per module that leads back to itself through ``graph``."""
+    found = []
+    for start in sorted(graph):
+        stack, seen = [(start, [start])], set()
+        while stack:
+            node, path = stack.pop()
+            for target in sorted(graph.get(node, ())):
+                if target == start:
+                    found.append([*path, start])
+                    stack = []
+                    break
+                if target not in seen:
+                    seen.add(target)
+                    stack.append((target, [*path, target]))
+    return found
+
+
+def test_no_module_of_the_package_imports_itself_through_others():
+    """Issue 48: no import circle anywhere in the package, lazy imports counted (a circle the guard can see)."""
+    graph = package_import_graph()
+    assert graph["onepiece_dist.job.runtime.local"] >= {"onepiece_dist.job.pipeline"}, "the graph sees imports"
+    assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}})[0] == ["a", "b", "c", "a"]
+    assert circles(graph) == []
+
+
+def test_the_job_stages_and_exports_import_nothing_from_the_runtime():
+    """Issue 48: a stage is what a worker or the writer does, whatever runs it; the runtimes (in process, a pinned
+    child, Ray) call the stages, never the other way round, and neither stages nor exports reach the pipeline."""
+    graph = package_import_graph()
+    rooms = ("onepiece_dist.job.stages.", "onepiece_dist.job.exports.")
+    stages = [m for m in graph if m.startswith(rooms)]
+    assert len(stages) >= 12, stages
+    reaching = {m: sorted(t for t in graph[m] if t.startswith("onepiece_dist.job.runtime")
+                          or t == "onepiece_dist.job.pipeline") for m in stages}
+    assert {m: t for m, t in reaching.items() if t} == {}
+    runtimes = [m for m in graph if m.startswith("onepiece_dist.job.runtime.")]
+    assert any(t.startswith("onepiece_dist.job.stages.") for m in runtimes for t in graph[m])  # the rule can see

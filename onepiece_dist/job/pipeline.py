@@ -11,13 +11,14 @@ import logging
 import os
 import socket
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 from onepiece_dist.errors import JobCancelled, JobError, SourceError, SpecError
 from onepiece_dist.job.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
+from onepiece_dist.job.stages.evaluate import evaluation_spec, objects_scored, record_evaluation
 from onepiece_dist.job.status import (
     AdaptiveReport,
     AssemblyReport,
@@ -53,22 +54,56 @@ class Central(Protocol):
     def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None: ...
 
 
-@dataclass(frozen=True)
-class Runtime:
-    """extract(refs, on_result) -> results in object order; the central actor; patch(tasks) -> the patch shards'
-    results in task order (the workers cut the patches); label(tasks) -> shard results in task order (the workers
-    simulate, not the central actor); train(spec) -> report; evaluate(spec) -> report (a
-    labelling job on the held-out objects, then the trained network scored on them); prepare(stage): start what
-    ``stage`` will need (its workers) while the central actor is still busy with the stage before it."""
+class Runtime(ABC):
+    """Where a job's work runs: in this process (``runtime.local.LocalRuntime``) or on Ray
+    (``runtime.ray_runner.RayRuntime``). The pipeline calls these methods in stage order; ``central`` is the
+    dataset's single writer (the central actor)."""
 
-    extract: Callable[[list[ObjectRef], Callable[[ObjectResult], None]], list[ObjectResult]]
     central: Central
-    label: Callable[[list[LabelTask]], list[LabelShardResult]]
-    patch: Callable[[list[PatchTask]], list[LabelShardResult]]
-    train: Callable[[JobSpec], TrainingReport]
-    evaluate: Callable[[JobSpec], EvaluationReport]
-    prepare: Callable[[str], None] = lambda stage: None
-    fit_round: Callable[[StepRun], StepResult] | None = None  # adaptive labelling: one round's training
+
+    @abstractmethod
+    def report(self, status: JobStatus) -> None:
+        """The status changed: save it where the job's users read it."""
+
+    @abstractmethod
+    def extract(self, refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
+        """Every object's extraction, its results in object order (``on_result`` as each comes)."""
+
+    @abstractmethod
+    def patch(self, tasks: list[PatchTask]) -> list[LabelShardResult]:
+        """The patch shards cut by the workers, their results in task order."""
+
+    @abstractmethod
+    def label(self, tasks: list[LabelTask]) -> list[LabelShardResult]:
+        """The label shards simulated by the workers (not the central actor), their results in task order."""
+
+    @abstractmethod
+    def train(self, spec: JobSpec) -> TrainingReport:
+        """The network trained on the job's labelled grasps."""
+
+    @abstractmethod
+    def fit_round(self, run: StepRun) -> StepResult:
+        """Adaptive labelling: one round's training."""
+
+    @abstractmethod
+    def label_heldout(self, heldout: JobSpec) -> JobStatus:
+        """The held-out objects' labelling job (``evaluation_spec``), run on this runtime."""
+
+    @abstractmethod
+    def score(self, job: JobSpec, dataset: str, objects: int) -> EvaluationReport:
+        """The job's trained network scored on the labelled held-out dataset of ``objects`` objects."""
+
+    def prepare(self, stage: str) -> None:
+        """Start what ``stage`` will need (its workers) while the central actor is busy with the stage before it;
+        by default nothing (workers start when the stage does)."""
+        return None
+
+    def evaluate(self, job: JobSpec) -> EvaluationReport:
+        """The evaluate stage, the same on every runtime: a labelling job on the held-out objects, then the trained
+        network scored on them."""
+        heldout = evaluation_spec(job)
+        labelled = self.label_heldout(heldout)
+        return record_evaluation(job, self.score(job, heldout.output, objects_scored(labelled)))
 
 
 def new_status(spec: JobSpec, job_id: str) -> JobStatus:
@@ -97,11 +132,12 @@ def _stage_summary(status: JobStatus, name: str) -> str:
     return summaries.get(name, "")
 
 
-def run_pipeline(spec: JobSpec, status: JobStatus, runtime: Runtime, report: Report,
+def run_pipeline(spec: JobSpec, status: JobStatus, runtime: Runtime,
                  refs: list[ObjectRef] | None = None) -> JobStatus:
     """Run the spec's stages on ``refs`` (resolved from ``spec.objects`` when not given); the status ends
     'succeeded', or 'failed'/'cancelled' with a :class:`JobError` raised (a :class:`SourceError`, a usage error,
     as it is). Without 'extract', the later stages run on the dataset already committed at the output."""
+    report = runtime.report
     try:
         _run_stages(spec, status, runtime, report, refs)
     except BaseException as err:

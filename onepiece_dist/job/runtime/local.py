@@ -8,59 +8,78 @@ with glibc's math functions pinned as on every worker: here, or in a child where
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from onepiece_dist.job.pipeline import ProgressFn, Runtime, new_status, run_pipeline
 from onepiece_dist.job.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
-from onepiece_dist.job.runtime.trainer import Trainer, objects_scored
+from onepiece_dist.job.runtime.trainer import Trainer
 from onepiece_dist.job.runtime.writer import CentralActor
-from onepiece_dist.job.stages.evaluate import evaluation_spec, record_evaluation
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
-from onepiece_dist.job.status import EvaluationReport, JobStatus
+from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.objects import ObjectRef
 from onepiece_dist.spec import JobSpec
+
+if TYPE_CHECKING:
+    from onepiece_dist.learn.train import StepResult, StepRun
 
 
 def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None = None,
               refs: list[ObjectRef] | None = None) -> JobStatus:
     """Run the spec's stages in this process on ``refs`` (default: resolved from ``spec.objects``). Without
     'extract', the later stages run on the committed dataset."""
-    central = CentralActor(spec)
-    central.parts.remove_stale_temporaries()
-    simulate = PinnedSimulation()
+    runtime = LocalRuntime(spec, job_id, progress)
+    try:
+        return run_pipeline(spec, new_status(spec, job_id), runtime, refs)
+    finally:
+        runtime.close()
 
-    def extract(refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
+
+class LocalRuntime(Runtime):
+    """One object or shard at a time, simulated in a pinned process; the central actor and the trainer are plain
+    objects here."""
+
+    def __init__(self, spec: JobSpec, job_id: str, progress: ProgressFn | None = None):
+        self.spec, self.job_id, self.progress = spec, job_id, progress
+        self.central = CentralActor(spec)
+        self.central.parts.remove_stale_temporaries()
+        self.simulate = PinnedSimulation()
+        self.trainer = Trainer()
+
+    def close(self) -> None:
+        self.simulate.close()
+
+    def report(self, status: JobStatus) -> None:
+        status.save(self.spec.output)
+        if self.progress:
+            self.progress(status)
+
+    def extract(self, refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
         results = []
         for index, ref in enumerate(refs):
-            results.append(simulate(extract_object, spec, ref, index, central.parts))
+            results.append(self.simulate(extract_object, self.spec, ref, index, self.central.parts))
             if results[-1].status == "ok":
-                central.add(index, results[-1].part_key)
+                self.central.add(index, results[-1].part_key)
             on_result(results[-1])
         return results
 
-    def report(status: JobStatus) -> None:
-        status.save(spec.output)
-        if progress:
-            progress(status)
+    def label(self, tasks: list[LabelTask]) -> list[LabelShardResult]:
+        return [self.simulate(label_shard, self.spec, task, index, self.central.parts)
+                for index, task in enumerate(tasks)]
 
-    def label(tasks: list[LabelTask]) -> list[LabelShardResult]:
-        return [simulate(label_shard, spec, task, index, central.parts) for index, task in enumerate(tasks)]
+    def patch(self, tasks: list[PatchTask]) -> list[LabelShardResult]:
+        return [build_patch_shard(self.spec, task, index, self.central.parts) for index, task in enumerate(tasks)]
 
-    def patch(tasks: list[PatchTask]) -> list[LabelShardResult]:
-        return [build_patch_shard(spec, task, index, central.parts) for index, task in enumerate(tasks)]
+    def train(self, spec: JobSpec) -> TrainingReport:
+        return self.trainer.fit(spec)
 
-    trainer = Trainer()
+    def fit_round(self, run: StepRun) -> StepResult:
+        return self.trainer.fit_steps(run)
 
-    def evaluate(job: JobSpec) -> EvaluationReport:
-        heldout = evaluation_spec(job)
-        labelled = run_local(heldout, job_id=f"{job_id}-evaluate")
-        return record_evaluation(job, trainer.score(job, heldout.output, objects_scored(labelled)))
+    def label_heldout(self, heldout: JobSpec) -> JobStatus:
+        return run_local(heldout, job_id=f"{self.job_id}-evaluate")
 
-    runtime = Runtime(extract=extract, central=central, label=label, patch=patch, train=trainer.fit,
-                      evaluate=evaluate, fit_round=trainer.fit_steps)
-    try:
-        return run_pipeline(spec, new_status(spec, job_id), runtime, report, refs)
-    finally:
-        simulate.close()
+    def score(self, job: JobSpec, dataset: str, objects: int) -> EvaluationReport:
+        return self.trainer.score(job, dataset, objects)

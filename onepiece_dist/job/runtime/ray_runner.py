@@ -16,6 +16,7 @@ import shutil
 from collections import Counter, deque
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ray.exceptions import OutOfMemoryError, RaySystemError
 
@@ -25,16 +26,18 @@ from onepiece_dist.job.results import LabelShardResult, LabelTask, ObjectResult,
 from onepiece_dist.job.runtime.actors import restartable_actor
 from onepiece_dist.job.runtime.crashes import CrashLog, crash_folder, crashed_on
 from onepiece_dist.job.runtime.registry import RegistryClient
-from onepiece_dist.job.runtime.trainer import TrainerClient, objects_scored
+from onepiece_dist.job.runtime.trainer import TrainerClient
 from onepiece_dist.job.runtime.writer import CentralClient, central_name
-from onepiece_dist.job.stages.evaluate import evaluation_spec, record_evaluation
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
-from onepiece_dist.job.status import EvaluationReport, JobStatus
+from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.objects import ObjectRef
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
+
+if TYPE_CHECKING:
+    from onepiece_dist.learn.train import StepResult, StepRun
 
 IN_FLIGHT_PER_WORKER = 2
 MAX_CRASHES = 3  # an item that crashes its worker (a crash record, Ray's OOM kill) this many times alone: quarantined
@@ -105,78 +108,9 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
     if not registry.claim(job_id, status.model_dump(mode="json")):
         raise JobError(f"job {job_id} is already running")
     PartStore(spec.parts_folder()).remove_stale_temporaries()
-    central = CentralClient.start(spec, job_id)
-    clients = [central]
-    crashes = crash_folder(spec.parts_folder(), job_id)
-
-    def report(current: JobStatus) -> None:
-        current.save(spec.output)
-        try:
-            registry.update(job_id, current.model_dump(mode="json"), wait=current.state != "running")
-        except (RuntimeLost, RaySystemError):
-            if current.state == "running":
-                raise  # while running, a lost runtime ends the job; once it has ended, the status file says it
-        if progress:
-            progress(current)
-
-    prepared: dict[str, list] = {}
-
-    def start_workers(stage: str, count: int) -> list:
-        return [restartable_actor(SimWorker, f"{stage}-{job_id}-{k}", num_cpus=1,
-                                  scheduling_strategy="SPREAD").remote(spec, central_name(job_id), str(crashes))
-                for k in range(count)]
-
-    def prepare(stage: str) -> None:
-        prepared[stage] = start_workers(stage, worker_count(workers, None))
-
-    def on_pool(stage: str, items: list, on_result, method: str, quarantined) -> list:
-        import ray
-
-        wanted = worker_count(workers, len(items))
-        actors = prepared.pop(stage, [])
-        for actor in actors[wanted:]:
-            ray.kill(actor)
-        actors = actors[:wanted] or start_workers(stage, wanted)
-        try:
-            return WorkerPool(actors, registry, status, on_result, method, quarantined, crashes).run(items)
-        finally:
-            for actor in actors:
-                ray.kill(actor)  # free their CPUs for the next stage and the trainer
-
-    def extract(refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
-        return on_pool("extract", refs, on_result, "extract", quarantined_object)
-
-    def label(tasks: list[LabelTask]) -> list[LabelShardResult]:
-        return on_pool("label", tasks, lambda result: None, "label", quarantined_shard)
-
-    def patch(tasks: list[PatchTask]) -> list[LabelShardResult]:
-        return on_pool("patch", tasks, lambda result: None, "patch", quarantined_shard)
-
-    def train(train_spec: JobSpec):
-        clients.append(TrainerClient.start(train_spec, job_id))
-        return clients[-1].fit(train_spec)
-
-    def fit_round(run):
-        trainer = TrainerClient.start_named(f"trainer-{job_id}-round", spec.train.device)
-        try:
-            return trainer.fit_steps(run)
-        finally:
-            trainer.kill()  # its CPU goes back to the next round's label workers
-
-    def evaluate(job: JobSpec) -> EvaluationReport:
-        for trainer in clients[1:]:  # the labelling workers get the trainer's CPU
-            with contextlib.suppress(Exception):
-                trainer.kill()
-        del clients[1:]
-        heldout = evaluation_spec(job)
-        labelled = run_on_ray(heldout, f"{job_id}-evaluate", workers=workers)
-        clients.append(TrainerClient.start(job, f"{job_id}-evaluate"))
-        return record_evaluation(job, clients[-1].score(job, heldout.output, objects_scored(labelled)))
-
+    runtime = RayRuntime(spec, job_id, registry, status, workers, progress)
     try:
-        runtime = Runtime(extract=extract, central=central, label=label, patch=patch, train=train, evaluate=evaluate,
-                          prepare=prepare, fit_round=fit_round)
-        return run_pipeline(spec, status, runtime, report, refs)
+        return run_pipeline(spec, status, runtime, refs)
     except JobError as err:
         if isinstance(err, RuntimeLost) or isinstance(err.__cause__, RuntimeLost | RaySystemError):
             lost = err if isinstance(err, RuntimeLost) else err.__cause__
@@ -185,15 +119,101 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
                               f"`onepiece resume {spec.output}`") from None
         raise
     finally:
-        for client in clients:
-            with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
-                client.kill()
+        runtime.close()
+
+
+class RayRuntime(Runtime):
+    """The job's stages on Ray: a pool of :class:`SimWorker` actors per stage (started ahead by ``prepare``), the
+    central actor and the trainer behind their clients, progress published to the registry."""
+
+    def __init__(self, spec: JobSpec, job_id: str, registry: RegistryClient, status: JobStatus,
+                 workers: int | None = None, progress: ProgressFn | None = None):
+        self.spec, self.job_id, self.registry, self.status = spec, job_id, registry, status
+        self.workers, self.progress = workers, progress
+        self.central = CentralClient.start(spec, job_id)
+        self.trainers: list[TrainerClient] = []  # killed before evaluation's labelling, and at the end
+        self.crashes = crash_folder(spec.parts_folder(), job_id)
+        self.prepared: dict[str, list] = {}  # stage -> its worker actors, started ahead
+
+    def report(self, status: JobStatus) -> None:
+        status.save(self.spec.output)
+        try:
+            self.registry.update(self.job_id, status.model_dump(mode="json"), wait=status.state != "running")
+        except (RuntimeLost, RaySystemError):
+            if status.state == "running":
+                raise  # while running, a lost runtime ends the job; once it has ended, the status file says it
+        if self.progress:
+            self.progress(status)
+
+    def _start_workers(self, stage: str, count: int) -> list:
+        return [restartable_actor(SimWorker, f"{stage}-{self.job_id}-{k}", num_cpus=1, scheduling_strategy="SPREAD")
+                .remote(self.spec, central_name(self.job_id), str(self.crashes)) for k in range(count)]
+
+    def prepare(self, stage: str) -> None:
+        self.prepared[stage] = self._start_workers(stage, worker_count(self.workers, None))
+
+    def _on_pool(self, stage: str, items: list, on_result: Callable, quarantined: Callable) -> list:
+        """``items`` through ``SimWorker.<stage>`` on the stage's workers, killed after (their CPUs go to the next
+        stage and the trainer)."""
         import ray
 
-        for actor in [a for started in prepared.values() for a in started]:  # prepared for a stage that never ran
+        wanted = worker_count(self.workers, len(items))
+        actors = self.prepared.pop(stage, [])
+        for actor in actors[wanted:]:
+            ray.kill(actor)
+        actors = actors[:wanted] or self._start_workers(stage, wanted)
+        try:
+            return WorkerPool(actors, self.registry, self.status, on_result, stage, quarantined,
+                              self.crashes).run(items)
+        finally:
+            for actor in actors:
+                ray.kill(actor)
+
+    def extract(self, refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
+        return self._on_pool("extract", refs, on_result, quarantined_object)
+
+    def label(self, tasks: list[LabelTask]) -> list[LabelShardResult]:
+        return self._on_pool("label", tasks, lambda result: None, quarantined_shard)
+
+    def patch(self, tasks: list[PatchTask]) -> list[LabelShardResult]:
+        return self._on_pool("patch", tasks, lambda result: None, quarantined_shard)
+
+    def train(self, spec: JobSpec) -> TrainingReport:
+        self.trainers.append(TrainerClient.start(spec, self.job_id))
+        return self.trainers[-1].fit(spec)
+
+    def fit_round(self, run: StepRun) -> StepResult:
+        trainer = TrainerClient.start_named(f"trainer-{self.job_id}-round", self.spec.train.device)
+        try:
+            return trainer.fit_steps(run)
+        finally:
+            trainer.kill()  # its CPU goes back to the next round's label workers
+
+    def label_heldout(self, heldout: JobSpec) -> JobStatus:
+        self._kill_trainers()  # the labelling workers get the trainer's CPU
+        return run_on_ray(heldout, f"{self.job_id}-evaluate", workers=self.workers)
+
+    def score(self, job: JobSpec, dataset: str, objects: int) -> EvaluationReport:
+        self.trainers.append(TrainerClient.start(job, f"{self.job_id}-evaluate"))
+        return self.trainers[-1].score(job, dataset, objects)
+
+    def _kill_trainers(self) -> None:
+        for trainer in self.trainers:
+            with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
+                trainer.kill()
+        self.trainers.clear()
+
+    def close(self) -> None:
+        """Every actor this job started, killed; its crash records removed."""
+        import ray
+
+        for client in [self.central, *self.trainers]:
+            with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
+                client.kill()
+        for actor in [a for started in self.prepared.values() for a in started]:  # for a stage that never ran
             with contextlib.suppress(Exception):
                 ray.kill(actor)
-        shutil.rmtree(crashes, ignore_errors=True)
+        shutil.rmtree(self.crashes, ignore_errors=True)
 
 
 def quarantined_object(index: int, ref: ObjectRef, reason: str) -> ObjectResult:

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
-from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
+from onepiece_dist.job.status import EvaluationReport, TrainingReport
 from onepiece_dist.spec import JobSpec
 
 if TYPE_CHECKING:  # torch loads where a trainer trains, not where a job is described
@@ -133,8 +133,3 @@ def run_step_runs(runs: list[StepRun], trainers: list[Callable[[StepRun], StepRe
 def trainer_gpus(device: str, cluster_gpus: float) -> int:
     """GPUs the trainer actor asks Ray for."""
     return int(device == "cuda" or (device == "auto" and cluster_gpus >= 1))
-
-
-def objects_scored(status: JobStatus) -> int:
-    """Objects of a finished labelling job that were not rejected."""
-    return status.progress.objects_done - len(status.rejections)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.job.status import EvaluationReport
+from onepiece_dist.job.status import EvaluationReport, JobStatus
 from onepiece_dist.spec import JobSpec
 
 SEPARABLE = (0.1, 0.9)  # held-out positive rates outside this range leave a ranking nothing to separate
@@ -30,6 +30,11 @@ def evaluation_spec(spec: JobSpec) -> JobSpec:
         "objects": spec.evaluate.objects, "grasps_per_object": spec.evaluate.grasps_per_object,
         "seed": spec.seed + 1, "output": f"{Path(spec.output)}.eval.zarr", "cache_dir": None,
         "stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
+
+
+def objects_scored(status: JobStatus) -> int:
+    """Objects of a finished labelling job that were not rejected."""
+    return status.progress.objects_done - len(status.rejections)
 
 
 def protocol_of(spec: JobSpec) -> str:
