@@ -3,7 +3,7 @@
     .venv/bin/python -m benchmarks.bench_merge [--sizes 1,5,20] [--batch 2000] [--partitions 2]
 
 Synthetic 64-bit codes (the default 10 mm grid, 4 x 8 x 2 voxels) arrive in batches of one object's grasps and
-go through the merge path of the central actor: `DedupIndex.add` in process, and the `CentralActor` Ray actor
+go through the merge path of the central actor: `DedupIndex.add` in process, and the `DatasetWriter` Ray actor
 fed as the extraction workers feed it (one `add.remote` per object with its codes); about 57 % are distinct.
 Beside it, in the same run:
   - the baseline: the previous index, which re-sorted the whole table on every batch (measured on 1 M codes);
@@ -29,7 +29,7 @@ import psutil
 
 from onepiece_dist.core.dedup import DedupIndex, merge_partitions, merge_unique, unique_codes
 from onepiece_dist.core.dedup_partitions import DedupShard, route_codes
-from onepiece_dist.job.runtime.writer import CentralActor
+from onepiece_dist.job.runtime.writer import DatasetWriter
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 
@@ -97,12 +97,12 @@ def partitioned_merge(total: int, batch: int, partitions: int) -> dict:
 
 
 def central_actor_merge(total: int, batch: int) -> dict:
-    """The job's path: each worker sends its object's codes to the CentralActor Ray actor (``add.remote``)."""
+    """The job's path: each worker sends its object's codes to the DatasetWriter Ray actor (``add.remote``)."""
     import ray
 
     with tempfile.TemporaryDirectory() as folder:
         spec = JobSpec(output=str(Path(folder) / "ds.zarr"))
-        actor = ray.remote(num_cpus=0)(CentralActor).remote(spec)
+        actor = ray.remote(num_cpus=0)(DatasetWriter).remote(spec)
         ray.get(actor.add.remote(-1, "", np.zeros((0, CODE_BYTES), np.uint8)))
         start, inflight = time.perf_counter(), []
         for k, codes in enumerate(synthetic_batches(total, batch)):
@@ -116,13 +116,13 @@ def central_actor_merge(total: int, batch: int) -> dict:
 
 
 def part_read_overhead(parts: int, batch: int) -> dict:
-    """CentralActor.add on committed parts (read from the Zarr store, then merged)."""
+    """DatasetWriter.add on committed parts (read from the Zarr store, then merged)."""
     with tempfile.TemporaryDirectory() as folder:
         spec = JobSpec(output=str(Path(folder) / "ds.zarr"))
         store = PartStore(f"{spec.output}.parts")
         for k, codes in enumerate(synthetic_batches(parts * batch, batch, seed=1)):
             store.write(f"part{k:05d}", {"code": codes}, {})
-        central = CentralActor(spec)
+        central = DatasetWriter(spec)
         start = time.perf_counter()
         for k in range(parts):
             central.add(k, f"part{k:05d}")

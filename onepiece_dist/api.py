@@ -34,13 +34,14 @@ from onepiece_dist.errors import (
 from onepiece_dist.job.pipeline import ProgressFn
 from onepiece_dist.job.relabel import RelabelReport, relabel_report, relabel_spec
 from onepiece_dist.job.runtime.local import run_local
-from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK, package_version
+from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK
 from onepiece_dist.job.status import JobStatus, status_path
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.plan_spec import PickSpec, PlanSpec
 from onepiece_dist.spec import JobSpec, default_job_id
 from onepiece_dist.store import DatasetReader, open_dataset
+from onepiece_dist.version import package_version
 
 __all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "PickReport",
            "PickSpec", "PlanSpec", "RelabelReport", "evaluate_model", "open_dataset", "relabel_report",

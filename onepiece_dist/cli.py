@@ -47,7 +47,7 @@ _err = err
 
 def _version(value: bool) -> None:
     if value:
-        from onepiece_dist.job.runtime.registry import package_version
+        from onepiece_dist.version import package_version
 
         typer.echo(f"onepiece-dist {package_version()}")
         raise typer.Exit()

@@ -13,10 +13,11 @@ import zarr
 from typer.testing import CliRunner
 
 from onepiece_dist.cli import app
+from onepiece_dist.core.ranking import average_precision
 from onepiece_dist.errors import StoreError
 from onepiece_dist.job.stages.evaluate import top_ranked_success
 from onepiece_dist.learn import ChunkBatchSampler, GraspDataset
-from onepiece_dist.learn.train import average_precision, load_checkpoint, load_model, predict, train_model
+from onepiece_dist.learn.train import load_checkpoint, load_model, predict, train_model
 from onepiece_dist.spec import TrainSpec
 from tests.factories import synthetic_labelled_dataset
 

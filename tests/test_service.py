@@ -14,7 +14,7 @@ from onepiece_dist.api import Client, read_status
 from onepiece_dist.cli import app
 from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.runtime.registry import JobRegistry
-from onepiece_dist.job.runtime.writer import CentralActor
+from onepiece_dist.job.runtime.writer import DatasetWriter
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.spec import default_job_id
@@ -49,9 +49,9 @@ def test_central_dedup_state_is_rebuilt_from_the_store(spec_factory, tmp_path, r
     parts = PartStore(spec.parts_folder())
     results = [extract_object(spec, ref, i, parts) for i, ref in enumerate(resolve_source(spec.objects))]
     fresh = spec.model_copy(update={"output": str(tmp_path / "rebuilt.zarr"), "cache_dir": spec.parts_folder()})
-    central = CentralActor(fresh)
+    central = DatasetWriter(fresh)
     central.add(results[0].index, results[0].part_key)  # merged before a "restart"
-    summary = CentralActor(fresh).commit(results)  # a restarted actor starts empty and folds in every part
+    summary = DatasetWriter(fresh).commit(results)  # a restarted actor starts empty and folds in every part
     assert summary.unique_codes == reference.progress.unique_codes
     assert_same_dataset(spec.output, fresh.output)
     record_figure(f"{summary.unique_codes} unique codes rebuilt from the parts, identical dataset")

@@ -17,7 +17,7 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Protocol
 
 from onepiece_dist.errors import JobCancelled, JobError, SourceError, SpecError
-from onepiece_dist.job.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
+from onepiece_dist.job.results import CommitSummary, LabelTask, ObjectResult, PatchTask, ShardResult
 from onepiece_dist.job.stages.evaluate import evaluation_spec, objects_scored, record_evaluation
 from onepiece_dist.job.status import (
     AdaptiveReport,
@@ -42,15 +42,15 @@ log = logging.getLogger("onepiece_dist.job")  # progress lines: the CLI shows th
 
 
 class Central(Protocol):
-    """The central actor's job-facing methods: :class:`~onepiece_dist.job.runtime.writer.CentralActor` in process,
+    """The central actor's job-facing methods: :class:`~onepiece_dist.job.runtime.writer.DatasetWriter` in process,
     its client on Ray."""
 
     def commit(self, results: list[ObjectResult]) -> CommitSummary: ...
     def committed(self) -> CommitSummary: ...
     def patch_tasks(self) -> list[PatchTask]: ...
-    def assemble(self, tasks: list[PatchTask], results: list[LabelShardResult]) -> AssemblyReport: ...
+    def assemble(self, tasks: list[PatchTask], results: list[ShardResult]) -> AssemblyReport: ...
     def label_tasks(self) -> list[LabelTask]: ...
-    def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport: ...
+    def merge_labels(self, tasks: list[LabelTask], results: list[ShardResult]) -> LabelReport: ...
     def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None: ...
 
 
@@ -70,11 +70,11 @@ class Runtime(ABC):
         """Every object's extraction, its results in object order (``on_result`` as each comes)."""
 
     @abstractmethod
-    def patch(self, tasks: list[PatchTask]) -> list[LabelShardResult]:
+    def patch(self, tasks: list[PatchTask]) -> list[ShardResult]:
         """The patch shards cut by the workers, their results in task order."""
 
     @abstractmethod
-    def label(self, tasks: list[LabelTask]) -> list[LabelShardResult]:
+    def label(self, tasks: list[LabelTask]) -> list[ShardResult]:
         """The label shards simulated by the workers (not the central actor), their results in task order."""
 
     @abstractmethod

@@ -82,7 +82,7 @@ class PatchTask:
 
 
 @dataclass(frozen=True)
-class LabelShardResult:
+class ShardResult:
     """A labelled (or patch) shard: 'ok' with its part and grasp (patch) count, or 'rejected' (its worker kept
     dying)."""
 

@@ -11,6 +11,7 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader
 
+from onepiece_dist.core.ranking import average_precision
 from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate
 from onepiece_dist.learn.models import MODELS
 from onepiece_dist.spec import JobSpec, TrainSpec
@@ -35,17 +36,6 @@ def resolve_device(choice: str) -> torch.device:
 
 def to_device(batch: dict[str, torch.Tensor], device: torch.device) -> dict[str, torch.Tensor]:
     return {k: v.to(device, non_blocking=True) for k, v in batch.items()}
-
-
-def average_precision(scores: np.ndarray, labels: np.ndarray) -> float:
-    """Area under the precision-recall curve (step interpolation); 0 when there is no positive."""
-    positives = labels.sum()
-    if positives == 0:
-        return 0.0
-    order = np.argsort(-scores, kind="stable")
-    hits = labels[order]
-    precision = np.cumsum(hits) / np.arange(1, len(hits) + 1)
-    return float(np.sum(precision * hits) / positives)
 
 
 def load_checkpoint(path: str | os.PathLike) -> dict:

@@ -135,9 +135,9 @@ class PickWorker:
     def pick(self, ref: ObjectRef, index: int) -> ObjectPicks:
         if self.crash_log is not None:
             self.crash_log.starting("pick", index)
-        from onepiece_dist.job.runtime.ray_runner import _node_id
+        from onepiece_dist.job.runtime.ray_runner import node_id
 
-        return dataclasses.replace(pick_object(self.spec, ref, index), node=_node_id())
+        return dataclasses.replace(pick_object(self.spec, ref, index), node=node_id())
 
 
 @dataclass

@@ -16,7 +16,7 @@ import pybullet as pb
 from onepiece_dist.core import portable
 from onepiece_dist.core.frames import compose_poses, perturb_pose, transform_points
 from onepiece_dist.sim.trials import LabelNoise, close_fingers, finger_contacts, lift_and_shake, move_gripper
-from onepiece_dist.sim.views import Camera, _depth_image, back_project, camera_at
+from onepiece_dist.sim.views import Camera, back_project, camera_at, depth_image
 from onepiece_dist.sim.world import SimWorld, matrix_from_pose, quat_from_matrix
 from onepiece_dist.spec import GripperSpec
 
@@ -125,7 +125,7 @@ def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, ca
                                      physicsClientId=client)
         pb.createMultiBody(baseVisualShapeIndex=table, basePosition=[0, 0, -TABLE_THICKNESS / 2],
                            physicsClientId=client)
-        points = back_project(_depth_image(pb, client, camera), camera)
+        points = back_project(depth_image(pb, client, camera), camera)
     finally:
         pb.disconnect(client)
     if depth_noise > 0 and len(points):

@@ -90,12 +90,12 @@ def render_depth(vertices: np.ndarray, faces: np.ndarray, cameras: list[Camera])
         shape = pb.createVisualShape(pb.GEOM_MESH, vertices=np.asarray(vertices, float).tolist(),
                                      indices=np.asarray(faces, int).ravel().tolist(), physicsClientId=client)
         pb.createMultiBody(baseVisualShapeIndex=shape, physicsClientId=client)
-        return np.stack([_depth_image(pb, client, camera) for camera in cameras]).astype(np.float32)
+        return np.stack([depth_image(pb, client, camera) for camera in cameras]).astype(np.float32)
     finally:
         pb.disconnect(client)
 
 
-def _depth_image(pb, client: int, camera: Camera) -> np.ndarray:
+def depth_image(pb, client: int, camera: Camera) -> np.ndarray:
     eye, target = camera.pose[:3, 3], camera.pose[:3, 3] - camera.pose[:3, 2]
     view = pb.computeViewMatrix(eye.tolist(), target.tolist(), camera.pose[:3, 1].tolist())
     proj = pb.computeProjectionMatrixFOV(camera.fov_deg, 1.0, camera.near, camera.far)

@@ -25,7 +25,7 @@ import numpy as np
 from onepiece_dist.core.dedup import unique_codes
 from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.learn.train import StepResult, StepRun
-from onepiece_dist.study.result import AdaptiveRound
+from onepiece_dist.study.result import ArmRound
 from onepiece_dist.study.spec import StudySpec
 
 TrainOne = Callable[[StepRun], StepResult]
@@ -41,7 +41,7 @@ def validation_ap(result: StepResult) -> float:
 
 
 def adaptive_rows(spec: StudySpec, a_output: str, learning_rate: float, train_one: TrainOne
-                  ) -> tuple[tuple[int, ...], list[AdaptiveRound]]:
+                  ) -> tuple[tuple[int, ...], list[ArmRound]]:
     """U's labelled rows of A and its rounds."""
     from onepiece_dist.store import open_dataset
 
@@ -52,12 +52,12 @@ def adaptive_rows(spec: StudySpec, a_output: str, learning_rate: float, train_on
     labelled = first_rows(inverse, share(plan.first), np.random.default_rng([spec.seed, 41]))
     base = StepRun(a_output, "grasps", None, a_output, t.model, t.steps, t.batch_size, learning_rate, t.validation,
                    0, t.evaluations, device=t.device)
-    rounds: list[AdaptiveRound] = []
+    rounds: list[ArmRound] = []
     aps: list[float] = []
     for number in range(plan.rounds + 1):
         result = train_one(dataclasses.replace(base, rows=tuple(int(r) for r in np.sort(labelled))))
         aps.append(validation_ap(result))
-        rounds.append(AdaptiveRound(round=number, labels=int(len(labelled)), validation_ap=round(aps[-1], 4)))
+        rounds.append(ArmRound(round=number, labels=int(len(labelled)), validation_ap=round(aps[-1], 4)))
         if plan.stale(aps) >= plan.patience or number == plan.rounds or len(labelled) >= n:
             break
         labelled = np.concatenate([labelled, least_sure(result.scores, labelled, inverse, share(plan.batch))])

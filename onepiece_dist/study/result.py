@@ -64,7 +64,7 @@ class ArmCost(Frozen):
                                  "one object and labels, A's labelled grasps (R: its share of A's).")
 
 
-class AdaptiveRound(Frozen):
+class ArmRound(Frozen):
     """One round of the adaptive arm: its labels so far and the validation AP of the network trained on them."""
 
     round: int
@@ -250,7 +250,7 @@ class StudyResult(Frozen):
     heldout: Baselines
     arms: list[Arm]
     premise: list[Premise]
-    adaptive: list[AdaptiveRound] | None = Field(None, description="The adaptive arm's rounds (with "
+    adaptive: list[ArmRound] | None = Field(None, description="The adaptive arm's rounds (with "
                                                  "spec.adaptive).")
     lookup: KeyLookup | None = Field(None, description="The code as a lookup, without a network.")
     keys: list[KeyMeasure] = Field([], description="The other keys of spec.keys as lookups.")

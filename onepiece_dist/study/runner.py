@@ -31,7 +31,7 @@ from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
 from onepiece_dist.study.jobs import JobRecord, StudyJobs, run_or_reuse, study_jobs
 from onepiece_dist.study.picks import judge_by_picks, judges_picks, weights_base
 from onepiece_dist.study.result import (
-    AdaptiveRound,
+    ArmRound,
     Baselines,
     Ceiling,
     HeldoutScore,
@@ -245,7 +245,7 @@ def check_jobs(records: dict[str, JobRecord]) -> None:
 
 
 def train_adaptive(spec: StudySpec, jobs: StudyJobs, search: dict, store: RunStore, where: Where, prefix: str,
-                   say: Say) -> tuple[list[AdaptiveRound], list[tuple[ArmRun, StepResult]]]:
+                   say: Say) -> tuple[list[ArmRound], list[tuple[ArmRun, StepResult]]]:
     """The adaptive arm U (study.adaptive) at A's learning rate, and R ~U, random rows of U's size."""
     from onepiece_dist.study.adaptive import adaptive_rows
 
@@ -305,13 +305,13 @@ def random_rows(a_output: str, count: int, seed: int) -> tuple[int, ...]:
 
 def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
                     trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int,
-                    rounds: list[AdaptiveRound] | None = None) -> StudyResult:
-    from onepiece_dist.job.runtime.registry import package_version
+                    rounds: list[ArmRound] | None = None) -> StudyResult:
     from onepiece_dist.store import open_dataset
     from onepiece_dist.study.keys import key_measures
     from onepiece_dist.study.lookup import key_lookup
     from onepiece_dist.study.premise import label_fit, premise
     from onepiece_dist.study.stats import baselines
+    from onepiece_dist.version import package_version
 
     ho = open_dataset(jobs.heldout.output)
     labels, groups = ho["grasps/success"].astype(np.float64), ho["grasps/object"].astype(np.int64)

@@ -12,18 +12,7 @@ import numpy as np
 
 from onepiece_dist.core.ceiling import threshold_ap  # noqa: F401 - the study's AP over tied scores
 from onepiece_dist.core.intervals import bootstrap_interval, percentile_interval
-
-
-def average_precision(scores: np.ndarray, labels: np.ndarray) -> float:
-    """Area under the precision-recall curve (step interpolation, ties in the given order); 0 without a positive."""
-    labels = np.asarray(labels, dtype=np.float64)
-    positives = labels.sum()
-    if positives == 0:
-        return 0.0
-    order = np.argsort(-np.asarray(scores), kind="stable")
-    hits = labels[order]
-    precision = np.cumsum(hits) / np.arange(1, len(hits) + 1)
-    return float(np.sum(precision * hits) / positives)
+from onepiece_dist.core.ranking import average_precision
 
 
 def per_object_top(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray,

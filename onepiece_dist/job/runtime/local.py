@@ -11,10 +11,10 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from onepiece_dist.job.pipeline import ProgressFn, Runtime, new_status, run_pipeline
-from onepiece_dist.job.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
+from onepiece_dist.job.results import LabelTask, ObjectResult, PatchTask, ShardResult
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.job.runtime.trainer import Trainer
-from onepiece_dist.job.runtime.writer import CentralActor
+from onepiece_dist.job.runtime.writer import DatasetWriter
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
@@ -43,7 +43,7 @@ class LocalRuntime(Runtime):
 
     def __init__(self, spec: JobSpec, job_id: str, progress: ProgressFn | None = None):
         self.spec, self.job_id, self.progress = spec, job_id, progress
-        self.central = CentralActor(spec)
+        self.central = DatasetWriter(spec)
         self.central.parts.remove_stale_temporaries()
         self.simulate = PinnedSimulation()
         self.trainer = Trainer()
@@ -65,11 +65,11 @@ class LocalRuntime(Runtime):
             on_result(results[-1])
         return results
 
-    def label(self, tasks: list[LabelTask]) -> list[LabelShardResult]:
+    def label(self, tasks: list[LabelTask]) -> list[ShardResult]:
         return [self.simulate(label_shard, self.spec, task, index, self.central.parts)
                 for index, task in enumerate(tasks)]
 
-    def patch(self, tasks: list[PatchTask]) -> list[LabelShardResult]:
+    def patch(self, tasks: list[PatchTask]) -> list[ShardResult]:
         return [build_patch_shard(self.spec, task, index, self.central.parts) for index, task in enumerate(tasks)]
 
     def train(self, spec: JobSpec) -> TrainingReport:

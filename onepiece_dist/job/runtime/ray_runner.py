@@ -22,12 +22,12 @@ from ray.exceptions import OutOfMemoryError, RaySystemError
 
 from onepiece_dist.errors import JobCancelled, JobError, RuntimeLost
 from onepiece_dist.job.pipeline import ProgressFn, Runtime, new_status, run_pipeline
-from onepiece_dist.job.results import LabelShardResult, LabelTask, ObjectResult, PatchTask
+from onepiece_dist.job.results import LabelTask, ObjectResult, PatchTask, ShardResult
 from onepiece_dist.job.runtime.actors import restartable_actor
 from onepiece_dist.job.runtime.crashes import CrashLog, crash_folder, crashed_on
 from onepiece_dist.job.runtime.registry import RegistryClient
 from onepiece_dist.job.runtime.trainer import TrainerClient
-from onepiece_dist.job.runtime.writer import CentralClient, central_name
+from onepiece_dist.job.runtime.writer import WriterClient, central_name
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
@@ -60,28 +60,28 @@ class SimWorker:
         if self.crash_log is not None:
             self.crash_log.starting(method, index)
 
-    def label(self, task: LabelTask, index: int) -> LabelShardResult:
+    def label(self, task: LabelTask, index: int) -> ShardResult:
         """Label one shard of the one object into its part."""
         self.starting("label", index)
-        return dataclasses.replace(label_shard(self.spec, task, index, self.parts), node=_node_id())
+        return dataclasses.replace(label_shard(self.spec, task, index, self.parts), node=node_id())
 
-    def patch(self, task: PatchTask, index: int) -> LabelShardResult:
+    def patch(self, task: PatchTask, index: int) -> ShardResult:
         """Cut one shard of the one object's patches into its part."""
         self.starting("patch", index)
-        return dataclasses.replace(build_patch_shard(self.spec, task, index, self.parts), node=_node_id())
+        return dataclasses.replace(build_patch_shard(self.spec, task, index, self.parts), node=node_id())
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
         """Extract one object; its codes go to the central actor (named ``central``), once. When that message
         is lost (the actor restarting), the central actor's commit reads them from the part instead."""
         self.starting("extract", index)
         result = extract_object(self.spec, ref, index, self.parts)
-        central = CentralClient.find(self.central) if self.central and result.status == "ok" else None
+        central = WriterClient.find(self.central) if self.central and result.status == "ok" else None
         if central is not None:
             central.send_codes(index, result.part_key, self.parts.read_array(result.part_key, "code"))
-        return dataclasses.replace(result, node=_node_id())
+        return dataclasses.replace(result, node=node_id())
 
 
-def _node_id() -> str:
+def node_id() -> str:
     try:
         import ray
 
@@ -130,7 +130,7 @@ class RayRuntime(Runtime):
                  workers: int | None = None, progress: ProgressFn | None = None):
         self.spec, self.job_id, self.registry, self.status = spec, job_id, registry, status
         self.workers, self.progress = workers, progress
-        self.central = CentralClient.start(spec, job_id)
+        self.central = WriterClient.start(spec, job_id)
         self.trainers: list[TrainerClient] = []  # killed before evaluation's labelling, and at the end
         self.crashes = crash_folder(spec.parts_folder(), job_id)
         self.prepared: dict[str, list] = {}  # stage -> its worker actors, started ahead
@@ -172,10 +172,10 @@ class RayRuntime(Runtime):
     def extract(self, refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
         return self._on_pool("extract", refs, on_result, quarantined_object)
 
-    def label(self, tasks: list[LabelTask]) -> list[LabelShardResult]:
+    def label(self, tasks: list[LabelTask]) -> list[ShardResult]:
         return self._on_pool("label", tasks, lambda result: None, quarantined_shard)
 
-    def patch(self, tasks: list[PatchTask]) -> list[LabelShardResult]:
+    def patch(self, tasks: list[PatchTask]) -> list[ShardResult]:
         return self._on_pool("patch", tasks, lambda result: None, quarantined_shard)
 
     def train(self, spec: JobSpec) -> TrainingReport:
@@ -220,8 +220,8 @@ def quarantined_object(index: int, ref: ObjectRef, reason: str) -> ObjectResult:
     return ObjectResult(index, ref.name, "rejected", reason=reason)
 
 
-def quarantined_shard(index: int, task: LabelTask, reason: str) -> LabelShardResult:
-    return LabelShardResult(index, "rejected", reason=reason)
+def quarantined_shard(index: int, task: LabelTask, reason: str) -> ShardResult:
+    return ShardResult(index, "rejected", reason=reason)
 
 
 class WorkerPool:

@@ -7,6 +7,7 @@ cluster-wide actor. Each job's status is also written beside its dataset, so it 
 from __future__ import annotations
 
 from onepiece_dist.job.runtime.actors import ActorClient
+from onepiece_dist.version import package_version
 
 ACTIVE = ("pending", "running")
 REGISTRY_NAME = "onepiece-registry"
@@ -95,10 +96,3 @@ def cluster_info() -> dict:
     """What a client outside the cluster asks of it (run inside it, by ``onepiece cluster-info``): the package
     version the cluster runs and every job's latest status from the registry."""
     return {"version": package_version(), "jobs": {status["job_id"]: status for status in RegistryClient().jobs()}}
-
-
-def package_version() -> str:
-    """The installed version of this package (client and cluster compare theirs before a submit)."""
-    from importlib.metadata import version
-
-    return version("onepiece-dist")

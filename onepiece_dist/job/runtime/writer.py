@@ -1,9 +1,9 @@
 """The central actor: the one writer of the global arrays. It merges each object's codes as its part is
 committed, commits the dataset, assembles the one object, cuts its label stage into shards for the workers and
 merges what they label. A plain class (tested without Ray);
-:class:`CentralClient` is its thin client on Ray.
+:class:`WriterClient` is its thin client on Ray.
 
-After a restart its state is rebuilt from the store: :meth:`CentralActor.commit` folds in every part it has not
+After a restart its state is rebuilt from the store: :meth:`DatasetWriter.commit` folds in every part it has not
 merged yet, and the later stages read what the commit wrote when they do not hold it in memory.
 """
 
@@ -13,7 +13,7 @@ import numpy as np
 
 from onepiece_dist.core.dedup import DedupIndex
 from onepiece_dist.errors import JobError, MissingAssembly
-from onepiece_dist.job.results import CommitSummary, LabelShardResult, LabelTask, ObjectResult, PatchTask
+from onepiece_dist.job.results import CommitSummary, LabelTask, ObjectResult, PatchTask, ShardResult
 from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
 from onepiece_dist.job.stages.commit import commit_dataset
 from onepiece_dist.job.status import AdaptiveReport, AssemblyReport, LabelReport
@@ -22,7 +22,7 @@ from onepiece_dist.store import DatasetReader, PartStore
 from onepiece_dist.store.dataset import update_attributes, write_groups
 
 
-class CentralActor:
+class DatasetWriter:
     def __init__(self, spec: JobSpec):
         self.spec = spec
         self.parts = PartStore(spec.parts_folder())
@@ -63,7 +63,7 @@ class CentralActor:
 
         return patch_tasks(self.spec, self.spec.output)
 
-    def assemble(self, tasks: list[PatchTask], results: list[LabelShardResult]) -> AssemblyReport:
+    def assemble(self, tasks: list[PatchTask], results: list[ShardResult]) -> AssemblyReport:
         """Read the patches the workers cut (each unique code's, from its representative's source object), build
         the one object from them and store it under ``assembled/``."""
         from onepiece_dist.job.stages.assemble import assemble_dataset
@@ -88,7 +88,7 @@ class CentralActor:
                                   "(run the assemble stage first)")
         return label_tasks(self.spec, self.spec.output)
 
-    def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport:
+    def merge_labels(self, tasks: list[LabelTask], results: list[ShardResult]) -> LabelReport:
         """Write the workers' labelled shards as ``assembled/grasps/``, then measure label transfer."""
         from onepiece_dist.job.stages.label_one_object import write_labels
 
@@ -121,19 +121,19 @@ class CentralActor:
                      {"adaptive": {**record.model_dump(mode="json"), "model": self.spec.train.model}})
 
 
-class CentralClient(ActorClient):
+class WriterClient(ActorClient):
     """The central actor of one job on Ray, on the driver's node (losing a worker node does not take it down)."""
 
     @classmethod
-    def start(cls, spec: JobSpec, job_id: str) -> CentralClient:
+    def start(cls, spec: JobSpec, job_id: str) -> WriterClient:
         from onepiece_dist.job.runtime.registry import on_this_node
 
         name = central_name(job_id)
-        handle = restartable_actor(CentralActor, name, num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
+        handle = restartable_actor(DatasetWriter, name, num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
         return cls(handle, f"central actor {name}")
 
     @classmethod
-    def find(cls, name: str) -> CentralClient | None:
+    def find(cls, name: str) -> WriterClient | None:
         """The running central actor ``name``, or None while it is restarting or gone."""
         import ray
 
@@ -156,13 +156,13 @@ class CentralClient(ActorClient):
     def patch_tasks(self) -> list[PatchTask]:
         return self.call("patch_tasks")
 
-    def assemble(self, tasks: list[PatchTask], results: list[LabelShardResult]) -> AssemblyReport:
+    def assemble(self, tasks: list[PatchTask], results: list[ShardResult]) -> AssemblyReport:
         return self.call("assemble", tasks, results)
 
     def label_tasks(self) -> list[LabelTask]:
         return self.call("label_tasks")
 
-    def merge_labels(self, tasks: list[LabelTask], results: list[LabelShardResult]) -> LabelReport:
+    def merge_labels(self, tasks: list[LabelTask], results: list[ShardResult]) -> LabelReport:
         return self.call("merge_labels", tasks, results)
 
     def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None:

@@ -5,8 +5,6 @@ Only this code writes the global arrays (``unique/``, ``grasps/*``), so there is
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
-
 import numpy as np
 
 from onepiece_dist.core.dedup import DedupIndex
@@ -15,17 +13,11 @@ from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import GroupAppender, ObjectTable, begin_dataset, finish_dataset
 from onepiece_dist.store.format import CORE_GRASP_ARRAYS, GRASP_DTYPES, grasp_row_shape
+from onepiece_dist.version import package_version
 
 VIEW_PREFIX = "view_"  # per-object depth-view arrays in a part (not per grasp)
 OBJECT_PREFIX = "object_"  # per-object geometry in a part (surface points, convex pieces): read by assembly
 PER_OBJECT = (VIEW_PREFIX, OBJECT_PREFIX)
-
-
-def package_version() -> str:
-    try:
-        return version("onepiece-dist")
-    except PackageNotFoundError:
-        return "0+unknown"
 
 
 def dataset_attrs(spec: JobSpec, results: list[ObjectResult]) -> dict:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.ranking import average_precision
 from onepiece_dist.job.status import EvaluationReport, JobStatus
 from onepiece_dist.spec import JobSpec
 
@@ -60,7 +61,7 @@ def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, obje
     """The network at ``checkpoint`` scored on every labelled grasp of ``dataset`` (on ``device``), judged by
     ``protocol`` (said in the report, with whether the positive rate lets it separate a network from a guess)."""
     from onepiece_dist.learn.dataset import GraspDataset
-    from onepiece_dist.learn.train import average_precision, load_model, predict, resolve_device
+    from onepiece_dist.learn.train import load_model, predict, resolve_device
 
     labelled = GraspDataset(dataset, "grasps")
     scores = predict(load_model(checkpoint), labelled, device=resolve_device(device))

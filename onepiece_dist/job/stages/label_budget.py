@@ -16,7 +16,7 @@ import os
 import numpy as np
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.job.results import LabelShardResult, LabelTask
+from onepiece_dist.job.results import LabelTask, ShardResult
 from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.status import LabelReport
 from onepiece_dist.spec import JobSpec
@@ -103,7 +103,7 @@ def budget_tasks(spec: JobSpec, path: str | os.PathLike) -> list[LabelTask]:
     return row_shards(str(path), owner, rows, labels_key(spec, reader, rows, "budget"))
 
 
-def label_budget_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> LabelShardResult:
+def label_budget_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> ShardResult:
     """Label one shard of chosen candidates on their own object into its part (once). Runs in a worker."""
     from onepiece_dist.job.stages.label_transfer import label_on_sources
 

@@ -21,7 +21,7 @@ from onepiece_dist.core.frames import compose_poses, perturb_pose
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_regions
-from onepiece_dist.job.results import LabelShardResult, LabelTask
+from onepiece_dist.job.results import LabelTask, ShardResult
 from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.stages.patches import Patches, read_patches
 from onepiece_dist.job.status import LabelReport
@@ -79,7 +79,7 @@ def label_key(spec: JobSpec, reader: DatasetReader) -> str:
     return digest.hexdigest()
 
 
-def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> LabelShardResult:
+def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> ShardResult:
     """Label one shard into its part (once: a committed part is reused). Runs in a worker."""
     if task.rows is not None:
         from onepiece_dist.job.stages.label_budget import label_budget_shard

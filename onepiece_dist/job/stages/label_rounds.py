@@ -27,7 +27,7 @@ import numpy as np
 
 from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.errors import JobError, SpecError
-from onepiece_dist.job.results import LabelShardResult, LabelTask
+from onepiece_dist.job.results import LabelTask, ShardResult
 from onepiece_dist.job.stages.label_budget import labels_key, row_shards
 from onepiece_dist.job.status import AdaptiveReport, AdaptiveRound, JobStatus
 from onepiece_dist.spec import JobSpec
@@ -115,7 +115,7 @@ def stop_reason(spec: JobSpec, plan: RoundsPlan, aps: list[float], labelled: int
 
 
 TrainRound = Callable[["StepRun"], "StepResult"]  # noqa: F821 - learn.train's, loaded where the trainer trains
-LabelShards = Callable[[list[LabelTask]], list[LabelShardResult]]
+LabelShards = Callable[[list[LabelTask]], list[ShardResult]]
 
 
 @dataclass(frozen=True)
@@ -176,7 +176,7 @@ def label_in_rounds(spec: JobSpec, status: JobStatus, central, label: LabelShard
     record = AdaptiveReport(candidates=candidates, validation_objects=[int(o) for o in plan.validation_objects],
                             validation_labels=len(plan.validation_rows), limit=limit, stopped="", rounds=[])
     tasks: list[LabelTask] = []
-    results: list[LabelShardResult] = []
+    results: list[ShardResult] = []
     labelled, new, scores = np.zeros(0, np.int64), first_batch(spec, plan, limit), []
     aps, warm, reason = [], None, "rounds"
     for number in range(spec.adaptive.rounds + 1):

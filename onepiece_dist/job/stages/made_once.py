@@ -8,12 +8,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from onepiece_dist.job.results import LabelShardResult
+from onepiece_dist.job.results import ShardResult
 from onepiece_dist.store import PartStore
 
 
 def shard_once(parts: PartStore, part_key: str, index: int, make: Callable[[], dict[str, np.ndarray]], meta: dict,
-               count: Callable[[], int]) -> LabelShardResult:
+               count: Callable[[], int]) -> ShardResult:
     """Write the part ``part_key`` from ``make()`` unless it is committed; its result, with ``count()`` items."""
     start = time.perf_counter()
     reused = parts.is_committed(part_key)
@@ -21,4 +21,4 @@ def shard_once(parts: PartStore, part_key: str, index: int, make: Callable[[], d
         parts.write(part_key, make(), {**meta, "made_seconds": time.perf_counter() - start})
     seconds = time.perf_counter() - start
     made = float(parts.read_meta(part_key).get("made_seconds", seconds))
-    return LabelShardResult(index, "ok", part_key, count(), reused=reused, seconds=seconds, made_seconds=made)
+    return ShardResult(index, "ok", part_key, count(), reused=reused, seconds=seconds, made_seconds=made)

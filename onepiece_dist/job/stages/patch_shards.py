@@ -16,14 +16,12 @@ import os
 
 import numpy as np
 
+from onepiece_dist.core.ragged import row_offsets, split_rows, stack_rows
 from onepiece_dist.errors import JobError
-from onepiece_dist.job.results import LabelShardResult, PatchTask
+from onepiece_dist.job.results import PatchTask, ShardResult
 from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.stages.patches import (
     Patches,
-    _offsets,
-    _split,
-    _stack,
     as_stored,
     build_patches,
     source_geometry,
@@ -63,7 +61,7 @@ def patch_tasks(spec: JobSpec, path: str | os.PathLike) -> list[PatchTask]:
             for start in range(0, count, PATCH_SHARD_PATCHES)]
 
 
-def build_patch_shard(spec: JobSpec, task: PatchTask, index: int, parts: PartStore) -> LabelShardResult:
+def build_patch_shard(spec: JobSpec, task: PatchTask, index: int, parts: PartStore) -> ShardResult:
     """Cut one shard's patches into its part (once: a committed part is reused). Runs in a worker."""
     def make() -> dict[str, np.ndarray]:
         reader = DatasetReader(task.dataset)
@@ -73,16 +71,16 @@ def build_patch_shard(spec: JobSpec, task: PatchTask, index: int, parts: PartSto
         return {"position": positions.astype(np.int64),
                 "patch_piece_count": np.array([len(p) for p in patches.pieces], dtype=np.int64),
                 "piece_vertex_count": np.array([len(p) for p in pieces], dtype=np.int64),
-                "piece_vertices": _stack(pieces, np.float32),
+                "piece_vertices": stack_rows(pieces, np.float32),
                 "point_count": np.array([len(p) for p in patches.points], dtype=np.int64),
-                "points": _stack(patches.points, np.float32), "source_volume": patches.source_volume}
+                "points": stack_rows(patches.points, np.float32), "source_volume": patches.source_volume}
 
     return shard_once(parts, task.part_key, index, make, {"patches": [task.start, task.stop]},
                       lambda: task.stop - task.start)
 
 
 def merge_patch_shards(spec: JobSpec, reader: DatasetReader, parts: PartStore, tasks: list[PatchTask],
-                       results: list[LabelShardResult]) -> Patches:
+                       results: list[ShardResult]) -> Patches:
     """Every patch, in patch order, from the shards' parts, with the sources they were cut from."""
     for task, result in zip(tasks, results, strict=True):
         if result.status != "ok":
@@ -93,9 +91,9 @@ def merge_patch_shards(spec: JobSpec, reader: DatasetReader, parts: PartStore, t
     volume = np.zeros(len(representative))
     for task in tasks:
         shard = parts.read(task.part_key)
-        piece_list = _split(shard["piece_vertices"], shard["piece_vertex_count"])
-        firsts = _offsets(shard["patch_piece_count"])
-        shard_points = _split(shard["points"], shard["point_count"])
+        piece_list = split_rows(shard["piece_vertices"], shard["piece_vertex_count"])
+        firsts = row_offsets(shard["patch_piece_count"])
+        shard_points = split_rows(shard["points"], shard["point_count"])
         for j, k in enumerate(shard["position"]):
             pieces[k] = piece_list[firsts[j]:firsts[j + 1]]
             points[k] = shard_points[j]

@@ -17,6 +17,7 @@ import numpy as np
 from onepiece_dist.core.clip import clip_to_box
 from onepiece_dist.core.frames import rotate_points
 from onepiece_dist.core.layout import patch_box
+from onepiece_dist.core.ragged import row_offsets, split_rows, stack_rows
 from onepiece_dist.errors import StoreError
 from onepiece_dist.job.results import part_key
 from onepiece_dist.spec import JobSpec
@@ -53,7 +54,7 @@ class Patches:
         return {"representative": self.representative.astype(np.int64),
                 "patch_piece_count": np.array([len(p) for p in self.pieces], dtype=np.int64),
                 "piece_vertex_count": np.array([len(p) for p in piece_list], dtype=np.int64),
-                "piece_vertices": _stack(piece_list, np.float32),
+                "piece_vertices": stack_rows(piece_list, np.float32),
                 "source_volume": self.source_volume.astype(np.float64),
                 "source_point_count": np.array([len(p) for p in self.sources], dtype=np.int64),
                 **quantized_sources(self.sources),
@@ -96,15 +97,6 @@ def cut_points(surface: np.ndarray, pose: np.ndarray, lower: np.ndarray, upper: 
     return local[np.all((local >= lower) & (local <= upper), axis=1)].astype(np.float32).astype(np.float64)
 
 
-def _stack(rows: list[np.ndarray], dtype) -> np.ndarray:
-    """(sum k_i, 3) rows of every (k_i, 3) array, cast while copying (no float64 copy of a float32 result)."""
-    return np.concatenate(rows, axis=0, dtype=dtype) if rows else np.zeros((0, 3), dtype=dtype)
-
-
-def _split(rows: np.ndarray, counts: np.ndarray) -> list[np.ndarray]:
-    return np.split(np.asarray(rows, dtype=np.float64), np.cumsum(counts)[:-1]) if len(counts) else []
-
-
 def read_patches(reader: DatasetReader, start: int = 0, stop: int | None = None) -> Patches:
     """Patches ``start`` to ``stop`` (default: all) of the one object, reading only their rows of the flat
     arrays and the surfaces of their own source objects: a label shard holds its own patches, not the whole
@@ -112,17 +104,17 @@ def read_patches(reader: DatasetReader, start: int = 0, stop: int | None = None)
     piece_count = reader["assembled/patch_piece_count"].astype(np.int64)
     vertex_count = reader["assembled/piece_vertex_count"].astype(np.int64)
     stop = len(piece_count) if stop is None else stop
-    first_piece, first_vertex = _offsets(piece_count), _offsets(vertex_count)
+    first_piece, first_vertex = row_offsets(piece_count), row_offsets(vertex_count)
     p0, p1 = first_piece[start], first_piece[stop]
 
     def rows(name: str, begin: int, end: int) -> np.ndarray:
         return reader.array(f"assembled/{name}")[int(begin):int(end)]
 
-    pieces = _split(rows("piece_vertices", first_vertex[p0], first_vertex[p1]), vertex_count[p0:p1])
+    pieces = split_rows(rows("piece_vertices", first_vertex[p0], first_vertex[p1]), vertex_count[p0:p1])
     starts = first_piece[start:stop + 1] - p0
     source_object = rows("source_object", start, stop).astype(np.int64)
     source_pose = rows("source_pose", start, stop)
-    point_starts = _offsets(reader["assembled/source_point_count"].astype(np.int64))
+    point_starts = row_offsets(reader["assembled/source_point_count"].astype(np.int64))
     boxes = reader["assembled/source_box"].astype(np.float64)
     sources = {int(o): dequantize(rows("source_points", point_starts[o], point_starts[o + 1]), *boxes[o])
                for o in np.unique(source_object)}
@@ -143,11 +135,6 @@ def patch_points(sources: list[np.ndarray], source_object: np.ndarray, source_po
 
     lower, upper = patch_box(GripperSpec.model_validate(attrs["gripper"]), float(attrs["voxel"]["resolution"]))
     return [cut_points(sources[o], pose, lower, upper) for o, pose in zip(source_object, source_pose, strict=True)]
-
-
-def _offsets(counts: np.ndarray) -> np.ndarray:
-    """(n + 1,) int64 first row of each of n runs of ``counts`` (n,) rows, then the total."""
-    return np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
 
 
 def build_patches(spec: JobSpec, reader: DatasetReader, parts: PartStore, representative: np.ndarray) -> Patches:
