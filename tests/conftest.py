@@ -15,7 +15,7 @@ FIGURES = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "reli
 def pytest_addoption(parser):
     parser.addoption("--record-figures", action="store_true",
                      help="write the figures the reliability tests measure to benchmarks/results/reliability.json "
-                          "(docs/reliability.md renders them: python -m benchmarks.report)")
+                          "(docs/reliability.md renders them: python -m benchmarks.pages.report)")
 
 
 def pytest_configure(config):

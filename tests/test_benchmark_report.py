@@ -7,7 +7,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def load_report():
-    return importlib.import_module("benchmarks.report")
+    return importlib.import_module("benchmarks.pages.report")
 
 
 def test_every_committed_result_renders_with_its_command_and_date():
@@ -21,21 +21,21 @@ def test_every_committed_result_renders_with_its_command_and_date():
 
 def test_the_committed_page_is_the_rendered_one():
     assert (ROOT / "docs" / "performance.md").read_text() == load_report().render(), \
-        "docs/performance.md is stale: run `python -m benchmarks.report`"
+        "docs/performance.md is stale: run `python -m benchmarks.pages.report`"
 
 
 def test_the_assembly_figures_are_the_rendered_ones():
-    from benchmarks.assembly_page import PAGE, render_assembly_page
+    from benchmarks.pages.assembly_page import PAGE, render_assembly_page
 
     assert PAGE.read_text() == render_assembly_page(), \
-        "docs/assembly.md figures are stale: run `python -m benchmarks.report`"
+        "docs/assembly.md figures are stale: run `python -m benchmarks.pages.report`"
 
 
 def test_the_picks_page_is_the_rendered_one_and_answers_first():
-    from benchmarks.picks_page import PAGE, render_picks_page
+    from benchmarks.pages.picks_page import PAGE, render_picks_page
 
     page = render_picks_page()
-    assert PAGE.read_text() == page, "docs/picks.md is stale: run `python -m benchmarks.report`"
+    assert PAGE.read_text() == page, "docs/picks.md is stale: run `python -m benchmarks.pages.report`"
     first = page.split("\n")[4]
     assert first.startswith("On 6 real household meshes") and ("**met**" in first or "**not met**" in first)
     for picture in (line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")):
@@ -43,26 +43,27 @@ def test_the_picks_page_is_the_rendered_one_and_answers_first():
 
 
 def test_the_scaling_plan_is_the_rendered_one():
-    from benchmarks.scaling_page import PAGE, render_scaling_page
+    from benchmarks.pages.scaling_page import PAGE, render_scaling_page
 
-    assert PAGE.read_text() == render_scaling_page(), "docs/scaling.md plan is stale: run `python -m benchmarks.report`"
+    assert PAGE.read_text() == render_scaling_page(), \
+        "docs/scaling.md plan is stale: run `python -m benchmarks.pages.report`"
 
 
 def test_the_label_rule_figures_are_the_rendered_ones():
-    from benchmarks.trials_page import PAGE, render_trials_page
+    from benchmarks.pages.trials_page import PAGE, render_trials_page
 
-    assert PAGE.read_text() == render_trials_page(), "docs/trials.md is stale: run `python -m benchmarks.report`"
+    assert PAGE.read_text() == render_trials_page(), "docs/trials.md is stale: run `python -m benchmarks.pages.report`"
 
 
 def test_the_reliability_figures_are_the_rendered_ones():
-    from benchmarks.reliability_page import PAGE, render_reliability_page
+    from benchmarks.pages.reliability_page import PAGE, render_reliability_page
 
     assert PAGE.read_text() == render_reliability_page(), \
-        "docs/reliability.md figures are stale: run `python -m benchmarks.report`"
+        "docs/reliability.md figures are stale: run `python -m benchmarks.pages.report`"
 
 
 def test_every_guarantee_names_tests_that_exist_and_each_recorded_its_figure():
-    from benchmarks.reliability_page import GUARANTEES_END, GUARANTEES_START, PAGE, test_ids
+    from benchmarks.pages.reliability_page import GUARANTEES_END, GUARANTEES_START, PAGE, test_ids
 
     page = PAGE.read_text()
     rows = [line for line in page[page.index(GUARANTEES_START):page.index(GUARANTEES_END)].splitlines()
@@ -78,7 +79,7 @@ def test_every_guarantee_names_tests_that_exist_and_each_recorded_its_figure():
 
 
 def test_test_ids_follow_the_file_named_before():
-    from benchmarks.reliability_page import test_ids
+    from benchmarks.pages.reliability_page import test_ids
 
     ids = test_ids("`a.py::test_x`, `::test_y`, `b.py::test_z`")
     assert ids == ["a.py::test_x", "a.py::test_y", "b.py::test_z"]
@@ -107,9 +108,10 @@ def test_the_physics_floor_is_given_at_one_copys_rates_and_at_two_at_once():
 
 
 def test_the_cpu_block_says_met_only_when_no_array_differs():
-    from benchmarks.bench_cpu_independence import cpu_section
+    from benchmarks.experiments.bench_cpu_independence import cpu_section
 
-    result = {"command": "python -m benchmarks.bench_cpu_independence", "date": "2026-11-27", "machine": "x86_64",
+    result = {"command": "python -m benchmarks.experiments.bench_cpu_independence", "date": "2026-11-27",
+              "machine": "x86_64",
               "settings": {"SSE": {"OPENBLAS_CORETYPE": "Prescott"}}, "extract_objects": "primitives[0:1]",
               "rows": [{"job": "pinned", "setting": "SSE", "arrays": 44, "differing": []}],
               "numpy_sines": {"angles_with_another_sine_or_cosine": 0.06, "grasps": 100,

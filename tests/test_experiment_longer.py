@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-longer = importlib.import_module("onepiece_dist.study.longer_page")
+longer = importlib.import_module("benchmarks.pages.longer_page")
 
 
 def _arm(name: str, top1: float, ap: float, low: float, best_step: int = 10) -> dict:
@@ -45,7 +45,7 @@ def test_the_committed_longer_page_is_the_rendering_of_its_results(name):
     assert longer.longer_name(result) == name and result["source"] == name.split("_longer")[0]
     assert result["decision"] == json.loads(json.dumps(longer.decide(result)))
     assert (ROOT / "docs" / f"{name}.md").read_text() == longer.page(result), \
-        f"docs/{name}.md is stale: render its results (onepiece_dist/study/longer_page.py)"
+        f"docs/{name}.md is stale: render its results (benchmarks/pages/longer_page.py)"
 
 
 def test_both_budgets_are_committed_and_linked_from_the_experiment_page():

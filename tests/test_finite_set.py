@@ -1,5 +1,5 @@
-"""benchmarks/finite_set.py: the growth fits recover known curves, the committed page is the rendering of the
-committed results, and --quick runs the whole measurement."""
+"""benchmarks/experiments/finite_set.py: the growth fits recover known curves, the committed page is the rendering of
+the committed results, and --quick runs the whole measurement."""
 
 import importlib.util
 import json
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-finite = importlib.import_module("benchmarks.finite_set")
+finite = importlib.import_module("benchmarks.experiments.finite_set")
 
 
 def rows(n: list[int], u: np.ndarray) -> list[dict]:

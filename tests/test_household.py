@@ -19,7 +19,7 @@ pytestmark = pytest.mark.sim
 
 @pytest.fixture(scope="module")
 def household():
-    from benchmarks.household import HouseholdUnavailable, household_objects
+    from benchmarks.experiments.household import HouseholdUnavailable, household_objects
 
     try:
         return household_objects()

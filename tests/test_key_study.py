@@ -15,7 +15,7 @@ from onepiece_dist.core.voxel import crop_regions
 
 ROOT = Path(__file__).resolve().parents[1]
 lookup = importlib.import_module("onepiece_dist.study.lookup")
-page = importlib.import_module("onepiece_dist.study.key_study_page")
+page = importlib.import_module("benchmarks.pages.key_study_page")
 
 
 def keys(values) -> np.ndarray:
@@ -145,5 +145,5 @@ def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):
         assert not out["quick"] and out["name"] == results.stem
         page.write_page(out, tmp_path / "page.md")
         assert (ROOT / "docs" / f"{results.stem}.md").read_text() == (tmp_path / "page.md").read_text(), \
-            f"docs/{results.stem}.md is stale: render its results (onepiece_dist/study/key_study_page.py)"
+            f"docs/{results.stem}.md is stale: render its results (benchmarks/pages/key_study_page.py)"
         assert (ROOT / "docs" / f"{results.stem}.png").stat().st_size > 1000

@@ -94,7 +94,7 @@ def test_a_planted_malicious_checkpoint_is_refused(tmp_path, record_figure):
 
 def test_torch_load_is_never_called_without_weights_only(record_figure):
     calls = []
-    for path in [*ROOT.glob("onepiece_dist/**/*.py"), *ROOT.glob("examples/*.py"), *ROOT.glob("benchmarks/*.py")]:
+    for path in [*ROOT.glob("onepiece_dist/**/*.py"), *ROOT.glob("examples/*.py"), *ROOT.glob("benchmarks/**/*.py")]:
         calls += [(path, m.group(0)) for m in re.finditer(r"torch\.load\([^)]*\)", path.read_text())]
     assert calls and all("weights_only=True" in call for _, call in calls)
     record_figure(f"{len(calls)} torch.load calls, all with weights_only=True")

@@ -1,4 +1,4 @@
-"""benchmarks/one_object_storage.py: the committed page is the rendering of the committed results, and those
+"""benchmarks/experiments/one_object_storage.py: the committed page is the rendering of the committed results, and those
 results say what the issue asks (format 2 against format 1, delivered ratios against their targets)."""
 
 import importlib.util
@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-storage = importlib.import_module("benchmarks.one_object_storage")
+storage = importlib.import_module("benchmarks.experiments.one_object_storage")
 
 
 def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path):

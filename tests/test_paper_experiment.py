@@ -15,7 +15,7 @@ from onepiece_dist.study.training import search_rates
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 learn = importlib.import_module("onepiece_dist.study.stats")
-page = importlib.import_module("onepiece_dist.study.experiment_page")
+page = importlib.import_module("benchmarks.pages.experiment_page")
 
 
 def test_the_bootstrap_interval_holds_the_mean_and_narrows_with_more_objects():
@@ -55,7 +55,7 @@ def test_the_committed_page_is_the_rendering_of_the_committed_results(tmp_path, 
     assert result["args"].get("name", "paper_experiment") == name
     page.write_page(result, tmp_path / "page.md", ROOT / "benchmarks" / "results")
     assert (ROOT / "docs" / f"{name}.md").read_text() == (tmp_path / "page.md").read_text(), \
-        f"docs/{name}.md is stale: render its results (onepiece_dist/study/experiment_page.py)"
+        f"docs/{name}.md is stale: render its results (benchmarks/pages/experiment_page.py)"
     for plot in ("cost", "tradeoff"):
         assert f"]({name}_{plot}.png)" in (tmp_path / "page.md").read_text()
         assert (ROOT / "docs" / f"{name}_{plot}.png").stat().st_size > 1000
@@ -122,7 +122,7 @@ def _variant_row(radius: int, variant: str, ap: float, top1: float) -> dict:
 
 
 def test_the_variants_page_says_whether_perfect_patches_reach_r_and_how_far_labels_repeat():
-    page = importlib.import_module("onepiece_dist.study.experiment_sections")
+    page = importlib.import_module("benchmarks.pages.experiment_sections")
     rows = [_variant_row(radius, variant, ap, top1) for radius, variant, ap, top1 in (
         (0, "as_trained", 0.69, 0.84), (0, "representatives", 0.692, 0.87), (0, "source_labels", 0.72, 0.90),
         (2, "as_trained", 0.67, 0.83), (2, "representatives", 0.66, 0.82), (2, "source_labels", 0.70, 0.95))]

@@ -4,7 +4,7 @@ cached as an OBJ of convex pieces; the plain convex hull only when asked (with a
 Two decompositions: pybullet's VHACD (the default) and CoACD (collision-aware, Wei et al. 2022; the registry
 package ``coacd``, extra ``decompose``), which cuts along concave features instead of voxelizing. Both run in a
 child process: they crash on some meshes, and a crash there must not take the worker down.
-docs/decomposition.md measures them side by side (benchmarks/decomposition.py).
+docs/decomposition.md measures them side by side (benchmarks/experiments/decomposition.py).
 """
 
 from __future__ import annotations

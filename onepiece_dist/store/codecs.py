@@ -11,7 +11,7 @@ CHUNK_BYTES = 4 * 2**20  # decoded bytes a chunk aims at: one random batch decod
 
 def shuffle_for(dtype: np.dtype) -> str:
     """Bit-shuffle for bytes (codes, bit-like); none for float16 (the point clouds: measured 10% smaller than
-    byte-shuffle, benchmarks/bench_storage.py); byte-shuffle for wider numbers."""
+    byte-shuffle, benchmarks/speed/bench_storage.py); byte-shuffle for wider numbers."""
     dtype = np.dtype(dtype)
     if dtype.itemsize == 1:
         return "bitshuffle"

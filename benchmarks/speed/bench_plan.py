@@ -1,0 +1,134 @@
+"""Planning latency per view on one CPU core (issue 49): 500 candidates sampled on a depth camera's cloud, their
+collision checks, crops and PointNet scores, ranked; against a baseline run beside it that crops and scores the
+same candidates one at a time (what a per-grasp planner loop costs).
+
+    .venv/bin/python -m benchmarks.speed.bench_plan
+
+Scenes: each object of SCENES settled on the pick benchmark's table and seen from a seeded camera (0.5-0.8 m, 30-70
+degrees), as `onepiece pick` sees it. The network is PointNet (750 points per crop) with fresh weights: latency does
+not depend on what it learnt. Torch and BLAS on one thread. Targets: at most 0.3 s per view on one core; at most 30
+ms of scoring on a GPU (measured only where one is present). Results: benchmarks/results/plan.json, rendered into
+docs/picks.md by benchmarks/pages/report.py.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parents[1]
+SCENES = "primitives[3:6]+pybullet:named[0:3]"
+CANDIDATES, REPEATS = 500, 3
+TARGETS = {"cpu_seconds_per_view": 0.3, "gpu_score_seconds": 0.03}
+
+
+def scenes():
+    """(name, Observation) per object: settled on the table, seen by one seeded camera."""
+    from onepiece_dist.core.mesh import enclosed_volume
+    from onepiece_dist.objects import load_object, resolve_source
+    from onepiece_dist.plan.observation import Observation
+    from onepiece_dist.sim.pick import PickWorld, observe, pick_camera
+    from onepiece_dist.spec import GripperSpec, JobSpec
+
+    world, out = PickWorld(GripperSpec()), []
+    for k, ref in enumerate(resolve_source(SCENES)):
+        mesh = load_object(ref, JobSpec()).mesh
+        world.load_object([mesh.vertices], enclosed_volume(mesh), 400.0)
+        rng = np.random.default_rng([k, 49])
+        resting = world.settle(rng, mesh.vertices)
+        camera = pick_camera(resting[:3, 3], rng, (0.5, 0.8), (30.0, 70.0), 320, 45.0).camera
+        cloud = observe(mesh.vertices, mesh.faces, resting, camera, rng)
+        if len(cloud) < 50:
+            continue
+        out.append((ref.name, Observation(cloud, camera.pose[:3, 3], ref.name)))
+    world.close()
+    return out
+
+
+def scorer(folder: Path, device: str = "cpu"):
+    import torch
+
+    from onepiece_dist.job.runtime.trainer import crop_record
+    from onepiece_dist.learn.models import PointNetGrasp
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.spec import JobSpec
+
+    path = folder / "pointnet.pt"
+    torch.manual_seed(0)
+    torch.save({"model": "pointnet", "state_dict": PointNetGrasp().state_dict(), "crop": crop_record(JobSpec())}, path)
+    return GraspScorer(path, device=device)
+
+
+def one_at_a_time(proposals, net, rng) -> float:
+    """The baseline: each candidate cropped and scored on its own. Returns seconds."""
+    from onepiece_dist.plan.scorer import cut_crops
+
+    start = time.perf_counter()
+    for pose in proposals.poses:
+        net.score(cut_crops(proposals.object_points, pose[None], net.record, rng))
+    return time.perf_counter() - start
+
+
+def measure(folder: Path) -> dict:
+    import torch
+
+    from onepiece_dist.plan.planner import plan_grasps, propose
+    from onepiece_dist.plan_spec import PlanSpec
+
+    torch.set_num_threads(1)
+    net, spec, rows = scorer(folder), PlanSpec(candidates=CANDIDATES), []
+    for name, observation in scenes():
+        plans = [plan_grasps(observation, net, spec) for _ in range(REPEATS)]
+        best = min(plans, key=lambda p: p.seconds["total"])
+        proposals = propose(observation, net.record, spec, np.random.default_rng(0))
+        baseline = one_at_a_time(proposals, net, np.random.default_rng(0))
+        rows.append({"object": name, "points": len(observation.points), **best.counts,
+                     "seconds": {k: round(v, 4) for k, v in best.seconds.items()},
+                     "baseline_seconds": round(baseline + best.seconds["sample"], 4)})
+    return {"rows": rows, "gpu": gpu_scoring(folder)}
+
+
+def gpu_scoring(folder: Path) -> dict | None:
+    """Scoring 500 crops on a CUDA GPU (median of 20 after warm-up), where one is present."""
+    import torch
+
+    if not torch.cuda.is_available():
+        return None
+    from onepiece_dist.plan.scorer import Crops
+
+    net = scorer(folder, "cuda")
+    crops = Crops(np.zeros((CANDIDATES, 4), np.uint8), np.full(CANDIDATES, 750),
+                  np.random.default_rng(0).normal(0, 0.01, (CANDIDATES, 750, 3)).astype(np.float16))
+    times = []
+    for _ in range(25):
+        torch.cuda.synchronize()
+        start = time.perf_counter()
+        net.score(crops, 512)
+        torch.cuda.synchronize()
+        times.append(time.perf_counter() - start)
+    return {"device": torch.cuda.get_device_name(), "score_seconds": float(np.median(times[5:]))}
+
+
+def main() -> None:
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        measured = measure(Path(folder))
+    totals = [r["seconds"]["total"] for r in measured["rows"]]
+    result = {"command": ".venv/bin/python -m benchmarks.speed.bench_plan", "date": date.today().isoformat(),
+              "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}, one thread",
+              "candidates": CANDIDATES, "targets": TARGETS, **measured,
+              "median_seconds_per_view": float(np.median(totals)),
+              "median_baseline_seconds": float(np.median([r["baseline_seconds"] for r in measured["rows"]]))}
+    out = HERE / "results" / "plan.json"
+    out.write_text(json.dumps(result, indent=1) + "\n")
+    print(out)
+
+
+if __name__ == "__main__":
+    main()
