@@ -35,7 +35,7 @@ from onepiece_dist.job.pipeline import ProgressFn
 from onepiece_dist.job.relabel import RelabelReport, relabel_report, relabel_spec
 from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK
-from onepiece_dist.job.status import JobStatus, status_path
+from onepiece_dist.job.status import EvaluationReport, JobStatus, status_path
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.plan_spec import PickSpec, PlanSpec
@@ -75,17 +75,15 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
                 ray.shutdown()
 
 
-def evaluate_model(model_path: str | Path, spec: JobSpec) -> dict:
+def evaluate_model(model_path: str | Path, spec: JobSpec) -> EvaluationReport:
     """Label the candidates of ``spec.objects`` in simulation (in process, by the evaluation's protocol), then
     score the model on them (``onepiece evaluate``)."""
-    from onepiece_dist.job.stages.evaluate import heldout_sim, protocol_of, score_heldout
+    from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, protocol_of, score_heldout
 
     labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
     status = run_local(labelled, job_id="evaluate")
-    report = score_heldout(model_path, labelled.output, spec.train.device,
-                           status.progress.objects_done - len(status.rejections), protocol_of(labelled))
-    return {**report.model_dump(), "top_ranked_success": report.top1, "random_choice_success": report.random_choice,
-            "label_positive_rate": report.positive_rate}
+    return score_heldout(model_path, labelled.output, spec.train.device, objects_scored(status),
+                         protocol_of(labelled))
 
 
 def _connect_or_raise(connect, address: str | None) -> None:

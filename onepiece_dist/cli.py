@@ -264,7 +264,9 @@ def evaluate(
     except JobError as error:
         _err(f"evaluation failed: {error}")
         raise typer.Exit(EXIT_FAILED) from None
-    _print_mapping(report, as_json)
+    _print_mapping({**report.model_dump(), "top_ranked_success": report.top1,  # the names it printed first
+                    "random_choice_success": report.random_choice, "label_positive_rate": report.positive_rate},
+                   as_json)
 
 
 @app.command()

@@ -143,6 +143,7 @@ def test_a_centimetre_copy_is_refused_with_the_units_that_fit_and_accepted_with_
 
 
 def test_an_object_that_keeps_few_grasps_says_why(household, tmp_path):
+    from onepiece_dist.job.results import ObjectPartMeta
     from onepiece_dist.job.stages.extract import shortfall
 
     spec = JobSpec(grasps_per_object=16, gripper={"max_opening": 0.03, "closing_width": 0.03,
@@ -150,7 +151,9 @@ def test_an_object_that_keeps_few_grasps_says_why(household, tmp_path):
                    voxel={"resolution": 0.005})  # a 3 cm gripper on a 16 cm cereal box
     result = extract_object(spec, resolve_source(str(household / "cereal.obj"))[0], 0, PartStore(tmp_path))
     assert result.status == "rejected" and "narrower than max_opening=0.03 m" in result.reason  # too wide
-    assert shortfall({"grasps": 2, "collisions": 40, "dropped_no_contact": 5, "empty_crops": 0}, 16) == (
+    counts = {"content_id": "c", "grasps": 2, "collisions": 40, "dropped_no_contact": 5, "empty_crops": 0,
+              "candidates_tried": 60}
+    assert shortfall(ObjectPartMeta.from_attrs(counts), 16) == (
         "2 of 16 grasps kept: 40 met the object with the open gripper while sampled; 5 closed on nothing (too wide, "
         "or the object slipped out)")
-    assert shortfall({"grasps": 9}, 16) == ""
+    assert shortfall(ObjectPartMeta.from_attrs({**counts, "grasps": 9}), 16) == ""

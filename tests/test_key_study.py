@@ -28,25 +28,25 @@ def test_a_key_that_decides_the_label_transfers_it_exactly_to_every_held_out_gra
     test = np.r_[np.arange(24) % 8, [9, 9, 10]]  # three held-out grasps with keys no train grasp has
     label = lambda k: k % 2 == 0  # noqa: E731
     out = lookup.lookup_transfer(keys(train), label(train), keys(test), label(test))
-    assert out["covered"] == 24 and out["coverage"] == pytest.approx(24 / 27, abs=1e-4)
-    assert out["one_label"]["agreement"] == out["majority"]["agreement"] == 1.0
-    assert out["one_label"]["floor"] == 0.5
+    assert out.covered == 24 and out.coverage == pytest.approx(24 / 27, abs=1e-4)
+    assert out.one_label.agreement == out.majority.agreement == 1.0
+    assert out.one_label.floor == 0.5
 
 
 def test_a_key_that_ignores_the_label_agrees_about_as_often_as_the_floor():
     rng = np.random.default_rng(0)
     train, test = rng.integers(0, 20, 4000), rng.integers(0, 20, 4000)
     out = lookup.lookup_transfer(keys(train), rng.random(4000) < 0.4, keys(test), rng.random(4000) < 0.4)
-    assert out["coverage"] == 1.0
-    assert out["one_label"]["agreement"] == pytest.approx(out["one_label"]["floor"], abs=0.03)
+    assert out.coverage == 1.0
+    assert out.one_label.agreement == pytest.approx(out.one_label.floor, abs=0.03)
 
 
 def test_one_label_per_key_agrees_as_its_keys_positive_fraction_expects_and_the_majority_outvotes_it():
     train, success = keys([1, 1, 1, 2, 2]), np.array([False, True, True, True, False])
     out = lookup.lookup_transfer(train, success, keys([1, 2, 1]), np.array([True, True, False]))
     # key 1 is positive in 2 of 3 train grasps, key 2 in 1 of 2: expected agreement (2/3 + 1/2 + 1/3) / 3
-    assert out["one_label"]["agreement"] == pytest.approx(1.5 / 3, abs=1e-4)
-    assert out["majority"]["agreement"] == pytest.approx(1 / 3, abs=1e-4)  # key 1 positive, key 2 a tie: negative
+    assert out.one_label.agreement == pytest.approx(1.5 / 3, abs=1e-4)
+    assert out.majority.agreement == pytest.approx(1 / 3, abs=1e-4)  # key 1 positive, key 2 a tie: negative
 
 
 def test_one_grasp_per_key_is_drawn_among_each_keys_own_grasps_and_reaches_every_one_of_them():
@@ -60,11 +60,11 @@ def test_one_grasp_per_key_is_drawn_among_each_keys_own_grasps_and_reaches_every
 
 
 def test_the_share_decided_runs_from_zero_at_the_floor_to_one_at_the_ceiling():
-    assert lookup.decided_share({"agreement": 0.5, "floor": 0.5}, 0.8) == 0.0
-    assert lookup.decided_share({"agreement": 0.8, "floor": 0.5}, 0.8) == 1.0
-    assert lookup.decided_share({"agreement": 0.65, "floor": 0.5}, 0.8) == 0.5
-    assert lookup.decided_share({"agreement": 0.6, "floor": 0.6}, 0.55) is None
-    assert lookup.decided_share({"agreement": None, "floor": None}, 0.8) is None
+    assert lookup.decided_share(lookup.Agreement(0.5, 0.5), 0.8) == 0.0
+    assert lookup.decided_share(lookup.Agreement(0.8, 0.5), 0.8) == 1.0
+    assert lookup.decided_share(lookup.Agreement(0.65, 0.5), 0.8) == 0.5
+    assert lookup.decided_share(lookup.Agreement(0.6, 0.6), 0.55) is None
+    assert lookup.decided_share(lookup.Agreement(None, None), 0.8) is None
 
 
 def test_one_label_per_key_ranks_below_as_many_random_labels_where_a_frequent_key_holds_mixed_labels():
@@ -74,11 +74,11 @@ def test_one_label_per_key_ranks_below_as_many_random_labels_where_a_frequent_ke
     test_keys = keys(np.r_[np.zeros(200, int), 1 + np.arange(30)])
     test_success = np.r_[rng.random(200) < 0.75, rng.random(30) < 0.3]
     out = lookup.budget_lookup(train_keys, train_success, test_keys, test_success, seed=0, draws=20)
-    assert out["B"]["labels"] == out["R"]["labels"] == out["S"]["labels"] == 31 and out["A"]["labels"] == 330
-    assert out["B"]["coverage"] == 1.0 > out["R"]["coverage"]
+    assert out["B"].labels == out["R"].labels == out["S"].labels == 31 and out["A"].labels == 330
+    assert out["B"].coverage == 1.0 > out["R"].coverage
     # B's one label for key 0, wrong a quarter of the time, decides most held-out grasps; R averages ~28 of them
-    assert out["R"]["ap"] > out["B"]["ap"] and out["R"]["accuracy"] > out["B"]["accuracy"]
-    assert out["B"]["sd"]["accuracy"] > 3 * out["R"]["sd"]["accuracy"]
+    assert out["R"].ap > out["B"].ap and out["R"].accuracy > out["B"].accuracy
+    assert out["B"].sd_accuracy > 3 * out["R"].sd_accuracy
 
 
 def test_labels_spread_by_key_count_follow_its_root_stay_within_each_key_and_spend_the_budget():
@@ -96,7 +96,7 @@ def test_labels_spread_by_key_count_follow_its_root_stay_within_each_key_and_spe
 def test_a_key_that_decides_the_label_ranks_perfectly_from_one_label_per_key():
     train, test = np.arange(80) % 8, np.arange(40) % 8
     out = lookup.budget_lookup(keys(train), train % 2 == 0, keys(test), test % 2 == 0, seed=0)
-    assert out["A"]["ap"] == out["B"]["ap"] == 1.0 and out["B"]["accuracy"] == 1.0 and out["B"]["sd"]["ap"] == 0
+    assert out["A"].ap == out["B"].ap == 1.0 and out["B"].accuracy == 1.0 and out["B"].sd_ap == 0
 
 
 def test_occupancy_codes_from_the_kept_crop_points_are_the_codes_core_voxel_gives():

@@ -70,7 +70,7 @@ def codes_at(spec: JobSpec, resolution_mm: float) -> tuple[np.ndarray, int]:
     codes = np.zeros((len(owner), (nbits + 7) // 8), dtype=np.uint8)
     parts = PartStore(spec.parts_folder())
     for obj in np.unique(owner):
-        surface = source_geometry(reader, parts, int(obj))["surface"]
+        surface = source_geometry(reader, parts, int(obj)).surface
         codes[owner == obj] = crop_codes(surface, poses[owner == obj], grid, voxel.resolution)[0]
     return codes, nbits
 

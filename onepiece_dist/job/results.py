@@ -3,7 +3,35 @@ to send through Ray (no arrays: those stay in the store)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
+
+
+@dataclass(frozen=True)
+class ObjectPartMeta:
+    """What an object's extraction part records of it (the part's attributes, written by the extract stage): its
+    counts, the physics it was simulated with and what making it cost. Parts written before a field existed read
+    as its default."""
+
+    content_id: str
+    grasps: int
+    empty_crops: int
+    candidates_tried: int
+    collisions: int
+    name: str = ""
+    trials: int = 0
+    settled_code_differs: int = 0
+    dropped_start_collision: int = 0
+    dropped_no_contact: int = 0
+    dropped_invalid: int = 0
+    volume: float = 0.0
+    density: float | None = None  # a folder manifest's, or the job's sim.density when the part was made
+    friction: float = 1.0
+    made_seconds: float | None = None
+
+    @classmethod
+    def from_attrs(cls, attrs: dict) -> ObjectPartMeta:
+        known = {field.name for field in fields(cls)}
+        return cls(**{name: value for name, value in attrs.items() if name in known})
 
 
 @dataclass(frozen=True)

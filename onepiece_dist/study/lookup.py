@@ -7,12 +7,48 @@ by count (S). docs/key_study.md measures several keys with it; every study measu
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from onepiece_dist.core.ceiling import threshold_ap
 from onepiece_dist.core.dedup import unique_codes
 from onepiece_dist.core.selection import one_grasp_per_key
 from onepiece_dist.study.result import KeyLookup, LookupRanking
+
+
+@dataclass(frozen=True)
+class Agreement:
+    """How often a label agrees with the truth, beside the floor of a label that ignores the shape (independent
+    labels at the same positive rates); both None where there was nothing to compare."""
+
+    agreement: float | None = None
+    floor: float | None = None
+
+
+@dataclass(frozen=True)
+class LookupTransfer:
+    """Held-out grasps labelled by looking their key up among the train grasps' (:func:`lookup_transfer`)."""
+
+    test_grasps: int
+    covered: int  # held-out grasps whose key some train grasp has
+    coverage: float | None  # their share (None without held-out grasps)
+    one_label: Agreement  # one train label of the key (B's)
+    majority: Agreement  # the key's majority train label
+
+
+@dataclass(frozen=True)
+class RankedLookup:
+    """Held-out grasps ranked by the lookup from some train labels: the mean over ``draws`` seeded draws of the
+    labels, their coverage, AP and accuracy, and the spread (sd) of AP and accuracy over the draws."""
+
+    labels: int
+    coverage: float
+    ap: float
+    accuracy: float
+    sd_ap: float = 0.0
+    sd_accuracy: float = 0.0
+    draws: int = 1
 
 
 def key_ids(train_keys: np.ndarray, test_keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
@@ -29,7 +65,7 @@ def key_labels(ids: np.ndarray, success: np.ndarray, keys: int) -> tuple[np.ndar
 
 
 def lookup_transfer(train_keys: np.ndarray, train_success: np.ndarray, test_keys: np.ndarray,
-                    test_success: np.ndarray) -> dict:
+                    test_success: np.ndarray) -> LookupTransfer:
     """Held-out grasps labelled by a lookup of their key among the train grasps' keys.
 
     train_keys (n, K) uint8, train_success (n,) bool, test_keys (m, K) uint8, test_success (m,) bool. A covered
@@ -45,29 +81,29 @@ def lookup_transfer(train_keys: np.ndarray, train_success: np.ndarray, test_keys
     covered = counts[test] > 0
     truth = np.asarray(test_success, dtype=bool)[covered]
     share = positives[test[covered]] / np.maximum(counts[test[covered]], 1)  # p_k of each covered test grasp
-    one_label = {"agreement": None, "floor": None}
+    one_label = Agreement()
     if covered.any():
         p, q = float(share.mean()), float(truth.mean())
-        one_label = {"agreement": round(float(np.mean(np.where(truth, share, 1 - share))), 4),
-                     "floor": round(p * q + (1 - p) * (1 - q), 4)}
-    return {"test_grasps": int(len(test_keys)), "covered": int(covered.sum()),
-            "coverage": round(float(covered.mean()), 4) if len(test_keys) else None,
-            "one_label": one_label, "majority": agreement(share > 0.5, truth)}
+        one_label = Agreement(round(float(np.mean(np.where(truth, share, 1 - share))), 4),
+                              round(p * q + (1 - p) * (1 - q), 4))
+    return LookupTransfer(test_grasps=int(len(test_keys)), covered=int(covered.sum()),
+                          coverage=round(float(covered.mean()), 4) if len(test_keys) else None,
+                          one_label=one_label, majority=agreement(share > 0.5, truth))
 
 
-def agreement(label: np.ndarray, truth: np.ndarray) -> dict:
+def agreement(label: np.ndarray, truth: np.ndarray) -> Agreement:
     """Agreement of (n,) bool labels with (n,) bool truth, and the floor of independent labels."""
     if not len(truth):
-        return {"agreement": None, "floor": None}
+        return Agreement()
     p, q = float(label.mean()), float(truth.mean())
-    return {"agreement": round(float(np.mean(label == truth)), 4), "floor": round(p * q + (1 - p) * (1 - q), 4)}
+    return Agreement(round(float(np.mean(label == truth)), 4), round(p * q + (1 - p) * (1 - q), 4))
 
 
-def decided_share(measure: dict, ceiling: float | None) -> float | None:
+def decided_share(measure: Agreement, ceiling: float | None) -> float | None:
     """(agreement - floor) / (ceiling - floor): how much of what a label can agree beyond chance the key gives."""
-    if measure["agreement"] is None or ceiling is None or ceiling <= measure["floor"]:
+    if measure.agreement is None or ceiling is None or ceiling <= measure.floor:
         return None
-    return round((measure["agreement"] - measure["floor"]) / (ceiling - measure["floor"]), 4)
+    return round((measure.agreement - measure.floor) / (ceiling - measure.floor), 4)
 
 
 def lookup_scores(train_ids: np.ndarray, train_success: np.ndarray, labelled: np.ndarray, test_ids: np.ndarray,
@@ -83,7 +119,7 @@ def lookup_scores(train_ids: np.ndarray, train_success: np.ndarray, labelled: np
 
 
 def budget_lookup(train_keys: np.ndarray, train_success: np.ndarray, test_keys: np.ndarray,
-                  test_success: np.ndarray, seed: int, draws: int = 5) -> dict:
+                  test_success: np.ndarray, seed: int, draws: int = 5) -> dict[str, RankedLookup]:
     """B against R without a network: held-out grasps ranked by :func:`lookup_scores` from (A) every train label,
     (B) one label per key, of a grasp of the key drawn at random, (R) as many labels as B of train grasps drawn at
     random, (S) as many labels spread over the keys by count (:func:`grasps_by_key_count`); B, R and S over ``draws``
@@ -93,16 +129,23 @@ def budget_lookup(train_keys: np.ndarray, train_success: np.ndarray, test_keys: 
     keys = int(inverse.max()) + 1 if len(inverse) else 0
     train_ids, test_ids, ids = key_ids(train_keys, test_keys)  # the scores look keys up across both sets
 
-    def measure(labelled: np.ndarray) -> dict:
+    def measure(labelled: np.ndarray) -> RankedLookup:
         scores, covered = lookup_scores(train_ids, train_success, labelled, test_ids, ids)
         accuracy = float(np.mean((scores > 0.5) == truth))
-        return {"labels": int(len(labelled)), "coverage": round(covered, 4),
-                "ap": round(threshold_ap(scores, truth), 4), "accuracy": round(accuracy, 4)}
+        return RankedLookup(labels=int(len(labelled)), coverage=round(covered, 4),
+                            ap=round(threshold_ap(scores, truth), 4), accuracy=round(accuracy, 4))
 
-    def summary(runs: list[dict]) -> dict:
-        spread = {m: round(float(np.std([r[m] for r in runs])), 4) for m in ("ap", "accuracy")}
-        mean = {m: round(float(np.mean([r[m] for r in runs])), 4) for m in ("coverage", "ap", "accuracy")}
-        return {"labels": int(round(np.mean([r["labels"] for r in runs]))), **mean, "sd": spread, "draws": draws}
+    def summary(runs: list[RankedLookup]) -> RankedLookup:
+        def mean(values) -> float:
+            return round(float(np.mean(values)), 4)
+
+        def sd(values) -> float:
+            return round(float(np.std(values)), 4)
+
+        ap, accuracy = [r.ap for r in runs], [r.accuracy for r in runs]
+        return RankedLookup(labels=int(round(np.mean([r.labels for r in runs]))),
+                            coverage=mean([r.coverage for r in runs]), ap=mean(ap), accuracy=mean(accuracy),
+                            sd_ap=sd(ap), sd_accuracy=sd(accuracy), draws=draws)
 
     rng = np.random.default_rng([seed, 29])
     one_per_key = [measure(one_grasp_per_key(inverse, rng)) for _ in range(draws)]
@@ -138,8 +181,8 @@ def key_lookup(train_codes: np.ndarray, train_success: np.ndarray, test_codes: n
     train_success, test_success = np.asarray(train_success, bool), np.asarray(test_success, bool)
     transfer = lookup_transfer(train_codes, train_success, test_codes, test_success)
     ranked = budget_lookup(train_codes, train_success, test_codes, test_success, seed)
-    return KeyLookup(train_codes=len(unique_codes(train_codes).unique), coverage=transfer["coverage"] or 0.0,
-                     one_label=transfer["one_label"]["agreement"], one_label_floor=transfer["one_label"]["floor"],
-                     majority=transfer["majority"]["agreement"], majority_floor=transfer["majority"]["floor"],
-                     ranked={arm: LookupRanking(labels=r["labels"], coverage=r["coverage"], ap=r["ap"],
-                                                accuracy=r["accuracy"]) for arm, r in ranked.items()})
+    return KeyLookup(train_codes=len(unique_codes(train_codes).unique), coverage=transfer.coverage or 0.0,
+                     one_label=transfer.one_label.agreement, one_label_floor=transfer.one_label.floor,
+                     majority=transfer.majority.agreement, majority_floor=transfer.majority.floor,
+                     ranked={arm: LookupRanking(labels=r.labels, coverage=r.coverage, ap=r.ap, accuracy=r.accuracy)
+                             for arm, r in ranked.items()})

@@ -16,7 +16,7 @@ from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_crop
 from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_candidates
 from onepiece_dist.core.voxel import canonical_codes, crop_regions
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.job.results import ObjectResult, part_key
+from onepiece_dist.job.results import ObjectPartMeta, ObjectResult, part_key
 from onepiece_dist.objects import ObjectRef, load_object
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
@@ -32,7 +32,7 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
         return ObjectResult(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
     key, repairs = part_key(loaded.content_id, spec.result_key()), "; ".join(loaded.repairs)
     if parts.is_committed(key):
-        meta = parts.read_meta(key)
+        meta = ObjectPartMeta.from_attrs(parts.read_meta(key))
         return replace(_from_meta(index, ref.name, key, meta, reused=True, start=start), repairs=repairs,
                        shortfall=shortfall(meta, spec.grasps_per_object))
     try:
@@ -45,7 +45,7 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
                             content_id=loaded.content_id, seconds=time.perf_counter() - start)
     parts.write(key, arrays, {"name": ref.name, "content_id": loaded.content_id, **meta,
                               "made_seconds": time.perf_counter() - start})
-    meta = parts.read_meta(key)
+    meta = ObjectPartMeta.from_attrs(parts.read_meta(key))
     return replace(_from_meta(index, ref.name, key, meta, reused=False, start=start), repairs=repairs,
                    shortfall=shortfall(meta, spec.grasps_per_object))
 
@@ -236,25 +236,25 @@ def crop_codes_from(clouds: list[np.ndarray], source: np.ndarray, poses: np.ndar
     return codes, counts, inside if keep_points else None
 
 
-def shortfall(meta: dict, asked: int) -> str:
+def shortfall(meta: ObjectPartMeta, asked: int) -> str:
     """Why an object kept fewer than half the grasps asked for, from its part's counts ('' when it kept enough):
     candidates whose open gripper met the object, whose fingers started in it or closed on nothing, that flew off,
     or whose crop held no point."""
-    kept = int(meta["grasps"])
+    kept = int(meta.grasps)
     if kept >= asked / 2:
         return ""
-    causes = [(meta.get("collisions", 0), "met the object with the open gripper while sampled"),
-              (meta.get("dropped_start_collision", 0), "started in collision"),
-              (meta.get("dropped_no_contact", 0), "closed on nothing (too wide, or the object slipped out)"),
-              (meta.get("dropped_invalid", 0), "sent the object flying"),
-              (meta.get("empty_crops", 0), "held no surface point in the closing region")]
+    causes = [(meta.collisions, "met the object with the open gripper while sampled"),
+              (meta.dropped_start_collision, "started in collision"),
+              (meta.dropped_no_contact, "closed on nothing (too wide, or the object slipped out)"),
+              (meta.dropped_invalid, "sent the object flying"),
+              (meta.empty_crops, "held no surface point in the closing region")]
     said = [f"{n} {what}" for n, what in sorted(causes, key=lambda c: -c[0]) if n]
     return f"{kept} of {asked} grasps kept: " + ("; ".join(said) if said else "too few candidates could be sampled")
 
 
-def _from_meta(index: int, name: str, key: str, meta: dict, reused: bool, start: float) -> ObjectResult:
-    return ObjectResult(index, name, "ok", content_id=meta["content_id"], part_key=key, grasps=meta["grasps"],
-                        empty_crops=meta["empty_crops"], candidates_tried=meta["candidates_tried"],
-                        collisions=meta["collisions"], settled_code_differs=meta.get("settled_code_differs", 0),
-                        reused=reused, seconds=time.perf_counter() - start,
-                        made_seconds=float(meta.get("made_seconds", time.perf_counter() - start)))
+def _from_meta(index: int, name: str, key: str, meta: ObjectPartMeta, reused: bool, start: float) -> ObjectResult:
+    made = meta.made_seconds if meta.made_seconds is not None else time.perf_counter() - start
+    return ObjectResult(index, name, "ok", content_id=meta.content_id, part_key=key, grasps=meta.grasps,
+                        empty_crops=meta.empty_crops, candidates_tried=meta.candidates_tried,
+                        collisions=meta.collisions, settled_code_differs=meta.settled_code_differs,
+                        reused=reused, seconds=time.perf_counter() - start, made_seconds=float(made))

@@ -77,13 +77,13 @@ def label_on_sources(spec: JobSpec, reader: DatasetReader, parts: PartStore,
     world, noise = process_world(spec.gripper), LabelNoise.from_spec(spec.sim)
     for obj in np.unique(objects):
         source = source_geometry(reader, parts, int(obj))
-        density = spec.sim.density if source["density"] is None else source["density"]  # a manifest's, if any
-        world.load_object(source["pieces"], source["volume"], density, source["friction"])
+        density = spec.sim.density if source.density is None else source.density  # a manifest's, if any
+        world.load_object(source.pieces, source.volume, density, source.friction)
         mine = np.flatnonzero(objects == obj)
         batch = run_trials(world, poses[mine], label=True, noise=noise,
                            rng=object_rng(content_ids[obj], spec.seed, stream=3))
         held = batch.outcome == 0
-        success[mine] = np.where(held, protocol_label(spec, source["pieces"], batch), False)
+        success[mine] = np.where(held, protocol_label(spec, source.pieces, batch), False)
         quality[mine] = np.where(held, batch.quality, 0.0)
     return success, quality
 

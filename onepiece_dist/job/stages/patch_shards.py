@@ -100,6 +100,6 @@ def merge_patch_shards(spec: JobSpec, reader: DatasetReader, parts: PartStore, t
             volume[k] = shard["source_volume"][j]
     objects = reader["grasps/object"][representative].astype(np.int64)
     used = np.unique(objects)
-    sources = [as_stored(source_geometry(reader, parts, int(obj))["surface"]) for obj in used]
+    sources = [as_stored(source_geometry(reader, parts, int(obj)).surface) for obj in used]
     return Patches(representative, pieces, points, volume, sources, np.searchsorted(used, objects).astype(np.int64),
                    reader["grasps/pose"][representative].astype(np.float32))

@@ -19,7 +19,7 @@ from onepiece_dist.core.frames import rotate_points
 from onepiece_dist.core.layout import patch_box
 from onepiece_dist.core.ragged import row_offsets, split_rows, stack_rows
 from onepiece_dist.errors import StoreError
-from onepiece_dist.job.results import part_key
+from onepiece_dist.job.results import ObjectPartMeta, part_key
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
 
@@ -150,21 +150,33 @@ def build_patches(spec: JobSpec, reader: DatasetReader, parts: PartStore, repres
     sources = []
     for obj in used:
         source = source_geometry(reader, parts, int(obj))
-        source["surface"] = as_stored(source["surface"])  # 6 bytes a point
-        sources.append(source["surface"])
+        surface = as_stored(source.surface)  # 6 bytes a point
+        sources.append(surface)
         for k in np.flatnonzero(objects == obj):
             rot, origin = poses[k, :3, :3], poses[k, :3, 3]
-            local = [clip_to_box(rotate_points(piece - origin, rot), lower, upper) for piece in source["pieces"]]
+            local = [clip_to_box(rotate_points(piece - origin, rot), lower, upper) for piece in source.pieces]
             pieces[k] = [piece.astype(np.float32).astype(np.float64) for piece in local if len(piece)]  # as stored
-            points[k] = cut_points(source["surface"], poses[k], lower, upper)
-            volume[k] = source["volume"]
+            points[k] = cut_points(surface, poses[k], lower, upper)
+            volume[k] = source.volume
     return Patches(np.asarray(representative, dtype=np.int64), pieces, points, volume, sources,
                    np.searchsorted(used, objects).astype(np.int64), poses32.astype(np.float32))
 
 
-def source_geometry(reader: DatasetReader, parts: PartStore, obj: int) -> dict:
-    """Object ``obj``'s surface points (S, 3), convex pieces (list of (k, 3)) and volume, from its extraction
-    part (found by its content id and the dataset's result key)."""
+@dataclass(frozen=True)
+class SourceGeometry:
+    """A source object as its extraction part keeps it: surface points (S, 3), convex pieces (list of (k, 3)),
+    float64, and the physics it was simulated with."""
+
+    surface: np.ndarray
+    pieces: list[np.ndarray]
+    volume: float
+    density: float | None  # a folder manifest's (None: the job's sim.density)
+    friction: float
+
+
+def source_geometry(reader: DatasetReader, parts: PartStore, obj: int) -> SourceGeometry:
+    """Object ``obj``'s geometry, from its extraction part (found by its content id and the dataset's result
+    key)."""
     key = part_key(bytes(reader.array("objects/id")[obj]).hex(), reader.attrs["provenance"]["result_key"])
     name = reader.object_names[obj]
     if not parts.is_committed(key):
@@ -172,7 +184,7 @@ def source_geometry(reader: DatasetReader, parts: PartStore, obj: int) -> dict:
                          "it (run the extract stage again with the same spec to recreate it)")
     arrays = {n: parts.read_array(key, n) for n in (SURFACE, PIECE_VERTICES, PIECE_SIZES)}
     sizes = arrays[PIECE_SIZES].astype(np.int64)
-    meta = parts.read_meta(key)
-    return {"surface": arrays[SURFACE].astype(np.float64), "volume": float(meta["volume"]),
-            "density": meta.get("density"), "friction": float(meta.get("friction", 1.0)),
-            "pieces": np.split(arrays[PIECE_VERTICES].astype(np.float64), np.cumsum(sizes)[:-1])}
+    meta = ObjectPartMeta.from_attrs(parts.read_meta(key))
+    return SourceGeometry(surface=arrays[SURFACE].astype(np.float64),
+                          pieces=np.split(arrays[PIECE_VERTICES].astype(np.float64), np.cumsum(sizes)[:-1]),
+                          volume=float(meta.volume), density=meta.density, friction=float(meta.friction))
