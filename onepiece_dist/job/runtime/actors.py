@@ -8,6 +8,7 @@ then raises :class:`~onepiece_dist.errors.ActorLost`, one of the package's error
 from __future__ import annotations
 
 import time
+from typing import ClassVar
 
 from onepiece_dist.errors import ActorLost, RuntimeLost
 
@@ -39,7 +40,10 @@ def restartable_actor(cls, name: str, **options):
 
 
 class ActorClient:
-    """Calls the methods of one actor handle; ``what`` names the actor in errors."""
+    """Calls the methods of one actor handle; ``what`` names the actor in errors. ``served`` is the plain class
+    the actor runs: every method a client calls by name is one of its methods (tests/test_actors.py)."""
+
+    served: ClassVar[type]
 
     def __init__(self, handle, what: str, patience_s: float = ACTOR_PATIENCE_S):
         self.handle, self.what, self.patience_s = handle, what, patience_s

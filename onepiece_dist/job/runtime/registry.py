@@ -51,6 +51,8 @@ class JobRegistry:
 class RegistryClient(ActorClient):
     """The cluster's registry actor (created on first use; needs a connected Ray)."""
 
+    served = JobRegistry
+
     def __init__(self):
         import ray
 

@@ -68,6 +68,8 @@ class TrainerClient(ActorClient):
     """The trainer as a Ray actor: one GPU when ``train.device`` is 'cuda', or 'auto' and the cluster has GPU
     nodes; else one CPU."""
 
+    served = Trainer
+
     @classmethod
     def start(cls, spec: JobSpec, job_id: str) -> TrainerClient:
         """The job's trainer actor ``trainer-<job>``; restarted by Ray if it dies, and a restarted trainer resumes

@@ -124,6 +124,8 @@ class DatasetWriter:
 class WriterClient(ActorClient):
     """The central actor of one job on Ray, on the driver's node (losing a worker node does not take it down)."""
 
+    served = DatasetWriter
+
     @classmethod
     def start(cls, spec: JobSpec, job_id: str) -> WriterClient:
         from onepiece_dist.job.runtime.registry import on_this_node
