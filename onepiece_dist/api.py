@@ -34,8 +34,10 @@ from onepiece_dist.errors import (
 from onepiece_dist.job.pipeline import ProgressFn
 from onepiece_dist.job.relabel import RelabelReport, relabel_report, relabel_spec
 from onepiece_dist.job.runtime.local import run_local
-from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK
-from onepiece_dist.job.status import EvaluationReport, JobStatus, status_path
+from onepiece_dist.job.runtime.ray_env import connect, loopback_environment
+from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK, RegistryClient
+from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, protocol_of, score_heldout
+from onepiece_dist.job.status import STATUS_SUFFIX, EvaluationReport, JobStatus, status_path
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.plan_spec import PickSpec, PlanSpec
@@ -62,7 +64,6 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
         return run_local(spec, job_id=job_id, progress=progress, refs=refs)
     import ray
 
-    from onepiece_dist.job.runtime.ray_env import connect
     from onepiece_dist.job.runtime.ray_runner import run_on_ray
 
     started_here = not ray.is_initialized()
@@ -78,8 +79,6 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
 def evaluate_model(model_path: str | Path, spec: JobSpec) -> EvaluationReport:
     """Label the candidates of ``spec.objects`` in simulation (in process, by the evaluation's protocol), then
     score the model on them (``onepiece evaluate``)."""
-    from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, protocol_of, score_heldout
-
     labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
     status = run_local(labelled, job_id="evaluate")
     return score_heldout(model_path, labelled.output, spec.train.device, objects_scored(status),
@@ -136,8 +135,6 @@ def _driver_alive(driver: str) -> bool:
 
 def local_jobs(folder: str | Path) -> list[dict]:
     """A row per job status file under ``folder`` (as :meth:`Client.jobs` gives)."""
-    from onepiece_dist.job.status import STATUS_SUFFIX
-
     return [_job_row(JobStatus.load(str(path)[: -len(STATUS_SUFFIX)]).model_dump(mode="json"))
             for path in sorted(Path(folder).glob(f"**/*{STATUS_SUFFIX}"))]
 
@@ -184,8 +181,6 @@ class Client:
     # -- cluster (Jobs API) -------------------------------------------------------------------------------
     def jobs_api(self):
         if self._jobs_api is None:
-            from onepiece_dist.job.runtime.ray_env import loopback_environment
-
             loopback_environment()  # token auth, set before Ray reads it
             from ray.exceptions import AuthenticationError
             from ray.job_submission import JobSubmissionClient
@@ -265,7 +260,6 @@ class Client:
         return json.loads(lines[-1][len(CLUSTER_INFO_MARK):])
 
     def _submit_local(self, spec: JobSpec, job_id: str) -> JobHandle:
-        from onepiece_dist.job.runtime.ray_env import connect
         from onepiece_dist.job.runtime.ray_runner import run_on_ray
 
         connect(None)
@@ -393,6 +387,5 @@ def _registry():
     """The embedded Ray's job registry, or None when this process has no Ray."""
     import ray
 
-    from onepiece_dist.job.runtime.registry import RegistryClient
 
     return RegistryClient() if ray.is_initialized() else None

@@ -34,7 +34,9 @@ from onepiece_dist.cli_jobs import register as register_job_commands
 from onepiece_dist.cli_label import register as register_label_commands
 from onepiece_dist.cli_plan import register as register_plan_commands
 from onepiece_dist.cli_study import study_app
-from onepiece_dist.errors import JobError, JobNotFound, SourceError, SpecError, StoreError
+from onepiece_dist.errors import JobError, JobNotFound, MeshRejected, SourceError, SpecError, StoreError
+from onepiece_dist.sim.libm import restart_pinned
+from onepiece_dist.version import package_version
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE grasp-dataset generation.",
                   epilog=EXIT_TABLE)
@@ -47,8 +49,6 @@ _err = err
 
 def _version(value: bool) -> None:
     if value:
-        from onepiece_dist.version import package_version
-
         typer.echo(f"onepiece-dist {package_version()}")
         raise typer.Exit()
 
@@ -189,7 +189,6 @@ def export(
 ) -> None:
     """Export the one object (OBJ, PLY, URDF, a URDF per patch) or the labelled grasps in ACRONYM's or GraspGen's
     format (docs/dataset_format.md, Other formats)."""
-    from onepiece_dist.errors import MeshRejected
     from onepiece_dist.job.stages.assemble import export_assembly
 
     formats = ("obj", "ply", "urdf", *FOLDER_FORMATS)
@@ -283,7 +282,6 @@ def supplement(
     """Turn a scan into a clean, watertight, metre-scaled object mesh, with a report. Exit 1 if refused."""
     from pydantic import ValidationError
 
-    from onepiece_dist.errors import MeshRejected
     from onepiece_dist.objects.supplement import SupplementSpec, supplement_scan
     from onepiece_dist.spec import describe_validation_error
 
@@ -323,8 +321,6 @@ def schema(
 def main() -> None:
     """The ``onepiece`` command: started again with glibc's math functions pinned where it was not (sim.libm),
     so that what it simulates in process is what the workers of any node simulate."""
-    from onepiece_dist.sim.libm import restart_pinned
-
     restart_pinned()
     app()
 

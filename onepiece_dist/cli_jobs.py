@@ -26,6 +26,9 @@ from onepiece_dist.cli_common import (
     spec_or_exit,
     spec_overrides,
 )
+from onepiece_dist.job.runtime.ray_env import connect
+from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK
+from onepiece_dist.job.runtime.registry import cluster_info as read_cluster
 
 Timeout = Annotated[float | None, typer.Option(help="Give up after this many seconds (exit 4).")]
 AsJson = Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")]
@@ -169,10 +172,6 @@ def list_jobs(
 
 def cluster_info(address: Address = None) -> None:
     """(Run inside the cluster by clients.) Print the package version and the job registry as one marked line."""
-    from onepiece_dist.job.runtime.ray_env import connect
-    from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK
-    from onepiece_dist.job.runtime.registry import cluster_info as read_cluster
-
     connect(address or "auto")
     typer.echo(CLUSTER_INFO_MARK + json.dumps(read_cluster()))
 

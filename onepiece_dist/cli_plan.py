@@ -10,6 +10,7 @@ import typer
 
 from onepiece_dist.cli_common import EXIT_USAGE, Address, err
 from onepiece_dist.errors import CloudRejected, OnePieceError, SourceError, SpecError
+from onepiece_dist.gripper_presets import gripper_fields
 
 
 def _floats(text: str | None, count: int, name: str) -> list[float] | None:
@@ -30,7 +31,6 @@ def _gripper(path: Path | None):
         return None
     import yaml
 
-    from onepiece_dist.gripper_presets import gripper_fields
     from onepiece_dist.spec import GripperSpec
 
     try:

@@ -226,3 +226,94 @@ def test_the_job_stages_and_exports_import_nothing_from_the_runtime():
     assert {m: t for m, t in reaching.items() if t} == {}
     runtimes = [m for m in graph if m.startswith("onepiece_dist.job.runtime.")]
     assert any(t.startswith("onepiece_dist.job.stages.") for m in runtimes for t in graph[m])  # the rule can see
+
+
+HEAVY = {"numpy", "ray", "torch", "pybullet", "pybullet_data", "zarr", "open3d", "scipy", "matplotlib", "h5py",
+         "trimesh", "coacd", "psutil", "typer", "rich", "yaml", "pydantic", "jsonschema"}
+
+
+def module_level_imports(tree: ast.Module, modules: set[str]) -> tuple[set[str], set[str]]:
+    """(our modules, third-party top-level names) a module imports when it loads: not inside functions, not under
+    ``if TYPE_CHECKING``."""
+    ours, third = set(), set()
+
+    def visit(body: list[ast.stmt]) -> None:
+        for node in body:
+            if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+                continue
+            if isinstance(node, ast.If | ast.Try):
+                for block in (node.body, node.orelse, getattr(node, "finalbody", []),
+                              *[h.body for h in getattr(node, "handlers", [])]):
+                    visit(block)
+            elif isinstance(node, ast.Import):
+                for alias in node.names:
+                    (ours if alias.name in modules else third).add(alias.name if alias.name in modules
+                                                                    else alias.name.split(".")[0])
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                if node.module.startswith("onepiece_dist"):
+                    ours.update(imported_module(node.module, a.name, modules) for a in node.names)
+                else:
+                    third.add(node.module.split(".")[0])
+
+    visit(tree.body)
+    return ours & modules, third
+
+
+def imported_module(module: str, name: str, modules: set[str]) -> str:
+    return f"{module}.{name}" if f"{module}.{name}" in modules else module
+
+
+def needless_lazy_imports() -> list[str]:
+    """In-function imports of our own modules that keep nothing out: the module they import brings no heavy
+    library (HEAVY) the importing module does not load already, and importing it at module level makes no
+    circle."""
+    paths = {".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): p
+             for p in PACKAGE.rglob("*.py")}
+    trees = {name: ast.parse(path.read_text()) for name, path in paths.items()}
+    loads = {}
+    for name, tree in trees.items():
+        ours, third = module_level_imports(tree, set(paths))
+        parents = {".".join(name.split(".")[:i]) for i in range(2, name.count(".") + 1)}
+        loads[name] = (ours | parents) & set(paths), third & HEAVY
+
+    def closure(name: str) -> tuple[set[str], set[str]]:
+        seen, heavy, todo = set(), set(), [name]
+        while todo:
+            current = todo.pop()
+            if current not in seen:
+                seen.add(current)
+                heavy |= loads[current][1]
+                todo += loads[current][0]
+        return seen, heavy
+
+    found = []
+    for name, tree in trees.items():
+        heavy_here = closure(name)[1]
+        for function in (n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)):
+            for node in ast.walk(function):
+                if isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith("onepie"):
+                    for target in {imported_module(node.module, a.name, set(paths)) for a in node.names} & set(paths):
+                        reached, heavy = closure(target)
+                        if name not in reached and heavy <= heavy_here:
+                            found.append(f"{paths[name].relative_to(ROOT)}:{node.lineno} imports {target}")
+    return found
+
+
+def test_a_function_imports_our_modules_only_to_keep_a_heavy_library_or_a_circle_out():
+    """Issue 48: 222 in-function imports of our own modules, 119 of which kept nothing heavy out (101 moved to
+    module level; 105 remain, each keeping ray, torch, pybullet, zarr or another heavy library off a light path,
+    or an import circle away)."""
+    assert needless_lazy_imports() == []
+
+
+def test_the_lazy_import_check_sees_a_needless_one(tmp_path, monkeypatch):
+    package = tmp_path / "onepiece_dist"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "light.py").write_text("import json\n")
+    (package / "heavy.py").write_text("import torch\n")
+    (package / "user.py").write_text("def f():\n    from onepiece_dist.light import x\n"
+                                     "def g():\n    from onepiece_dist.heavy import y\n")
+    monkeypatch.setattr(sys.modules[__name__], "PACKAGE", package)
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    assert needless_lazy_imports() == ["onepiece_dist/user.py:2 imports onepiece_dist.light"]

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.mesh import merge_meshes
+
 EPS = 1e-12
 MISS = 1e-9  # a piece whose bounds lie further than this outside the box is cut away whole, without cutting
 
@@ -122,6 +124,4 @@ def hull_mesh(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def pieces_mesh(pieces: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """One triangle mesh (vertices, faces) of convex pieces, each the hull of its (k, 3) points: what a patch
     or a source object is as the simulation sees it (views are rendered and contacts found on it)."""
-    from onepiece_dist.core.mesh import merge_meshes
-
     return merge_meshes([hull_mesh(piece) for piece in pieces])

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from onepiece_dist.core.portable import sin_cos
+from onepiece_dist.core.repair import closed_volume
 from onepiece_dist.errors import MeshRejected
 
 MIN_FACE_AREA = 1e-14
@@ -57,8 +58,6 @@ def wound_outwards(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     whether they were. The antipodal sampler casts rays along the inward normal, so an inward-wound mesh would
     yield no grasp at all. An open surface's holes are capped first (core.repair.closed_volume): its plain
     signed volume depends on where the origin lies."""
-    from onepiece_dist.core.repair import closed_volume
-
     if closed_volume(vertices, faces)[0] < 0:
         return np.ascontiguousarray(np.asarray(faces)[:, ::-1]), True
     return faces, False
@@ -176,8 +175,6 @@ def merge_meshes(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray
 def enclosed_volume(mesh: TriangleMesh) -> float:
     """Volume by the divergence theorem (exact for closed meshes), an open surface's holes capped first
     (core.repair.closed_volume); half the bounding box when that gives ~0."""
-    from onepiece_dist.core.repair import closed_volume
-
     volume = abs(closed_volume(mesh.vertices, mesh.faces)[0])
     return volume if volume > 1e-9 else 0.5 * float(np.prod(np.maximum(mesh.extents, 1e-3)))
 

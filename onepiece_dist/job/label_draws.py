@@ -12,7 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.mesh import enclosed_volume
+from onepiece_dist.errors import MeshRejected
+from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
+from onepiece_dist.sim.collision import convex_pieces
 from onepiece_dist.spec import JobSpec
 
 
@@ -25,7 +28,6 @@ def sample_rows(count: int, sample: int, seed: int) -> np.ndarray:
 def object_draws(job: JobSpec, ref: ObjectRef, poses: np.ndarray, rows: np.ndarray, draws: int, seed: int,
                  collision_dir: str) -> np.ndarray:
     """(n, draws) bool: ``draws`` fresh labels of each candidate ``poses`` (n, 4, 4) of the object ``ref``."""
-    from onepiece_dist.sim.collision import convex_pieces
     from onepiece_dist.sim.trials import LabelNoise, label_draws
     from onepiece_dist.sim.world import process_world
 
@@ -42,7 +44,6 @@ def heldout_label_draws(job: JobSpec, dataset: str, sample: int, draws: int, see
                                                                                                  np.ndarray]:
     """A seeded sample of the rows of ``job``'s dataset at ``dataset`` (its objects matched to ``job.objects`` by
     content id), and (rows, draws) bool: each one's label drawn ``draws`` times again by ``job``'s protocol."""
-    from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
     from onepiece_dist.store import open_dataset
 
     reader = open_dataset(dataset)
@@ -64,8 +65,6 @@ def heldout_label_draws(job: JobSpec, dataset: str, sample: int, draws: int, see
 
 def _refs_by_content_id(job: JobSpec) -> dict[str, ObjectRef]:
     """{content id: reference} of every object of ``job.objects`` that loads (each loaded once)."""
-    from onepiece_dist.errors import MeshRejected
-
     found = {}
     for ref in resolve_source(job.objects):
         try:

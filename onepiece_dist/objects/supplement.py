@@ -18,7 +18,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from onepiece_dist.core.mesh import TriangleMesh, make_mesh, min_width
+from onepiece_dist.core.mesh import TriangleMesh, make_mesh, min_width, sample_surface
 from onepiece_dist.core.repair import fan_fill
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_mesh_bytes, write_obj
@@ -148,8 +148,6 @@ def _o3d_format(path: Path) -> str:
 
 def _read_mesh_scan(path: Path, samples: int = 50000) -> tuple[np.ndarray, np.ndarray]:
     """Points and normals sampled on a raw mesh (parsed from bytes by our own loaders)."""
-    from onepiece_dist.core.mesh import sample_surface
-
     vertices, faces = parse_mesh_bytes(path.read_bytes(), path.suffix.lower(), str(path))
     mesh = make_mesh(vertices, faces, str(path))
     return sample_surface(mesh, samples, np.random.default_rng(0))
@@ -349,7 +347,6 @@ def hausdorff(points: np.ndarray, mesh: TriangleMesh, samples: int = 20000) -> t
     """Symmetric Hausdorff distance between points (n, 3) and a mesh, and the mean point-to-mesh distance."""
     import open3d as o3d
 
-    from onepiece_dist.core.mesh import sample_surface
 
     to_mesh = point_mesh_distances(points, mesh)
     surface, _ = sample_surface(mesh, samples, np.random.default_rng(0))

@@ -20,11 +20,13 @@ import numpy as np
 from onepiece_dist.core.mesh import enclosed_volume
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.errors import MeshRejected
+from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import propose, rank
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan_spec import PickSpec
+from onepiece_dist.sim.collision import convex_pieces
 
 
 @dataclass(frozen=True)
@@ -45,7 +47,6 @@ def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: Object
     """Every view of one object, every network's first choice executed (a bad object: a rejected result)."""
     import torch
 
-    from onepiece_dist.sim.collision import convex_pieces
     from onepiece_dist.sim.pick import pick_world
 
     torch.set_num_threads(1)
@@ -104,8 +105,6 @@ def _index_of(poses: np.ndarray, pose: np.ndarray) -> int:
 
 def run_network_picks(spec: PickSpec, checkpoints: tuple[str, ...]) -> list[NetworkPicks]:
     """Every object of ``spec.objects``, one at a time in a pinned simulation process (job.runtime.pinned_child)."""
-    from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
-
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     simulate, results = PinnedSimulation(), []
     try:

@@ -14,16 +14,18 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.cloud_grasps import SupportPlane, antipodal_scores, cloud_normals
+from onepiece_dist.core.cloud_grasps import SupportPlane, above_plane, antipodal_scores, cloud_normals
 from onepiece_dist.core.frames import compose_poses, transform_points
 from onepiece_dist.core.mesh import enclosed_volume, sample_surface
 from onepiece_dist.core.sampling import object_rng, sample_candidates
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
+from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import PlannedGrasp, Proposals, propose, rank
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.plan_spec import PickSpec
+from onepiece_dist.sim.collision import convex_pieces
 
 
 @dataclass(frozen=True)
@@ -77,7 +79,6 @@ def process_scorer(spec: PickSpec) -> GraspScorer:
 
 def pick_object(spec: PickSpec, ref: ObjectRef, index: int) -> ObjectPicks:
     """Every view of one object; a bad object becomes a rejected result, never an exception."""
-    from onepiece_dist.sim.collision import convex_pieces
     from onepiece_dist.sim.pick import pick_world
 
     start = time.perf_counter()
@@ -145,8 +146,6 @@ def _full_mesh_choice(spec: PickSpec, scorer: GraspScorer, mesh, resting: np.nda
                       rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
     """The network ranking candidates sampled on the complete mesh (the study's held-out setting), cropped from
     the complete surface, moved to where the object rests, those that would meet the table dropped."""
-    from onepiece_dist.core.cloud_grasps import above_plane
-
     gripper = scorer.gripper
     surface, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
     found = sample_candidates(mesh, surface, normals, spec.mesh_candidates, gripper, spec.sampler, rng)
@@ -169,7 +168,6 @@ def _draw(spec: PickSpec, scorer: GraspScorer, observation: Observation, proposa
 
     if importlib.util.find_spec("matplotlib") is None:  # the plots extra: no pictures without it
         return
-    from onepiece_dist.plan.drawing import draw_plan
 
     result = ", ".join("picked" if o.success else o.failure for o in outcomes) or "no grasp"
     safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name)

@@ -15,8 +15,14 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.intervals import bootstrap_interval
+from onepiece_dist.job.runtime.actors import restartable_actor
+from onepiece_dist.job.runtime.crashes import CrashLog, crash_folder
+from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
+from onepiece_dist.job.runtime.ray_env import connect
+from onepiece_dist.job.runtime.registry import RegistryClient
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
+from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan_spec import PickSpec
 
 SEPARABLE = (0.1, 0.9)  # a random grasp's pick rate outside this range leaves nothing to rank
@@ -96,7 +102,6 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
     """Run the benchmark: on an embedded Ray (default), the cluster at ``address``, or in this process; write
     ``picks.json`` into ``spec.output`` and return the report."""
     refs = resolve_source(spec.objects)  # a bad source is a usage error, found before any Ray starts
-    from onepiece_dist.plan.scorer import GraspScorer
 
     GraspScorer(spec.checkpoint, spec.gripper, device="cpu")  # a bad checkpoint fails here, not in every worker
     Path(spec.output).mkdir(parents=True, exist_ok=True)
@@ -110,8 +115,6 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
 
 
 def _run_here(spec: PickSpec, refs: list[ObjectRef], progress) -> list[ObjectPicks]:
-    from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
-
     simulate, results = PinnedSimulation(), []
     try:
         for index, ref in enumerate(refs):
@@ -127,8 +130,6 @@ class PickWorker:
     """One pybullet client and one network per actor: picks objects. A plain class, testable without Ray."""
 
     def __init__(self, spec: PickSpec, crashes: str | None = None):
-        from onepiece_dist.job.runtime.crashes import CrashLog
-
         self.spec = spec
         self.crash_log = CrashLog(crashes) if crashes else None
 
@@ -155,11 +156,7 @@ def pick_job_id(spec: PickSpec) -> str:
 def _run_on_ray(spec: PickSpec, refs: list[ObjectRef], address: str | None, progress) -> list[ObjectPicks]:
     import ray
 
-    from onepiece_dist.job.runtime.actors import restartable_actor
-    from onepiece_dist.job.runtime.crashes import crash_folder
-    from onepiece_dist.job.runtime.ray_env import connect
     from onepiece_dist.job.runtime.ray_runner import WorkerPool, worker_count
-    from onepiece_dist.job.runtime.registry import RegistryClient
 
     started_here = not ray.is_initialized()
     connect(address)

@@ -25,6 +25,7 @@ import numpy as np
 from onepiece_dist.core.dedup import unique_codes
 from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.learn.train import StepResult, StepRun
+from onepiece_dist.store import open_dataset
 from onepiece_dist.study.result import ArmRound
 from onepiece_dist.study.spec import StudySpec
 
@@ -43,8 +44,6 @@ def validation_ap(result: StepResult) -> float:
 def adaptive_rows(spec: StudySpec, a_output: str, learning_rate: float, train_one: TrainOne
                   ) -> tuple[tuple[int, ...], list[ArmRound]]:
     """U's labelled rows of A and its rounds."""
-    from onepiece_dist.store import open_dataset
-
     plan, t = spec.adaptive, spec.training
     inverse = unique_codes(open_dataset(a_output)["grasps/code"]).inverse
     n = len(inverse)

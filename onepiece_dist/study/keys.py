@@ -17,7 +17,10 @@ import numpy as np
 
 from onepiece_dist.core.contact import ContactKeySpec, contact_keys
 from onepiece_dist.core.dedup import unique_codes
-from onepiece_dist.core.voxel import pack_codes, voxel_indices
+from onepiece_dist.core.mesh import sample_surface
+from onepiece_dist.core.sampling import object_rng
+from onepiece_dist.core.voxel import crop_regions, pack_codes, voxel_indices
+from onepiece_dist.objects import load_object, resolve_source
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.study.lookup import key_lookup
 from onepiece_dist.study.result import KeyMeasure
@@ -37,10 +40,6 @@ class Crops:
 def settled_crops(spec: JobSpec) -> Crops:
     """Every grasp of the job's dataset (``spec.output``) cropped at its settled pose from its object's surface
     points, sampled as the job samples them."""
-    from onepiece_dist.core.mesh import sample_surface
-    from onepiece_dist.core.sampling import object_rng
-    from onepiece_dist.core.voxel import crop_regions
-    from onepiece_dist.objects import load_object, resolve_source
     from onepiece_dist.store import open_dataset
 
     ds = open_dataset(spec.output)

@@ -17,7 +17,9 @@ import numpy as np
 
 from onepiece_dist.core.intervals import bootstrap_interval
 from onepiece_dist.learn.train import StepResult
+from onepiece_dist.picks.networks import run_network_picks
 from onepiece_dist.picks.runner import SEPARABLE
+from onepiece_dist.plan_spec import PICK_SIM, PickSpec
 from onepiece_dist.study.result import Arm, ArmPicks, Measure, PicksJudgement
 from onepiece_dist.study.spec import StudySpec
 from onepiece_dist.study.training import ArmRun, weights_at
@@ -35,8 +37,6 @@ def judges_picks(spec: StudySpec) -> bool:
 
 
 def pick_spec(spec: StudySpec, folder: Path, checkpoint: str):
-    from onepiece_dist.plan_spec import PICK_SIM, PickSpec
-
     sim = PICK_SIM.model_copy(update={"label_trials": spec.label_trials, "success": spec.success,
                                       "load": spec.load, "load_mass": spec.load_mass})
     return PickSpec(objects=spec.picks.objects or spec.heldout, checkpoint=checkpoint, output=str(folder / "picks"),
@@ -80,8 +80,6 @@ def _measure(rates: np.ndarray, spec: StudySpec) -> Measure:
 
 
 def _picks(spec: StudySpec, folder: Path, checkpoints: tuple[str, ...], say) -> list[dict]:
-    from onepiece_dist.picks.networks import run_network_picks
-
     path = folder / "picks" / PICKS_FILE
     asked = {"checkpoints": [str(Path(c).relative_to(folder)) for c in checkpoints],
              "pick": pick_spec(spec, folder, checkpoints[0]).model_dump(mode="json", exclude={"checkpoint",

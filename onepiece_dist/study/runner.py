@@ -22,14 +22,27 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.errors import SourceError, SpecError
+from onepiece_dist.api import run_job
+from onepiece_dist.core.ceiling import ap_against_draws, label_ceiling
+from onepiece_dist.errors import MeshRejected, SourceError, SpecError
+from onepiece_dist.job.label_draws import heldout_label_draws
+from onepiece_dist.job.runtime.ray_env import connect
+from onepiece_dist.job.runtime.trainer import Trainer, run_step_runs, trainers_on_ray
+from onepiece_dist.job.stages.label_budget import budget_rows
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.learn.train import StepResult, StepRun
+from onepiece_dist.objects import load_object, resolve_source
 from onepiece_dist.spec import JobSpec
+from onepiece_dist.store import open_dataset
+from onepiece_dist.study.adaptive import adaptive_rows
 from onepiece_dist.study.costs import arm_costs
 from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
 from onepiece_dist.study.jobs import JobRecord, StudyJobs, run_or_reuse, study_jobs
+from onepiece_dist.study.keys import key_measures
+from onepiece_dist.study.lookup import key_lookup
+from onepiece_dist.study.page import write_pages
 from onepiece_dist.study.picks import judge_by_picks, judges_picks, weights_base
+from onepiece_dist.study.premise import label_fit, premise
 from onepiece_dist.study.result import (
     ArmRound,
     Baselines,
@@ -40,7 +53,9 @@ from onepiece_dist.study.result import (
     StudyResult,
 )
 from onepiece_dist.study.spec import StudySpec
+from onepiece_dist.study.stats import arm_summary, baselines
 from onepiece_dist.study.training import ArmRun, RunStore, train_arms
+from onepiece_dist.version import package_version
 
 Say = Callable[[str], None]  # progress lines (the CLI prints them on stderr)
 SPEC_FILE, RESULT_FILE = "study.spec.json", "study.json"
@@ -96,9 +111,6 @@ def claim_folder(spec: StudySpec, folder: Path) -> None:
 def check_objects(spec: StudySpec) -> None:
     """Before any work: both sources resolve, each has an object that loads, and no held-out object is a train
     object (same mesh content). Raises :class:`SourceError` naming the objects."""
-    from onepiece_dist.errors import MeshRejected
-    from onepiece_dist.objects import load_object, resolve_source
-
     job = spec.job_spec(spec.train, spec.grasps_per_object, spec.seed, "unused.zarr")
     ids: dict[str, dict[str, str]] = {}
     for role, source in (("train", spec.train), ("heldout", spec.heldout)):
@@ -121,13 +133,10 @@ def check_objects(spec: StudySpec) -> None:
 @contextlib.contextmanager
 def job_runner(where: Where, prefix: str, say: Say) -> Iterator[Callable[[JobSpec, str], JobStatus]]:
     """A function that runs a job to completion where the study runs (Ray connected once for the whole study)."""
-    from onepiece_dist.api import run_job
-
     started_here = False
     if not where.in_process:
         import ray
 
-        from onepiece_dist.job.runtime.ray_env import connect
 
         started_here = not ray.is_initialized()
         connect(where.address)
@@ -156,8 +165,6 @@ def job_runner(where: Where, prefix: str, say: Say) -> Iterator[Callable[[JobSpe
 
 def trainer_runner(where: Where, prefix: str, device: str, limit: int):
     """A function that trains step runs in parallel on trainer actors (or in this process)."""
-    from onepiece_dist.job.runtime.trainer import Trainer, run_step_runs, trainers_on_ray
-
     def train(runs: list[StepRun], done) -> list[StepResult]:
         if where.in_process:
             return run_step_runs(runs, [Trainer().fit_steps], done)
@@ -216,7 +223,6 @@ def label_draws_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> 
         kept = json.loads(path.read_text())
         if kept["asked"] == asked and "draws" in kept:
             return np.asarray(kept["rows"], dtype=np.int64), np.asarray(kept["draws"], dtype=bool)
-    from onepiece_dist.job.label_draws import heldout_label_draws
 
     say(f"study: the label's ceiling: {spec.ceiling_grasps} held-out candidates x {spec.ceiling_draws} draws")
     rows, draws = heldout_label_draws(jobs.heldout, jobs.heldout.output, spec.ceiling_grasps, spec.ceiling_draws,
@@ -227,8 +233,6 @@ def label_draws_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> 
 
 def ceiling_of(rows: np.ndarray, draws: np.ndarray, trained: list[tuple[ArmRun, StepResult]]) -> Ceiling:
     """The label's ceiling from the draws, and each arm's seed-averaged scores against the same executions."""
-    from onepiece_dist.core.ceiling import ap_against_draws, label_ceiling
-
     scores: dict[str, list[np.ndarray]] = {}
     for job, result in trained:
         scores.setdefault(job.arm, []).append(result.scores[rows])
@@ -247,8 +251,6 @@ def check_jobs(records: dict[str, JobRecord]) -> None:
 def train_adaptive(spec: StudySpec, jobs: StudyJobs, search: dict, store: RunStore, where: Where, prefix: str,
                    say: Say) -> tuple[list[ArmRound], list[tuple[ArmRun, StepResult]]]:
     """The adaptive arm U (study.adaptive) at A's learning rate, and R ~U, random rows of U's size."""
-    from onepiece_dist.study.adaptive import adaptive_rows
-
     rate = search["A"]["chosen"] if search else spec.training.learning_rates[0]
     one = trainer_runner(where, prefix, spec.training.device, 1)
     rows, rounds = adaptive_rows(spec, jobs.a.output, rate, lambda run: store.train([run], one)[0])
@@ -296,9 +298,6 @@ def random_rows(a_output: str, count: int, seed: int) -> tuple[int, ...]:
     """The rows of A a budget job with ``count`` labels would label (``job.stages.label_budget.budget_rows``: spread
     over every object, at random within each, seeded): R is that plan, its labels A's (the same for every training
     seed)."""
-    from onepiece_dist.job.stages.label_budget import budget_rows
-    from onepiece_dist.store import open_dataset
-
     owner = open_dataset(a_output)["grasps/object"].astype(np.int64)
     return tuple(int(r) for r in budget_rows(owner, count, seed))
 
@@ -306,13 +305,6 @@ def random_rows(a_output: str, count: int, seed: int) -> tuple[int, ...]:
 def assemble_result(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
                     trained: list[tuple[ArmRun, StepResult]], start: float, reused_runs: int,
                     rounds: list[ArmRound] | None = None) -> StudyResult:
-    from onepiece_dist.store import open_dataset
-    from onepiece_dist.study.keys import key_measures
-    from onepiece_dist.study.lookup import key_lookup
-    from onepiece_dist.study.premise import label_fit, premise
-    from onepiece_dist.study.stats import baselines
-    from onepiece_dist.version import package_version
-
     ho = open_dataset(jobs.heldout.output)
     labels, groups = ho["grasps/success"].astype(np.float64), ho["grasps/object"].astype(np.int64)
     drafts = arm_drafts(spec, jobs, records, trained, labels, groups, rounds[-1].labels if rounds else None)
@@ -355,8 +347,6 @@ def arm_drafts(spec: StudySpec, jobs: StudyJobs, records: dict[str, JobRecord],
 
 def heldout_score(spec: StudySpec, runs: list[tuple[ArmRun, StepResult]], labels: np.ndarray,
                   groups: np.ndarray) -> HeldoutScore:
-    from onepiece_dist.study.stats import arm_summary
-
     t = spec.targets
     summary = arm_summary([{"scores": r.scores, "seed": job.seed, "best_step": r.best_step,
                             "train_seconds": r.train_seconds, "train_grasps": r.train_grasps} for job, r in runs],
@@ -372,8 +362,6 @@ def heldout_score(spec: StudySpec, runs: list[tuple[ArmRun, StepResult]], labels
 
 
 def write_result(result: StudyResult, folder: Path) -> None:
-    from onepiece_dist.study.page import write_pages
-
     tmp = folder / f".{RESULT_FILE}.tmp"
     tmp.write_text(result.model_dump_json(indent=2) + "\n")
     os.replace(tmp, folder / RESULT_FILE)
@@ -386,14 +374,11 @@ def report_study(folder: str | Path) -> StudyResult:
     if not path.is_file():
         raise SpecError(f"{path}: no study result here (run `onepiece study run ... --out {folder}` first)")
     result = StudyResult.model_validate_json(path.read_text())
-    from onepiece_dist.study.decide import decide
 
     decision = decide(list(result.arms), result.spec.targets)  # figures a result from older code lacks
     if decision != result.decision:
         result = result.model_copy(update={"decision": decision})
         write_result(result, Path(folder))
     else:
-        from onepiece_dist.study.page import write_pages
-
         write_pages(result, Path(folder))
     return result

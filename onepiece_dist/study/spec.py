@@ -14,7 +14,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
 from onepiece_dist.frozen import Frozen
-from onepiece_dist.spec import JobSpec, describe_validation_error
+from onepiece_dist.spec import GripperSpec, JobSpec, describe_validation_error
 from onepiece_dist.spec_labels import RoundsRule
 
 
@@ -66,7 +66,6 @@ class StudyKey(Frozen):
     @model_validator(mode="after")
     def _divides_the_closing_region(self) -> StudyKey:
         from onepiece_dist.core.contact import ContactKeySpec
-        from onepiece_dist.spec import GripperSpec
 
         g = GripperSpec()  # a study's jobs grip with the default gripper
         region = (g.closing_depth, g.closing_width, g.closing_height)

@@ -20,9 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.hand_frames import to_panda
-from onepiece_dist.errors import StoreError
+from onepiece_dist.errors import MeshRejected, StoreError
+from onepiece_dist.objects import load_object
 from onepiece_dist.objects.meshio import write_obj
 from onepiece_dist.objects.paths import confined
+from onepiece_dist.objects.sources import resolve_source
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader
 
@@ -93,10 +95,6 @@ def _one_object_set(reader: DatasetReader) -> GraspSet:
 def source_meshes(spec: JobSpec, names: list[str], ids: list[str]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """{content id: (vertices, faces)} of the dataset's objects, loaded again from the job's object source (the
     mesh each grasp's pose refers to). Refused, naming the object, when the source no longer gives it."""
-    from onepiece_dist.errors import MeshRejected
-    from onepiece_dist.objects import load_object
-    from onepiece_dist.objects.sources import resolve_source
-
     wanted = dict(zip(names, ids, strict=True))
     found = {}
     for ref in resolve_source(spec.objects):

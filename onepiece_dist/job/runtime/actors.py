@@ -11,6 +11,8 @@ import time
 from typing import ClassVar
 
 from onepiece_dist.errors import ActorLost, RuntimeLost
+from onepiece_dist.job.runtime.ray_env import NAMESPACE
+from onepiece_dist.sim.libm import worker_environment
 
 ACTOR_PATIENCE_S = 120.0  # how long a central actor may take to come back
 RETRY_SECONDS = 0.5
@@ -32,8 +34,6 @@ def restartable_actor(cls, name: str, **options):
     whichever node it lands, whatever that node was started with."""
     import ray
 
-    from onepiece_dist.job.runtime.ray_env import NAMESPACE
-    from onepiece_dist.sim.libm import worker_environment
 
     return ray.remote(cls).options(name=name, namespace=NAMESPACE, max_restarts=-1, max_task_retries=0,
                                    runtime_env={"env_vars": worker_environment()}, **options)

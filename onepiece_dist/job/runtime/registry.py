@@ -7,6 +7,7 @@ cluster-wide actor. Each job's status is also written beside its dataset, so it 
 from __future__ import annotations
 
 from onepiece_dist.job.runtime.actors import ActorClient
+from onepiece_dist.job.runtime.ray_env import NAMESPACE
 from onepiece_dist.version import package_version
 
 ACTIVE = ("pending", "running")
@@ -56,7 +57,6 @@ class RegistryClient(ActorClient):
     def __init__(self):
         import ray
 
-        from onepiece_dist.job.runtime.ray_env import NAMESPACE
 
         actor = ray.remote(num_cpus=0, max_restarts=-1)(JobRegistry)
         handle = actor.options(name=REGISTRY_NAME, namespace=NAMESPACE, lifetime="detached", get_if_exists=True,

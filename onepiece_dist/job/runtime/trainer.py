@@ -11,7 +11,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from onepiece_dist.errors import JobError
 from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
+from onepiece_dist.job.stages.evaluate import evaluation_spec, protocol_of, score_heldout
 from onepiece_dist.job.status import EvaluationReport, TrainingReport
 from onepiece_dist.spec import JobSpec
 
@@ -43,8 +45,6 @@ class Trainer:
 
     def score(self, spec: JobSpec, dataset: str, objects: int) -> EvaluationReport:
         """The job's trained network (its best checkpoint) scored on the labelled held-out ``dataset``."""
-        from onepiece_dist.errors import JobError
-        from onepiece_dist.job.stages.evaluate import evaluation_spec, protocol_of, score_heldout
         from onepiece_dist.learn.train import BEST
 
         checkpoint = checkpoint_dir(spec) / BEST

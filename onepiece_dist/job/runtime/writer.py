@@ -15,7 +15,15 @@ from onepiece_dist.core.dedup import DedupIndex
 from onepiece_dist.errors import JobError, MissingAssembly
 from onepiece_dist.job.results import CommitSummary, LabelTask, ObjectResult, PatchTask, ShardResult
 from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
+from onepiece_dist.job.runtime.ray_env import NAMESPACE
+from onepiece_dist.job.runtime.registry import on_this_node
+from onepiece_dist.job.stages.assemble import assemble_dataset
 from onepiece_dist.job.stages.commit import commit_dataset
+from onepiece_dist.job.stages.label_budget import budget_tasks, write_budget_labels
+from onepiece_dist.job.stages.label_one_object import label_tasks, write_labels
+from onepiece_dist.job.stages.label_rounds import round_weights
+from onepiece_dist.job.stages.label_transfer import measure_transfer
+from onepiece_dist.job.stages.patch_shards import merge_patch_shards, patch_tasks
 from onepiece_dist.job.status import AdaptiveReport, AssemblyReport, LabelReport
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
@@ -59,16 +67,11 @@ class DatasetWriter:
 
     def patch_tasks(self) -> list[PatchTask]:
         """The patch cutting in shards for the workers."""
-        from onepiece_dist.job.stages.patch_shards import patch_tasks
-
         return patch_tasks(self.spec, self.spec.output)
 
     def assemble(self, tasks: list[PatchTask], results: list[ShardResult]) -> AssemblyReport:
         """Read the patches the workers cut (each unique code's, from its representative's source object), build
         the one object from them and store it under ``assembled/``."""
-        from onepiece_dist.job.stages.assemble import assemble_dataset
-        from onepiece_dist.job.stages.patch_shards import merge_patch_shards
-
         reader = DatasetReader(self.spec.output)
         if self.unique_codes is None or self.grasps is None:
             self.unique_codes, self.grasps = reader["unique/code"], int(reader.array("grasps/code").shape[0])
@@ -77,11 +80,7 @@ class DatasetWriter:
 
     def label_tasks(self) -> list[LabelTask]:
         """The label stage in shards for the workers (the one object must be assembled)."""
-        from onepiece_dist.job.stages.label_one_object import label_tasks
-
         if self.spec.budget.enabled:
-            from onepiece_dist.job.stages.label_budget import budget_tasks
-
             return budget_tasks(self.spec, self.spec.output)
         if not DatasetReader(self.spec.output).attrs.get("assembly"):
             raise MissingAssembly(f"{self.spec.output}: the label stage needs an assembled object "
@@ -90,20 +89,14 @@ class DatasetWriter:
 
     def merge_labels(self, tasks: list[LabelTask], results: list[ShardResult]) -> LabelReport:
         """Write the workers' labelled shards as ``assembled/grasps/``, then measure label transfer."""
-        from onepiece_dist.job.stages.label_one_object import write_labels
-
         for task, result in zip(tasks, results, strict=True):
             if result.status != "ok":
                 raise JobError(f"label shard {result.index} (patches {task.start}-{task.stop - 1}): {result.reason}")
         if self.spec.budget.enabled or self.spec.adaptive.enabled:
-            from onepiece_dist.job.stages.label_budget import write_budget_labels
-
             seconds = sum(result.made_seconds for result in results)
             return write_budget_labels(self.spec, self.spec.output, tasks, self.parts, seconds)
         report = write_labels(self.spec, self.spec.output, tasks, self.parts)
         if self.spec.sim.transfer_codes:
-            from onepiece_dist.job.stages.label_transfer import measure_transfer
-
             transfer = measure_transfer(self.spec, DatasetReader(self.spec.output), self.parts)
             report = report.model_copy(update={"transfer": transfer})
             update_attributes(self.spec.output, {"assembly_labels": report.model_dump(mode="json")})
@@ -112,8 +105,6 @@ class DatasetWriter:
     def record_rounds(self, record: AdaptiveReport, scores: np.ndarray) -> None:
         """Adaptive labelling's rounds: ``adaptive/`` (each round's scores of every candidate, the validation
         objects, each round's network under ``round_NNN/``) and the ``adaptive`` attribute."""
-        from onepiece_dist.job.stages.label_rounds import round_weights
-
         groups = {"adaptive": {"scores": scores.astype(np.float32),  # the parent first, then its round groups
                                "validation_objects": np.asarray(record.validation_objects, dtype=np.int64)}}
         groups.update({f"adaptive/round_{r.round:03d}": round_weights(self.parts, r.part) for r in record.rounds})
@@ -128,8 +119,6 @@ class WriterClient(ActorClient):
 
     @classmethod
     def start(cls, spec: JobSpec, job_id: str) -> WriterClient:
-        from onepiece_dist.job.runtime.registry import on_this_node
-
         name = central_name(job_id)
         handle = restartable_actor(DatasetWriter, name, num_cpus=0, scheduling_strategy=on_this_node()).remote(spec)
         return cls(handle, f"central actor {name}")
@@ -139,7 +128,6 @@ class WriterClient(ActorClient):
         """The running central actor ``name``, or None while it is restarting or gone."""
         import ray
 
-        from onepiece_dist.job.runtime.ray_env import NAMESPACE
 
         try:
             return cls(ray.get_actor(name, namespace=NAMESPACE), f"central actor {name}")

@@ -15,7 +15,9 @@ from onepiece_dist.core.frames import transform_points
 from onepiece_dist.core.layout import (
     assembly_geometry,
     corridor_intrusions,
+    cube_points,
     layout_patches,
+    placed_points,
     placement_point_grid,
     region_codes,
 )
@@ -164,8 +166,6 @@ def one_object_points(reader: DatasetReader) -> tuple[np.ndarray, np.ndarray]:
     """The one object's dense point cloud, derived from what the store keeps: every patch's points (cut from its
     source at its pose) placed by its stored placement (as the label stage places them), then the core box's.
     -> (P, 3) float32, (P,) int32 patch of each point (-1 = core)."""
-    from onepiece_dist.core.layout import cube_points, placed_points
-
     patches = read_patches(reader)
     core_half = reader["assembled/core_half"].astype(np.float64)
     res = float(reader.attrs["voxel"]["resolution"])

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from onepiece_dist.core.dedup import DedupIndex
+from onepiece_dist.core.similar import similar_clusters
 from onepiece_dist.job.results import CommitSummary, ObjectResult
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
@@ -93,7 +94,6 @@ def _similar_clusters(spec: JobSpec, index: DedupIndex):
     """Hamming-radius clusters of the exact unique codes (core.similar.Clusters), or None for exact dedup."""
     if not spec.similar_radius:
         return None
-    from onepiece_dist.core.similar import similar_clusters
 
     a, b, c = spec.grid_shape()
     return similar_clusters(index.unique, index.counts, a * b * c, spec.similar_radius)

@@ -12,12 +12,20 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.closure import binary_label, closure_arrays
 from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_crops, sample_surface
 from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_candidates
 from onepiece_dist.core.voxel import canonical_codes, crop_regions
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.results import ObjectPartMeta, ObjectResult, part_key
 from onepiece_dist.objects import ObjectRef, load_object
+from onepiece_dist.objects.foreign import read_foreign_grasps
+from onepiece_dist.plan.observation import Observation
+from onepiece_dist.plan.planner import propose
+from onepiece_dist.plan.scorer import CropRecord
+from onepiece_dist.plan_spec import PlanSpec
+from onepiece_dist.sim.collision import convex_pieces
+from onepiece_dist.sim.views import camera_for_grasps, object_views
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.format import grasp_arrays
@@ -109,8 +117,6 @@ def closure_labelled(spec: JobSpec, vertices: np.ndarray, faces: np.ndarray, pos
                      physics: np.ndarray | None) -> dict[str, np.ndarray]:
     """The closure arrays of grasps at ``poses`` on the mesh, and, when ``closure.label`` is not physics, their
     binary label as success with the trials' outcome (if any) as physics_success."""
-    from onepiece_dist.core.closure import binary_label, closure_arrays
-
     arrays = closure_arrays(vertices, faces, poses, spec)
     if spec.closure.label != "physics":
         if physics is not None:
@@ -121,15 +127,11 @@ def closure_labelled(spec: JobSpec, vertices: np.ndarray, faces: np.ndarray, pos
 
 def _collision_pieces(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path) -> list[np.ndarray]:
     """The object's convex pieces as the simulation uses them (cached per content id)."""
-    from onepiece_dist.sim.collision import convex_pieces
-
     return convex_pieces(mesh, collision_dir, spec.sim.collision)
 
 
 def given_candidates(spec: JobSpec, ref: ObjectRef) -> GraspCandidates:
     """The grasps of the object's grasp file (objects.foreign) in our frame for the job's gripper, fingers open."""
-    from onepiece_dist.objects.foreign import read_foreign_grasps
-
     found = read_foreign_grasps(ref.grasps)
     if found.digest != ref.grasps_digest:
         raise MeshRejected(ref.name, f"{ref.grasps} changed while the job ran: run it again")
@@ -145,11 +147,6 @@ def view_candidates(spec: JobSpec, views, rng: np.random.Generator) -> tuple[Gra
     """Candidates as the planner samples a camera's cloud (plan.planner.propose: GPD-style placements, at least
     its min_points observed points in the closing region), ``ceil(grasps_per_object / views)`` on each view's
     cloud; and (n,) int64 the view each was sampled on (its crop's cloud)."""
-    from onepiece_dist.plan.observation import Observation
-    from onepiece_dist.plan.planner import propose
-    from onepiece_dist.plan.scorer import CropRecord
-    from onepiece_dist.plan_spec import PlanSpec
-
     record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, spec.train.model)
     per_view = -(-spec.grasps_per_object // len(views.cameras))
     plan = PlanSpec(candidates=per_view, support_plane="none")
@@ -202,7 +199,6 @@ def _render_views(spec: JobSpec, mesh: TriangleMesh):
     """The object's depth views (sim.views.ObjectViews), or None when the spec asks for none."""
     if not spec.views.count:
         return None
-    from onepiece_dist.sim.views import object_views
 
     views = spec.views
     return object_views(mesh.vertices, mesh.faces, views.count, views.image_size, views.fov_deg, views.distance)
@@ -215,7 +211,6 @@ def crop_sources(spec: JobSpec, points: np.ndarray, views, poses: np.ndarray,
     the view of the camera nearest its approach direction."""
     if views is None or spec.views.crop == "full":
         return [points], np.zeros(len(poses), dtype=np.int64)
-    from onepiece_dist.sim.views import camera_for_grasps
 
     source = camera_for_grasps(views.cameras, poses) if sampled_on is None else sampled_on
     return [views.cloud(k) for k in range(len(views.cameras))], source

@@ -17,6 +17,7 @@ import numpy as np
 
 from onepiece_dist.errors import SpecError
 from onepiece_dist.job.results import LabelTask, ShardResult
+from onepiece_dist.job.stages.label_transfer import label_on_sources
 from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.status import LabelReport
 from onepiece_dist.spec import JobSpec
@@ -105,8 +106,6 @@ def budget_tasks(spec: JobSpec, path: str | os.PathLike) -> list[LabelTask]:
 
 def label_budget_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> ShardResult:
     """Label one shard of chosen candidates on their own object into its part (once). Runs in a worker."""
-    from onepiece_dist.job.stages.label_transfer import label_on_sources
-
     def make() -> dict[str, np.ndarray]:
         rows = np.asarray(task.rows, dtype=np.int64)
         success, quality = label_on_sources(spec, DatasetReader(task.dataset), parts, rows)

@@ -17,14 +17,18 @@ import os
 
 import numpy as np
 
+from onepiece_dist.core.clip import pieces_mesh
 from onepiece_dist.core.frames import compose_poses, perturb_pose
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_regions
 from onepiece_dist.job.results import LabelTask, ShardResult
+from onepiece_dist.job.stages.extract import closure_labelled
+from onepiece_dist.job.stages.label_budget import label_budget_shard
 from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.stages.patches import Patches, read_patches
 from onepiece_dist.job.status import LabelReport
+from onepiece_dist.sim.views import camera_at, framing_distance, views_from
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader, write_group
@@ -36,8 +40,6 @@ def patch_cloud(patches: Patches, k: int, spec: JobSpec) -> np.ndarray:
     depth camera behind the palm, looking along the approach axis, sees of its pieces."""
     if spec.views.crop == "full":
         return patches.points[k]
-    from onepiece_dist.core.clip import pieces_mesh
-    from onepiece_dist.sim.views import camera_at, framing_distance, views_from
 
     g = spec.gripper
     radius = 0.5 * float(np.linalg.norm([g.closing_depth, g.closing_width, g.closing_height]))
@@ -82,8 +84,6 @@ def label_key(spec: JobSpec, reader: DatasetReader) -> str:
 def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> ShardResult:
     """Label one shard into its part (once: a committed part is reused). Runs in a worker."""
     if task.rows is not None:
-        from onepiece_dist.job.stages.label_budget import label_budget_shard
-
         return label_budget_shard(spec, task, index, parts)
     return shard_once(parts, task.part_key, index, lambda: label_patches(spec, task),
                       {"patches": [task.start, task.stop]},
@@ -130,9 +130,6 @@ def grasp_rows(spec: JobSpec) -> tuple[str, ...]:
 def _score_closure(rows, pieces: list[np.ndarray], batch, spec: JobSpec) -> None:
     """Force closure and epsilon of the held trials on the patch's real geometry (its convex pieces as one mesh,
     in the patch frame where the settled poses are)."""
-    from onepiece_dist.core.clip import pieces_mesh
-    from onepiece_dist.job.stages.extract import closure_labelled
-
     ok = batch.outcome == 0
     if ok.any():
         vertices, faces = pieces_mesh(pieces)

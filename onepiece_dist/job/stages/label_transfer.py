@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.clip import pieces_mesh
 from onepiece_dist.core.sampling import object_rng
+from onepiece_dist.job.stages.extract import closure_labelled
 from onepiece_dist.job.stages.patches import source_geometry
 from onepiece_dist.job.status import PairAgreement, TransferReport
 from onepiece_dist.spec import JobSpec
@@ -93,8 +95,6 @@ def protocol_label(spec: JobSpec, pieces: list[np.ndarray], batch) -> np.ndarray
     outcome) at the settled poses on the source's convex pieces, the geometry a patch is scored on."""
     if spec.closure.label == "physics":
         return batch.success
-    from onepiece_dist.core.clip import pieces_mesh
-    from onepiece_dist.job.stages.extract import closure_labelled
 
     vertices, faces = pieces_mesh(pieces)
     return closure_labelled(spec, vertices, faces, batch.settled_pose, batch.success)["success"]

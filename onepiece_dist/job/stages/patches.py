@@ -20,7 +20,7 @@ from onepiece_dist.core.layout import patch_box
 from onepiece_dist.core.ragged import row_offsets, split_rows, stack_rows
 from onepiece_dist.errors import StoreError
 from onepiece_dist.job.results import ObjectPartMeta, part_key
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.spec import GripperSpec, JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
 
 SURFACE, PIECE_VERTICES, PIECE_SIZES = "object_surface", "object_piece_vertices", "object_piece_sizes"
@@ -131,8 +131,6 @@ def patch_points(sources: list[np.ndarray], source_object: np.ndarray, source_po
                  attrs: dict) -> list[np.ndarray]:
     """Each patch's surface points, cut from its source at its pose (the dataset's gripper and voxel size give
     the patch box)."""
-    from onepiece_dist.spec import GripperSpec
-
     lower, upper = patch_box(GripperSpec.model_validate(attrs["gripper"]), float(attrs["voxel"]["resolution"]))
     return [cut_points(sources[o], pose, lower, upper) for o, pose in zip(source_object, source_pose, strict=True)]
 
