@@ -1,4 +1,5 @@
 import ast
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -317,3 +318,20 @@ def test_the_lazy_import_check_sees_a_needless_one(tmp_path, monkeypatch):
     monkeypatch.setattr(sys.modules[__name__], "PACKAGE", package)
     monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
     assert needless_lazy_imports() == ["onepiece_dist/user.py:2 imports onepiece_dist.light"]
+
+
+def test_the_readme_layout_table_names_every_layer_and_benchmark_folder_there_is():
+    """Issue 48: the README's layout table is true: every layer of the package (a folder, or a module the layer
+    table lists as one of several) and every folder of benchmarks/ is named in it, and every one it names exists."""
+    readme = (ROOT / "README.md").read_text()
+    table = readme[readme.index("## Layout"):]
+    package_row = next(line for line in table.splitlines() if line.startswith("| `onepiece_dist/` |")).split("|")[2]
+    folders = {p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    named = set(re.findall(r"`([a-z_]+)`", package_row))
+    assert folders - named == set(), "layers missing from the README's layout table"
+    assert {"api", "cli"} <= named and named - folders - {"api", "cli"} <= {"pipeline.py"}, named - folders
+    for name in re.findall(r"`([a-z_]+)/`", package_row):
+        assert (PACKAGE / "job" / name).is_dir(), name
+    bench_row = next(line for line in table.splitlines() if line.startswith("| `benchmarks/` |")).split("|")[2]
+    bench = {p.name for p in (ROOT / "benchmarks").iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    assert set(re.findall(r"`([a-z_]+)/`", bench_row)) == bench

@@ -159,7 +159,7 @@ def plan(b: dict) -> list[str]:
             f"- **Central dedup.** {grasps / 1e6:.1f} M codes at {b['merge_codes_per_s'] / 1e6:.2f} M codes/s is "
             f"{grasps / b['merge_codes_per_s']:.0f} s of actor time spread over the job; state grows with distinct "
             f"codes ({b['merge_state_mib']:.0f} MiB at {b['merge_unique'] / 1e6:.1f} M distinct 64-bit codes). At "
-            "5 mm (512-bit codes) split by hash prefix over `DedupShard` actors (`core.dedup.PartitionedDedup`).",
+            "5 mm (512-bit codes) split by hash prefix over `DedupPartition` actors (`core.dedup.PartitionedDedup`).",
             f"- **Store.** {grasps / 1e6:.1f} M grasps kept make about "
             f"{grasps * b['dataset_bytes_per_grasp'] / 1e9:.0f} GB of dataset; the single committer's measured "
             f"{b['commit_grasps_per_s']:,.0f} grasps/s makes {grasps / b['commit_grasps_per_s'] / 60:.0f} minutes "

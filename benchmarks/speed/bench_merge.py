@@ -7,7 +7,7 @@ go through the merge path of the central actor: `DedupIndex.add` in process, and
 fed as the extraction workers feed it (one `add.remote` per object with its codes); about 57 % are distinct.
 Beside it, in the same run:
   - the baseline: the previous index, which re-sorted the whole table on every batch (measured on 1 M codes);
-  - partitioned dedup: the codes routed by hash prefix to P `DedupShard` Ray actors, then unioned;
+  - partitioned dedup: the codes routed by hash prefix to P `DedupPartition` Ray actors, then unioned;
   - the fallback path that reads each committed part from the store (after an actor restart).
 Writes benchmarks/results/bench_merge.json.
 """
@@ -28,7 +28,7 @@ import numpy as np
 import psutil
 
 from onepiece_dist.core.dedup import DedupIndex, merge_partitions, merge_unique, unique_codes
-from onepiece_dist.core.dedup_partitions import DedupShard, route_codes
+from onepiece_dist.core.dedup_partitions import DedupPartition, route_codes
 from onepiece_dist.job.runtime.writer import DatasetWriter
 from onepiece_dist.spec import JobSpec
 from onepiece_dist.store import PartStore
@@ -76,7 +76,7 @@ def partitioned_merge(total: int, batch: int, partitions: int) -> dict:
     """Codes routed to P shard actors (Ray, 1 CPU each would be the cluster setting; 0 here to fit 2 cores)."""
     import ray
 
-    shards = [ray.remote(num_cpus=0)(DedupShard).remote(CODE_BYTES, k, partitions) for k in range(partitions)]
+    shards = [ray.remote(num_cpus=0)(DedupPartition).remote(CODE_BYTES, k, partitions) for k in range(partitions)]
     ray.get([s.nbytes.remote() for s in shards])
     start, inflight = time.perf_counter(), []
     for codes in synthetic_batches(total, batch * partitions):

@@ -8,7 +8,7 @@ import numpy as np
 from onepiece_dist.core.dedup import DedupIndex, partition_of
 
 
-class DedupShard:
+class DedupPartition:
     """One hash-prefix partition of the global dedup, for corpora where one central index is not enough
     (docs/scaling.md). A plain class; on a cluster each is an actor fed only the codes it owns
     (:func:`route_codes`), and the committer unions their states (``core.dedup.merge_partitions``)."""
