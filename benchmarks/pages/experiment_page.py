@@ -266,7 +266,7 @@ def _budget(longer: dict) -> str:
             f"{longer['device'].split(',')[0]}")
 
 
-def write_page(out: dict, path: Path, results: Path) -> None:
+def page_text(out: dict, results: Path) -> str:
     """The page of the experiment ``out`` at ``path``, linking the longer trainings and key studies committed in
     ``results`` (the checkout's benchmarks/results)."""
     args = out["args"]
@@ -318,7 +318,11 @@ def write_page(out: dict, path: Path, results: Path) -> None:
              "against up to four others; random pairs: as many pairs of grasps with different codes. The code "
              "decides the label as far as same-code agreement exceeds random-pair agreement. The plot leaves out "
              "rows with fewer than 30 same-code pairs.", *key_study_link(results)]
-    path.write_text("\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
+
+
+def write_page(out: dict, path: Path, results: Path) -> None:
+    path.write_text(page_text(out, results))
 
 
 def plot_curves(out: dict, path: Path) -> None:

@@ -155,7 +155,7 @@ def headline_sentence(out: dict) -> str:
             f"held-out grasps at least as well as as many random labels for {holds} of {len(out['keys'])} keys")
 
 
-def write_page(out: dict, path: Path) -> None:
+def page_text(out: dict) -> str:
     train, held, ceiling = out["train"], out["heldout"], out["ceiling"]
     load = ("a payload of {:g} kg at the grasp centre".format(out["load_mass"]) if out["load"] == "grasp"
             else "the object itself")
@@ -206,7 +206,11 @@ def write_page(out: dict, path: Path) -> None:
         "travels before it meets surface there than where it first meets surface, quantized in relief steps up "
         "to a last level, or 'no surface' in that cell; and the opening at first contact. Same-key pairs: the first "
         "grasp of each key against up to four others; random pairs: as many pairs with different keys.", ""]
-    path.write_text("\n".join(lines))
+    return "\n".join(lines)
+
+
+def write_page(out: dict, path: Path) -> None:
+    path.write_text(page_text(out))
 
 
 def _redundancy_section(out: dict) -> list[str]:
