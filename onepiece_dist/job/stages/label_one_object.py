@@ -23,8 +23,8 @@ from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_regions
 from onepiece_dist.job.results import LabelTask, ShardResult
+from onepiece_dist.job.stages import label_budget  # the module: a test injects a fault into its shard function
 from onepiece_dist.job.stages.extract import closure_labelled
-from onepiece_dist.job.stages.label_budget import label_budget_shard
 from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.stages.patches import Patches, read_patches
 from onepiece_dist.job.status import LabelReport
@@ -84,7 +84,7 @@ def label_key(spec: JobSpec, reader: DatasetReader) -> str:
 def label_shard(spec: JobSpec, task: LabelTask, index: int, parts: PartStore) -> ShardResult:
     """Label one shard into its part (once: a committed part is reused). Runs in a worker."""
     if task.rows is not None:
-        return label_budget_shard(spec, task, index, parts)
+        return label_budget.label_budget_shard(spec, task, index, parts)
     return shard_once(parts, task.part_key, index, lambda: label_patches(spec, task),
                       {"patches": [task.start, task.stop]},
                       lambda: int(parts.array_shapes(task.part_key)["patch"][0][0]))
