@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from string import Template
 
 HERE = Path(__file__).resolve().parents[1]
 RESULTS = HERE / "results"
+TEMPLATES = Path(__file__).resolve().parent / "templates"  # the pages' prose, with $placeholders
 
 
 def load(name: str) -> dict | None:
@@ -32,3 +34,9 @@ def render_block(page: Path, start_mark: str, end_mark: str, names: str | tuple[
         return text
     start, end = text.index(start_mark), text.index(end_mark) + len(end_mark)
     return text[:start] + section(*results) + text[end:]
+
+
+def fill(template: str, **values) -> str:
+    """The page template ``templates/<template>.md`` with its ``$name`` placeholders replaced by ``values`` (every
+    one must be given: a missing figure is an error, never a blank)."""
+    return Template((TEMPLATES / f"{template}.md").read_text()).substitute(values)

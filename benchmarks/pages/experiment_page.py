@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from benchmarks.pages.committed import fill
 from benchmarks.pages.experiment_sections import key_study_link
 from onepiece_dist.study.markdown import in_words, pct, pyplot, table
 
@@ -267,58 +268,27 @@ def _budget(longer: dict) -> str:
 
 
 def page_text(out: dict, results: Path) -> str:
-    """The page of the experiment ``out`` at ``path``, linking the longer trainings and key studies committed in
-    ``results`` (the checkout's benchmarks/results)."""
+    """The page of the experiment ``out`` (templates/experiment.md), linking the longer trainings and key studies
+    committed in ``results`` (the checkout's benchmarks/results)."""
     args = out["args"]
-    lines = ["# The paper's experiment, in simulation", "",
-             f"Command: `{out['command'].strip()}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} "
-             f"minutes). Rendered from benchmarks/results/{_name(out)}.json by "
-             "benchmarks/pages/experiment_page.py. The script is now a study configuration: `onepiece study run "
-             "examples/studies/paper.yaml` (docs/study.md).", "",
-             _label_load(out), "",
-             *headline(out), "", "## What holds here", "", *verdict(out), "", "## What the figures say", "",
-             *analysis(out), *_longer_link(out, results), "", "## Scale and protocol", "",
-             f"Train: {args['objects']} objects (pybullet named + random_urdfs; {out['train_objects_ok']} passed "
-             f"validation), {args['grasps']} candidates each from the paper's normal-direction sampler, seed "
-             f"{args['seed']}. Held-out: random_urdfs from index 500 on, {args['heldout']} objects x "
-             f"{args['heldout_grasps']} candidates, labelled with the same protocol. Label protocol: "
-             f"{args['label_trials']} trials per label (the nominal lift-and-shake plus perturbed ones; "
-             f"{_label_rule(out)}). Physics: the defaults (docs/trials.md, Physical defaults). Network: "
-             f"{args['model']} on {args['points']} gripper-frame points per grasp, {args['steps']} gradient steps of "
-             f"{args['batch_size']} for every arm, {_optimiser(out)}, the checkpoint with the lowest loss "
-             f"on the arm's own validation split (20% of its objects, or of its patches for B), {args['seeds']} "
-             "seeds. The full size is `--objects 64 --grasps 2000 --heldout 64 --heldout-grasps 200`." + _phases(out),
-             "", "## Cost per stage (core-seconds; each job ran in one process on one core)", "", *cost_table(out),
-             "", "A's job labels every candidate inside its extract stage (`sim.label: true`: the settling trial, "
-             "then the label trials of each grasp that held), so A's extract column is its labelling and its label "
-             "column is empty. B arms after the first radius reuse its extracted parts; each is charged the same "
-             "extraction. "
-             "R's cost is A's per labelled candidate times the grasps it labels (a seeded subset of A's labelled "
-             "candidates: same protocol, same outcomes), plus A's ingest.", "",
-             "## Cost ratios against candidates per object and radius", "",
-             f"![time and storage ratios]({_name(out)}_cost.png)", "", *curve_table(out), "",
-             "Unique counts measured on the first n extracted candidates of each train object; costs per candidate "
-             "and per patch are this run's.", "", "## Label transfer: the premise, measured", "",
-             *transfer_table(out), "",
-             "B labels each shape once, on its patch of the one object, and that label stands for every grasp that "
-             "shares the code (or cluster). A labelled each of those grasps on its own object, so the agreement "
-             "above is how far B's labels are the labels A would have given. Shuffled patches: the agreement with "
-             "the label of an unrelated shape, from one random permutation of the patch labels; where a few large "
-             "clusters hold most grasps (radius 1 and 2) one permutation swings widely. Independent labels: "
-             "p q + (1 - p)(1 - q) for positive rates p (patches) and q (grasps), the agreement of labels that "
-             "ignore the shape (recorded from 2026-11-26's second version of the script on). Grasps whose patch "
-             "has no label (its placement's trial was invalid) are left out: with a radius that can drop a large "
-             "cluster, hence the smaller counts.", "",
-             "## The method's trade-off: which resolution to pick", "",
-             f"![unique fraction against label agreement]({_name(out)}_tradeoff.png)", "", *tradeoff_table(out),
-             "", "Codes re-cropped from every train object's surface at A's grasp poses"
-             + (f" (the first {args['tradeoff_grasps']:,} labelled candidates of each object)"
-                if "tradeoff_grasps" in args else "") + "; labels are A's (each grasp "
-             "labelled on its own object). Same-code pairs: the first grasp of each code (cluster, at radius r) "
-             "against up to four others; random pairs: as many pairs of grasps with different codes. The code "
-             "decides the label as far as same-code agreement exceeds random-pair agreement. The plot leaves out "
-             "rows with fewer than 30 same-code pairs.", *key_study_link(results)]
-    return "\n".join(lines) + "\n"
+
+    def lines_after(found: list[str]) -> str:
+        return "".join("\n" + line for line in found)
+
+    tradeoff = (f" (the first {args['tradeoff_grasps']:,} labelled candidates of each object)"
+                if "tradeoff_grasps" in args else "")
+    return fill("experiment", command=out["command"].strip(), date=out["date"], machine=out["machine"],
+                minutes=f"{out['wall_seconds'] / 60:.1f}", name=_name(out), label_load=_label_load(out),
+                headline="\n".join(headline(out)), verdict="\n".join(verdict(out)),
+                analysis="\n".join(analysis(out)), longer_link=lines_after(_longer_link(out, results)),
+                objects=args["objects"], train_objects_ok=out["train_objects_ok"], grasps=args["grasps"],
+                seed=args["seed"], heldout=args["heldout"], heldout_grasps=args["heldout_grasps"],
+                label_trials=args["label_trials"], label_rule=_label_rule(out), model=args["model"],
+                points=args["points"], steps=args["steps"], batch_size=args["batch_size"], optimiser=_optimiser(out),
+                seeds=args["seeds"], phases=_phases(out), cost_table="\n".join(cost_table(out)),
+                curve_table="\n".join(curve_table(out)), transfer_table="\n".join(transfer_table(out)),
+                tradeoff_table="\n".join(tradeoff_table(out)), tradeoff_grasps=tradeoff,
+                key_study_link=lines_after(key_study_link(results)))
 
 
 def write_page(out: dict, path: Path, results: Path) -> None:

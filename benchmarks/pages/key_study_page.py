@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from benchmarks.pages.committed import fill
 from onepiece_dist.study.markdown import in_words, pct, pyplot
 
 REFERENCE = "occupancy 10 mm"  # the code the paper experiment dedups by
@@ -156,57 +157,22 @@ def headline_sentence(out: dict) -> str:
 
 
 def page_text(out: dict) -> str:
+    """The page (templates/key_study.md) with this result's figures."""
     train, held, ceiling = out["train"], out["heldout"], out["ceiling"]
     load = ("a payload of {:g} kg at the grasp centre".format(out["load_mass"]) if out["load"] == "grasp"
             else "the object itself")
-    lines = [
-        "# Which dedup key decides the label", "",
-        f"Command: `{out['command']}` ({out['date']}, {out['machine']}, {out['wall_seconds'] / 60:.1f} minutes"
-        f"{_jobs(out)}). Rendered from benchmarks/results/{out['name']}.json by "
-        "benchmarks/pages/key_study_page.py. The script is now a study option: `onepiece study run "
-        "examples/studies/key_study.yaml` (`keys`, docs/study.md).", "",
-        "The method labels one grasp per key and lets that label stand for every grasp with the key. This measures, "
-        "without a network, how far each key's label holds on unseen objects: a held-out grasp whose key some "
-        "train grasp has takes the label of one of that key's train grasps (B's one label per key, as if its patch "
-        "trial on the one object gave its source's label; the agreement is the expectation over which grasp of the "
-        "key gives it, as B's representative is any of them) or the key's majority label (a tie counts negative). "
-        "'Share decided' is (agreement - floor) / "
-        "(ceiling - floor): 0 for a key that says nothing of the label, 1 for one that decides it as far as the "
-        "label repeats itself.", "",
-        f"Labels: arm A's protocol ({out['label_trials']} trials per label, positive = all held), each trial lifting "
-        f"{load}. Train: {train['objects']} objects, {train['grasps']:,} labelled grasps, positive rate "
-        f"{pct(train['positive_rate'])}. Held-out: {held['objects']} unseen objects, {held['grasps']:,} grasps, "
-        f"positive rate {pct(held['positive_rate'])}. Crops: each grasp's settled pose, the object's surface "
-        f"points in the closing region ({train['mean_points']:g} points on average). Ceiling: {ceiling['grasps']:,} "
-        f"of A's grasps labelled again with other perturbation draws agree with A {pct(ceiling['agreement'])} of "
-        f"the time (floor {pct(ceiling['independent_floor'])}).", "",
-        "## What it says", "", *verdict(out), "",
-        f"![unique fraction against share decided]({out['name']}.png)", "",
-        *key_table(out), "",
-        "## B against R without a network", "",
-        "Each held-out grasp is scored by the mean label of the labelled train grasps with its key (the mean of "
-        "all labelled grasps where none has it), and the held-out grasps are ranked by that score (AP over "
-        "score thresholds; accuracy at a score above one half). A labels every train grasp; B one grasp per key, "
-        "drawn at random among the key's grasps (a perfect patch of its representative); R as many train grasps "
-        "drawn at random; S as many spread over the keys in proportion to the root of each key's count (several "
-        "labels on a frequent key, none on some rare ones: what the dedup could still buy, labels placed where "
-        f"the grasps are) ({out['keys'][0]['budget']['R']['draws']} seeded draws each, mean and spread). This is "
-        "the paper experiment's B against R "
-        "with a lookup for the network: it needs no training, so no budget or learning rate can decide it.", "",
-        *budget_table(out), "",
-        "Why one label per key loses to as many random labels: if a key's grasps succeed at a rate p_k, B's one "
-        "label agrees with a held-out grasp of that key with probability p_k^2 + (1 - p_k)^2, while R's labels "
-        "of that key, several wherever the key is frequent, estimate p_k itself; held-out grasps fall on keys in "
-        "proportion to how often keys occur, so the frequent keys, where R has many labels and B one, carry most "
-        "of the ranking. B can match R only where keys decide their labels (p_k near 0 or 1), which the share "
-        "decided above measures, or where most held-out keys are rare (B covers more of them: the coverage "
-        "columns). S puts B's labels where R's fall; the table gives how close that comes.", "",
-        *_redundancy_section(out),
-        "Contact keys (onepiece_dist/core/contact.py): per finger and pad cell (u by t), how much farther the pad "
-        "travels before it meets surface there than where it first meets surface, quantized in relief steps up "
-        "to a last level, or 'no surface' in that cell; and the opening at first contact. Same-key pairs: the first "
-        "grasp of each key against up to four others; random pairs: as many pairs with different keys.", ""]
-    return "\n".join(lines)
+    redundancy = _redundancy_section(out)
+    return fill("key_study", command=out["command"], date=out["date"], machine=out["machine"],
+                minutes=f"{out['wall_seconds'] / 60:.1f}", jobs=_jobs(out), name=out["name"],
+                label_trials=out["label_trials"], load=load, train_objects=train["objects"],
+                train_grasps=f"{train['grasps']:,}", train_rate=pct(train["positive_rate"]),
+                heldout_objects=held["objects"], heldout_grasps=f"{held['grasps']:,}",
+                heldout_rate=pct(held["positive_rate"]), mean_points=f"{train['mean_points']:g}",
+                ceiling_grasps=f"{ceiling['grasps']:,}", ceiling_agreement=pct(ceiling["agreement"]),
+                ceiling_floor=pct(ceiling["independent_floor"]), verdict="\n".join(verdict(out)),
+                key_table="\n".join(key_table(out)), draws=out["keys"][0]["budget"]["R"]["draws"],
+                budget_table="\n".join(budget_table(out)),
+                redundancy="\n".join(redundancy) + "\n" if redundancy else "")
 
 
 def write_page(out: dict, path: Path) -> None:

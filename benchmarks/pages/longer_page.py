@@ -4,6 +4,7 @@ study's ``training.steps`` on any trainer actor, a GPU one included). Standard l
 
 from __future__ import annotations
 
+from benchmarks.pages.committed import fill
 from onepiece_dist.study.markdown import in_words
 
 
@@ -45,23 +46,14 @@ def page(out: dict) -> str:
                                        *_cell(a["cpu_heldout"], a["cpu_heldout"]["ap_ci95"]),
                                        *_cell(longer, held["ap"]["ci95"]), f"{held['ap']['std']:.3f}",
                                        f"{a['learning_rate']:g}", f"{steps[len(steps) // 2]:,}"]) + " |")
-    lines = [f"# The paper experiment's arms trained {samples / cpu_samples:g}x longer", "",
-             f"Command: `{out['command']}` ({out['date']}, {out['device']}). Rendered from "
-             f"benchmarks/results/{longer_name(out)}.json by benchmarks/pages/longer_page.py (trained by the "
-             "script benchmarks/experiment_longer.py, since replaced by a study's `training.steps`, "
-             "docs/study.md).", "",
-             f"docs/{out['source']}.md trained every arm for {out['cpu_steps']} gradient steps of {out['cpu_batch']} "
-             f"({cpu_samples:,} samples) on 2 cores. Here {_names(out)} train for {out['steps']:,} steps of "
-             f"{out['batch_size']} ({samples:,} samples) on the same train rows, validation splits and held-out "
-             f"grasps ({out['heldout']['objects']} objects, {out['heldout']['grasps']:,} grasps, positive rate "
-             f"{_pct(out['heldout']['positive_rate'])}); {_rate_rule(out)}, the checkpoint the one of the lowest "
-             f"validation loss (evaluated {out['evaluations']} times), {len(out['arms'][0]['heldout']['seeds'])} "
-             f"seeds. The points travel as int8 ({out['point_step_mm']} mm steps).", "",
-             "| arm | labelled grasps | 2-core top-1 (95% CI) | 2-core AP [95% CI] | longer top-1 (95% CI) | "
-             "longer AP [95% CI] | longer AP sd over seeds | learning rate | median best step |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |", *rows, "", "## What it says", "",
-             *_verdict(out)]
-    return "\n".join(lines) + "\n"
+    return fill("longer", times=f"{samples / cpu_samples:g}", command=out["command"], date=out["date"],
+                device=out["device"], name=longer_name(out), source=out["source"], cpu_steps=out["cpu_steps"],
+                cpu_batch=out["cpu_batch"], cpu_samples=f"{cpu_samples:,}", arms=_names(out),
+                steps=f"{out['steps']:,}", batch_size=out["batch_size"], samples=f"{samples:,}",
+                heldout_objects=out["heldout"]["objects"], heldout_grasps=f"{out['heldout']['grasps']:,}",
+                heldout_rate=_pct(out["heldout"]["positive_rate"]), rate_rule=_rate_rule(out),
+                evaluations=out["evaluations"], seeds=len(out["arms"][0]["heldout"]["seeds"]),
+                point_step_mm=out["point_step_mm"], rows="\n".join(rows), verdict="\n".join(_verdict(out)))
 
 
 def _names(out: dict) -> str:
