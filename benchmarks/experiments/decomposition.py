@@ -94,9 +94,9 @@ def main() -> None:
               "protocol": "label trials 4, every_trial; same candidates for every decomposition",
               "objects": rows, "summary": summary(rows)}
     (RESULTS / "decomposition.json").write_text(json.dumps(result, indent=1) + "\n")
-    from benchmarks.pages.decomposition_page import write_page
+    from benchmarks.pages.report import write_page
 
-    write_page()
+    write_page("docs/decomposition.md")
 
 
 if __name__ == "__main__":

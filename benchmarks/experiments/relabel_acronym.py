@@ -81,9 +81,9 @@ def main() -> None:
             shutil.rmtree(folder)
     out = {"source": f"NVlabs/acronym@{ACRONYM_COMMIT[:12]} {GRASPS}", "settings": results}
     (RESULTS / "relabel_acronym.json").write_text(json.dumps(out, indent=1) + "\n")
-    from benchmarks.pages.relabel_page import write_page
+    from benchmarks.pages.report import write_page
 
-    write_page()
+    write_page("docs/relabel.md")
 
 
 if __name__ == "__main__":

@@ -3,11 +3,6 @@ benchmarks/experiments/decomposition.py): the page's figures are rendered, never
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from benchmarks.pages.committed import load
-
-PAGE = Path(__file__).resolve().parents[2] / "docs" / "decomposition.md"
 LABELS = {"vhacd": "VHACD (default, 50k voxels)", "coacd": "CoACD (threshold 0.05)",
           "vhacd_fine": "VHACD (1M voxels)", "reference": "reference: CoACD (threshold 0.02)"}
 
@@ -51,13 +46,3 @@ def render(result: dict) -> str:
         "| --- | --- | " + " | ".join("---" for _ in LABELS) + " | --- |",
         *objects,
         ""])
-
-
-def write_page() -> None:
-    result = load("decomposition")
-    if result is not None:
-        PAGE.write_text(render(result))
-
-
-if __name__ == "__main__":
-    write_page()

@@ -4,11 +4,7 @@ benchmarks/experiments/relabel_acronym.py): the page's figures are rendered, nev
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
-from benchmarks.pages.committed import load
-
-PAGE = Path(__file__).resolve().parents[2] / "docs" / "relabel.md"
 NAMES = {"ours_vhacd": "our protocol, VHACD pieces", "ours_coacd": "our protocol, CoACD pieces",
          "acronym_physics_coacd": "ACRONYM's physics (friction 1, 150 kg/m^3), CoACD pieces"}
 
@@ -56,13 +52,3 @@ def render(result: dict) -> str:
         "perturbed) that must all hold. Grasps that start in collision met the object's convex pieces with the "
         "open hand; a decomposition that fills a cavity (a mug's inside) makes a rim grasp collide.",
         ""])
-
-
-def write_page() -> None:
-    result = load("relabel_acronym")
-    if result is not None:
-        PAGE.write_text(render(result))
-
-
-if __name__ == "__main__":
-    write_page()

@@ -69,6 +69,12 @@ def pages() -> list[Page]:
     return listed
 
 
+def write_page(path: str) -> None:
+    """Write the listed page at ``path`` (under the checkout) from the committed results."""
+    page = next(page for page in pages() if page.path == path)
+    (ROOT / page.path).write_text(page.render())
+
+
 def main() -> None:
     for page in pages():
         (ROOT / page.path).write_text(page.render())
