@@ -11,11 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.mesh import enclosed_volume
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
-from onepiece_dist.sim.collision import convex_pieces
+from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.spec import JobSpec
 
 
@@ -31,11 +30,8 @@ def object_draws(job: JobSpec, ref: ObjectRef, poses: np.ndarray, rows: np.ndarr
     from onepiece_dist.sim.trials import LabelNoise, label_draws
     from onepiece_dist.sim.world import process_world
 
-    loaded = load_object(ref, job)
-    volume = enclosed_volume(loaded.mesh)
     world = process_world(job.gripper)
-    world.load_object(convex_pieces(loaded.mesh, Path(collision_dir), job.sim.collision), volume,
-                      loaded.density(job.sim.density, volume), loaded.friction)
+    load_simulated(world, load_object(ref, job), Path(collision_dir), job.sim.collision, job.sim.density)
     rngs = [np.random.default_rng([seed, int(row)]) for row in rows]
     return label_draws(world, poses, rngs, LabelNoise.from_spec(job.sim), draws)
 

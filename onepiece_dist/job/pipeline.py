@@ -1,8 +1,9 @@
 """One spine for every job: its stages in order, each inside one :func:`stage` block that names the stage in the
 status, times it, saves the status and reports progress.
 
-The in-process and Ray runners differ only in the :class:`Runtime` they pass in: how extraction is spread, where
-the central actor lives and who trains. Stages: ingest, extract, dedup (the commit), assemble, label, train, evaluate.
+The in-process and Ray runtimes (runtime.local.LocalRuntime, runtime.ray_runner.RayRuntime) implement
+:class:`Runtime`: how extraction is spread, where the central actor lives and who trains. Stages: ingest,
+extract, dedup (the commit), assemble, label, train, evaluate.
 """
 
 from __future__ import annotations

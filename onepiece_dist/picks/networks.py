@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.mesh import enclosed_volume
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
@@ -26,7 +25,7 @@ from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import propose, rank
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan_spec import PickSpec
-from onepiece_dist.sim.collision import convex_pieces
+from onepiece_dist.sim.collision import load_simulated
 
 
 @dataclass(frozen=True)
@@ -57,12 +56,9 @@ def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: Object
         loaded = load_object(ref, spec.object_job(record.gripper, record.voxel))
     except MeshRejected as err:
         return NetworkPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    mesh = loaded.mesh
     world = pick_world(record.gripper)
-    volume = enclosed_volume(mesh)
-    world.load_object(convex_pieces(mesh, Path(spec.output) / "collision", spec.sim.collision), volume,
-                      loaded.density(spec.sim.density, volume), loaded.friction)
-    views = [_view(spec, scorers, world, mesh, view) for view in range(spec.views)]
+    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+    views = [_view(spec, scorers, world, loaded.mesh, view) for view in range(spec.views)]
     return NetworkPicks(index, ref.name, "ok", tuple(v[0] for v in views), tuple(v[1] for v in views),
                         seconds=time.perf_counter() - start)
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from onepiece_dist.core.cloud_grasps import SupportPlane, above_plane, antipodal_scores, cloud_normals
 from onepiece_dist.core.frames import compose_poses, transform_points
-from onepiece_dist.core.mesh import enclosed_volume, sample_surface
+from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import object_rng, sample_candidates
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
@@ -25,7 +25,7 @@ from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import PlannedGrasp, Proposals, propose, rank
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.plan_spec import PickSpec
-from onepiece_dist.sim.collision import convex_pieces
+from onepiece_dist.sim.collision import load_simulated
 
 
 @dataclass(frozen=True)
@@ -87,12 +87,9 @@ def pick_object(spec: PickSpec, ref: ObjectRef, index: int) -> ObjectPicks:
         loaded = load_object(ref, spec.object_job(scorer.gripper, scorer.record.voxel))
     except MeshRejected as err:
         return ObjectPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    mesh = loaded.mesh
     world = pick_world(scorer.gripper)
-    pieces = convex_pieces(mesh, Path(spec.output) / "collision", spec.sim.collision)
-    volume = enclosed_volume(mesh)
-    world.load_object(pieces, volume, loaded.density(spec.sim.density, volume), loaded.friction)
-    views = tuple(_pick_view(spec, scorer, world, mesh, view) for view in range(spec.views))
+    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+    views = tuple(_pick_view(spec, scorer, world, loaded.mesh, view) for view in range(spec.views))
     return ObjectPicks(index, ref.name, "ok", views, seconds=time.perf_counter() - start)
 
 

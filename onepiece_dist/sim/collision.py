@@ -14,11 +14,15 @@ import subprocess
 import sys
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from onepiece_dist.core.mesh import TriangleMesh
+from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume
 from onepiece_dist.objects.meshio import parse_obj, write_obj
+
+if TYPE_CHECKING:
+    from onepiece_dist.objects import LoadedObject
 
 _VHACD_SCRIPT = """
 import sys, pybullet as p
@@ -41,6 +45,14 @@ with open(sys.argv[2], "w") as out:
         offset += len(vertices)
 """
 COACD_THRESHOLD = 0.05  # CoACD's concavity threshold (its default): lower cuts finer and runs longer
+
+
+def load_simulated(world, loaded: LoadedObject, cache_dir: Path, method: str, default_density: float) -> None:
+    """``loaded`` as ``world``'s object: its convex pieces by ``method`` (cached in ``cache_dir``), the mass of its
+    enclosed volume at its manifest's density or mass (else ``default_density``), its own friction."""
+    volume = enclosed_volume(loaded.mesh)
+    world.load_object(convex_pieces(loaded.mesh, cache_dir, method), volume, loaded.density(default_density, volume),
+                      loaded.friction)
 
 
 def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
