@@ -68,7 +68,8 @@ class CameraSpec(Frozen):
 
 
 PICK_SIM = SimSpec(label_trials=4, success="every_trial")
-METHODS = ("network", "random", "analytic", "network_full_mesh")
+METHODS = ("network", "random", "analytic", "top_down", "network_full_mesh", "random_full_mesh", "oracle")
+Method = Literal["network", "random", "analytic", "top_down", "network_full_mesh", "random_full_mesh", "oracle"]
 
 
 class PickSpec(Frozen):
@@ -81,10 +82,13 @@ class PickSpec(Frozen):
     views: int = Field(3, ge=1, le=64, description="Camera poses per object.")
     attempts: int = Field(3, ge=1, le=20, description="k: the ranked grasps tried per view, one after another.")
     seed: int = Field(0, ge=0, lt=2**63, description="Seed of the drops, the camera poses and the planning.")
-    methods: tuple[Literal["network", "random", "analytic", "network_full_mesh"], ...] = Field(
+    methods: tuple[Method, ...] = Field(
         METHODS, min_length=1, description="What chooses the grasp: the network on the view, a random collision-free "
-        "candidate, the analytic antipodal score on the view's cloud, the network ranking candidates sampled on the "
-        "full mesh (what held-out top-1 measures).")
+        "candidate, the analytic antipodal score on the view's cloud, straight down across the cloud's narrow "
+        "horizontal axis (top_down), the network and a random choice among candidates sampled on the full mesh "
+        "(what held-out top-1 measures), and the oracle: every candidate of the view executed (the pool's ceiling).")
+    oracle_candidates: int = Field(1000, ge=1, le=100_000, description="The oracle executes at most this many of "
+                                   "a view's candidates.")
     mesh_candidates: int = Field(200, ge=1, le=100_000, description="Candidates sampled on the full mesh "
                                  "(network_full_mesh).")
     pictures: int = Field(4, ge=0, le=64, description="Views drawn as PNG with their planned grasps.")
@@ -115,3 +119,35 @@ def parse_pick_spec(data: dict[str, Any], source: str = "<pick spec>") -> PickSp
     except ValidationError as err:
         raise SpecError(describe_validation_error(err, source).replace("invalid job spec", "invalid pick spec")) \
             from None
+
+
+class PickLabelSpec(Frozen):
+    """Labels made where the network is used (issue 55): each training object settled on the table and seen from
+    ``views`` seeded cameras exactly as the pick benchmark sees it, the planner's candidates proposed on the view
+    and each executed by the pick protocol (the same hand, table and trials the benchmark judges with). Each label
+    keeps the candidate's crop of the view and its context (gravity and the object's centre in the gripper frame)."""
+
+    objects: str = Field("pybullet:random_urdfs[0:64]", description="Training objects (a source as a job's).")
+    output: str = Field("onepiece-out/pick_labels", description="Folder of the labels (pick_labels.zarr).")
+    views: int = Field(8, ge=1, le=256, description="Camera poses per object.")
+    per_view: int = Field(64, ge=1, le=10_000, description="Candidates executed per view (a seeded subset).")
+    seed: int = Field(0, ge=0, lt=2**63, description="Seed of the drops, cameras, planning and executions.")
+    gripper: GripperSpec = GripperSpec()
+    voxel: VoxelSpec = VoxelSpec()
+    points_per_grasp: int = Field(256, ge=1, le=4096, description="Gripper-frame points kept per crop.")
+    plan: PlanSpec = PlanSpec()
+    camera: CameraSpec = CameraSpec()
+    sim: SimSpec = Field(PICK_SIM, description="The pick protocol every candidate is executed with.")
+    sampler: SamplerSpec = SamplerSpec()
+    max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
+    workers: int | None = Field(None, ge=1, description="Worker actors on Ray (default: the cluster's CPUs).")
+
+    @field_validator("gripper", mode="before")
+    @classmethod
+    def _preset(cls, value: Any) -> Any:
+        return gripper_fields(value)
+
+    def object_job(self) -> JobSpec:
+        """The job-shaped spec the object loader reads (file limits, extents, physics)."""
+        return JobSpec(objects=self.objects, gripper=self.gripper, voxel=self.voxel, sampler=self.sampler,
+                       sim=self.sim, max_file_bytes=self.max_file_bytes, seed=self.seed)

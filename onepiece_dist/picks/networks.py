@@ -17,12 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
-from onepiece_dist.plan.observation import Observation
-from onepiece_dist.plan.planner import propose, rank
+from onepiece_dist.picks.views import Executions, index_of, observe_view
+from onepiece_dist.plan.planner import rank
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan_spec import PickSpec
 from onepiece_dist.sim.collision import load_simulated
@@ -64,39 +63,21 @@ def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: Object
 
 
 def _view(spec: PickSpec, scorers: list[GraspScorer], world, mesh, view: int) -> tuple[tuple[bool, ...], bool]:
-    from onepiece_dist.sim.pick import execute_pick, observe, pick_camera
-    from onepiece_dist.sim.trials import LabelNoise
-
-    rng = object_rng(mesh.content_id, spec.seed, stream=100 + view)
-    resting = world.settle(rng, mesh.vertices)
-    cam = spec.camera
-    drawn = pick_camera(resting[:3, 3], rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
-    cloud = observe(mesh.vertices, mesh.faces, resting, drawn.camera, rng, cam.depth_noise)
-    if len(cloud) < 50:
+    seen = observe_view(spec, scorers[0].record, world, mesh, view)
+    proposals = seen.proposals
+    if proposals is None or len(proposals.poses) == 0:
         return (False,) * len(scorers), False
-    proposals = propose(Observation(cloud, drawn.camera.pose[:3, 3], f"{mesh.name} view {view}"), scorers[0].record,
-                        spec.plan, rng)
-    if len(proposals.poses) == 0:
-        return (False,) * len(scorers), False
-    noise, executed = LabelNoise.from_spec(spec.sim), {}
+    executions = Executions(spec, world, mesh, seen.resting, view)
 
     def picked(candidate: int) -> bool:
-        if candidate not in executed:
-            own = np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, candidate])
-            executed[candidate] = execute_pick(world, proposals.poses[candidate], resting, noise, own).success
-        return executed[candidate]
+        return executions.run("view", candidate, proposals.poses[candidate]).success
 
     choices = []
     for scorer in scorers:
         best = rank(proposals, scorer.score(proposals.crops, spec.plan.batch_size), scorer.record, spec.plan, keep=1)
-        choices.append(picked(_index_of(proposals.poses, best[0].pose)) if best else False)
+        choices.append(picked(index_of(proposals.poses, best[0].pose)) if best else False)
     guess = int(np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view]).integers(len(proposals.poses)))
     return tuple(choices), picked(guess)
-
-
-def _index_of(poses: np.ndarray, pose: np.ndarray) -> int:
-    """The candidate a ranked grasp is (rank returns the pose itself)."""
-    return int(np.argmin(np.abs(poses - pose).reshape(len(poses), -1).max(axis=1)))
 
 
 def run_network_picks(spec: PickSpec, checkpoints: tuple[str, ...]) -> list[NetworkPicks]:

@@ -1,9 +1,10 @@
-"""One object of the pick benchmark (docs/picks.md), run by a worker: for each seeded view, the object settled on
-the table, the camera's cloud, the planner's candidates, and each method's ranked grasps executed one after
-another (up to ``attempts``), every execution by the label protocol.
+"""One object of the pick benchmark (docs/picks.md), run by a worker: for each seeded view (picks.views), each
+chooser's ranked grasps executed one after another (up to ``attempts``), every execution by the label protocol.
 
-Methods: the network on the view (the product), a random collision-free candidate, the analytic antipodal score
-on the view's cloud, and the network ranking candidates sampled on the full mesh (what held-out top-1 measures).
+Choosers: the network on the view (the product); a random collision-free candidate; the analytic antipodal score
+on the view's cloud; the top-down grasp a user tries first (core.top_down); the network, and a random choice,
+among candidates sampled on the full mesh (the full-mesh figure apart: the pool against the ranking); and the
+oracle, which executes every candidate of the view and so says how often the pool holds a grasp that picks.
 """
 
 from __future__ import annotations
@@ -16,14 +17,17 @@ import numpy as np
 
 from onepiece_dist.core.cloud_grasps import SupportPlane, above_plane, antipodal_scores, cloud_normals
 from onepiece_dist.core.frames import compose_poses, transform_points
+from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.mesh import sample_surface
-from onepiece_dist.core.sampling import object_rng, sample_candidates
+from onepiece_dist.core.sampling import sample_candidates
+from onepiece_dist.core.top_down import top_down_grasps
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
+from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view
 from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
-from onepiece_dist.plan.planner import PlannedGrasp, Proposals, propose, rank
-from onepiece_dist.plan.scorer import GraspScorer, cut_crops
+from onepiece_dist.plan.planner import Proposals, rank
+from onepiece_dist.plan.scorer import Crops, GraspScorer, cut_crops
 from onepiece_dist.plan_spec import PickSpec
 from onepiece_dist.sim.collision import load_simulated
 
@@ -32,7 +36,8 @@ from onepiece_dist.sim.collision import load_simulated
 class ViewPicks:
     """One view of one object: the camera's distance (m) and elevation (degrees), the observed points, the
     planner's candidates, and per method the outcome of each attempt in rank order (True: picked) with the
-    failure reasons ('' for a pick)."""
+    failure reasons ('' for a pick); with the oracle, how many of the view's candidates it executed and how many
+    of those picked."""
 
     view: int
     distance: float
@@ -41,6 +46,8 @@ class ViewPicks:
     candidates: int
     attempts: dict[str, tuple[bool, ...]]
     failures: dict[str, tuple[str, ...]]
+    pool_executed: int = 0
+    pool_picked: int = 0
 
     def first(self, method: str) -> bool:
         return bool(self.attempts[method][:1] == (True,))
@@ -93,82 +100,113 @@ def pick_object(spec: PickSpec, ref: ObjectRef, index: int) -> ObjectPicks:
     return ObjectPicks(index, ref.name, "ok", views, seconds=time.perf_counter() - start)
 
 
-def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> ViewPicks:
-    from onepiece_dist.sim.pick import execute_pick, observe, pick_camera
-    from onepiece_dist.sim.trials import LabelNoise
+@dataclass(frozen=True)
+class Choice:
+    """A chooser's ranked grasps: the pool they come from and, per grasp, its index there and its pose."""
 
-    rng = object_rng(mesh.content_id, spec.seed, stream=100 + view)
-    resting = world.settle(rng, mesh.vertices)
-    cam = spec.camera
-    drawn = pick_camera(resting[:3, 3], rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
-    cloud = observe(mesh.vertices, mesh.faces, resting, drawn.camera, rng, cam.depth_noise)
-    eye, geometry = drawn.camera.pose[:3, 3], (drawn.distance, drawn.elevation_deg)
-    if len(cloud) < 50:
-        return ViewPicks(view, *geometry, len(cloud), 0, {m: () for m in spec.methods}, {m: () for m in spec.methods})
-    observation = Observation(cloud, eye, f"{mesh.name} view {view}")
-    proposals = propose(observation, scorer.record, spec.plan, rng)
-    noise = LabelNoise.from_spec(spec.sim)
-    attempts, failures = {}, {}
+    pool: str
+    indices: tuple[int, ...]
+    poses: np.ndarray
+
+
+def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> ViewPicks:
+    seen = observe_view(spec, scorer.record, world, mesh, view)
+    geometry = (seen.distance, seen.elevation_deg)
+    empty = {m: () for m in spec.methods}
+    if seen.proposals is None:
+        return ViewPicks(view, *geometry, len(seen.cloud), 0, empty, empty)
+    executions = Executions(spec, world, mesh, seen.resting, view)
+    attempts, failures, pool = {}, {}, (0, 0)
+    full_mesh = _full_mesh_proposals(spec, scorer, mesh, seen) if _needs_full_mesh(spec) else None
     for method in spec.methods:
-        ranked = _ranked(method, spec, scorer, proposals, mesh, resting, rng)
-        outcomes = [execute_pick(world, grasp.pose, resting, noise, rng) for grasp in ranked[: spec.attempts]]
+        if method == "oracle":
+            outcomes, pool = _oracle(spec, seen.proposals, executions)
+        else:
+            choice = _choice(method, spec, scorer, seen, full_mesh)
+            outcomes = [executions.run(choice.pool, i, pose)
+                        for i, pose in zip(choice.indices, choice.poses, strict=True)]
         attempts[method] = tuple(o.success for o in outcomes)
         failures[method] = tuple(o.failure for o in outcomes)
         if method == "network" and view < spec.pictures:
-            _draw(spec, scorer, observation, proposals, ranked, mesh.name, view, outcomes)
-    return ViewPicks(view, *geometry, len(cloud), len(proposals.poses), attempts, failures)
+            _draw(spec, scorer, mesh.name, seen, outcomes)
+    return ViewPicks(view, *geometry, len(seen.cloud), len(seen.proposals.poses), attempts, failures, *pool)
 
 
-def _ranked(method: str, spec: PickSpec, scorer: GraspScorer, proposals: Proposals, mesh, resting: np.ndarray,
-            rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
+def _needs_full_mesh(spec: PickSpec) -> bool:
+    return any(m in spec.methods for m in ("network_full_mesh", "random_full_mesh"))
+
+
+def _oracle(spec: PickSpec, proposals: Proposals, executions: Executions) -> tuple[list, tuple[int, int]]:
+    """Every candidate of the view executed (at most ``spec.oracle_candidates``); the oracle's ranked grasps are
+    those that picked, in candidate order, then the rest."""
+    count = min(len(proposals.poses), spec.oracle_candidates)
+    outcomes = [executions.run("view", i, proposals.poses[i]) for i in range(count)]
+    ranked = sorted(outcomes, key=lambda o: not o.success)[: spec.attempts]
+    return ranked, (count, sum(o.success for o in outcomes))
+
+
+def _choice(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
+            full_mesh: Proposals | None) -> Choice:
     """The grasps ``method`` would try, best first (at most ``spec.attempts``); a random choice ranks a seeded
     permutation."""
-    if method == "network_full_mesh":
-        return _full_mesh_choice(spec, scorer, mesh, resting, proposals.plane, rng)
-    if len(proposals.poses) == 0:
-        return ()
+    proposals, rng = seen.proposals, seen.rng
+    if method == "top_down":
+        plane = proposals.plane
+        down = WORLD_DOWN if plane is None else -plane.normal
+        poses = top_down_grasps(proposals.object_points, down, scorer.gripper)[: spec.attempts]
+        return Choice("top_down", tuple(range(len(poses))), poses)
+    if method in ("network_full_mesh", "random_full_mesh"):
+        proposals, pool = full_mesh, "mesh"
+        method = method.removesuffix("_full_mesh")
+    else:
+        pool = "view"
+    if proposals is None or len(proposals.poses) == 0:
+        return Choice(pool, (), np.zeros((0, 4, 4)))
+    plan = spec.plan
     if method == "random":
         scores = rng.permutation(len(proposals.poses)).astype(np.float64)
-        return rank(proposals, scores, scorer.record, spec.plan.model_copy(update={"nms_distance": 0.0}),
-                    keep=spec.attempts)
-    if method == "analytic":
+        plan = plan.model_copy(update={"nms_distance": 0.0})
+    elif method == "analytic":
         normals = cloud_normals(proposals.object_points, proposals.object_points, proposals.viewpoint)
         scores = antipodal_scores(proposals.object_points, normals, proposals.poses, scorer.gripper)
     else:
-        scores = scorer.score(proposals.crops, spec.plan.batch_size)
-    return rank(proposals, scores, scorer.record, spec.plan, keep=spec.attempts)
+        scores = scorer.score(proposals.crops, plan.batch_size)
+    ranked = rank(proposals, scores, scorer.record, plan, keep=spec.attempts)
+    poses = np.array([g.pose for g in ranked]).reshape(-1, 4, 4)
+    return Choice(pool, tuple(index_of(proposals.poses, p) for p in poses), poses)
 
 
-def _full_mesh_choice(spec: PickSpec, scorer: GraspScorer, mesh, resting: np.ndarray, plane: SupportPlane | None,
-                      rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
-    """The network ranking candidates sampled on the complete mesh (the study's held-out setting), cropped from
-    the complete surface, moved to where the object rests, those that would meet the table dropped."""
-    gripper = scorer.gripper
+def _full_mesh_proposals(spec: PickSpec, scorer: GraspScorer, mesh, seen: PickView) -> Proposals | None:
+    """Candidates sampled on the complete mesh (the study's held-out setting), cropped from the complete surface,
+    moved to where the object rests, those that would meet the table dropped."""
+    gripper, rng = scorer.gripper, seen.rng
     surface, normals = sample_surface(mesh, spec.sampler.surface_points, rng)
     found = sample_candidates(mesh, surface, normals, spec.mesh_candidates, gripper, spec.sampler, rng)
-    poses = compose_poses(resting[None], found.poses)
+    poses = compose_poses(seen.resting[None], found.poses)
     table = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(0, bool))
     poses = poses[above_plane(poses, gripper, table)]
-    world_surface = transform_points(surface, resting)
+    world_surface = transform_points(surface, seen.resting)
     crops, keep = cut_crops(world_surface, poses, scorer.record, rng).holding(spec.plan.min_points)
     if not keep.any():
-        return ()
-    proposals = Proposals(poses[keep], crops, world_surface, plane, {})
-    scores = scorer.score(crops, spec.plan.batch_size)
-    return rank(proposals, scores, scorer.record, spec.plan, keep=spec.attempts)
+        return None
+    context = grasp_context(poses[keep], object_centre(world_surface), WORLD_DOWN, gripper.closing_depth)
+    crops = Crops(crops.codes, crops.counts, crops.points, context)
+    return Proposals(poses[keep], crops, world_surface, seen.proposals.plane, {})
 
 
-def _draw(spec: PickSpec, scorer: GraspScorer, observation: Observation, proposals: Proposals, ranked, name: str,
-          view: int, outcomes) -> None:
+def _draw(spec: PickSpec, scorer: GraspScorer, name: str, seen: PickView, outcomes) -> None:
     """The view's cloud with the network's ranked grasps, for the benchmark's page."""
     import importlib.util
 
     if importlib.util.find_spec("matplotlib") is None:  # the plots extra: no pictures without it
         return
-
+    proposals = seen.proposals
+    ranked = rank(proposals, scorer.score(proposals.crops, spec.plan.batch_size), scorer.record, spec.plan,
+                  keep=spec.attempts)
     result = ", ".join("picked" if o.success else o.failure for o in outcomes) or "no grasp"
     safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name)
-    picture = Path(spec.output) / "pictures" / f"{safe}-view{view}.png"
-    table = None if proposals.plane is None else observation.points[proposals.plane.inliers]
+    picture = Path(spec.output) / "pictures" / f"{safe}-view{seen.view}.png"
+    table = None if proposals.plane is None else seen.cloud[proposals.plane.inliers]
+    observation = Observation(seen.cloud, seen.eye, f"{name} view {seen.view}")
     draw_plan(proposals.object_points, ranked, scorer.gripper, picture, observation.viewpoint,
-              f"{name}, view {view}: {result}", table)
+              f"{name}, view {seen.view}: {result}", table)

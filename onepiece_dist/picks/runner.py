@@ -8,6 +8,7 @@ import dataclasses
 import hashlib
 import json
 import shutil
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +32,8 @@ REPORT_FILE = "picks.json"
 
 @dataclass(frozen=True)
 class MethodSummary:
-    """One method over every object: the mean of the per-object rates, with 95% bootstrap intervals."""
+    """One method over every object: the mean of the per-object rates, with 95% bootstrap intervals, and how its
+    first attempts failed (reason: views; 'no_grasp' where it had none to try)."""
 
     method: str
     first_attempt: float
@@ -39,6 +41,7 @@ class MethodSummary:
     within_k: float
     within_k_interval: tuple[float, float]
     views: int
+    first_failures: dict[str, int] = dataclasses.field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,19 @@ def object_rate(picks: ObjectPicks, method: str, k: int | None) -> float:
     return float(np.mean(hits)) if hits else 0.0
 
 
+def first_failures(done: list[ObjectPicks], method: str) -> dict[str, int]:
+    """How ``method``'s first attempts failed, over every view: reason -> views (sorted by reason)."""
+    reasons = Counter()
+    for picks in done:
+        for view in picks.views:
+            tried = view.failures.get(method, ())
+            if not tried:
+                reasons["no_grasp"] += 1
+            elif tried[0]:
+                reasons[tried[0]] += 1
+    return dict(sorted(reasons.items()))
+
+
 def summarise(spec: PickSpec, results: list[ObjectPicks]) -> PickReport:
     """Per-method rates over the objects that could be loaded, with intervals, and the verdict."""
     done = [r for r in results if r.status == "ok"]
@@ -78,7 +94,8 @@ def summarise(spec: PickSpec, results: list[ObjectPicks]) -> PickReport:
         summaries.append(MethodSummary(method, float(first.mean()) if len(first) else 0.0,
                                        bootstrap_interval(first, seed=spec.seed),
                                        float(within.mean()) if len(within) else 0.0,
-                                       bootstrap_interval(within, seed=spec.seed), sum(len(r.views) for r in done)))
+                                       bootstrap_interval(within, seed=spec.seed), sum(len(r.views) for r in done),
+                                       first_failures(done, method)))
     separable, verdict = _verdict(spec, summaries, len(done))
     return PickReport(spec.model_dump(mode="json"), tuple(results), tuple(summaries), separable, verdict)
 

@@ -15,7 +15,14 @@ import pybullet as pb
 
 from onepiece_dist.core import portable
 from onepiece_dist.core.frames import compose_poses, perturb_pose, transform_points
-from onepiece_dist.sim.trials import LabelNoise, close_fingers, finger_contacts, lift_and_shake, move_gripper
+from onepiece_dist.sim.trials import (
+    LabelNoise,
+    close_fingers,
+    finger_contacts,
+    lift_and_shake,
+    lift_steps,
+    move_gripper,
+)
 from onepiece_dist.sim.views import Camera, back_project, camera_at, depth_image
 from onepiece_dist.sim.world import SimWorld, matrix_from_pose, quat_from_matrix
 from onepiece_dist.spec import GripperSpec
@@ -137,10 +144,15 @@ def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, ca
     return points[near]
 
 
+# why a pick failed: the gripper met the object or the table at the pregrasp; the fingers closed without both
+# touching the object; it slipped out while lifted; it fell out while shaken
+FAILURES = ("start_collision", "no_contact", "slipped_lifting", "dropped_shaking")
+
+
 @dataclass(frozen=True)
 class PickOutcome:
     """One executed grasp: ``success`` (every trial held, or the nominal one), ``trials`` held of ``tried``, and
-    why the first failing trial failed ('' when none): start_collision, no_contact, dropped."""
+    why the first failing trial failed ('' when none): one of FAILURES."""
 
     success: bool
     held: int
@@ -196,8 +208,11 @@ def _one_pick(world: PickWorld, pose: np.ndarray, resting: np.ndarray) -> str:
     close_fingers(world)
     if not all(finger_contacts(world)):
         return "no_contact"
-    held, _ = lift_and_shake(world, world.gripper_pose())
-    return "" if held else "dropped"
+    lost_at: list[int] = []
+    held, _ = lift_and_shake(world, world.gripper_pose(), lost_at)
+    if held:
+        return ""
+    return "slipped_lifting" if lost_at and lost_at[0] < lift_steps(world.physics.time_step) else "dropped_shaking"
 
 
 _WORLDS: dict[GripperSpec, PickWorld] = {}

@@ -128,10 +128,11 @@ def extract_trial(world: SimWorld, pose: np.ndarray) -> tuple[int, np.ndarray, f
     return 0, settled, world.spec.max_opening - q[0] - q[1], shift, steps
 
 
-def lift_and_shake(world: SimWorld, start: np.ndarray) -> tuple[bool, float]:
+def lift_and_shake(world: SimWorld, start: np.ndarray, lost_at: list[int] | None = None) -> tuple[bool, float]:
     """After closing: gravity on, lift, shake linearly along world x and y, then rotationally about world z.
 
-    Exits early (failure) when a periodic check finds no finger touching the object.
+    Exits early (failure) when a periodic check finds no finger touching the object; ``lost_at``, when given,
+    gets the step at which the object was found lost (the path's length when it was lost only at the end).
     returns : success (both fingers still touch at the end), slip (m) = largest change of the object's position
               in the gripper frame during lifting and shaking
     """
@@ -147,9 +148,19 @@ def lift_and_shake(world: SimWorld, start: np.ndarray) -> tuple[bool, float]:
         if step % DROP_CHECK_EVERY == DROP_CHECK_EVERY - 1:
             slip = max(slip, _distance(_object_in_gripper(world), held))
             if not any(finger_contacts(world)):
+                if lost_at is not None:
+                    lost_at.append(step)
                 return False, slip
     slip = max(slip, _distance(_object_in_gripper(world), held))
-    return bool(np.isfinite(slip) and all(finger_contacts(world))), slip
+    success = bool(np.isfinite(slip) and all(finger_contacts(world)))
+    if not success and lost_at is not None:
+        lost_at.append(len(pivots))
+    return success, slip
+
+
+def lift_steps(time_step: float) -> int:
+    """Steps of the lift before the shakes begin (gripper_path's first part)."""
+    return int(round(LIFT_TIME / time_step))
 
 
 def gripper_path(start: np.ndarray, time_step: float) -> tuple[list, list]:

@@ -1,0 +1,78 @@
+"""One view of the pick benchmark, written once for every flow that picks (the benchmark's choosers, many
+networks' picks, the pick-labelled training set): the object dropped on the table and settled, a seeded camera,
+its cloud, the planner's candidates; and the executions of candidates, each by the pick protocol with a generator
+of its own, so a candidate's outcome never depends on who chose it or in what order."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from onepiece_dist.core.sampling import object_rng
+from onepiece_dist.plan.observation import MIN_POINTS, Observation
+from onepiece_dist.plan.planner import Proposals, propose
+from onepiece_dist.plan.scorer import CropRecord
+from onepiece_dist.plan_spec import PickSpec
+
+# the pools a candidate is drawn from, each with a stream of generators of its own
+POOLS = {"view": 0, "mesh": 1, "top_down": 2}
+
+
+@dataclass(frozen=True)
+class PickView:
+    """A settled object seen once: ``resting`` (4, 4) its mesh-frame world pose, the camera's position, distance
+    (m) and elevation (degrees), the observed ``cloud`` (m, 3) and the planner's ``proposals`` (None when the
+    camera saw fewer than MIN_POINTS points); ``rng`` continues the view's seeded stream."""
+
+    view: int
+    resting: np.ndarray
+    eye: np.ndarray
+    distance: float
+    elevation_deg: float
+    cloud: np.ndarray
+    proposals: Proposals | None
+    rng: np.random.Generator
+
+
+def observe_view(spec: PickSpec, record: CropRecord, world, mesh, view: int) -> PickView:
+    """View ``view`` of ``mesh`` (loaded in ``world``): settled, seen, and its candidates proposed."""
+    from onepiece_dist.sim.pick import observe, pick_camera
+
+    rng = object_rng(mesh.content_id, spec.seed, stream=100 + view)
+    resting = world.settle(rng, mesh.vertices)
+    cam = spec.camera
+    drawn = pick_camera(resting[:3, 3], rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
+    cloud = observe(mesh.vertices, mesh.faces, resting, drawn.camera, rng, cam.depth_noise)
+    eye = drawn.camera.pose[:3, 3]
+    proposals = None
+    if len(cloud) >= MIN_POINTS:
+        proposals = propose(Observation(cloud, eye, f"{mesh.name} view {view}"), record, spec.plan, rng)
+    return PickView(view, resting, eye, drawn.distance, drawn.elevation_deg, cloud, proposals, rng)
+
+
+class Executions:
+    """Candidates of one view executed by the pick protocol, each once: ``run(pool, index, pose)`` executes
+    candidate ``index`` of ``pool`` (POOLS) with its own generator ([object, seed, view, pool, index]) and keeps
+    the outcome, so every chooser that picks it meets the same outcome."""
+
+    def __init__(self, spec: PickSpec, world, mesh, resting: np.ndarray, view: int):
+        from onepiece_dist.sim.trials import LabelNoise
+
+        self.world, self.resting, self.noise = world, resting, LabelNoise.from_spec(spec.sim)
+        self.seed = [int(mesh.content_id[:16], 16), spec.seed, view]
+        self.done: dict[tuple[str, int], object] = {}
+
+    def run(self, pool: str, index: int, pose: np.ndarray):
+        from onepiece_dist.sim.pick import execute_pick
+
+        key = (pool, int(index))
+        if key not in self.done:
+            rng = np.random.default_rng([*self.seed, POOLS[pool], int(index)])
+            self.done[key] = execute_pick(self.world, pose, self.resting, self.noise, rng)
+        return self.done[key]
+
+
+def index_of(poses: np.ndarray, pose: np.ndarray) -> int:
+    """Which of ``poses`` (n, 4, 4) a ranked grasp's ``pose`` is (rank returns the pose itself)."""
+    return int(np.argmin(np.abs(poses - pose).reshape(len(poses), -1).max(axis=1)))
