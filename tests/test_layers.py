@@ -46,7 +46,8 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
             {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
              "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
     # the pick benchmark: one object's views and choosers, a task per object on the job's worker pool
-    "picks": (BASE | {"plan_spec", "core", "objects", "sim", "plan", "job"}, {"numpy", "ray", "torch", "pydantic"}),
+    "picks": (BASE | {"plan_spec", "core", "objects", "sim", "store", "plan", "job"},
+              {"numpy", "ray", "torch", "pydantic"}),
     "api": (BASE | {"plan_spec", "objects", "job", "picks", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
     "study": (BASE | {"frozen", "spec_labels", "plan_spec", "api", "job", "picks", "learn", "store", "core", "objects"},

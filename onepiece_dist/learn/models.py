@@ -6,22 +6,36 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+# gravity is a unit vector; offsets in m, scaled so that 10 cm is 1
+CONTEXT_SCALE = torch.tensor([1.0, 1.0, 1.0, 10.0, 10.0, 10.0])
+
 
 class PointNetGrasp(nn.Module):
-    """PointNet classifier: shared per-point MLP (conv1d), max pooling, MLP head. points (n, P, 3) -> (n,)."""
+    """PointNet classifier: shared per-point MLP (conv1d), max pooling, MLP head. points (n, P, 3) -> (n,).
+    With ``context`` > 0 the head also reads ``batch["context"]`` (n, context): the grasp's gravity direction and
+    object-centre offset in the gripper frame (core.grasp_context), through a small MLP of its own."""
 
-    def __init__(self, width: int = 64):
+    def __init__(self, width: int = 64, context: int = 0):
         super().__init__()
+        self.context = context
         self.features = nn.Sequential(
             nn.Conv1d(3, width, 1), nn.BatchNorm1d(width), nn.ReLU(),
             nn.Conv1d(width, 2 * width, 1), nn.BatchNorm1d(2 * width), nn.ReLU(),
             nn.Conv1d(2 * width, 4 * width, 1), nn.BatchNorm1d(4 * width), nn.ReLU())
-        self.head = nn.Sequential(nn.Linear(4 * width, 2 * width), nn.ReLU(), nn.Dropout(0.3),
+        extra = width // 2 if context else 0
+        if context:
+            self.context_features = nn.Sequential(nn.Linear(context, extra), nn.ReLU(), nn.Linear(extra, extra),
+                                                  nn.ReLU())
+        self.head = nn.Sequential(nn.Linear(4 * width + extra, 2 * width), nn.ReLU(), nn.Dropout(0.3),
                                   nn.Linear(2 * width, 1))
 
     def forward(self, batch: dict[str, torch.Tensor]) -> torch.Tensor:
         x = batch["points"].transpose(1, 2) * 25.0  # metres -> roughly unit scale for a 4 cm region
-        return self.head(self.features(x).max(dim=2).values).squeeze(1)
+        pooled = self.features(x).max(dim=2).values
+        if self.context:
+            context = batch["context"] * CONTEXT_SCALE.to(pooled.device)
+            pooled = torch.cat([pooled, self.context_features(context)], dim=1)
+        return self.head(pooled).squeeze(1)
 
 
 class VoxelCNN(nn.Module):
@@ -39,4 +53,10 @@ class VoxelCNN(nn.Module):
         return self.head(self.features(batch["code"].unsqueeze(1))).squeeze(1)
 
 
-MODELS = {"pointnet": PointNetGrasp, "voxel": VoxelCNN}
+def PointNetWithContext() -> PointNetGrasp:  # noqa: N802 (a model constructor, named as the classes are)
+    """PointNet on the crop with the grasp's context (gravity and object offset in the gripper frame)."""
+    return PointNetGrasp(context=6)
+
+
+MODELS = {"pointnet": PointNetGrasp, "voxel": VoxelCNN, "pointnet_context": PointNetWithContext}
+CONTEXT_MODELS = frozenset({"pointnet_context"})  # models that read batch["context"]

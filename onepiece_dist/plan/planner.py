@@ -4,6 +4,7 @@ rank with pose-distance non-maximum suppression. Typed results, JSON-ready."""
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -17,6 +18,7 @@ from onepiece_dist.core.cloud_grasps import (
     suppress_near,
     voxel_downsample,
 )
+from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.hand_frames import to_panda
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
@@ -96,6 +98,9 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
                                 spec.orientations)
     sampled = time.perf_counter()
     crops, keep = cut_crops(objects, found.poses, record, rng).holding(spec.min_points)
+    down = WORLD_DOWN if plane is None else -plane.normal
+    context = grasp_context(found.poses[keep], object_centre(objects), down, gripper.closing_depth)
+    crops = dataclasses.replace(crops, context=context)
     return Proposals(found.poses[keep], crops, objects, plane, _counts(found, int(np.sum(~keep))),
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint)
 

@@ -33,16 +33,23 @@ class CropRecord:
 
 @dataclass(frozen=True)
 class Crops:
-    """Crops of n poses: codes (n, B) uint8, counts (n,) int64 observed points inside, points (n, P, 3) float16."""
+    """Crops of n poses: codes (n, B) uint8, counts (n,) int64 observed points inside, points (n, P, 3) float16,
+    and where the planner knows it, each grasp's context (n, 6) float32 (core.grasp_context)."""
 
     codes: np.ndarray
     counts: np.ndarray
     points: np.ndarray
+    context: np.ndarray | None = None
 
     def holding(self, min_points: int) -> tuple[Crops, np.ndarray]:
         """The crops with at least ``min_points`` observed points inside, and (n,) bool which they were."""
         keep = self.counts >= min_points
-        return Crops(self.codes[keep], self.counts[keep], self.points[keep]), keep
+        return self.subset(keep), keep
+
+    def subset(self, which: np.ndarray) -> Crops:
+        """The crops ``which`` (a bool mask or indices) selects."""
+        context = None if self.context is None else self.context[which]
+        return Crops(self.codes[which], self.counts[which], self.points[which], context)
 
 
 def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.random.Generator) -> Crops:
@@ -61,7 +68,7 @@ class GraspScorer:
     another is refused (its crops would mean other shapes)."""
 
     def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto"):
-        from onepiece_dist.learn.models import MODELS
+        from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
         from onepiece_dist.learn.train import load_checkpoint, resolve_device
 
         self.path = str(checkpoint)
@@ -72,6 +79,7 @@ class GraspScorer:
         self.record = _crop_record(saved, self.path, gripper)
         self.device = resolve_device(device)
         self.model = MODELS[saved["model"]]()
+        self.reads_context = saved["model"] in CONTEXT_MODELS
         self.model.load_state_dict(saved["state_dict"])
         self.model.to(self.device).eval()
 
@@ -95,9 +103,19 @@ class GraspScorer:
                     batch = {"code": torch.from_numpy(code).to(self.device)}
                 else:
                     batch = {"points": torch.from_numpy(crops.points[start:stop].astype(np.float32)).to(self.device)}
+                if self.reads_context:
+                    batch["context"] = torch.from_numpy(self._context(crops)[start:stop]).to(self.device)
                 scores.append(torch.sigmoid(self.model(batch)).float().cpu().numpy())
         # rounded: the last bits of a sum depend on the CPU's kernels and threads, and must not reorder near ties
         return np.round(np.concatenate(scores).astype(np.float64), SCORE_DECIMALS) if scores else np.zeros(0)
+
+
+    def _context(self, crops: Crops) -> np.ndarray:
+        if crops.context is None:
+            raise CloudRejected(f"{self.path}: this network reads each grasp's context (gravity and the object's "
+                                "centre in the gripper frame), and these crops carry none: plan them with "
+                                "plan.propose, which computes it")
+        return np.ascontiguousarray(crops.context, dtype=np.float32)
 
 
 def _crop_record(saved: dict, path: str, gripper: GripperSpec | None) -> CropRecord:

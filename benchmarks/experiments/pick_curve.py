@@ -1,0 +1,128 @@
+"""The pick learning curve and the design trials of issue 55 (docs/picks.md): networks fitted on pick labels
+(picks.pick_labels: training objects settled on the table, seen as the benchmark sees them, candidates executed by
+the pick protocol) at several label counts and designs, each judged by first-attempt picks on the household
+objects from one view.
+
+    .venv/bin/python -m benchmarks.experiments.pick_curve [--sizes 500,2000,8000,32000] [--views 8]
+
+Steps: (1) label: random_urdfs[0:160] and 160 seeded household-sized shapes (benchmarks/experiments/
+training_shapes.py), 8 views each, 16 candidates executed per view, on the embedded Ray (skipped when
+data/pick_labels/pick_labels.zarr holds labels of the same spec); (2) per design and size, a network fitted on a
+seeded random subset of the labels (validation: 10% of the objects); (3) each network's picks on the household set
+(benchmarks/experiments/household.py), the network chooser alone. Core-seconds of a point: the labelling's
+core-seconds in proportion to its labels, plus the fit's. Results: benchmarks/results/pick_curve.json; the best
+design's largest network is copied to data/pick_curve/best.pt.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+from dataclasses import asdict, replace
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parents[1]
+ROOT = HERE.parent
+LABELS = ROOT / "data" / "pick_labels"
+OUT = ROOT / "data" / "pick_curve"
+TRAIN_OBJECTS = "pybullet:random_urdfs[0:160]+data/shapes"
+DESIGNS = {  # name -> PickTrainOptions fields
+    "context": {"model": "pointnet_context"},
+    "crop_only": {"model": "pointnet"},
+    "context_balanced": {"model": "pointnet_context", "balanced": True},
+    "context_share": {"model": "pointnet_context", "target": "share"},
+}
+
+
+def label_spec():
+    from onepiece_dist.plan_spec import PickLabelSpec
+
+    return PickLabelSpec(objects=TRAIN_OBJECTS, output=str(LABELS.relative_to(ROOT)), views=8, per_view=16)
+
+
+def labels():
+    """The pick labels (made here unless they already are, for the same spec)."""
+    from benchmarks.experiments.training_shapes import training_shapes
+    from onepiece_dist.picks.pick_labels import run_pick_labels
+    from onepiece_dist.store.pick_labels import read_pick_labels
+
+    spec = label_spec()
+    path = LABELS / "pick_labels.zarr"
+    if path.exists() and read_pick_labels(path).attrs["spec"] == spec.model_dump(mode="json"):
+        return read_pick_labels(path)
+    training_shapes(ROOT / "data" / "shapes", 160)
+    return read_pick_labels(run_pick_labels(spec))
+
+
+def fit(all_labels, size: int, design: str, seed: int = 0) -> dict:
+    from onepiece_dist.learn.pick_train import PickTrainOptions, train_on_pick_labels
+
+    rows = np.sort(np.random.default_rng([seed, size]).permutation(len(all_labels))[:size])
+    subset = all_labels.subset(rows)
+    spec = all_labels.attrs["spec"]
+    crop = {"gripper": spec["gripper"], "voxel": spec["voxel"], "points_per_grasp": spec["points_per_grasp"],
+            "source": "pick_labels"}
+    options = replace(PickTrainOptions(seed=seed), **DESIGNS[design])
+    result = train_on_pick_labels(subset, OUT / f"{design}_{size}", crop, options)
+    label_seconds = all_labels.attrs["core_seconds"] * len(rows) / len(all_labels)
+    return {"design": design, "labels": len(rows), "options": asdict(options),
+            "checkpoint": str(result.checkpoint.relative_to(ROOT)), "fit_seconds": round(result.seconds, 1),
+            "label_core_seconds": round(label_seconds, 1),
+            "core_seconds": round(label_seconds + result.seconds, 1), "success_rate": result.success_rate,
+            "best_epoch": asdict(result.best), "epochs": len(result.epochs)}
+
+
+def picks(checkpoint: str, views: int, methods: tuple[str, ...] = ("network",), name: str = "household") -> dict:
+    from benchmarks.experiments.household import household_objects
+    from onepiece_dist.picks.runner import run_picks
+    from onepiece_dist.plan_spec import PickSpec
+
+    spec = PickSpec(objects=str(household_objects()), checkpoint=str(ROOT / checkpoint),
+                    output=str(OUT / "picks" / name), views=views, attempts=3, pictures=0, methods=methods)
+    start = time.perf_counter()
+    report = run_picks(spec)
+    summary = {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),
+                          "within_k": m.within_k, "failures": m.first_failures} for m in report.methods}
+    return {"methods": summary, "verdict": report.verdict, "seconds": round(time.perf_counter() - start, 1)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default="500,2000,8000,32000")
+    parser.add_argument("--designs", default=",".join(DESIGNS))
+    parser.add_argument("--views", type=int, default=8)
+    args = parser.parse_args()
+    all_labels = labels()
+    sizes = [min(int(s), len(all_labels)) for s in args.sizes.split(",")]
+    path = HERE / "results" / "pick_curve.json"
+    done = json.loads(path.read_text())["points"] if path.is_file() else []
+    points = [p for p in done if p["design"] in args.designs.split(",")]
+    for design in args.designs.split(","):
+        for size in sizes:
+            if any(p["design"] == design and p["labels"] == size and p.get("views") == args.views for p in points):
+                continue
+            point = fit(all_labels, size, design)
+            point.update(views=args.views, picks=picks(point["checkpoint"], args.views, name=f"{design}_{size}"))
+            points.append(point)
+            print(design, size, point["picks"]["methods"]["network"]["first_attempt"], flush=True)
+            _write(path, all_labels, points)
+
+
+def _write(path: Path, all_labels, points: list[dict]) -> None:
+    out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_curve", "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
+           "labels": {"spec": all_labels.attrs["spec"], "rows": len(all_labels),
+                      "success_rate": float(all_labels.success.mean()),
+                      "core_seconds": all_labels.attrs["core_seconds"],
+                      "objects": sum(o["status"] == "ok" for o in all_labels.attrs["objects"])},
+           "points": points}
+    path.write_text(json.dumps(out, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()

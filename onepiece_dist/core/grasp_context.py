@@ -1,0 +1,44 @@
+"""What a crop in the gripper frame cannot know (issue 55): where down is and where the observed object's centre
+lies, both in the gripper frame. A crop alone cannot tell a grasp from above from one from the side, nor the lever
+arm a lifted object hangs on; these six numbers can.
+
+The context of a grasp, (6,) float32: gravity's unit direction in the gripper frame (u approach, v closing, w),
+then the observed object's centre minus the closing region's centre, in the gripper frame (m). Down is the support
+plane's normal turned over where a plane was found, else the cloud frame's -z. Fixed-order products only: the
+same bits on every CPU.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+CONTEXT_SIZE = 6
+WORLD_DOWN = np.array([0.0, 0.0, -1.0])
+
+
+def transposed_rotation(rot: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """``rot.T @ vector`` for (n, 3, 3) ``rot`` and (n, 3) or (3,) ``vectors``, in one fixed order of sums."""
+    v = np.broadcast_to(np.asarray(vectors, dtype=np.float64), (len(rot), 3))
+    return rot[:, 0, :] * v[:, 0, None] + rot[:, 1, :] * v[:, 1, None] + rot[:, 2, :] * v[:, 2, None]
+
+
+def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closing_depth: float) -> np.ndarray:
+    """(n, 6) float32 context of ``poses`` (n, 4, 4) gripper-to-cloud: ``down`` (3,) unit gravity and ``centre`` (3,)
+    the observed object's centre, both in the cloud's frame, seen from each gripper frame."""
+    poses = np.asarray(poses, dtype=np.float64)
+    if len(poses) == 0:
+        return np.zeros((0, CONTEXT_SIZE), np.float32)
+    rot = poses[:, :3, :3]
+    closing_centre = poses[:, :3, 3] + poses[:, :3, 0] * (closing_depth / 2)
+    gravity = transposed_rotation(rot, down)
+    offset = transposed_rotation(rot, np.asarray(centre, dtype=np.float64)[None] - closing_centre)
+    return np.concatenate([gravity, offset], axis=1).astype(np.float32)
+
+
+def object_centre(points: np.ndarray) -> np.ndarray:
+    """(3,) the observed object's centre: the middle of its points' bounding box (no sum: the same on every CPU,
+    and less pulled towards the side the camera sees most of)."""
+    points = np.asarray(points, dtype=np.float64)
+    if len(points) == 0:
+        return np.zeros(3)
+    return (points.min(axis=0) + points.max(axis=0)) / 2

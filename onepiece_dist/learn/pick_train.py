@@ -1,0 +1,169 @@
+"""A grasp network fitted on pick labels (store.pick_labels, issue 55): crops of the candidates a camera's view
+gives, each labelled by executing it on the table, with each grasp's context (gravity and the object's centre in
+the gripper frame) where the model reads it.
+
+Validation by object (never by grasp); early stopping on the validation AP; the reported ranking figure is the
+validation views' top-1: the share of views whose best-scored candidate picked. The gripper is symmetric under a
+half turn about its approach axis: each batch turns a seeded half of its grasps that way (points and context).
+Checkpoints hold plain values only (``weights_only`` loads them) and the crop record a planner checks.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from onepiece_dist.core.ranking import average_precision
+from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
+from onepiece_dist.store.pick_labels import PickLabels
+
+HALF_TURN = np.array([1.0, -1.0, -1.0], np.float32)  # (u, v, t) -> (u, -v, -t)
+
+
+@dataclass(frozen=True)
+class PickTrainOptions:
+    """How to fit: the model, the target (every trial held, or the share of trials that held), whether batches
+    are balanced (as many successes as failures drawn), epochs, patience, batch size, learning rate, the share
+    of objects held out for validation, the seed."""
+
+    model: str = "pointnet_context"
+    target: str = "every_trial"  # or "share"
+    balanced: bool = False
+    epochs: int = 40
+    patience: int = 8
+    batch_size: int = 128
+    learning_rate: float = 1e-3
+    validation: float = 0.1
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class EpochRecord:
+    epoch: int
+    train_loss: float
+    val_ap: float
+    val_view_top1: float
+
+
+@dataclass(frozen=True)
+class PickTrainResult:
+    """The best checkpoint, every epoch's record, the labels it saw, their success rate, the fit's seconds."""
+
+    checkpoint: Path
+    epochs: tuple[EpochRecord, ...]
+    labels: int
+    success_rate: float
+    seconds: float
+
+    @property
+    def best(self) -> EpochRecord:
+        return max(self.epochs, key=lambda e: (e.val_ap, -e.epoch))
+
+
+def split_by_object(labels: PickLabels, share: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row indices of the training and validation objects (a seeded ``share`` of the objects, at least one)."""
+    objects = np.unique(labels.object)
+    rng = np.random.default_rng([seed, 55])
+    held = rng.permutation(objects)[: max(1, int(round(share * len(objects))))]
+    val = np.isin(labels.object, held)
+    return np.flatnonzero(~val), np.flatnonzero(val)
+
+
+def _batch(labels: PickLabels, rows: np.ndarray, turn: np.ndarray | None = None) -> dict[str, torch.Tensor]:
+    points = labels.points[rows].astype(np.float32)
+    context = labels.context[rows].astype(np.float32)
+    if turn is not None and turn.any():
+        points[turn] *= HALF_TURN
+        context[turn, :3] *= HALF_TURN
+        context[turn, 3:] *= HALF_TURN
+    return {"points": torch.from_numpy(points), "context": torch.from_numpy(context)}
+
+
+def targets(labels: PickLabels, rows: np.ndarray, target: str, trials: int) -> np.ndarray:
+    if target == "share":
+        return (labels.held[rows].astype(np.float32) / trials).clip(0, 1)
+    return labels.success[rows].astype(np.float32)
+
+
+def score_rows(model: torch.nn.Module, labels: PickLabels, rows: np.ndarray, batch: int = 512) -> np.ndarray:
+    model.eval()
+    out = []
+    with torch.inference_mode():
+        for start in range(0, len(rows), batch):
+            out.append(torch.sigmoid(model(_batch(labels, rows[start:start + batch]))).numpy())
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+def view_top1(labels: PickLabels, rows: np.ndarray, scores: np.ndarray) -> float:
+    """Share of the views (object, view) among ``rows`` whose best-scored row picked."""
+    keys = labels.object[rows].astype(np.int64) * 100_000 + labels.view[rows]
+    hits = []
+    for key in np.unique(keys):
+        mine = np.flatnonzero(keys == key)
+        hits.append(bool(labels.success[rows[mine[np.argmax(scores[mine])]]]))
+    return float(np.mean(hits)) if hits else 0.0
+
+
+def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
+                         options: PickTrainOptions = PickTrainOptions()) -> PickTrainResult:
+    """Fit ``options.model`` on ``labels``; the best epoch's checkpoint is ``folder/best.pt``."""
+    start = time.perf_counter()
+    torch.manual_seed(options.seed)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    train, val = split_by_object(labels, options.validation, options.seed)
+    model = MODELS[options.model]()
+    optimiser = torch.optim.Adam(model.parameters(), lr=options.learning_rate)
+    trials = int(labels.attrs["spec"]["sim"]["label_trials"])
+    rng = np.random.default_rng([options.seed, 56])
+    records, best, bad = [], -1.0, 0
+    for epoch in range(options.epochs):
+        loss = _epoch(model, optimiser, labels, train, options, trials, rng)
+        scores = score_rows(model, labels, val)
+        record = EpochRecord(epoch, loss, average_precision(scores, labels.success[val]),
+                             view_top1(labels, val, scores))
+        records.append(record)
+        if record.val_ap > best:
+            best, bad = record.val_ap, 0
+            torch.save({"model": options.model, "state_dict": model.state_dict(), "crop": crop,
+                        "epoch": epoch, "val_ap": record.val_ap}, folder / "best.pt")
+        else:
+            bad += 1
+            if bad >= options.patience:
+                break
+    return PickTrainResult(folder / "best.pt", tuple(records), len(train), float(labels.success[train].mean()),
+                           time.perf_counter() - start)
+
+
+def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: PickTrainOptions, trials: int,
+           rng: np.random.Generator) -> float:
+    model.train()
+    order = _balanced_order(labels, rows, rng) if options.balanced else rng.permutation(rows)
+    losses = []
+    for start in range(0, len(order) - 1, options.batch_size):
+        chunk = order[start:start + options.batch_size]
+        if len(chunk) < 2:  # batch norm needs two
+            continue
+        batch = _batch(labels, chunk, rng.random(len(chunk)) < 0.5)
+        if options.model not in CONTEXT_MODELS:
+            batch.pop("context")
+        target = torch.from_numpy(targets(labels, chunk, options.target, trials))
+        loss = torch.nn.functional.binary_cross_entropy_with_logits(model(batch), target)
+        optimiser.zero_grad()
+        loss.backward()
+        optimiser.step()
+        losses.append(loss.item())
+    return float(np.mean(losses)) if losses else 0.0
+
+
+def _balanced_order(labels: PickLabels, rows: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """As many rows as ``rows``, half successes and half failures (each side drawn with replacement)."""
+    good, bad = rows[labels.success[rows]], rows[~labels.success[rows]]
+    if len(good) == 0 or len(bad) == 0:
+        return rng.permutation(rows)
+    half = len(rows) // 2
+    return rng.permutation(np.concatenate([rng.choice(good, half), rng.choice(bad, len(rows) - half)]))

@@ -1,0 +1,131 @@
+"""Labels made where the network is used (issue 55, docs/picks.md): each training object settled on the table and
+seen as the pick benchmark sees it (picks.views), a seeded subset of the planner's candidates on each view executed
+by the pick protocol; each label keeps the candidate's crop, its context, whether it picked and why not.
+
+One task per object, in this process or on the job's Ray worker pool; the labels go to ``pick_labels.zarr``
+(store.pick_labels) in object order, whatever order the workers finish in.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.errors import MeshRejected
+from onepiece_dist.job.runtime.actors import restartable_actor
+from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
+from onepiece_dist.job.runtime.ray_env import connect
+from onepiece_dist.job.runtime.registry import RegistryClient
+from onepiece_dist.objects import ObjectRef, load_object, resolve_source
+from onepiece_dist.picks.views import Executions, observe_view
+from onepiece_dist.plan.scorer import CropRecord
+from onepiece_dist.plan_spec import PickLabelSpec
+from onepiece_dist.sim.collision import load_simulated
+from onepiece_dist.store.pick_labels import FAILURE_CODES, LabelledObject, write_pick_labels
+
+
+def crop_record(spec: PickLabelSpec) -> CropRecord:
+    return CropRecord(spec.gripper, spec.voxel, spec.points_per_grasp, "pointnet_context")
+
+
+def label_object(spec: PickLabelSpec, ref: ObjectRef, index: int) -> LabelledObject:
+    """Every view of one object labelled; a bad object becomes a rejected result, never an exception."""
+    from onepiece_dist.sim.pick import pick_world
+
+    start = time.perf_counter()
+    try:
+        loaded = load_object(ref, spec.object_job())
+    except MeshRejected as err:
+        return LabelledObject.rejected(index, ref.name, err.reason)
+    world = pick_world(spec.gripper)
+    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+    parts = [_label_view(spec, world, loaded.mesh, view) for view in range(spec.views)]
+    parts = [p for p in parts if p is not None]
+    if not parts:
+        return LabelledObject.rejected(index, ref.name, "no view held a candidate", time.perf_counter() - start)
+    joined = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    return LabelledObject(index, ref.name, "ok", seconds=time.perf_counter() - start, **joined)
+
+
+def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.ndarray] | None:
+    seen = observe_view(spec, crop_record(spec), world, mesh, view)
+    proposals = seen.proposals
+    if proposals is None or len(proposals.poses) == 0:
+        return None
+    count = len(proposals.poses)
+    chosen = np.sort(seen.rng.permutation(count)[: spec.per_view])
+    executions = Executions(spec, world, mesh, seen.resting, view)
+    outcomes = [executions.run("view", i, proposals.poses[i]) for i in chosen]
+    return {"points": proposals.crops.points[chosen].astype(np.float16),
+            "context": proposals.crops.context[chosen].astype(np.float32),
+            "success": np.array([o.success for o in outcomes], bool),
+            "held": np.array([o.held for o in outcomes], np.int8),
+            "failure": np.array([FAILURE_CODES.index(o.failure) for o in outcomes], np.int8),
+            "view": np.full(len(chosen), view, np.int16),
+            "pose": proposals.poses[chosen].astype(np.float64)}
+
+
+class PickLabelWorker:
+    """One pybullet client per actor: labels objects. A plain class, testable without Ray."""
+
+    def __init__(self, spec: PickLabelSpec):
+        self.spec = spec
+
+    def label(self, ref: ObjectRef, index: int) -> LabelledObject:
+        return label_object(self.spec, ref, index)
+
+
+@dataclass
+class _PoolStatus:
+    job_id: str
+    retries: int = 0
+
+
+def run_pick_labels(spec: PickLabelSpec, address: str | None = None, in_process: bool = False) -> Path:
+    """Label every object of ``spec.objects``; write ``pick_labels.zarr`` into ``spec.output``; return its path."""
+    refs = resolve_source(spec.objects)
+    Path(spec.output).mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    results = _run_here(spec, refs) if in_process else _run_on_ray(spec, refs, address)
+    path = Path(spec.output) / "pick_labels.zarr"
+    core_seconds = sum(r.seconds for r in results)
+    write_pick_labels(path, results, spec.model_dump(mode="json"), core_seconds, time.perf_counter() - start)
+    return path
+
+
+def _run_here(spec: PickLabelSpec, refs: list[ObjectRef]) -> list[LabelledObject]:
+    simulate, results = PinnedSimulation(), []
+    try:
+        for index, ref in enumerate(refs):
+            results.append(simulate(label_object, spec, ref, index))
+    finally:
+        simulate.close()
+    return results
+
+
+def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None) -> list[LabelledObject]:
+    import ray
+
+    from onepiece_dist.job.runtime.ray_runner import WorkerPool, worker_count
+
+    started_here = not ray.is_initialized()
+    connect(address)
+    job_id = "pick-labels-" + hashlib.blake2b(spec.model_dump_json().encode(), digest_size=6).hexdigest()
+    actors = [restartable_actor(PickLabelWorker, f"{job_id}-{k}", num_cpus=1, scheduling_strategy="SPREAD")
+              .remote(spec) for k in range(worker_count(spec.workers, len(refs)))]
+    try:
+        pool = WorkerPool(actors, RegistryClient(), _PoolStatus(job_id), lambda result: None, "label",
+                          lambda i, ref, reason: LabelledObject.rejected(i, ref.name, reason))
+        return pool.run(refs)
+    finally:
+        for actor in actors:
+            ray.kill(actor)
+        if started_here:
+            ray.shutdown()
+
+
+__all__ = ["PickLabelWorker", "crop_record", "label_object", "run_pick_labels"]

@@ -1,0 +1,109 @@
+"""Pick labels on disk (``pick_labels.zarr``, docs/picks.md): candidates of settled, seen training objects executed
+by the pick protocol, one row per execution, in object then view order. Readable with zarr and numpy alone:
+
+    points (n, P, 3) float16  the crop in the gripper frame (m)
+    context (n, 6) float32    gravity and the object-centre offset in the gripper frame (core.grasp_context)
+    success (n,) bool         every trial held
+    held (n,) int8            trials that held
+    failure (n,) int8         index into the root attribute ``failure_codes`` ('' for a pick)
+    object (n,) int32, view (n,) int16, pose (n, 4, 4) float64 (gripper to world)
+
+Root attributes: ``spec`` (the PickLabelSpec), ``objects`` (name, status, reason, rows, seconds per object),
+``failure_codes``, ``core_seconds`` and ``wall_seconds``. One writer: the process that ran the labelling.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from onepiece_dist.errors import StoreError
+from onepiece_dist.store.codecs import write_array
+
+FAILURE_CODES = ("", "start_collision", "no_contact", "slipped_lifting", "dropped_shaking")
+COLUMNS = ("points", "context", "success", "held", "failure", "view", "pose")
+
+
+def _empty(shape: tuple[int, ...], dtype) -> np.ndarray:
+    return np.zeros(shape, dtype)
+
+
+@dataclass(frozen=True)
+class LabelledObject:
+    """One object's labels (its rows of the columns), or ``status`` 'rejected' with ``reason``."""
+
+    index: int
+    name: str
+    status: str
+    reason: str = ""
+    seconds: float = 0.0
+    points: np.ndarray = field(default_factory=lambda: _empty((0, 1, 3), np.float16))
+    context: np.ndarray = field(default_factory=lambda: _empty((0, 6), np.float32))
+    success: np.ndarray = field(default_factory=lambda: _empty((0,), bool))
+    held: np.ndarray = field(default_factory=lambda: _empty((0,), np.int8))
+    failure: np.ndarray = field(default_factory=lambda: _empty((0,), np.int8))
+    view: np.ndarray = field(default_factory=lambda: _empty((0,), np.int16))
+    pose: np.ndarray = field(default_factory=lambda: _empty((0, 4, 4), np.float64))
+
+    @classmethod
+    def rejected(cls, index: int, name: str, reason: str, seconds: float = 0.0) -> LabelledObject:
+        return cls(index, name, "rejected", reason, seconds)
+
+    @property
+    def rows(self) -> int:
+        return len(self.success)
+
+
+@dataclass(frozen=True)
+class PickLabels:
+    """Every row of a ``pick_labels.zarr``, read back."""
+
+    points: np.ndarray
+    context: np.ndarray
+    success: np.ndarray
+    held: np.ndarray
+    failure: np.ndarray
+    object: np.ndarray
+    view: np.ndarray
+    pose: np.ndarray
+    attrs: dict
+
+    def __len__(self) -> int:
+        return len(self.success)
+
+    def subset(self, rows: np.ndarray) -> PickLabels:
+        return PickLabels(self.points[rows], self.context[rows], self.success[rows], self.held[rows],
+                          self.failure[rows], self.object[rows], self.view[rows], self.pose[rows], self.attrs)
+
+
+def write_pick_labels(path: str | os.PathLike, objects: list[LabelledObject], spec: dict, core_seconds: float,
+                      wall_seconds: float) -> None:
+    """Write every object's rows (object order) and the attributes; replaces what was at ``path``."""
+    import zarr
+
+    done = sorted((o for o in objects if o.status == "ok" and o.rows), key=lambda o: o.index)
+    group = zarr.open_group(str(path), mode="w")
+    for name in COLUMNS:
+        parts = [getattr(o, name) for o in done]
+        write_array(group, name, np.concatenate(parts) if parts else getattr(LabelledObject(0, "", ""), name))
+    rows = [np.full(o.rows, o.index, np.int32) for o in done]
+    write_array(group, "object", np.concatenate(rows) if rows else np.zeros(0, np.int32))
+    group.attrs.update({
+        "spec": spec, "failure_codes": list(FAILURE_CODES), "core_seconds": round(core_seconds, 1),
+        "wall_seconds": round(wall_seconds, 1),
+        "objects": [{"index": o.index, "name": o.name, "status": o.status, "reason": o.reason, "rows": o.rows,
+                     "seconds": round(o.seconds, 2)} for o in sorted(objects, key=lambda o: o.index)]})
+
+
+def read_pick_labels(path: str | os.PathLike) -> PickLabels:
+    """Every row of the pick labels at ``path``; :class:`StoreError` naming the path when it is none."""
+    import zarr
+
+    try:
+        group = zarr.open_group(str(path), mode="r")
+        arrays = {name: np.asarray(group[name][...]) for name in (*COLUMNS, "object")}
+    except (FileNotFoundError, KeyError) as err:
+        raise StoreError(f"{path}: not a pick-labels store ({err}): make one with run_pick_labels") from None
+    return PickLabels(**arrays, attrs=dict(group.attrs))

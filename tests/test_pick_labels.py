@@ -1,0 +1,155 @@
+"""A network that picks (issue 55): the top-down baseline, the oracle over a view's candidates, failure reasons,
+each grasp's context (gravity and the object's centre in the gripper frame), labels made by executing a view's
+candidates on the table, and a network fitted on them that the planner loads."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from onepiece_dist.core.grasp_context import grasp_context, object_centre
+from onepiece_dist.core.mesh import box_mesh
+from onepiece_dist.core.top_down import top_down_grasps
+from onepiece_dist.errors import CloudRejected
+from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
+from onepiece_dist.picks.runner import first_failures
+from onepiece_dist.core.voxel import crop_regions
+from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.plan_spec import PickLabelSpec, PickSpec
+from onepiece_dist.spec import GripperSpec
+from tests.test_picks import box_on_table  # noqa: F401 (a fixture)
+from tests.test_plan import save_checkpoint
+
+pytestmark = pytest.mark.sim
+
+
+def test_the_context_says_where_down_is_and_where_the_object_lies_in_the_gripper_frame():
+    from onepiece_dist.core.frames import pose_from_axes
+
+    above = pose_from_axes(np.array([[0.0, 0, 0.2]]), np.array([[0, 0, -1.0]]), np.array([[1.0, 0, 0]]))
+    side = pose_from_axes(np.array([[-0.2, 0, 0.0]]), np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+    context = grasp_context(np.concatenate([above, side]), np.zeros(3), np.array([0, 0, -1.0]), 0.04)
+    assert np.allclose(context[0, :3], [1, 0, 0])  # from above: gravity along the approach
+    assert abs(context[1, 0]) < 1e-6 and np.isclose(abs(context[1, 2]), 1)  # from the side: across it
+    assert np.allclose(context[0, 3:], [0.2 - 0.02, 0, 0], atol=1e-6)  # the centre lies ahead, beyond the bite
+    assert np.allclose(object_centre(np.array([[0, 0, 0], [1.0, 2, 4], [0.5, 0.5, 0.5]])), [0.5, 1, 2])
+
+
+def test_the_top_down_baseline_picks_a_box_on_the_table(box_on_table):  # noqa: F811
+    from onepiece_dist.sim.pick import execute_pick
+
+    world, resting, noise = box_on_table
+    mesh = box_mesh((0.04, 0.03, 0.06))
+    surface = (resting[:3, :3] @ mesh.vertices.T).T + resting[:3, 3]
+    top = surface[surface[:, 2] > surface[:, 2].max() - 1e-4]
+    poses = top_down_grasps(np.concatenate([surface, top]), np.array([0, 0, -1.0]), world.spec)
+    assert len(poses) == 3 and np.allclose(poses[:, :3, 0], [0, 0, -1])  # straight down
+    widths = [np.ptp(surface @ poses[k, :3, 1]) for k in range(2)]
+    assert widths[0] < widths[1]  # the first closes across the narrow axis
+    picked = execute_pick(world, poses[0], resting, noise, np.random.default_rng(0))
+    assert picked.success, picked.failure
+
+
+def _view(attempts, failures, pool=(0, 0)) -> ViewPicks:
+    return ViewPicks(0, 0.6, 45.0, 1000, 50, attempts, failures, *pool)
+
+
+def test_first_failures_are_counted_by_reason():
+    views = (_view({"network": (False, True)}, {"network": ("slipped_lifting", "")}),
+             _view({"network": (False,)}, {"network": ("start_collision",)}),
+             _view({"network": ()}, {"network": ()}),
+             _view({"network": (True,)}, {"network": ("",)}))
+    counts = first_failures([ObjectPicks(0, "a", "ok", views)], "network")
+    assert counts == {"no_grasp": 1, "slipped_lifting": 1, "start_collision": 1}
+
+
+@pytest.mark.slow
+def test_the_oracle_is_at_least_every_chooser_on_the_same_views(tmp_path):
+    from onepiece_dist.objects import resolve_source
+
+    checkpoint = save_checkpoint(tmp_path / "net.pt")
+    spec = PickSpec(objects="primitives[0:1]", checkpoint=str(checkpoint), output=str(tmp_path), views=2,
+                    attempts=2, pictures=0, mesh_candidates=40, plan={"candidates": 96},
+                    sim={"label_trials": 2, "success": "every_trial"})
+    picks = pick_object(spec, resolve_source(spec.objects)[0], 0)
+    assert picks.status == "ok"
+    for view in picks.views:
+        assert view.pool_executed == view.candidates > 0
+        for method in ("network", "random", "analytic"):
+            assert view.within("oracle", 2) >= view.within(method, 2)
+            assert view.first("oracle") >= view.first(method)
+        assert view.first("oracle") == (view.pool_picked > 0)
+        assert set(view.failures["top_down"]) <= {"", "start_collision", "no_contact", "slipped_lifting",
+                                                  "dropped_shaking"}
+
+
+@pytest.fixture(scope="module")
+def pick_labels(tmp_path_factory):
+    from onepiece_dist.picks.pick_labels import run_pick_labels
+    from onepiece_dist.store.pick_labels import read_pick_labels
+
+    folder = tmp_path_factory.mktemp("labels")
+    spec = PickLabelSpec(objects="primitives[0:3]", output=str(folder), views=2, per_view=12,
+                         plan={"candidates": 96}, sim={"label_trials": 2, "success": "every_trial"})
+    return spec, read_pick_labels(run_pick_labels(spec, in_process=True))
+
+
+@pytest.mark.slow
+def test_a_planned_crop_and_context_are_the_stored_labels_of_the_same_pose_and_view(pick_labels):
+    """The planner's crop of the view's cloud at a stored pose holds every stored point, and its context is the
+    stored context."""
+    from onepiece_dist.objects import load_object, resolve_source
+    from onepiece_dist.picks.pick_labels import crop_record
+    from onepiece_dist.picks.views import observe_view
+    from onepiece_dist.sim.collision import load_simulated
+    from onepiece_dist.sim.pick import PickWorld
+
+    spec, labels = pick_labels
+    assert len(labels) > 0 and labels.attrs["objects"][0]["status"] == "ok"
+    ref = resolve_source(spec.objects)[0]
+    loaded = load_object(ref, spec.object_job())
+    world = PickWorld(spec.gripper)
+    try:
+        load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+        seen = observe_view(spec, crop_record(spec), world, loaded.mesh, 1)
+    finally:
+        world.close()
+    rows = np.flatnonzero((labels.object == 0) & (labels.view == 1))
+    assert len(rows) > 0
+    poses = labels.pose[rows]
+    objects = seen.proposals.object_points
+    down = -seen.proposals.plane.normal
+    assert np.array_equal(grasp_context(poses, object_centre(objects), down, spec.gripper.closing_depth),
+                          labels.context[rows])
+    record = crop_record(spec)
+    _, counts, inside = crop_regions(objects, poses, record.grid_shape(), spec.voxel.resolution, keep_points=True)
+    for k, row in enumerate(rows):
+        stored = labels.points[row].astype(np.float64)
+        planned = np.asarray(inside[k], np.float64).astype(np.float16).astype(np.float64)
+        assert counts[k] >= spec.plan.min_points
+        nearest = np.abs(stored[:, None, :] - planned[None]).max(axis=2).min(axis=1)
+        assert nearest.max() == 0.0  # every stored point is one of the planner's crop of that pose
+
+
+@pytest.mark.slow
+def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick_labels, tmp_path):
+    from onepiece_dist.learn.pick_train import PickTrainOptions, train_on_pick_labels
+    from onepiece_dist.plan.scorer import Crops
+
+    spec, labels = pick_labels
+    assert set(np.unique(labels.failure)) <= set(range(5)) and labels.success.any() and not labels.success.all()
+    crop = {"gripper": spec.gripper.model_dump(mode="json"), "voxel": spec.voxel.model_dump(mode="json"),
+            "points_per_grasp": spec.points_per_grasp}
+    result = train_on_pick_labels(labels, tmp_path, crop, PickTrainOptions(epochs=2, validation=0.34))
+    assert len(result.epochs) == 2 and result.checkpoint.is_file()
+    torch.load(result.checkpoint, weights_only=True)
+    scorer = GraspScorer(result.checkpoint, GripperSpec(), device="cpu")
+    n = 5
+    with_context = Crops(np.zeros((n, 1), np.uint8), np.full(n, 300), labels.points[:n], labels.context[:n])
+    scores = scorer.score(with_context)
+    assert scores.shape == (n,) and np.all((scores >= 0) & (scores <= 1))
+    with pytest.raises(CloudRejected, match="context"):
+        scorer.score(Crops(with_context.codes, with_context.counts, with_context.points))
