@@ -40,18 +40,33 @@ def _gripper(path: Path | None):
         raise typer.Exit(EXIT_USAGE) from None
 
 
-def _observation(cloud: Path, intrinsics: str | None, viewpoint: str | None):
+def _observation(cloud: Path, intrinsics: str | None, viewpoint: str | None, depth_scale: float | None = None,
+                 camera_pose: Path | None = None, workspace: str | None = None):
+    """The observation to plan on, in the camera's frame when a camera pose is given (then also that pose), else
+    in the cloud's own frame (and None)."""
     import numpy as np
 
-    from onepiece_dist.plan import depth_to_cloud, read_cloud
+    from onepiece_dist.plan import read_cloud
+    from onepiece_dist.plan.camera_files import (
+        crop_to_workspace,
+        depth_observation,
+        read_camera_pose,
+        read_intrinsics,
+        read_workspace,
+        with_known_up,
+    )
 
     view = _floats(viewpoint, 3, "--viewpoint")
-    if intrinsics is None:
-        return read_cloud(cloud, None if view is None else np.array(view))
-    fx, fy, cx, cy = _floats(intrinsics, 4, "--intrinsics")
-    if cloud.suffix.lower() != ".npy" or not cloud.is_file():
-        raise CloudRejected(f"{cloud}: a depth image is an (H, W) .npy of metres")
-    return depth_to_cloud(np.load(cloud, allow_pickle=False), fx, fy, cx, cy, source=str(cloud))
+    pose = None if camera_pose is None else read_camera_pose(camera_pose)
+    if intrinsics is not None:
+        observation = depth_observation(cloud, read_intrinsics(intrinsics), depth_scale)
+    else:
+        observation = read_cloud(cloud, np.array(view) if view else (np.zeros(3) if pose is not None else None))
+    if pose is not None:
+        observation = with_known_up(observation, pose)
+    if workspace is not None:
+        observation = crop_to_workspace(observation, *read_workspace(workspace), pose)
+    return observation, pose
 
 
 def register(app: typer.Typer) -> None:
@@ -61,12 +76,21 @@ def register(app: typer.Typer) -> None:
 
 def grasp(
     cloud: Annotated[Path, typer.Argument(help="Point cloud (PLY, PCD, or NPY of (N, 3) metres), or with "
-                                               "--intrinsics a depth image (NPY of (H, W) metres).")],
-    checkpoint: Annotated[Path, typer.Option(help="The network (best.pt of a train stage).")],
+                                               "--intrinsics a depth image (16-bit PNG, or NPY of (H, W)).")],
+    checkpoint: Annotated[Path | None, typer.Option(help="The network (best.pt of a train stage); default: the "
+                                                         "shipped network (docs/planning.md).")] = None,
     out: Annotated[Path, typer.Option(help="Folder for grasps.json and grasps.png.")] = Path("onepiece-grasps"),
     top: Annotated[int, typer.Option(help="Grasps to return.")] = 10,
     candidates: Annotated[int, typer.Option(help="Candidates sampled on the cloud.")] = 500,
-    intrinsics: Annotated[str | None, typer.Option(help="fx,fy,cx,cy: read CLOUD as a depth image.")] = None,
+    intrinsics: Annotated[str | None, typer.Option(help="fx,fy,cx,cy or a JSON file ({fx, fy, cx, cy} or a 3x3 "
+                                                        "K): read CLOUD as a depth image.")] = None,
+    depth_scale: Annotated[float | None, typer.Option(help="Metres per depth unit (default: 0.001 for a PNG, 1 for "
+                                                           "an NPY).")] = None,
+    camera_pose: Annotated[Path | None, typer.Option(help="JSON camera-to-base pose ({matrix: 4x4} or position + "
+                                                          "quaternion x,y,z,w): grasps come out in the base "
+                                                          "frame.")] = None,
+    workspace: Annotated[str | None, typer.Option(help="xmin,ymin,zmin,xmax,ymax,zmax: crop the cloud to this box "
+                                                       "(the output frame) first.")] = None,
     viewpoint: Annotated[str | None, typer.Option(help="x,y,z: the camera's position in the cloud's frame "
                                                        "(normals face it; default: a depth image's camera, "
                                                        "else unknown).")] = None,
@@ -81,18 +105,26 @@ def grasp(
 ) -> None:
     """Plan grasps on a depth camera's cloud: the top grasps by the network, written as JSON and drawn as PNG."""
     from onepiece_dist.plan import GraspScorer, plan_grasps, write_plan
+    from onepiece_dist.plan.camera_files import in_frame
+    from onepiece_dist.plan.shipped import shipped_network, shipped_summary
     from onepiece_dist.plan_spec import PlanSpec
 
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto")
-        observation = _observation(cloud, intrinsics, viewpoint)
-        scorer = GraspScorer(checkpoint, _gripper(gripper), spec.device)
+        observation, pose = _observation(cloud, intrinsics, viewpoint, depth_scale, camera_pose, workspace)
+        scorer = GraspScorer(checkpoint or shipped_network(), _gripper(gripper), spec.device)
         plan = plan_grasps(observation, scorer, spec)
+        if pose is not None:  # planned in the camera's frame, answered in the base frame
+            plan, observation = plan.transformed(pose), in_frame(observation, pose)
     except (OnePieceError, ValueError) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
-    json_path, png = write_plan(plan, observation, scorer.gripper, out, extra={"checkpoint": str(checkpoint)})
+    if checkpoint is None:
+        err(shipped_summary())
+    extra = {"checkpoint": str(checkpoint) if checkpoint else "shipped", "output_frame": "the robot's base frame"
+             if camera_pose else "the cloud's frame"}
+    json_path, png = write_plan(plan, observation, scorer.gripper, out, extra=extra)
     if as_json:
         typer.echo(json_path.read_text())
     else:

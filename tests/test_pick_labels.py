@@ -13,10 +13,10 @@ import torch
 from onepiece_dist.core.grasp_context import grasp_context, object_centre
 from onepiece_dist.core.mesh import box_mesh
 from onepiece_dist.core.top_down import top_down_grasps
+from onepiece_dist.core.voxel import crop_regions
 from onepiece_dist.errors import CloudRejected
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.picks.runner import first_failures
-from onepiece_dist.core.voxel import crop_regions
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan_spec import PickLabelSpec, PickSpec
 from onepiece_dist.spec import GripperSpec

@@ -20,11 +20,13 @@ CLOUD_SUFFIXES = (".ply", ".pcd", ".npy")
 @dataclass(frozen=True)
 class Observation:
     """points (m, 3) float64 in the frame grasps are returned in (metres); viewpoint (3,) the camera's position in
-    that frame (normals face it), or None when unknown; source names where it came from."""
+    that frame (normals face it), or None when unknown; source names where it came from; up (3,) the frame's up
+    where it is known (a robot's base frame: +z), else None."""
 
     points: np.ndarray
     viewpoint: np.ndarray | None
     source: str
+    up: np.ndarray | None = None
 
 
 def check_cloud(points: np.ndarray, source: str) -> np.ndarray:
@@ -87,8 +89,8 @@ def depth_to_cloud(depth: np.ndarray, fx: float, fy: float, cx: float, cy: float
     rows, cols = np.nonzero(np.isfinite(depth) & (depth > 0))
     z = depth[rows, cols]
     points = np.stack([(cols - cx) * z / fx, (rows - cy) * z / fy, z], axis=1)
-    viewpoint = np.zeros(3)
-    if camera_pose is not None:
+    viewpoint, up = np.zeros(3), None
+    if camera_pose is not None:  # the robot's base frame: z is up
         pose = np.asarray(camera_pose, dtype=np.float64)
-        points, viewpoint = transform_points(points, pose), pose[:3, 3].copy()
-    return Observation(check_cloud(points, source), viewpoint, source)
+        points, viewpoint, up = transform_points(points, pose), pose[:3, 3].copy(), np.array([0.0, 0.0, 1.0])
+    return Observation(check_cloud(points, source), viewpoint, source, up)

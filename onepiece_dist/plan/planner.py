@@ -13,16 +13,21 @@ import numpy as np
 from onepiece_dist.core.cloud_grasps import (
     CloudCandidates,
     SupportPlane,
-    fit_support_plane,
+    dot3,
     sample_cloud_grasps,
     suppress_near,
     voxel_downsample,
 )
+from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.hand_frames import to_panda
+from onepiece_dist.core.support_check import support_plane
+from onepiece_dist.errors import CloudRejected
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
 from onepiece_dist.plan_spec import PlanSpec
+
+PREGRASP = 0.05  # m back along the approach, where the hand opens before it moves in (the pick benchmark's)
 
 
 @dataclass(frozen=True)
@@ -40,10 +45,21 @@ class PlannedGrasp:
     score: float
     points: int
 
+    def pregrasp(self) -> np.ndarray:
+        """(4, 4) the Panda hand PREGRASP back along its approach (its z) from ``panda_pose``."""
+        out = self.panda_pose.copy()
+        out[:3, 3] = out[:3, 3] - PREGRASP * out[:3, 2]
+        return out
+
     def to_json(self) -> dict:
+        pregrasp = self.pregrasp()
         return {"rank": self.rank, "score": round(self.score, 6), "opening": self.opening,
                 "observed_width": round(self.observed_width, 6), "points": self.points,
-                "pose": np.round(self.pose, 9).tolist(), "panda_pose": np.round(self.panda_pose, 9).tolist()}
+                "pose": np.round(self.pose, 9).tolist(), "panda_pose": np.round(self.panda_pose, 9).tolist(),
+                "position": np.round(self.panda_pose[:3, 3], 9).tolist(),
+                "quaternion": np.round(quat_from_matrix(self.panda_pose[:3, :3]), 9).tolist(),
+                "pregrasp": {"position": np.round(pregrasp[:3, 3], 9).tolist(),
+                             "quaternion": np.round(quat_from_matrix(pregrasp[:3, :3]), 9).tolist()}}
 
 
 @dataclass(frozen=True)
@@ -71,12 +87,26 @@ class GraspPlan:
     plane: SupportPlane | None
     seconds: dict[str, float]
 
+    def transformed(self, pose: np.ndarray) -> GraspPlan:
+        """The same plan in another frame: ``pose`` (4, 4) maps the planning frame (a camera's) into it (a robot's
+        base). Planning in the camera's frame and moving the result keeps the grasps those of the camera's cloud."""
+        pose = np.asarray(pose, dtype=np.float64)
+        grasps = tuple(dataclasses.replace(g, pose=compose_poses(pose, g.pose),
+                                           panda_pose=compose_poses(pose, g.panda_pose)) for g in self.grasps)
+        plane = None
+        if self.plane is not None:
+            normal = apply_rotation(pose[:3, :3], self.plane.normal)
+            plane = SupportPlane(normal, self.plane.offset - float(dot3(normal, pose[:3, 3])), self.plane.inliers)
+        return dataclasses.replace(self, grasps=grasps, plane=plane)
+
     def to_json(self) -> dict:
         plane = None if self.plane is None else {"normal": np.round(self.plane.normal, 9).tolist(),
                                                  "offset": round(self.plane.offset, 9),
                                                  "points": int(self.plane.inliers.sum())}
-        return {"source": self.source, "frame": "the cloud's frame; pose: ours (u approach, v closing, origin at the "
-                "palm centre); panda_pose: the Franka Panda hand (z approach, x closing, origin at the hand base)",
+        return {"source": self.source, "frame": "the cloud's frame (the robot's base with a camera pose); pose: "
+                "ours (u approach, v closing, origin at the palm centre); panda_pose, and position + quaternion "
+                "(x, y, z, w): the Franka Panda hand (z approach, x closing, origin at the hand base); pregrasp: "
+                "that hand 5 cm back along z",
                 "counts": self.counts, "support_plane": plane,
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "grasps": [g.to_json() for g in self.grasps]}
@@ -90,7 +120,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     plane = None
     if spec.support_plane == "auto":
         up = None if observation.viewpoint is None else observation.viewpoint - points.mean(axis=0)
-        plane = fit_support_plane(points, rng, up=up)
+        plane = support_plane(points, rng, towards=up, up=observation.up)
     objects = points[~plane.inliers] if plane is not None else points
     table = points[plane.inliers] if plane is not None else np.zeros((0, 3))
     thin, thin_table = _thin(objects, spec.downsample), _thin(table, spec.downsample)
@@ -131,11 +161,25 @@ def _observed_width(points: np.ndarray) -> float:
     return float(v.max() - v.min()) if len(v) else 0.0
 
 
+MIN_OBJECT_POINTS = 20  # off the support plane: fewer is noise on the table, not an object
+
+
+def _refuse_plane_alone(observation: Observation, proposals: Proposals) -> None:
+    plane = proposals.plane
+    if plane is None or len(proposals.object_points) >= MIN_OBJECT_POINTS:
+        return
+    normal = ", ".join(f"{v:+.2f}" for v in plane.normal)
+    raise CloudRejected(f"{observation.source}: no object above the plane: {int(plane.inliers.sum())} of "
+                        f"{len(observation.points)} points lie on one plane (normal {normal}) and "
+                        f"{len(proposals.object_points)} off it: is the object in view, or already taken?")
+
+
 def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None) -> GraspPlan:
     """The ranked grasps on ``observation`` by ``scorer``'s network (seeded by ``spec.seed``; default PlanSpec)."""
     spec = spec or PlanSpec()
     rng = np.random.default_rng([spec.seed, 49])
     proposals = propose(observation, scorer.record, spec, rng)
+    _refuse_plane_alone(observation, proposals)
     clock = time.perf_counter()
     scores = scorer.score(proposals.crops, spec.batch_size)
     scored = time.perf_counter()

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.sim.world import quat_from_matrix
+from onepiece_dist.core.frames import quat_from_matrix
 from onepiece_dist.spec import GripperSpec
 
 PANDA_FINGER_JOINTS = 0.0584  # m along the hand's z

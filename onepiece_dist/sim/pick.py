@@ -14,7 +14,7 @@ import numpy as np
 import pybullet as pb
 
 from onepiece_dist.core import portable
-from onepiece_dist.core.frames import compose_poses, perturb_pose, transform_points
+from onepiece_dist.core.frames import compose_poses, perturb_pose, quat_from_matrix, transform_points
 from onepiece_dist.sim.trials import (
     LabelNoise,
     close_fingers,
@@ -24,7 +24,7 @@ from onepiece_dist.sim.trials import (
     move_gripper,
 )
 from onepiece_dist.sim.views import Camera, back_project, camera_at, depth_image
-from onepiece_dist.sim.world import SimWorld, matrix_from_pose, quat_from_matrix
+from onepiece_dist.sim.world import SimWorld, matrix_from_pose
 from onepiece_dist.spec import GripperSpec
 
 TABLE_HALF = 0.5  # m: the table's half width

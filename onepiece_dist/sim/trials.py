@@ -17,8 +17,8 @@ import numpy as np
 import pybullet as pb
 
 from onepiece_dist.core import portable
-from onepiece_dist.core.frames import apply_rotation, compose_poses, invert_poses, perturb_pose
-from onepiece_dist.sim.world import SimWorld, quat_from_matrix
+from onepiece_dist.core.frames import apply_rotation, compose_poses, invert_poses, perturb_pose, quat_from_matrix
+from onepiece_dist.sim.world import SimWorld
 from onepiece_dist.spec import SimSpec
 
 CLOSE_SPEED = 0.25  # m/s per finger

@@ -38,22 +38,6 @@ class BodyIds:
     com: np.ndarray  # (3,) object centre of mass in its mesh frame
 
 
-def quat_from_matrix(rot: np.ndarray) -> list[float]:
-    """(3, 3) rotation -> pybullet quaternion [x, y, z, w]."""
-    m = rot
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * np.sqrt(trace + 1.0)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s]
-    else:
-        i = int(np.argmax(np.diag(m)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * np.sqrt(1.0 + m[i, i] - m[j, j] - m[k, k])
-        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / s]
-        q[i], q[j], q[k] = 0.25 * s, (m[j, i] + m[i, j]) / s, (m[k, i] + m[i, k]) / s
-    return [float(x) for x in q]
-
-
 def matrix_from_pose(position, quaternion) -> np.ndarray:
     pose = np.eye(4)
     pose[:3, :3] = np.reshape(pb.getMatrixFromQuaternion(quaternion), (3, 3))

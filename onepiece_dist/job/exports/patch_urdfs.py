@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.frames import quat_from_matrix
 from onepiece_dist.errors import MissingAssembly
 from onepiece_dist.job.exports.grasp_files import ExportFolder
 from onepiece_dist.job.stages.assemble import URDF_TEMPLATE, solid_of_pieces, write_pieces_obj
@@ -35,8 +36,6 @@ def export_patches(path: str | os.PathLike, out: str | os.PathLike) -> list[Path
     """``out/patches/patch_K.urdf`` (+ its OBJ of convex pieces, one ``o`` group each) per patch with pieces, and
     ``out/scene.json``: for each, the URDF, its pose on the one object (4x4 and position + xyzw quaternion), mass,
     centre of mass and source object. Returns the files written."""
-    from onepiece_dist.sim.world import quat_from_matrix
-
     reader = DatasetReader(path)
     if not reader.has("assembled/placement"):
         raise MissingAssembly(f"{path}: no assembled object (run the assemble stage)")

@@ -1,0 +1,91 @@
+"""The pick learning curve and the design trials on docs/picks.md, from results/pick_curve.json
+(benchmarks/experiments/pick_curve.py), and its picture docs/picks/curve.png drawn from the same figures, the
+heuristics and the oracle of results/picks.json drawn flat beside it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+PICTURE = ROOT / "docs" / "picks" / "curve.png"
+DESIGN_WORDS = {
+    "context": "crop + context (gravity, object offset in the gripper frame), every-trial target",
+    "crop_only": "crop alone (no context), every-trial target",
+    "context_balanced": "crop + context, balanced batches",
+    "context_share": "crop + context, target: the share of trials that held",
+}
+FLAT = ("random", "analytic", "top_down", "oracle")
+
+
+def _pct(value: float) -> str:
+    return f"{100 * value:.0f}%"
+
+
+def _first(point: dict) -> dict:
+    return point["picks"]["methods"]["network"]
+
+
+def curve_section(curve: dict, picks: dict | None) -> list[str]:
+    labels = curve["labels"]
+    spec = labels["spec"]
+    rows = [f"| {p['design']} | {p['labels']} | {p['core_seconds']:.0f} | {p['best_epoch']['val_ap']:.2f} | "
+            f"{p['best_epoch']['val_view_top1']:.2f} | {_pct(_first(p)['first_attempt'])} "
+            f"[{_pct(_first(p)['interval'][0])}, {_pct(_first(p)['interval'][1])}] |"
+            for p in sorted(curve["points"], key=lambda p: (p["design"], p["labels"]))]
+    designs = sorted({p["design"] for p in curve["points"]})
+    lines = ["## The pick learning curve: `" + curve["command"] + "`", "",
+             f"{curve['date']}, {curve['machine']}. Pick labels: {labels['rows']} executions on {labels['objects']} "
+             f"training objects (`{spec['objects']}`), {spec['views']} views each, {spec['per_view']} of each view's "
+             f"candidates executed by the pick protocol (success rate {labels['success_rate']:.2f}), "
+             f"{labels['core_seconds']:.0f} core-seconds. Each point: a network fitted on a seeded random subset of "
+             "the labels (validation: 10% of the objects), judged by first-attempt picks on the household set "
+             "(network chooser alone, same views as below). Core-seconds: the labels' share of the labelling plus "
+             "the fit.", "", "![pick learning curve](picks/curve.png)", "",
+             "| design | labels | core-seconds | val AP | val view top-1 | household first attempt [95% CI] |",
+             "| --- | --- | --- | --- | --- | --- |", *rows, "", "Designs tried:", ""]
+    lines += [f"- `{d}`: {DESIGN_WORDS.get(d, d)}{_design_verdict(curve, d)}" for d in designs]
+    draw_curve(curve, picks)
+    return lines
+
+
+def _design_verdict(curve: dict, design: str) -> str:
+    mine = sorted((p for p in curve["points"] if p["design"] == design), key=lambda p: p["labels"])
+    largest = mine[-1]
+    return f"; at {largest['labels']} labels it picks {_pct(_first(largest)['first_attempt'])}."
+
+
+def draw_curve(curve: dict, picks: dict | None) -> None:
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=100)
+    for design in sorted({p["design"] for p in curve["points"]}):
+        mine = sorted((p for p in curve["points"] if p["design"] == design), key=lambda p: p["labels"])
+        xs = [p["labels"] for p in mine]
+        ys = [100 * _first(p)["first_attempt"] for p in mine]
+        low = [100 * _first(p)["interval"][0] for p in mine]
+        high = [100 * _first(p)["interval"][1] for p in mine]
+        ax.plot(xs, ys, marker="o", label=design)
+        ax.fill_between(xs, low, high, alpha=0.12)
+    if picks is not None:
+        household = next(s for s in picks["sets"] if s["name"] == "household")
+        for m in household["methods"]:
+            if m["method"] in FLAT:
+                ax.axhline(100 * m["first_attempt"], linestyle="--", linewidth=1, color="grey")
+                ax.text(ax.get_xlim()[0], 100 * m["first_attempt"] + 1, m["method"], fontsize=7, color="grey")
+    ax.axhline(85, linestyle=":", color="red", linewidth=1)
+    ax.set_xscale("log")
+    ax.set_ylim(0, 100)
+    ax.set_xlabel("pick labels")
+    ax.set_ylabel("household first-attempt picks (%)")
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    PICTURE.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(PICTURE, metadata={"Software": None})
+    plt.close(fig)

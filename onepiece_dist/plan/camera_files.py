@@ -1,0 +1,144 @@
+"""What a depth camera and a robot give, read into an :class:`Observation` in the robot's base frame (issue 56):
+a 16-bit PNG depth image in camera units (or an NPY), its intrinsics (fx,fy,cx,cy, or a JSON file with those keys
+or a 3x3 ``K``), the camera's pose in the robot's base frame (a JSON file: ``{"matrix": 4x4}`` or ``{"position":
+[x, y, z], "quaternion": [x, y, z, w]}``, camera to base, the OpenCV camera frame: x right, y down, z forward), and
+a workspace box the cloud is cropped to. Bad input is refused naming the file and the fix."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.core.frames import matrix_from_quat, transform_points
+from onepiece_dist.errors import CloudRejected
+from onepiece_dist.plan.observation import Observation, check_cloud, depth_to_cloud
+
+PNG_DEPTH_SCALE = 0.001  # a 16-bit PNG holds millimetres unless told otherwise
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+
+
+def read_intrinsics(text: str) -> Intrinsics:
+    """``fx,fy,cx,cy`` or the path of a JSON file with those keys or a 3x3 ``K``."""
+    path = Path(text)
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError) as err:
+            raise CloudRejected(f"{path}: not readable intrinsics JSON ({err})") from None
+        if isinstance(data, dict) and "K" in data:
+            k = np.asarray(data["K"], dtype=np.float64)
+            if k.shape != (3, 3):
+                raise CloudRejected(f"{path}: K must be 3x3, got shape {k.shape}")
+            return Intrinsics(k[0, 0], k[1, 1], k[0, 2], k[1, 2])
+        if isinstance(data, dict) and all(key in data for key in ("fx", "fy", "cx", "cy")):
+            return Intrinsics(*(float(data[key]) for key in ("fx", "fy", "cx", "cy")))
+        raise CloudRejected(f'{path}: give {{"fx", "fy", "cx", "cy"}} or a 3x3 "K" (pixels)')
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 4:
+        raise CloudRejected(f"--intrinsics {text!r}: give fx,fy,cx,cy (pixels) or a JSON file")
+    return Intrinsics(*values)
+
+
+def read_camera_pose(path: str | Path) -> np.ndarray:
+    """(4, 4) camera-to-base transform from a JSON file (a 4x4 ``matrix``, or ``position`` + ``quaternion``)."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as err:
+        raise CloudRejected(f"{path}: not a readable camera pose JSON ({err})") from None
+    if isinstance(data, dict) and "matrix" in data:
+        pose = np.asarray(data["matrix"], dtype=np.float64)
+        if pose.shape != (4, 4) or not np.allclose(pose[3], [0, 0, 0, 1]):
+            raise CloudRejected(f"{path}: matrix must be 4x4 with a last row 0 0 0 1")
+        rotation = pose[:3, :3]
+        if not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-4) or np.linalg.det(rotation) < 0:
+            raise CloudRejected(f"{path}: the matrix's rotation is not a rotation (orthonormal, det +1)")
+        return pose
+    if isinstance(data, dict) and "position" in data and "quaternion" in data:
+        position, quaternion = np.asarray(data["position"], float), np.asarray(data["quaternion"], float)
+        if position.shape != (3,) or quaternion.shape != (4,) or not np.any(quaternion):
+            raise CloudRejected(f"{path}: position is [x, y, z] and quaternion [x, y, z, w]")
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = matrix_from_quat(quaternion), position
+        return pose
+    raise CloudRejected(f'{path}: give {{"matrix": 4x4}} or {{"position": [x, y, z], "quaternion": [x, y, z, w]}} '
+                        "(camera to robot base)")
+
+
+def read_depth(path: str | Path, depth_scale: float | None = None) -> np.ndarray:
+    """(H, W) float64 depth in metres from a 16-bit PNG (times ``depth_scale``, default 0.001) or an NPY (times
+    ``depth_scale``, default 1); 0 stays 0 (no return)."""
+    path = Path(path)
+    if not path.is_file():
+        raise CloudRejected(f"{path}: no such file")
+    suffix = path.suffix.lower()
+    if suffix == ".png":
+        import open3d as o3d
+
+        raw = np.asarray(o3d.io.read_image(str(path)))
+        if raw.ndim != 2 or raw.dtype != np.uint16:
+            raise CloudRejected(f"{path}: a depth PNG is one 16-bit channel, got {raw.dtype} of shape {raw.shape}")
+        return raw.astype(np.float64) * (PNG_DEPTH_SCALE if depth_scale is None else depth_scale)
+    if suffix == ".npy":
+        try:
+            raw = np.load(path, allow_pickle=False)
+        except ValueError as err:
+            raise CloudRejected(f"{path}: not a plain numeric .npy array ({err})") from None
+        return np.asarray(raw, dtype=np.float64) * (1.0 if depth_scale is None else depth_scale)
+    raise CloudRejected(f"{path}: a depth image is a 16-bit .png or an .npy, not {suffix!r}")
+
+
+def read_workspace(text: str) -> tuple[np.ndarray, np.ndarray]:
+    """``xmin,ymin,zmin,xmax,ymax,zmax`` (m) -> (lower, upper)."""
+    try:
+        values = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        values = np.zeros(0)
+    if len(values) != 6 or np.any(values[:3] >= values[3:]):
+        raise CloudRejected(f"--workspace {text!r}: give xmin,ymin,zmin,xmax,ymax,zmax (m), each min below its max")
+    return values[:3], values[3:]
+
+
+def crop_to_workspace(observation: Observation, lower: np.ndarray, upper: np.ndarray,
+                      pose: np.ndarray | None = None) -> Observation:
+    """The observation's points inside the box (given in the frame ``pose`` maps the points into, when given),
+    checked again (an empty box is refused)."""
+    points = observation.points
+    framed = points if pose is None else transform_points(points, pose)
+    inside = np.all((framed >= lower) & (framed <= upper), axis=1)
+    source = f"{observation.source} (workspace {lower.tolist()} to {upper.tolist()})"
+    return Observation(check_cloud(points[inside], source), observation.viewpoint, observation.source,
+                       observation.up)
+
+
+def depth_observation(path: str | Path, intrinsics: Intrinsics, depth_scale: float | None = None) -> Observation:
+    """A depth image file back-projected in the OpenCV camera frame."""
+    depth = read_depth(path, depth_scale)
+    return depth_to_cloud(depth, intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy, source=str(path))
+
+
+def with_known_up(observation: Observation, camera_pose: np.ndarray) -> Observation:
+    """A camera-frame observation that knows where up is: the base frame's +z seen from the camera (planning stays
+    in the camera's frame, so the grasps are those of the camera's cloud; GraspPlan.transformed moves them)."""
+    up = np.asarray(camera_pose, dtype=np.float64)[:3, :3].T @ np.array([0.0, 0.0, 1.0])
+    return Observation(observation.points, observation.viewpoint, observation.source, up)
+
+
+def in_frame(observation: Observation, pose: np.ndarray) -> Observation:
+    """The observation moved by ``pose`` (4, 4) into another frame (for its drawing beside the moved plan)."""
+    view = None if observation.viewpoint is None else transform_points(observation.viewpoint[None], pose)[0]
+    up = None if observation.up is None else np.asarray(pose)[:3, :3] @ observation.up
+    return Observation(transform_points(observation.points, pose), view, observation.source, up)
