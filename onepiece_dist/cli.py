@@ -119,10 +119,14 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
     if status.evaluation:
         e = status.evaluation
         _err(f"held-out: {e.objects} unseen objects, {e.grasps} candidates (positive rate {e.positive_rate:.2f}): "
-             f"top-1 success {e.top1:.2f} against random choice {e.random_choice:.2f}, AP {e.ap:.2f} against "
-             f"{e.positive_rate:.2f} for random scores")
+             f"top-1 success {e.top1:.2f}{_interval(e.top1_interval)} against random choice {e.random_choice:.2f}"
+             f"{_interval(e.random_choice_interval)}, AP {e.ap:.2f} against {e.positive_rate:.2f} for random scores")
         _err(f"held-out protocol: {e.protocol}; {e.verdict}")
     typer.echo(status.model_dump_json() if as_json else status.output)
+
+
+def _interval(pair: tuple[float, float] | None) -> str:
+    return "" if pair is None else f" [{pair[0]:.2f}, {pair[1]:.2f}]"
 
 
 @app.command()

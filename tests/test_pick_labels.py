@@ -153,3 +153,16 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
     assert scores.shape == (n,) and np.all((scores >= 0) & (scores <= 1))
     with pytest.raises(CloudRejected, match="context"):
         scorer.score(Crops(with_context.codes, with_context.counts, with_context.points))
+
+
+def test_the_default_jobs_verdict_says_whether_the_network_is_above_a_guess_with_an_interval():
+    from onepiece_dist.job.stages.evaluate import against_a_guess
+
+    rng = np.random.default_rng(0)
+    random = rng.uniform(0.2, 0.4, 16)
+    above, said = against_a_guess(np.ones(16), random)
+    assert above[0] > 0 and said == "the network is above a guess"
+    tied, said = against_a_guess(rng.integers(0, 2, 16).astype(float), np.full(16, 0.5))
+    assert tied[0] < 0 < tied[1] and "cannot tell" in said
+    below, said = against_a_guess(np.zeros(16), random)
+    assert below[1] < 0 and said == "the network is below a guess"

@@ -145,6 +145,10 @@ class EvaluationReport(_Report):
     separable: bool | None = Field(None, description="False when the held-out positive rate is above 90% or below "
                                    "10%: then a network's top-1 cannot be told from a random choice's.")
     verdict: str = Field("", description="What the evaluation can and cannot say, in a sentence.")
+    top1_interval: tuple[float, float] | None = Field(None, description="95% interval of top1 (objects resampled).")
+    random_choice_interval: tuple[float, float] | None = Field(None, description="95% interval of random_choice.")
+    above_guess_interval: tuple[float, float] | None = Field(None, description="95% interval of top1 minus "
+                                                             "random_choice (objects resampled, paired).")
 
 
 class JobStatus(BaseModel):

@@ -21,12 +21,12 @@ from onepiece_dist.job.runtime.crashes import CrashLog, crash_folder
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.job.runtime.ray_env import connect
 from onepiece_dist.job.runtime.registry import RegistryClient
+from onepiece_dist.job.stages.evaluate import SEPARABLE  # the one range: a guess's rate outside it ranks nothing
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan_spec import PickSpec
 
-SEPARABLE = (0.1, 0.9)  # a random grasp's pick rate outside this range leaves nothing to rank
 REPORT_FILE = "picks.json"
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.intervals import bootstrap_interval
 from onepiece_dist.core.ranking import average_precision
 from onepiece_dist.job.status import EvaluationReport, JobStatus
 from onepiece_dist.spec import JobSpec
@@ -66,14 +67,20 @@ def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, obje
     labelled = GraspDataset(dataset, "grasps")
     scores = predict(load_model(checkpoint), labelled, device=resolve_device(device))
     labels = labelled.labels()
+    per_top, per_random = per_object_success(scores, labels, labelled.groups)
     top, random = top_ranked_success(scores, labels, labelled.groups)
     positive = float(labels.mean()) if len(labels) else 0.0
     separable, sentence = verdict(positive, top, random)
+    difference, said = against_a_guess(per_top, per_random)
+    if separable:
+        sentence = (f"{sentence}; top-1 minus random {difference[0]:+.2f} to {difference[1]:+.2f} (95%, objects "
+                    f"resampled): {said}")
     return EvaluationReport(objects=objects, grasps=int(len(labels)), positive_rate=positive, top1=top,
                             random_choice=random, ap=average_precision(scores, labels),
                             accuracy=float(np.mean((scores > 0.5) == (labels > 0.5))) if len(labels) else 0.0,
                             checkpoint=str(checkpoint), dataset=dataset, protocol=protocol, separable=separable,
-                            verdict=sentence)
+                            verdict=sentence, top1_interval=bootstrap_interval(per_top),
+                            random_choice_interval=bootstrap_interval(per_random), above_guess_interval=difference)
 
 
 def record_evaluation(spec: JobSpec, report: EvaluationReport) -> EvaluationReport:
@@ -86,9 +93,24 @@ def record_evaluation(spec: JobSpec, report: EvaluationReport) -> EvaluationRepo
 
 def top_ranked_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[float, float]:
     """Success rate of executing each object's best-scored grasp, and the expected rate of a random one."""
+    top, random = per_object_success(scores, labels, groups)
+    return (float(np.mean(top)), float(np.mean(random))) if len(top) else (0.0, 0.0)
+
+
+def per_object_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(objects,) the success of each object's best-scored grasp and (objects,) a random grasp's expected one."""
     objects = np.unique(groups)
-    if len(objects) == 0:
-        return 0.0, 0.0
     top = [labels[groups == g][np.argmax(scores[groups == g])] for g in objects]
     random = [labels[groups == g].mean() for g in objects]
-    return float(np.mean(top)), float(np.mean(random))
+    return np.asarray(top, np.float64), np.asarray(random, np.float64)
+
+
+def against_a_guess(top: np.ndarray, random: np.ndarray, seed: int = 0) -> tuple[tuple[float, float], str]:
+    """The 95% interval (objects resampled) of top-1 minus a random choice, and what it says: above a guess,
+    below it, or not told apart from it by these objects."""
+    difference = bootstrap_interval(top - random, seed=seed)
+    if difference[0] > 0:
+        return difference, "the network is above a guess"
+    if difference[1] < 0:
+        return difference, "the network is below a guess"
+    return difference, "these held-out objects cannot tell the network from a guess"
