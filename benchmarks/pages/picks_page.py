@@ -162,9 +162,14 @@ def render_picks_page() -> str:
 
 def _how(picks: dict) -> str:
     t, spec = picks["training"], picks["sets"][0]["spec"]
-    trained = (f"The network: `{t['spec']}`, {t['labels']} labels of {t['candidates']} candidates (success rate "
-               f"{t['label_success_rate']:.2f}), validation AP {t['validation_ap']:.2f}."
-               if t.get("labels") else f"The network: `{t.get('checkpoint')}`.")
+    if t.get("design"):
+        trained = (f"The network: `{t['checkpoint']}` (the shipped one), design `{t['design']}`, {t['labels']} pick "
+                   f"labels on `{t['training_objects']}` (the learning curve below).")
+    elif t.get("candidates"):
+        trained = (f"The network: `{t['spec']}`, {t['labels']} labels of {t['candidates']} candidates (success rate "
+                   f"{t['label_success_rate']:.2f}), validation AP {t['validation_ap']:.2f}.")
+    else:
+        trained = f"The network: `{t.get('checkpoint')}`."
     camera = spec["camera"]
     return (f"{picks['date']}, {picks['machine']}. {trained} Each object dropped on a table in a seeded orientation "
             f"and settled; {spec['views']} views per object from a camera {camera['distance'][0]}-"

@@ -33,7 +33,8 @@ def shipped_summary() -> str:
     if not record:
         return f"planning with the shipped network {NETWORK.name}"
     picks = record["household_first_attempt"]
+    views = f"{picks['views']} " if picks.get("views") else ""
     return (f"planning with the shipped network {NETWORK.name} ({record['design']}, {record['labels']} pick labels "
             f"on {record['training_objects']}): it picks {100 * picks['rate']:.0f}% "
-            f"[{100 * picks['interval'][0]:.0f}%, {100 * picks['interval'][1]:.0f}%] of {picks['views']} household "
+            f"[{100 * picks['interval'][0]:.0f}%, {100 * picks['interval'][1]:.0f}%] of {views}household "
             f"views at the first attempt in simulation (docs/picks.md)")
