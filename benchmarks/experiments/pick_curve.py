@@ -33,7 +33,7 @@ OUT = ROOT / "data" / "pick_curve"
 TRAIN_OBJECTS = "pybullet:random_urdfs[0:160]+data/shapes"
 DESIGNS = {  # name -> PickTrainOptions fields
     "context": {"model": "pointnet_context"},
-    "crop_only": {"model": "pointnet"},
+    "crop_only": {"model": "pointnet_small"},
     "context_balanced": {"model": "pointnet_context", "balanced": True},
     "context_share": {"model": "pointnet_context", "target": "share"},
 }
@@ -101,7 +101,7 @@ def main() -> None:
     sizes = [min(int(s), len(all_labels)) for s in args.sizes.split(",")]
     path = HERE / "results" / "pick_curve.json"
     done = json.loads(path.read_text())["points"] if path.is_file() else []
-    points = [p for p in done if p["design"] in args.designs.split(",")]
+    points = list(done)
     for design in args.designs.split(","):
         for size in sizes:
             if any(p["design"] == design and p["labels"] == size and p.get("views") == args.views for p in points):

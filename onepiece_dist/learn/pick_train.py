@@ -27,15 +27,17 @@ HALF_TURN = np.array([1.0, -1.0, -1.0], np.float32)  # (u, v, t) -> (u, -v, -t)
 @dataclass(frozen=True)
 class PickTrainOptions:
     """How to fit: the model, the target (every trial held, or the share of trials that held), whether batches
-    are balanced (as many successes as failures drawn), epochs, patience, batch size, learning rate, the share
-    of objects held out for validation, the seed."""
+    are balanced (as many successes as failures drawn), epochs, patience, batch size, the points of each crop the
+    network sees (a seeded subset of the stored ones; a planner then resamples its crops to as many), learning
+    rate, the share of objects held out for validation, the seed."""
 
     model: str = "pointnet_context"
     target: str = "every_trial"  # or "share"
     balanced: bool = False
-    epochs: int = 40
-    patience: int = 8
-    batch_size: int = 128
+    epochs: int = 30
+    patience: int = 5
+    batch_size: int = 256
+    points: int = 128  # of each stored crop's, drawn anew every batch; the checkpoint's points_per_grasp
     learning_rate: float = 1e-3
     validation: float = 0.1
     seed: int = 0
@@ -73,8 +75,11 @@ def split_by_object(labels: PickLabels, share: float, seed: int) -> tuple[np.nda
     return np.flatnonzero(~val), np.flatnonzero(val)
 
 
-def _batch(labels: PickLabels, rows: np.ndarray, turn: np.ndarray | None = None) -> dict[str, torch.Tensor]:
+def _batch(labels: PickLabels, rows: np.ndarray, turn: np.ndarray | None = None,
+           points_seen: np.ndarray | None = None) -> dict[str, torch.Tensor]:
     points = labels.points[rows].astype(np.float32)
+    if points_seen is not None:
+        points = points[:, points_seen]
     context = labels.context[rows].astype(np.float32)
     if turn is not None and turn.any():
         points[turn] *= HALF_TURN
@@ -89,12 +94,15 @@ def targets(labels: PickLabels, rows: np.ndarray, target: str, trials: int) -> n
     return labels.success[rows].astype(np.float32)
 
 
-def score_rows(model: torch.nn.Module, labels: PickLabels, rows: np.ndarray, batch: int = 512) -> np.ndarray:
+def score_rows(model: torch.nn.Module, labels: PickLabels, rows: np.ndarray, points: int,
+               batch: int = 512) -> np.ndarray:
+    """Scores of ``rows``, each crop's first ``points`` points (stored resampled in random order)."""
     model.eval()
     out = []
+    seen = np.arange(min(points, labels.points.shape[1]))
     with torch.inference_mode():
         for start in range(0, len(rows), batch):
-            out.append(torch.sigmoid(model(_batch(labels, rows[start:start + batch]))).numpy())
+            out.append(torch.sigmoid(model(_batch(labels, rows[start:start + batch], None, seen))).numpy())
     return np.concatenate(out) if out else np.zeros(0)
 
 
@@ -123,14 +131,15 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
     records, best, bad = [], -1.0, 0
     for epoch in range(options.epochs):
         loss = _epoch(model, optimiser, labels, train, options, trials, rng)
-        scores = score_rows(model, labels, val)
+        scores = score_rows(model, labels, val, options.points)
         record = EpochRecord(epoch, loss, average_precision(scores, labels.success[val]),
                              view_top1(labels, val, scores))
         records.append(record)
         if record.val_ap > best:
             best, bad = record.val_ap, 0
-            torch.save({"model": options.model, "state_dict": model.state_dict(), "crop": crop,
-                        "epoch": epoch, "val_ap": record.val_ap}, folder / "best.pt")
+            torch.save({"model": options.model, "state_dict": model.state_dict(),
+                        "crop": {**crop, "points_per_grasp": options.points}, "epoch": epoch,
+                        "val_ap": record.val_ap}, folder / "best.pt")
         else:
             bad += 1
             if bad >= options.patience:
@@ -148,7 +157,8 @@ def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: Pick
         chunk = order[start:start + options.batch_size]
         if len(chunk) < 2:  # batch norm needs two
             continue
-        batch = _batch(labels, chunk, rng.random(len(chunk)) < 0.5)
+        seen = np.sort(rng.permutation(labels.points.shape[1])[: options.points])
+        batch = _batch(labels, chunk, rng.random(len(chunk)) < 0.5, seen)
         if options.model not in CONTEXT_MODELS:
             batch.pop("context")
         target = torch.from_numpy(targets(labels, chunk, options.target, trials))
