@@ -94,6 +94,7 @@ def test_the_exit_code_table_is_in_help_and_in_the_readme():
 
     help_text = " ".join(runner.invoke(app, ["--help"], terminal_width=400).output.split())
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    assert sorted(EXIT_CODES) == [0, 1, 2, 3, 4]  # a loop over no code would pass
     for code, meaning in EXIT_CODES.items():
         assert f"{code} {meaning}" in help_text
         assert f"| {code} | {meaning} |" in readme

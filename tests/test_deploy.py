@@ -185,7 +185,8 @@ def test_the_launcher_config_brings_up_workers_with_the_token_and_the_package():
     head = " ".join(config["head_start_ray_commands"])
     assert "--autoscaling-config=~/ray_bootstrap_config.yaml" in head  # without it the head starts no workers
     assert "RAY_AUTH_MODE=token" in head and "--dashboard-host=127.0.0.1" in head
-    assert all("RAY_AUTH_MODE=token" in c for c in config["worker_start_ray_commands"] if "ray start" in c)
+    starts = [c for c in config["worker_start_ray_commands"] if "ray start" in c]
+    assert starts and all("RAY_AUTH_MODE=token" in c for c in starts)  # all() over none would pass
     assert config["file_mounts"]["~/.ray/auth_token"] and config["file_mounts"]["/opt/onepiece-dist"] == "."
     setup = " ".join(config["setup_commands"])
     assert "apt-get update" in setup and "chmod 600 ~/.ray/auth_token" in setup

@@ -31,6 +31,7 @@ def test_antipodal_box_grasps_close_across_parallel_faces():
 def test_candidate_centre_lies_in_the_closing_region():
     mesh = cylinder_mesh(0.02, 0.1)
     _, cands = candidates(mesh)
+    assert len(cands.poses) > 0  # np.all over no candidates would pass
     centre = to_gripper_frame(np.zeros((1, 3)), cands.poses)[:, 0]  # the cylinder axis point at the origin
     assert np.all(centre[:, 0] > 0) and np.all(np.abs(centre[:, 1]) < GRIPPER.max_opening / 2)
 

@@ -102,7 +102,9 @@ def test_views_are_stored_in_the_object_frame_of_each_object(spec_factory, tmp_p
     spec = spec_factory(objects="primitives[0:2]", sim={"physics": False}, views={"count": 4, "image_size": 64})
     run_local(spec)
     data = open_dataset(spec.output)
-    for k, ref in enumerate(resolve_source(spec.objects)):
+    refs = resolve_source(spec.objects)
+    assert len(refs) == 2  # a loop over no object would pass
+    for k, ref in enumerate(refs):
         mesh = load_object(ref, spec).mesh
         mine = np.isin(data["views/point_camera"], np.flatnonzero(data["views/camera_object"] == k))
         cloud = data["views/points"][mine]
