@@ -166,3 +166,16 @@ def test_the_default_jobs_verdict_says_whether_the_network_is_above_a_guess_with
     assert tied[0] < 0 < tied[1] and "cannot tell" in said
     below, said = against_a_guess(np.zeros(16), random)
     assert below[1] < 0 and said == "the network is below a guess"
+
+
+def test_a_study_reports_a_tie_by_picks_as_a_tie():
+    """Issue 58: equal pick rates are a tie, never a win (an interval test, not >=)."""
+    from onepiece_dist.study.picks import compare
+    from onepiece_dist.study.spec import StudySpec
+
+    spec = StudySpec(train="primitives[0:2]", heldout="primitives[2:4]")
+    same = np.array([0.5, 0.25, 0.75, 0.5, 1.0, 0.0, 0.5, 0.25])
+    assert compare(same, same.copy(), spec) == "ties"
+    assert compare(same + 0.2, same, spec) == "beats" and compare(same, same + 0.2, spec) == "loses"
+    noisy = np.random.default_rng(1).permutation(same)
+    assert compare(noisy, same, spec) == "ties"

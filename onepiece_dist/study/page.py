@@ -73,7 +73,10 @@ def picks_lines(result: StudyResult) -> list[str]:
     lines = [f"**Judged by picks.** From one depth view of each of {p.objects} held-out objects ({p.views} views "
              f"each; {p.label}), A's networks pick {measure(a.first_attempt, True)} at the first attempt; {guess}. "
              f"The cheapest plan inside A's interval by pick success is **{p.cheapest}**{by_how_much}."]
-    lines += [f"By picks, {name} {'beats' if beats else 'does not beat'} random labels of its size (R ~{name})."
+    said = {"beats": "beats", "ties": "ties with", "loses": "loses to"}
+    lines += [f"By picks, {name} {said[p.b_versus_random[name]]} random labels of its size (R ~{name}; the 95% "
+              "interval of their per-object difference)." if name in p.b_versus_random else
+              f"By picks, {name} {'beats' if beats else 'does not beat'} random labels of its size (R ~{name})."
               for name, beats in p.b_beats_random.items()]
     return lines
 

@@ -51,9 +51,10 @@ def judge_by_picks(spec: StudySpec, folder: Path, trained: list[tuple[ArmRun, St
     ok = [p for p in picks if p["status"] == "ok"]
     picked = np.array([p["picked"] for p in ok], dtype=float)  # objects x views x networks
     guess = np.array([p["random"] for p in ok], dtype=float).mean(axis=1)
-    per_arm = {}
+    per_arm, per_object = {}, {}
     for arm in dict.fromkeys(job.arm for job, _ in trained):
         mine = [k for k, (job, _) in enumerate(trained) if job.arm == arm]
+        per_object[arm] = picked[:, :, mine].mean(axis=1).mean(axis=1)
         per_arm[arm] = _measure(picked[:, :, mine].mean(axis=1), spec)  # objects x seeds
     a = per_arm["A"]
     random = Measure(mean=round(float(guess.mean()), 4), std=0.0,
@@ -63,12 +64,20 @@ def judge_by_picks(spec: StudySpec, folder: Path, trained: list[tuple[ArmRun, St
     cost = {arm.name: arm.cost.core_seconds for arm in arms}
     cheapest = min((name for name in per_arm if inside[name]), key=lambda name: cost.get(name, float("inf")))
     separable = bool(SEPARABLE[0] <= random.mean <= SEPARABLE[1])
+    versus = {n: compare(per_object[n], per_object[f"R ~{n}"], spec) for n in per_arm
+              if n.startswith("B ") and f"R ~{n}" in per_arm}
     return PicksJudgement(objects=len(ok), views=spec.picks.views,
                           label=f"{spec.label_trials} trials, {spec.success}", random=random, separable=separable,
                           arms=[ArmPicks(name=n, first_attempt=m, within_a=inside[n]) for n, m in per_arm.items()],
                           cheapest=cheapest,
-                          b_beats_random={n: per_arm[n].mean >= per_arm[f"R ~{n}"].mean for n in per_arm
-                                          if n.startswith("B ") and f"R ~{n}" in per_arm})
+                          b_beats_random={n: v == "beats" for n, v in versus.items()}, b_versus_random=versus)
+
+
+def compare(arm: np.ndarray, other: np.ndarray, spec: StudySpec) -> str:
+    """``arm`` against ``other`` (per-object rates of the same objects): 'beats' when the interval of their paired
+    difference lies above zero, 'loses' when below, else 'ties' (equal means are a tie, never a win)."""
+    low, high = bootstrap_interval(arm - other, spec.seed, spec.targets.bootstrap_draws, spec.targets.confidence)
+    return "beats" if low > 0 else "loses" if high < 0 else "ties"
 
 
 def _measure(rates: np.ndarray, spec: StudySpec) -> Measure:

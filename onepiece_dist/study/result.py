@@ -230,7 +230,9 @@ class PicksJudgement(Frozen):
     separable: bool = Field(description="Whether the guess's rate leaves room to rank (10% to 90%).")
     arms: list[ArmPicks]
     cheapest: str | None = Field(description="The cheapest arm (core-seconds) inside A's interval.")
-    b_beats_random: dict[str, bool] = Field(description="B r against R ~B r: its mean at least R's.")
+    b_beats_random: dict[str, bool] = Field(description="B r against R ~B r: it beats R (see b_versus_random).")
+    b_versus_random: dict[str, str] = Field(default_factory=dict, description="B r against R ~B r by the 95% "
+                                            "interval of their per-object difference: beats, ties or loses.")
 
 
 class StudyResult(Frozen):
