@@ -57,7 +57,9 @@ def test_every_household_mesh_is_accepted_in_metres_and_yields_grasps(panda_acro
     from onepiece_dist.store import open_dataset
 
     reader = open_dataset(panda_acronym / "d.zarr")
-    assert len(reader.object_names) == 6 and reader.attrs["stats"]["objects_rejected"] == 0
+    from benchmarks.experiments.household import OBJECTS
+
+    assert len(reader.object_names) == len(OBJECTS) == 16 and reader.attrs["stats"]["objects_rejected"] == 0
     counts = dict(zip(reader.object_names, reader["objects/grasp_count"].tolist(), strict=True))
     assert all(n > 0 for n in counts.values()), counts
     repairs = {row["name"]: row["repairs"] for row in reader.attrs["ingest"]}  # the scan's seams, recorded

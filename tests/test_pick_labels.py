@@ -179,3 +179,35 @@ def test_a_study_reports_a_tie_by_picks_as_a_tie():
     assert compare(same + 0.2, same, spec) == "beats" and compare(same, same + 0.2, spec) == "loses"
     noisy = np.random.default_rng(1).permutation(same)
     assert compare(noisy, same, spec) == "ties"
+
+
+def test_the_franka_hand_collides_where_the_box_palm_does_not():
+    """The panda preset: the hand's collision mesh (20 cm across the closing axis) in physics and in the planner's
+    collision test; a point 8 cm to the side of the palm meets the Franka hand, not a box palm of the same sizes."""
+    import pybullet_data
+    import trimesh
+
+    from onepiece_dist.core.frames import pose_from_axes
+    from onepiece_dist.core.sampling import FRANKA_HAND_BOUNDS, collides
+    from onepiece_dist.gripper_presets import PRESETS
+    from onepiece_dist.sim.trials import place, starts_in_collision
+    from onepiece_dist.sim.world import SimWorld
+
+    hand = trimesh.load(Path(pybullet_data.getDataPath()) / "franka_panda/meshes/collision/hand.obj", force="mesh")
+    assert np.allclose(hand.bounds, FRANKA_HAND_BOUNDS, atol=1e-3)
+    franka = GripperSpec(**PRESETS["panda"])
+    boxed = franka.model_copy(update={"name": "panda_box_palm"})
+    pose = pose_from_axes(np.zeros((1, 3)), np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+    beside = np.array([[-0.03, 0.08, 0.0]])  # behind the palm face, 8 cm along the closing axis
+    assert collides(beside, pose, franka)[0] and not collides(beside, pose, boxed)[0]
+    block = box_mesh((0.02, 0.02, 0.02))
+    hits = []
+    for gripper in (franka, boxed):
+        world = SimWorld(gripper)
+        try:
+            world.load_object([block.vertices + beside[0]], 0.02**3, 400)
+            place(world, pose[0])
+            hits.append(starts_in_collision(world))
+        finally:
+            world.close()
+    assert hits == [True, False]

@@ -140,10 +140,26 @@ def plane_normals(local: np.ndarray) -> np.ndarray:
     return np.where(largest[:, None] > 0, best / np.sqrt(np.maximum(largest, 1e-300))[:, None], fallback)
 
 
-def gripper_boxes(gripper: GripperSpec, opening: float | None = None) -> np.ndarray:
-    """Palm and finger boxes in the gripper frame at ``opening`` (default: fully open).
+# The Franka hand's collision mesh (pybullet_data franka_panda/meshes/collision/hand.obj) bounds, in the hand's
+# frame (panda.urdf: z approach, fingers along y): about 20 cm across the closing axis, where a box palm as wide as
+# the stroke misses what the hand meets. tests/test_pick_labels.py reads the mesh and checks these.
+FRANKA_HAND = "franka_panda"
+FRANKA_HAND_BOUNDS = ((-0.0316, -0.104, -0.0259), (0.0316, 0.1004, 0.066))
+FRANKA_FINGERTIP_Z = 0.11217  # m along the hand's z (core.hand_frames: our fingertips are the Panda's)
 
-    returns : (3, 2, 3) float64, boxes x (lower, upper) x (u, v, t)
+
+def franka_hand_box(gripper: GripperSpec) -> np.ndarray:
+    """(2, 3) the Franka hand's bounds in our gripper frame: u = z - (tip - finger_length), v = y, t = -x."""
+    (x0, y0, z0), (x1, y1, z1) = FRANKA_HAND_BOUNDS
+    shift = FRANKA_FINGERTIP_Z - gripper.finger_length
+    return np.array([[z0 - shift, y0, -x1], [z1 - shift, y1, -x0]])
+
+
+def gripper_boxes(gripper: GripperSpec, opening: float | None = None) -> np.ndarray:
+    """Palm and finger boxes in the gripper frame at ``opening`` (default: fully open), and for the Franka hand
+    (``gripper.name`` franka_panda, the panda preset) the hand's own bounds as a fourth box.
+
+    returns : (3 or 4, 2, 3) float64, boxes x (lower, upper) x (u, v, t)
     """
     half = (gripper.max_opening if opening is None else opening) / 2
     f = gripper.finger_thickness
@@ -151,7 +167,8 @@ def gripper_boxes(gripper: GripperSpec, opening: float | None = None) -> np.ndar
     palm = [[-gripper.palm_depth, -half - f, -gripper.palm_height / 2], [0.0, half + f, gripper.palm_height / 2]]
     left = [[0.0, -half - f, -fh], [fl, -half, fh]]
     right = [[0.0, half, -fh], [fl, half + f, fh]]
-    return np.array([palm, left, right])
+    boxes = np.array([palm, left, right])
+    return np.concatenate([boxes, franka_hand_box(gripper)[None]]) if gripper.name == FRANKA_HAND else boxes
 
 
 def collides(points: np.ndarray, poses: np.ndarray, gripper: GripperSpec) -> np.ndarray:

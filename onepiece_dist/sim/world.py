@@ -5,7 +5,9 @@ The gripper base frame is the gripper frame (origin at the palm centre, on the p
 coincides). The base is a box (the palm) held by a fixed constraint that trials move; two prismatic fingers, coupled
 by a gear so they keep the same opening (as the Panda hand's mimic joint), close along v with a force limit. The
 object is one rigid body; its frame is its mesh frame; it starts at the world origin, so candidate poses (gripper
-in the object frame) are also world poses at the start of a trial.
+in the object frame) are also world poses at the start of a trial. The Franka hand (the panda preset) adds the hull
+of its own collision mesh (pybullet_data franka_panda/meshes/collision/hand.obj) to the palm, where the planner's
+collision test adds its bounds (core.sampling.franka_hand_box).
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ from pathlib import Path
 import numpy as np
 import pybullet as pb
 
-from onepiece_dist.core.frames import apply_rotation
+from onepiece_dist.core.frames import apply_rotation, quat_from_matrix
+from onepiece_dist.core.sampling import FRANKA_FINGERTIP_Z, FRANKA_HAND
 from onepiece_dist.spec import GripperSpec
 
 TIME_STEP = 1.0 / 240.0
@@ -81,11 +84,26 @@ class SimWorld:
         self._unload()
         pb.disconnect(physicsClientId=self.client)
 
+    def _palm_shape(self) -> int:
+        g, c = self.spec, self.client
+        half = [g.palm_depth / 2, g.max_opening / 2 + g.finger_thickness, g.palm_height / 2]
+        if g.name != FRANKA_HAND:
+            return pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, collisionFramePosition=[-g.palm_depth / 2,
+                                           0, 0], physicsClientId=c)
+        import pybullet_data
+
+        hand = str(Path(pybullet_data.getDataPath()) / "franka_panda" / "meshes" / "collision" / "hand.obj")
+        # the hand's frame in ours: u = z - (tip - finger_length), v = y, t = -x (core.sampling.franka_hand_box)
+        axes = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # columns: hand x, y, z in ours
+        return pb.createCollisionShapeArray(
+            [pb.GEOM_BOX, pb.GEOM_MESH], halfExtents=[half, [0, 0, 0]], fileNames=["", hand],
+            meshScales=[[1, 1, 1], [1, 1, 1]],
+            collisionFramePositions=[[-g.palm_depth / 2, 0, 0], [g.finger_length - FRANKA_FINGERTIP_Z, 0, 0]],
+            collisionFrameOrientations=[[0, 0, 0, 1], quat_from_matrix(axes)], physicsClientId=c)
+
     def _build_gripper(self) -> tuple[int, int]:
         g, c = self.spec, self.client
-        palm = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[g.palm_depth / 2, g.max_opening / 2 +
-                                       g.finger_thickness, g.palm_height / 2],
-                                       collisionFramePosition=[-g.palm_depth / 2, 0, 0], physicsClientId=c)
+        palm = self._palm_shape()
         finger = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[g.finger_length / 2, g.finger_thickness / 2,
                                          g.finger_height / 2], physicsClientId=c)
         side = g.max_opening / 2 + g.finger_thickness / 2
