@@ -132,6 +132,8 @@ def grasp(
 
 
 def _print_plan(plan, json_path: Path, png: Path | None) -> None:
+    for note in plan.notes:
+        err(f"note: {note}")
     c = plan.counts
     err(f"{plan.source}: {c['sampled']} placements, {c['collided']} collided, {c['below_plane']} below the "
         f"plane, {c['too_few_points']} with too few points, {c['scored']} scored in {plan.seconds['total']:.2f} s")

@@ -92,3 +92,22 @@ def test_a_box_side_seen_head_on_is_not_taken_as_the_table():
     plane = support_plane(points, np.random.default_rng(0), towards=towards, up=np.array([0, 0, 1.0]))
     assert plane is not None and plane.normal[2] > 0.99
     assert plane.inliers[len(side):].all() and not plane.inliers[:len(side)].any()
+
+
+@pytest.mark.sim
+def test_a_cloud_without_a_viewpoint_gets_an_estimated_camera_said_in_the_plan_or_is_refused(tmp_path):
+    from onepiece_dist.core.frames import transform_points
+    from onepiece_dist.errors import CloudRejected
+    from onepiece_dist.plan import GraspScorer, Observation, depth_to_cloud, plan_grasps
+    from onepiece_dist.plan_spec import PlanSpec
+
+    scorer = GraspScorer(save_checkpoint(tmp_path / "net.pt"))
+    seen = depth_to_cloud(depth_millimetres() / 1000, FX, FY, CX, CY)
+    cloud = Observation(transform_points(seen.points, CAMERA_POSE), None, "cloud.ply")  # base frame, no camera
+    plan = plan_grasps(cloud, scorer)
+    assert len(plan.notes) == 1 and "camera was estimated" in plan.notes[0] and plan.grasps
+    estimated = np.array([float(v) for v in plan.notes[0].split("(")[1].split(")")[0].split(",")])
+    assert estimated[2] > 0.3  # above the table (z = 0), on the side the box stands
+    box_alone = Observation(cloud.points[cloud.points[:, 2] > 0.01], None, "box.ply")
+    with pytest.raises(CloudRejected, match="--viewpoint"):
+        plan_grasps(box_alone, scorer, PlanSpec(support_plane="none"))

@@ -87,6 +87,7 @@ class GraspPlan:
     counts: dict[str, int]
     plane: SupportPlane | None
     seconds: dict[str, float]
+    notes: tuple[str, ...] = ()
 
     def transformed(self, pose: np.ndarray) -> GraspPlan:
         """The same plan in another frame: ``pose`` (4, 4) maps the planning frame (a camera's) into it (a robot's
@@ -108,7 +109,7 @@ class GraspPlan:
                 "ours (u approach, v closing, origin at the palm centre); panda_pose, and position + quaternion "
                 "(x, y, z, w): the Franka Panda hand (z approach, x closing, origin at the hand base); pregrasp: "
                 "that hand 5 cm back along z",
-                "counts": self.counts, "support_plane": plane,
+                "counts": self.counts, "support_plane": plane, "notes": list(self.notes),
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "grasps": [g.to_json() for g in self.grasps]}
 
@@ -180,6 +181,7 @@ def _refuse_plane_alone(observation: Observation, proposals: Proposals) -> None:
 def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None) -> GraspPlan:
     """The ranked grasps on ``observation`` by ``scorer``'s network (seeded by ``spec.seed``; default PlanSpec)."""
     spec = spec or PlanSpec()
+    observation, notes = with_viewpoint(observation, spec)
     rng = np.random.default_rng([spec.seed, 49])
     proposals = propose(observation, scorer.record, spec, rng)
     _refuse_plane_alone(observation, proposals)
@@ -190,4 +192,27 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     seconds = {**proposals.seconds, "score": scored - clock, "rank": time.perf_counter() - scored}
     seconds["total"] = sum(seconds.values())
     return GraspPlan(observation.source, grasps, {**proposals.counts, "scored": len(scores)}, proposals.plane,
-                     seconds)
+                     seconds, notes)
+
+
+ESTIMATED_DISTANCE = 0.6  # m above the support plane's points where a camera of unknown position is put
+
+
+def with_viewpoint(observation: Observation, spec: PlanSpec) -> tuple[Observation, tuple[str, ...]]:
+    """``observation`` with a camera position: its own, or where none was given, one estimated on the side the
+    surface was seen from (ESTIMATED_DISTANCE along the support plane's normal, which faces the objects on it),
+    said in the notes; refused where it cannot be estimated (no support plane)."""
+    if observation.viewpoint is not None:
+        return observation, ()
+    plane = None
+    if spec.support_plane == "auto":
+        plane = support_plane(observation.points, np.random.default_rng([spec.seed, 56]), up=observation.up)
+    if plane is None:
+        raise CloudRejected(f"{observation.source}: no camera position and no support plane to estimate it from: "
+                            "give the camera's position in the cloud's frame (--viewpoint x,y,z; a camera-frame "
+                            "cloud: 0,0,0) so that normals face the camera")
+    eye = observation.points[plane.inliers].mean(axis=0) + ESTIMATED_DISTANCE * plane.normal
+    note = (f"no viewpoint given: the camera was estimated at ({eye[0]:+.3f}, {eye[1]:+.3f}, {eye[2]:+.3f}), "
+            f"{ESTIMATED_DISTANCE} m above the support plane on the side the objects stand; give --viewpoint for "
+            "normals that face the real camera")
+    return Observation(observation.points, eye, observation.source, observation.up), (note,)
