@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 
 from onepiece_dist.cli_common import EXIT_USAGE, Address, err
-from onepiece_dist.errors import CloudRejected, OnePieceError, SourceError, SpecError
+from onepiece_dist.errors import CheckpointRejected, CloudRejected, OnePieceError, SourceError, SpecError
 from onepiece_dist.gripper_presets import gripper_fields
 
 
@@ -174,7 +174,7 @@ def pick(
         spec = parse_pick_spec(given, str(spec_file or "command line"))
         report = run_picks(spec, address=address, in_process=in_process,
                            progress=lambda o: err(f"{o.name}: {o.status} {o.reason}".rstrip()))
-    except (SpecError, SourceError, CloudRejected) as error:
+    except (SpecError, SourceError, CloudRejected, CheckpointRejected) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
     if as_json:

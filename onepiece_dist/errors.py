@@ -71,5 +71,10 @@ class DriverGone(JobError):
 
 
 class CloudRejected(OnePieceError, ValueError):
-    """An observed point cloud, depth image or checkpoint cannot be planned on; the message names the file, what is
+    """An observed point cloud or depth image cannot be planned on; the message names the file, what is
     wrong and the fix."""
+
+
+class CheckpointRejected(OnePieceError, ValueError):
+    """A checkpoint that cannot score a planner's crops (unreadable, not a grasp network, trained for another
+    gripper); the message names the file and the fix."""

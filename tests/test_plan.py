@@ -20,7 +20,7 @@ from onepiece_dist.core.cloud_grasps import (
 from onepiece_dist.core.hand_frames import from_panda
 from onepiece_dist.core.mesh import box_mesh, cylinder_mesh, resample_crops
 from onepiece_dist.core.sampling import collides
-from onepiece_dist.errors import CloudRejected
+from onepiece_dist.errors import CheckpointRejected, CloudRejected
 from onepiece_dist.plan import GraspScorer, Observation, depth_to_cloud, plan_grasps, read_cloud
 from onepiece_dist.plan.scorer import cut_crops
 from onepiece_dist.plan_spec import PlanSpec
@@ -158,10 +158,10 @@ def test_a_depth_image_drops_missing_pixels_and_a_checkpoint_for_another_gripper
     assert len(seen.points) == 32 * 40 and np.allclose(seen.points[:, 2], 0.6)
     checkpoint = save_checkpoint(tmp_path / "net.pt")
     wider = GripperSpec(max_opening=0.085, closing_width=0.08)
-    with pytest.raises(CloudRejected, match="another gripper .*max_opening"):
+    with pytest.raises(CheckpointRejected, match="another gripper .*max_opening"):
         GraspScorer(checkpoint, wider, device="cpu")
     torch.save({"model": "pointnet", "state_dict": {}}, tmp_path / "old.pt")
-    with pytest.raises(CloudRejected, match="--gripper"):
+    with pytest.raises(CheckpointRejected, match="--gripper"):
         GraspScorer(tmp_path / "old.pt", device="cpu")
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from onepiece_dist.core.mesh import resample_crops
 from onepiece_dist.core.voxel import canonical_codes, crop_regions, unpack_codes
-from onepiece_dist.errors import CloudRejected
+from onepiece_dist.errors import CheckpointRejected, CloudRejected
 from onepiece_dist.spec import GripperSpec, VoxelSpec
 
 SCORE_DECIMALS = 6
@@ -75,7 +75,7 @@ class GraspScorer:
         try:
             saved = load_checkpoint(self.path)
         except (OSError, RuntimeError, EOFError) as err:
-            raise CloudRejected(f"{self.path}: not a readable checkpoint ({type(err).__name__}: {err})") from None
+            raise CheckpointRejected(f"{self.path}: not a readable checkpoint ({type(err).__name__}: {err})") from None
         self.record = _crop_record(saved, self.path, gripper)
         self.device = resolve_device(device)
         self.model = MODELS[saved["model"]]()
@@ -120,11 +120,11 @@ class GraspScorer:
 
 def _crop_record(saved: dict, path: str, gripper: GripperSpec | None) -> CropRecord:
     if not isinstance(saved, dict) or "model" not in saved or "state_dict" not in saved:
-        raise CloudRejected(f"{path}: not a grasp-network checkpoint (no model and state_dict)")
+        raise CheckpointRejected(f"{path}: not a grasp-network checkpoint (no model and state_dict)")
     crop = saved.get("crop")
     if crop is None:
         if gripper is None:
-            raise CloudRejected(f"{path}: the checkpoint does not say which gripper it was trained for (trained "
+            raise CheckpointRejected(f"{path}: the checkpoint does not say which gripper it was trained for (trained "
                                 "before checkpoints kept their crop): name the gripper (--gripper FILE)")
         return CropRecord(gripper, VoxelSpec(), 750, saved["model"])
     trained = GripperSpec.model_validate(crop["gripper"])
@@ -133,7 +133,7 @@ def _crop_record(saved: dict, path: str, gripper: GripperSpec | None) -> CropRec
         if differs == ["name"]:  # the same hand under another name
             return CropRecord(trained, VoxelSpec.model_validate(crop["voxel"]), int(crop["points_per_grasp"]),
                               saved["model"])
-        raise CloudRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
+        raise CheckpointRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
                             f"{', '.join(differs)}: trained {', '.join(f'{n}={getattr(trained, n)}' for n in differs)}"
                             "): plan with the checkpoint's gripper, or train a network for this one")
     return CropRecord(trained, VoxelSpec.model_validate(crop["voxel"]), int(crop["points_per_grasp"]), saved["model"])
