@@ -5,9 +5,10 @@ objects from one view.
 
     .venv/bin/python -m benchmarks.experiments.pick_curve [--sizes 500,2000,8000,32000] [--views 8]
 
-Steps: (1) label: random_urdfs[0:160] and 160 seeded household-sized shapes (benchmarks/experiments/
-training_shapes.py), 8 views each, 16 candidates executed per view, on the embedded Ray (skipped when
-data/pick_labels/pick_labels.zarr holds labels of the same spec); (2) per design and size, a network fitted on a
+Steps: (1) label (BATCHES; --batches 2 adds the second): random_urdfs[0:160] and 160 seeded household-sized
+shapes (benchmarks/experiments/training_shapes.py), then random_urdfs[160:320] and 160 more shapes, 8 views each, 16
+candidates executed per view, on the embedded Ray (skipped where data/pick_labels*/pick_labels.zarr holds labels of
+the same spec); (2) per design and size, a network fitted on a
 seeded random subset of the labels (validation: 10% of the objects); (3) each network's picks on the household set
 (benchmarks/experiments/household.py), the network chooser alone. Core-seconds of a point: the labelling's
 core-seconds in proportion to its labels, plus the fit's. Results: benchmarks/results/pick_curve.json; the best
@@ -28,7 +29,6 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parents[1]
 ROOT = HERE.parent
-LABELS = ROOT / "data" / "pick_labels"
 OUT = ROOT / "data" / "pick_curve"
 TRAIN_OBJECTS = "pybullet:random_urdfs[0:160]+data/shapes"
 DESIGNS = {  # name -> PickTrainOptions fields
@@ -39,24 +39,34 @@ DESIGNS = {  # name -> PickTrainOptions fields
 }
 
 
-def label_spec():
+# the labels' batches: (objects, folder, shapes folder, shapes seed); the second doubles the labels
+BATCHES = ((TRAIN_OBJECTS, "pick_labels", "shapes", 0),
+           ("pybullet:random_urdfs[160:320]+data/shapes2", "pick_labels2", "shapes2", 1))
+
+
+def label_spec(objects: str, folder: str):
     from onepiece_dist.plan_spec import PickLabelSpec
 
-    return PickLabelSpec(objects=TRAIN_OBJECTS, output=str(LABELS.relative_to(ROOT)), views=8, per_view=16)
+    return PickLabelSpec(objects=objects, output=f"data/{folder}", views=8, per_view=16)
 
 
-def labels():
-    """The pick labels (made here unless they already are, for the same spec)."""
+def labels(batches: int = 1):
+    """The pick labels of the first ``batches`` batches (each made here unless it already is, for the same
+    spec), joined."""
     from benchmarks.experiments.training_shapes import training_shapes
     from onepiece_dist.picks.pick_labels import run_pick_labels
     from onepiece_dist.store.pick_labels import read_pick_labels
 
-    spec = label_spec()
-    path = LABELS / "pick_labels.zarr"
-    if path.exists() and read_pick_labels(path).attrs["spec"] == spec.model_dump(mode="json"):
-        return read_pick_labels(path)
-    training_shapes(ROOT / "data" / "shapes", 160)
-    return read_pick_labels(run_pick_labels(spec))
+    joined = None
+    for objects, folder, shapes, seed in BATCHES[:batches]:
+        spec = label_spec(objects, folder)
+        path = ROOT / "data" / folder / "pick_labels.zarr"
+        if not (path.exists() and read_pick_labels(path).attrs["spec"] == spec.model_dump(mode="json")):
+            training_shapes(ROOT / "data" / shapes, 160, seed)
+            run_pick_labels(spec)
+        batch = read_pick_labels(path)
+        joined = batch if joined is None else joined.joined(batch)
+    return joined
 
 
 def fit(all_labels, size: int, design: str, seed: int = 0) -> dict:
@@ -96,8 +106,9 @@ def main() -> None:
     parser.add_argument("--sizes", default="500,2000,8000,32000")
     parser.add_argument("--designs", default=",".join(DESIGNS))
     parser.add_argument("--views", type=int, default=8)
+    parser.add_argument("--batches", type=int, default=1, help="label batches to use (BATCHES)")
     args = parser.parse_args()
-    all_labels = labels()
+    all_labels = labels(args.batches)
     sizes = [min(int(s), len(all_labels)) for s in args.sizes.split(",")]
     path = HERE / "results" / "pick_curve.json"
     done = json.loads(path.read_text())["points"] if path.is_file() else []
@@ -107,7 +118,8 @@ def main() -> None:
             if any(p["design"] == design and p["labels"] == size and p.get("views") == args.views for p in points):
                 continue
             point = fit(all_labels, size, design)
-            point.update(views=args.views, picks=picks(point["checkpoint"], args.views, name=f"{design}_{size}"))
+            point.update(views=args.views, batches=args.batches,
+                         picks=picks(point["checkpoint"], args.views, name=f"{design}_{size}"))
             points.append(point)
             print(design, size, point["picks"]["methods"]["network"]["first_attempt"], flush=True)
             _write(path, all_labels, points)
@@ -116,7 +128,8 @@ def main() -> None:
 def _write(path: Path, all_labels, points: list[dict]) -> None:
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_curve", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
-           "labels": {"spec": all_labels.attrs["spec"], "rows": len(all_labels),
+           "labels": {"spec": all_labels.attrs["spec"], "specs": all_labels.attrs.get("specs"),
+                      "rows": len(all_labels),
                       "success_rate": float(all_labels.success.mean()),
                       "core_seconds": all_labels.attrs["core_seconds"],
                       "objects": sum(o["status"] == "ok" for o in all_labels.attrs["objects"])},

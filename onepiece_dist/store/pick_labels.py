@@ -73,6 +73,19 @@ class PickLabels:
     def __len__(self) -> int:
         return len(self.success)
 
+    def joined(self, other: PickLabels) -> PickLabels:
+        """These rows then ``other``'s (its objects numbered after these); attributes: these, with both stores'
+        objects, core-seconds and specs."""
+        offset = int(self.object.max()) + 1 if len(self) else 0
+        attrs = {**self.attrs, "objects": [*self.attrs["objects"], *({**o, "index": o["index"] + offset}
+                                                                     for o in other.attrs["objects"])],
+                 "core_seconds": self.attrs["core_seconds"] + other.attrs["core_seconds"],
+                 "specs": [*self.attrs.get("specs", [self.attrs["spec"]]), other.attrs["spec"]]}
+        return PickLabels(*(np.concatenate([getattr(self, name), getattr(other, name)]) for name in
+                            ("points", "context", "success", "held", "failure")),
+                          np.concatenate([self.object, other.object + offset]),
+                          np.concatenate([self.view, other.view]), np.concatenate([self.pose, other.pose]), attrs)
+
     def subset(self, rows: np.ndarray) -> PickLabels:
         return PickLabels(self.points[rows], self.context[rows], self.success[rows], self.held[rows],
                           self.failure[rows], self.object[rows], self.view[rows], self.pose[rows], self.attrs)
