@@ -4,8 +4,11 @@
     handle = Client().submit(JobSpec(objects="pybullet:random_urdfs[0:8]"))
     print(handle.wait().progress)
 
-    from onepiece_dist.api import PickSpec, run_picks   # the pick benchmark (docs/planning.md)
+    from onepiece_dist.api import PickSpec, run_picks   # the pick benchmark (docs/picks.md)
     report = run_picks(PickSpec(checkpoint="data/x.zarr.train/best.pt", objects="meshes/"))
+
+    from onepiece_dist.api import plan_grasps           # grasps on a camera's files (docs/planning.md)
+    planned = plan_grasps("depth.png", intrinsics="k.json", camera_pose="camera.json")  # the shipped network
 
 ``Client(address=None)`` runs jobs on an embedded Ray (loopback only) in a background thread of this process;
 ``Client(address="http://127.0.0.1:8265")`` submits them to a cluster through the Ray Jobs API, where they keep
@@ -40,14 +43,16 @@ from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, proto
 from onepiece_dist.job.status import STATUS_SUFFIX, EvaluationReport, JobStatus, status_path
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
+from onepiece_dist.plan.robot import RobotPlan
+from onepiece_dist.plan.robot import plan_from_files as plan_grasps
 from onepiece_dist.plan_spec import PickSpec, PlanSpec
 from onepiece_dist.spec import JobSpec, default_job_id
 from onepiece_dist.store import DatasetReader, open_dataset
 from onepiece_dist.version import package_version
 
 __all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "PickReport",
-           "PickSpec", "PlanSpec", "RelabelReport", "evaluate_model", "open_dataset", "relabel_report",
-           "relabel_spec", "resolve_source", "run_job", "run_picks"]
+           "PickSpec", "PlanSpec", "RelabelReport", "RobotPlan", "evaluate_model", "open_dataset", "plan_grasps",
+           "relabel_report", "relabel_spec", "resolve_source", "run_job", "run_picks"]
 
 TERMINAL = ("succeeded", "failed", "cancelled")
 _RAY_JOB_STATES = {"PENDING": "pending", "RUNNING": "running", "SUCCEEDED": "succeeded", "FAILED": "failed",

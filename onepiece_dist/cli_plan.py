@@ -40,35 +40,6 @@ def _gripper(path: Path | None):
         raise typer.Exit(EXIT_USAGE) from None
 
 
-def _observation(cloud: Path, intrinsics: str | None, viewpoint: str | None, depth_scale: float | None = None,
-                 camera_pose: Path | None = None, workspace: str | None = None):
-    """The observation to plan on, in the camera's frame when a camera pose is given (then also that pose), else
-    in the cloud's own frame (and None)."""
-    import numpy as np
-
-    from onepiece_dist.plan import read_cloud
-    from onepiece_dist.plan.camera_files import (
-        crop_to_workspace,
-        depth_observation,
-        read_camera_pose,
-        read_intrinsics,
-        read_workspace,
-        with_known_up,
-    )
-
-    view = _floats(viewpoint, 3, "--viewpoint")
-    pose = None if camera_pose is None else read_camera_pose(camera_pose)
-    if intrinsics is not None:
-        observation = depth_observation(cloud, read_intrinsics(intrinsics), depth_scale)
-    else:
-        observation = read_cloud(cloud, np.array(view) if view else (np.zeros(3) if pose is not None else None))
-    if pose is not None:
-        observation = with_known_up(observation, pose)
-    if workspace is not None:
-        observation = crop_to_workspace(observation, *read_workspace(workspace), pose)
-    return observation, pose
-
-
 def register(app: typer.Typer) -> None:
     app.command()(grasp)
     app.command()(pick)
@@ -104,31 +75,28 @@ def grasp(
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
 ) -> None:
     """Plan grasps on a depth camera's cloud: the top grasps by the network, written as JSON and drawn as PNG."""
-    from onepiece_dist.plan import GraspScorer, plan_grasps, write_plan
-    from onepiece_dist.plan.camera_files import in_frame
-    from onepiece_dist.plan.shipped import shipped_network, shipped_summary
+    from onepiece_dist.api import plan_grasps
+    from onepiece_dist.plan import write_plan
+    from onepiece_dist.plan.shipped import shipped_summary
     from onepiece_dist.plan_spec import PlanSpec
 
+    view = _floats(viewpoint, 3, "--viewpoint")
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto")
-        observation, pose = _observation(cloud, intrinsics, viewpoint, depth_scale, camera_pose, workspace)
-        scorer = GraspScorer(checkpoint or shipped_network(), _gripper(gripper), spec.device)
-        plan = plan_grasps(observation, scorer, spec)
-        if pose is not None:  # planned in the camera's frame, answered in the base frame
-            plan, observation = plan.transformed(pose), in_frame(observation, pose)
+        planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
+                              camera_pose, workspace, _gripper(gripper))
     except (OnePieceError, ValueError) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
     if checkpoint is None:
         err(shipped_summary())
-    extra = {"checkpoint": str(checkpoint) if checkpoint else "shipped", "output_frame": "the robot's base frame"
-             if camera_pose else "the cloud's frame"}
-    json_path, png = write_plan(plan, observation, scorer.gripper, out, extra=extra)
+    extra = {"checkpoint": planned.checkpoint or "shipped", "output_frame": planned.frame}
+    json_path, png = write_plan(planned.plan, planned.observation, planned.gripper, out, extra=extra)
     if as_json:
         typer.echo(json_path.read_text())
     else:
-        _print_plan(plan, json_path, png)
+        _print_plan(planned.plan, json_path, png)
 
 
 def _print_plan(plan, json_path: Path, png: Path | None) -> None:
@@ -163,8 +131,8 @@ def pick(
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
 ) -> None:
     """The simulated pick benchmark: objects settled on a table, one depth camera, the planner's best grasp executed
-    with the label protocol; first-attempt and within-k pick success beside three baselines."""
-    from onepiece_dist.picks.runner import run_picks
+    with the label protocol; first-attempt and within-k pick success beside the baselines and the oracle."""
+    from onepiece_dist.api import run_picks
     from onepiece_dist.plan_spec import parse_pick_spec
 
     given = _spec_mapping(spec_file)

@@ -48,7 +48,7 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     # the pick benchmark: one object's views and choosers, a task per object on the job's worker pool
     "picks": (BASE | {"plan_spec", "core", "objects", "sim", "store", "plan", "job"},
               {"numpy", "ray", "torch", "pydantic"}),
-    "api": (BASE | {"plan_spec", "objects", "job", "picks", "store"}, {"ray"}),
+    "api": (BASE | {"plan_spec", "objects", "job", "picks", "plan", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
     "study": (BASE | {"frozen", "spec_labels", "plan_spec", "api", "job", "picks", "learn", "store", "core", "objects"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
@@ -56,7 +56,7 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "cli_common": (BASE, {"typer", "rich"}),
     "cli_jobs": (BASE | {"api", "job", "cli_common"}, {"typer", "yaml"}),
     "cli_study": (BASE | {"study", "cli_common"}, {"typer"}),
-    "cli_plan": (BASE | {"gripper_presets", "plan_spec", "plan", "job", "picks", "cli_common"},
+    "cli_plan": (BASE | {"gripper_presets", "plan_spec", "plan", "job", "picks", "api", "cli_common"},
                  {"typer", "yaml", "numpy"}),
     "cli_label": (BASE | {"api", "cli_common"}, {"typer"}),
     "cli": (BASE | {"api", "objects", "sim", "job", "store", "schemas", "cli_common", "cli_jobs", "cli_study",

@@ -44,7 +44,6 @@ def curve_section(curve: dict, picks: dict | None) -> list[str]:
              "| design | labels | core-seconds | val AP | val view top-1 | household first attempt [95% CI] |",
              "| --- | --- | --- | --- | --- | --- |", *rows, "", "Designs tried:", ""]
     lines += [f"- `{d}`: {DESIGN_WORDS.get(d, d)}{_design_verdict(curve, d)}" for d in designs]
-    draw_curve(curve, picks)
     return lines
 
 
@@ -54,9 +53,12 @@ def _design_verdict(curve: dict, design: str) -> str:
     return f"; at {largest['labels']} labels it picks {_pct(_first(largest)['first_attempt'])}."
 
 
-def draw_curve(curve: dict, picks: dict | None) -> None:
+def draw_curve(curve: dict | None, picks: dict | None) -> None:
+    """docs/picks/curve.png from the committed results (the report's main draws it; rendering the page does not)."""
     import importlib.util
 
+    if curve is None:
+        return
     if importlib.util.find_spec("matplotlib") is None:
         return
     import matplotlib

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from benchmarks.pages import (
     assembly_page,
+    committed,
     decomposition_page,
     experiment_page,
     finite_set_page,
@@ -29,6 +30,7 @@ from benchmarks.pages import (
     scaling_page,
     trials_page,
 )
+from benchmarks.pages.pick_curve_section import draw_curve
 
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "benchmarks" / "results"
@@ -79,6 +81,7 @@ def main() -> None:
     for page in pages():
         (ROOT / page.path).write_text(page.render())
         print(page.path)
+    draw_curve(committed.load("pick_curve"), committed.load("picks"))
 
 
 if __name__ == "__main__":

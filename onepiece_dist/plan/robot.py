@@ -1,0 +1,73 @@
+"""From a camera's files to grasps in the robot's frame, in one call (issue 56): what `onepiece grasp` does, through
+``onepiece_dist.api.plan_grasps``. The cloud file or depth image is read, in the camera's frame when a camera pose
+is given (then planned there and moved to the base frame: the grasps are those of the camera's cloud), cropped to
+the workspace, and planned by the checkpoint's network, or the shipped one."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.plan.camera_files import (
+    crop_to_workspace,
+    depth_observation,
+    in_frame,
+    read_camera_pose,
+    read_intrinsics,
+    read_workspace,
+    with_known_up,
+)
+from onepiece_dist.plan.observation import Observation, read_cloud
+from onepiece_dist.plan.planner import GraspPlan, plan_grasps
+from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.plan.shipped import shipped_network
+from onepiece_dist.plan_spec import PlanSpec
+from onepiece_dist.spec import GripperSpec
+
+
+@dataclass(frozen=True)
+class RobotPlan:
+    """The plan (in the base frame with a camera pose, else the cloud's), the observation in that frame, the
+    gripper it was planned for, the checkpoint that scored it (None: the shipped network) and the frame's name."""
+
+    plan: GraspPlan
+    observation: Observation
+    gripper: GripperSpec
+    checkpoint: str | None
+    frame: str
+
+
+def read_observation(cloud: str | Path, intrinsics: str | None = None, depth_scale: float | None = None,
+                     viewpoint: tuple[float, float, float] | None = None, camera_pose: str | Path | None = None,
+                     workspace: str | None = None) -> tuple[Observation, np.ndarray | None]:
+    """The observation to plan on (in the camera's frame when ``camera_pose`` is given, with that pose), else in
+    the cloud's own frame (and None)."""
+    pose = None if camera_pose is None else read_camera_pose(camera_pose)
+    view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
+    if intrinsics is not None:
+        observation = depth_observation(cloud, read_intrinsics(intrinsics), depth_scale)
+    else:
+        observation = read_cloud(cloud, view if view is not None else (np.zeros(3) if pose is not None else None))
+    if pose is not None:
+        observation = with_known_up(observation, pose)
+    if workspace is not None:
+        observation = crop_to_workspace(observation, *read_workspace(workspace), pose)
+    return observation, pose
+
+
+def plan_from_files(cloud: str | Path, checkpoint: str | Path | None = None, spec: PlanSpec | None = None,
+                    intrinsics: str | None = None, depth_scale: float | None = None,
+                    viewpoint: tuple[float, float, float] | None = None, camera_pose: str | Path | None = None,
+                    workspace: str | None = None, gripper: GripperSpec | None = None) -> RobotPlan:
+    """Grasps on a cloud file or depth image (``intrinsics``: fx,fy,cx,cy or a JSON file), by ``checkpoint``'s
+    network (None: the shipped one), in the robot's base frame when ``camera_pose`` (a JSON file) is given."""
+    spec = spec or PlanSpec()
+    observation, pose = read_observation(cloud, intrinsics, depth_scale, viewpoint, camera_pose, workspace)
+    scorer = GraspScorer(checkpoint or shipped_network(), gripper, spec.device)
+    plan = plan_grasps(observation, scorer, spec)
+    if pose is not None:
+        plan, observation = plan.transformed(pose), in_frame(observation, pose)
+    frame = "the robot's base frame" if pose is not None else "the cloud's frame"
+    return RobotPlan(plan, observation, scorer.gripper, None if checkpoint is None else str(checkpoint), frame)
