@@ -27,14 +27,18 @@ class Intrinsics:
     cy: float
 
 
+def _json(path: Path, what: str):
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as err:
+        raise CloudRejected(f"{path}: not a readable {what} JSON file ({err})") from None
+
+
 def read_intrinsics(text: str) -> Intrinsics:
     """``fx,fy,cx,cy`` or the path of a JSON file with those keys or a 3x3 ``K``."""
     path = Path(text)
     if path.suffix.lower() == ".json":
-        try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError) as err:
-            raise CloudRejected(f"{path}: not readable intrinsics JSON ({err})") from None
+        data = _json(path, "intrinsics")
         if isinstance(data, dict) and "K" in data:
             k = np.asarray(data["K"], dtype=np.float64)
             if k.shape != (3, 3):
@@ -55,10 +59,7 @@ def read_intrinsics(text: str) -> Intrinsics:
 def read_camera_pose(path: str | Path) -> np.ndarray:
     """(4, 4) camera-to-base transform from a JSON file (a 4x4 ``matrix``, or ``position`` + ``quaternion``)."""
     path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError) as err:
-        raise CloudRejected(f"{path}: not a readable camera pose JSON ({err})") from None
+    data = _json(path, "camera pose")
     if isinstance(data, dict) and "matrix" in data:
         pose = np.asarray(data["matrix"], dtype=np.float64)
         if pose.shape != (4, 4) or not np.allclose(pose[3], [0, 0, 0, 1]):
