@@ -111,3 +111,21 @@ def test_a_cloud_without_a_viewpoint_gets_an_estimated_camera_said_in_the_plan_o
     box_alone = Observation(cloud.points[cloud.points[:, 2] > 0.01], None, "box.ply")
     with pytest.raises(CloudRejected, match="--viewpoint"):
         plan_grasps(box_alone, scorer, PlanSpec(support_plane="none"))
+
+
+@pytest.mark.sim
+def test_grasp_without_a_checkpoint_plans_with_the_shipped_network_and_says_which(tmp_path):
+    import torch
+
+    from onepiece_dist.plan.shipped import NETWORK, shipped_record
+
+    assert NETWORK.is_file(), "the shipped network is package data: python -m benchmarks.experiments.ship_network"
+    saved = torch.load(NETWORK, weights_only=True)  # plain values only
+    assert saved["model"] == shipped_record()["model"] and saved["crop"]["points_per_grasp"] > 0
+    np.save(tmp_path / "depth.npy", depth_millimetres().astype(np.float64) / 1000)
+    result = CliRunner().invoke(app, ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}",
+                                      "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "planning with the shipped network pick_view.pt" in result.output and "household" in result.output
+    plan = json.loads((tmp_path / "out" / "grasps.json").read_text())
+    assert plan["checkpoint"] == "shipped" and plan["grasps"]

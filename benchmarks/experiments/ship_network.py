@@ -34,7 +34,8 @@ def ship(point: dict, curve: dict) -> dict:
     NETWORK.parent.mkdir(parents=True, exist_ok=True)
     torch.save({"model": saved["model"], "state_dict": saved["state_dict"], "crop": saved["crop"]}, NETWORK)
     record = {"design": point["design"], "model": saved["model"], "labels": point["labels"],
-              "training_objects": curve["labels"]["spec"]["objects"], "trained_by":
+              "training_objects": " + ".join(spec["objects"] for spec in curve["labels"].get("specs") or
+                                             [curve["labels"]["spec"]]), "trained_by":
               "python -m benchmarks.experiments.pick_curve, then python -m benchmarks.experiments.ship_network",
               "household_first_attempt": {"rate": point["picks"]["methods"]["network"]["first_attempt"],
                                           "interval": point["picks"]["methods"]["network"]["interval"],

@@ -56,8 +56,8 @@ def scenes():
 def scorer(folder: Path, device: str = "cpu"):
     import torch
 
-    from onepiece_dist.job.runtime.trainer import crop_record
     from onepiece_dist.learn.models import PointNetWithContext
+    from onepiece_dist.learn.train import crop_record
     from onepiece_dist.plan.scorer import GraspScorer
     from onepiece_dist.plan.shipped import NETWORK
     from onepiece_dist.spec import JobSpec
@@ -83,11 +83,14 @@ def dense(observation, count: int = 2_000_000):
 
 def one_at_a_time(proposals, net, rng) -> float:
     """The baseline: each candidate cropped and scored on its own. Returns seconds."""
+    from dataclasses import replace
+
     from onepiece_dist.plan.scorer import cut_crops
 
     start = time.perf_counter()
-    for pose in proposals.poses:
-        net.score(cut_crops(proposals.object_points, pose[None], net.record, rng))
+    for k, pose in enumerate(proposals.poses):
+        crops = cut_crops(proposals.object_points, pose[None], net.record, rng)
+        net.score(replace(crops, context=proposals.crops.context[k:k + 1]))
     return time.perf_counter() - start
 
 
