@@ -17,7 +17,7 @@ import numpy as np
 
 from onepiece_dist.core.cloud_grasps import SupportPlane, above_plane, antipodal_scores, cloud_normals
 from onepiece_dist.core.frames import compose_poses, transform_points
-from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
+from onepiece_dist.core.grasp_context import WORLD_DOWN
 from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import sample_candidates
 from onepiece_dist.core.top_down import top_down_grasps
@@ -26,8 +26,8 @@ from onepiece_dist.objects import ObjectRef, load_object
 from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view
 from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
-from onepiece_dist.plan.planner import Proposals, rank
-from onepiece_dist.plan.scorer import Crops, GraspScorer, cut_crops
+from onepiece_dist.plan.planner import PlannedGrasp, Proposals, gravity, rank, with_context
+from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.plan_spec import PickSpec
 from onepiece_dist.sim.collision import load_simulated
 
@@ -107,6 +107,7 @@ class Choice:
     pool: str
     indices: tuple[int, ...]
     poses: np.ndarray
+    ranked: tuple[PlannedGrasp, ...] = ()  # the ranked grasps, where a ranking made them
 
 
 def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> ViewPicks:
@@ -125,10 +126,10 @@ def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> V
             choice = _choice(method, spec, scorer, seen, full_mesh)
             outcomes = [executions.run(choice.pool, i, pose)
                         for i, pose in zip(choice.indices, choice.poses, strict=True)]
+            if method == "network" and view < spec.pictures:
+                _draw(spec, scorer, mesh.name, seen, choice.ranked, outcomes)
         attempts[method] = tuple(o.success for o in outcomes)
         failures[method] = tuple(o.failure for o in outcomes)
-        if method == "network" and view < spec.pictures:
-            _draw(spec, scorer, mesh.name, seen, outcomes)
     return ViewPicks(view, *geometry, len(seen.cloud), len(seen.proposals.poses), attempts, failures, *pool)
 
 
@@ -151,9 +152,7 @@ def _choice(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
     permutation."""
     proposals, rng = seen.proposals, seen.rng
     if method == "top_down":
-        plane = proposals.plane
-        down = WORLD_DOWN if plane is None else -plane.normal
-        poses = top_down_grasps(proposals.object_points, down, scorer.gripper)[: spec.attempts]
+        poses = top_down_grasps(proposals.object_points, gravity(proposals.plane), scorer.gripper)[: spec.attempts]
         return Choice("top_down", tuple(range(len(poses))), poses)
     if method in ("network_full_mesh", "random_full_mesh"):
         proposals, pool = full_mesh, "mesh"
@@ -173,7 +172,7 @@ def _choice(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
         scores = scorer.score(proposals.crops, plan.batch_size)
     ranked = rank(proposals, scores, scorer.record, plan, keep=spec.attempts)
     poses = np.array([g.pose for g in ranked]).reshape(-1, 4, 4)
-    return Choice(pool, tuple(index_of(proposals.poses, p) for p in poses), poses)
+    return Choice(pool, tuple(index_of(proposals.poses, p) for p in poses), poses, ranked)
 
 
 def _full_mesh_proposals(spec: PickSpec, scorer: GraspScorer, mesh, seen: PickView) -> Proposals | None:
@@ -189,20 +188,18 @@ def _full_mesh_proposals(spec: PickSpec, scorer: GraspScorer, mesh, seen: PickVi
     crops, keep = cut_crops(world_surface, poses, scorer.record, rng).holding(spec.plan.min_points)
     if not keep.any():
         return None
-    context = grasp_context(poses[keep], object_centre(world_surface), WORLD_DOWN, gripper.closing_depth)
-    crops = Crops(crops.codes, crops.counts, crops.points, context)
+    crops = with_context(crops, poses[keep], world_surface, WORLD_DOWN, gripper.closing_depth)
     return Proposals(poses[keep], crops, world_surface, seen.proposals.plane, {})
 
 
-def _draw(spec: PickSpec, scorer: GraspScorer, name: str, seen: PickView, outcomes) -> None:
+def _draw(spec: PickSpec, scorer: GraspScorer, name: str, seen: PickView, ranked: tuple[PlannedGrasp, ...],
+          outcomes) -> None:
     """The view's cloud with the network's ranked grasps, for the benchmark's page."""
     import importlib.util
 
     if importlib.util.find_spec("matplotlib") is None:  # the plots extra: no pictures without it
         return
     proposals = seen.proposals
-    ranked = rank(proposals, scorer.score(proposals.crops, spec.plan.batch_size), scorer.record, spec.plan,
-                  keep=spec.attempts)
     result = ", ".join("picked" if o.success else o.failure for o in outcomes) or "no grasp"
     safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name)
     picture = Path(spec.output) / "pictures" / f"{safe}-view{seen.view}.png"

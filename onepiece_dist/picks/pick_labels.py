@@ -10,17 +10,16 @@ from __future__ import annotations
 
 import hashlib
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.runtime.actors import restartable_actor
-from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.job.runtime.ray_env import connect
 from onepiece_dist.job.runtime.registry import RegistryClient
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
+from onepiece_dist.picks.runner import PoolStatus, run_each_in_process
 from onepiece_dist.picks.views import Executions, observe_view
 from onepiece_dist.plan.scorer import CropRecord
 from onepiece_dist.plan_spec import PickLabelSpec
@@ -79,32 +78,16 @@ class PickLabelWorker:
         return label_object(self.spec, ref, index)
 
 
-@dataclass
-class _PoolStatus:
-    job_id: str
-    retries: int = 0
-
-
 def run_pick_labels(spec: PickLabelSpec, address: str | None = None, in_process: bool = False) -> Path:
     """Label every object of ``spec.objects``; write ``pick_labels.zarr`` into ``spec.output``; return its path."""
     refs = resolve_source(spec.objects)
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    results = _run_here(spec, refs) if in_process else _run_on_ray(spec, refs, address)
+    results = run_each_in_process(label_object, spec, refs) if in_process else _run_on_ray(spec, refs, address)
     path = Path(spec.output) / "pick_labels.zarr"
     core_seconds = sum(r.seconds for r in results)
     write_pick_labels(path, results, spec.model_dump(mode="json"), core_seconds, time.perf_counter() - start)
     return path
-
-
-def _run_here(spec: PickLabelSpec, refs: list[ObjectRef]) -> list[LabelledObject]:
-    simulate, results = PinnedSimulation(), []
-    try:
-        for index, ref in enumerate(refs):
-            results.append(simulate(label_object, spec, ref, index))
-    finally:
-        simulate.close()
-    return results
 
 
 def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None) -> list[LabelledObject]:
@@ -118,7 +101,7 @@ def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None)
     actors = [restartable_actor(PickLabelWorker, f"{job_id}-{k}", num_cpus=1, scheduling_strategy="SPREAD")
               .remote(spec) for k in range(worker_count(spec.workers, len(refs)))]
     try:
-        pool = WorkerPool(actors, RegistryClient(), _PoolStatus(job_id), lambda result: None, "label",
+        pool = WorkerPool(actors, RegistryClient(), PoolStatus(job_id), lambda result: None, "label",
                           lambda i, ref, reason: LabelledObject.rejected(i, ref.name, reason))
         return pool.run(refs)
     finally:

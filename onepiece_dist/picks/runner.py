@@ -123,7 +123,7 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
     GraspScorer(spec.checkpoint, spec.gripper, device="cpu")  # a bad checkpoint fails here, not in every worker
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     if in_process:
-        results = _run_here(spec, refs, progress)
+        results = run_each_in_process(pick_object, spec, refs, progress)
     else:
         results = _run_on_ray(spec, refs, address, progress)
     report = summarise(spec, results)
@@ -131,11 +131,13 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
     return report
 
 
-def _run_here(spec: PickSpec, refs: list[ObjectRef], progress) -> list[ObjectPicks]:
+def run_each_in_process(task: Callable, spec, refs: list[ObjectRef], progress=None) -> list:
+    """``task(spec, ref, index)`` for every object in turn, in a pinned simulation child (job.runtime.pinned_child),
+    results in object order; ``progress`` sees each."""
     simulate, results = PinnedSimulation(), []
     try:
         for index, ref in enumerate(refs):
-            results.append(simulate(pick_object, spec, ref, index))
+            results.append(simulate(task, spec, ref, index))
             if progress:
                 progress(results[-1])
     finally:
@@ -159,7 +161,7 @@ class PickWorker:
 
 
 @dataclass
-class _PoolStatus:
+class PoolStatus:
     """What the worker pool reads and counts of a run: its id (for cancel requests) and the retries."""
 
     job_id: str
@@ -182,7 +184,7 @@ def _run_on_ray(spec: PickSpec, refs: list[ObjectRef], address: str | None, prog
     actors = [restartable_actor(PickWorker, f"{job_id}-{k}", num_cpus=1, scheduling_strategy="SPREAD")
               .remote(spec, str(crashes)) for k in range(worker_count(spec.workers, len(refs)))]
     try:
-        pool = WorkerPool(actors, RegistryClient(), _PoolStatus(job_id), progress or (lambda result: None), "pick",
+        pool = WorkerPool(actors, RegistryClient(), PoolStatus(job_id), progress or (lambda result: None), "pick",
                           _quarantined, crashes)
         return pool.run(refs)
     finally:

@@ -132,11 +132,21 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
                                 spec.orientations)
     sampled = time.perf_counter()
     crops, keep = cut_crops(objects, found.poses, record, rng).holding(spec.min_points)
-    down = WORLD_DOWN if plane is None else -plane.normal
-    context = grasp_context(found.poses[keep], object_centre(objects), down, gripper.closing_depth)
-    crops = dataclasses.replace(crops, context=context)
+    crops = with_context(crops, found.poses[keep], objects, gravity(plane), gripper.closing_depth)
     return Proposals(found.poses[keep], crops, objects, plane, _counts(found, int(np.sum(~keep))),
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint)
+
+
+def gravity(plane: SupportPlane | None) -> np.ndarray:
+    """(3,) down: against the support plane's normal where one was found, else the cloud frame's -z."""
+    return WORLD_DOWN if plane is None else -plane.normal
+
+
+def with_context(crops: Crops, poses: np.ndarray, points: np.ndarray, down: np.ndarray,
+                 closing_depth: float) -> Crops:
+    """``crops`` of ``poses`` with each grasp's context: ``down`` and the centre of the object's ``points``, seen
+    from the gripper (core.grasp_context)."""
+    return dataclasses.replace(crops, context=grasp_context(poses, object_centre(points), down, closing_depth))
 
 
 def _thin(points: np.ndarray, cell: float) -> np.ndarray:

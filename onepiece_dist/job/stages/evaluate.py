@@ -68,7 +68,7 @@ def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, obje
     scores = predict(load_model(checkpoint), labelled, device=resolve_device(device))
     labels = labelled.labels()
     per_top, per_random = per_object_success(scores, labels, labelled.groups)
-    top, random = top_ranked_success(scores, labels, labelled.groups)
+    top, random = (float(np.mean(per_top)), float(np.mean(per_random))) if len(per_top) else (0.0, 0.0)
     positive = float(labels.mean()) if len(labels) else 0.0
     separable, sentence = verdict(positive, top, random)
     difference, said = against_a_guess(per_top, per_random)
