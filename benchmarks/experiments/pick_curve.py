@@ -107,12 +107,15 @@ def main() -> None:
     parser.add_argument("--designs", default=",".join(DESIGNS))
     parser.add_argument("--views", type=int, default=8)
     parser.add_argument("--batches", type=int, default=1, help="label batches to use (BATCHES)")
+    parser.add_argument("--rejudge", action="store_true", help="judge the committed points' networks again")
     args = parser.parse_args()
     all_labels = labels(args.batches)
     sizes = [min(int(s), len(all_labels)) for s in args.sizes.split(",")]
     path = HERE / "results" / "pick_curve.json"
     done = json.loads(path.read_text())["points"] if path.is_file() else []
-    points = list(done)
+    points = [rejudged(p) for p in done] if args.rejudge else list(done)
+    if args.rejudge:
+        _write(path, all_labels, points)
     for design in args.designs.split(","):
         for size in sizes:
             if any(p["design"] == design and p["labels"] == size and p.get("views") == args.views for p in points):
@@ -123,6 +126,13 @@ def main() -> None:
             points.append(point)
             print(design, size, point["picks"]["methods"]["network"]["first_attempt"], flush=True)
             _write(path, all_labels, points)
+
+
+def rejudged(point: dict) -> dict:
+    """``point`` with its network's picks measured again (after a change to the pick world)."""
+    judged = {**point, "picks": picks(point["checkpoint"], point["views"], name=f"{point['design']}_{point['labels']}")}
+    print(point["design"], point["labels"], judged["picks"]["methods"]["network"]["first_attempt"], flush=True)
+    return judged
 
 
 def _write(path: Path, all_labels, points: list[dict]) -> None:

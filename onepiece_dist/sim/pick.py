@@ -69,7 +69,12 @@ class PickWorld(SimWorld):
     def settle(self, rng: np.random.Generator, vertices: np.ndarray) -> np.ndarray:
         """Drop the object in a seeded random orientation just above the table centre and let it come to rest
         (gravity on, the gripper parked); dropped again (up to DROPS times) while it rolls out of the workspace.
-        ``vertices`` (V, 3) the mesh's. Returns its mesh-frame world pose."""
+        ``vertices`` (V, 3) the mesh's. Returns its mesh-frame world pose.
+
+        The object's body is made again first: Bullet keeps contact caches (and the solver's warm start) on a
+        body, so a body that took earlier picks would settle a little differently from a new one, and a view
+        would depend on what the world executed before it."""
+        self.carry_payload(None)
         for _ in range(DROPS):
             resting = self._drop(rng, vertices)
             if np.all(np.abs(resting[:2, 3]) < WORKSPACE / 2) and resting[2, 3] > -TABLE_THICKNESS:
@@ -165,7 +170,8 @@ def execute_pick(world: PickWorld, grasp: np.ndarray, resting: np.ndarray, noise
     """Execute ``grasp`` (4, 4, gripper-to-world) on the object resting at ``resting`` by the label protocol:
     the nominal trial and ``noise.trials - 1`` perturbed ones (pose and friction noise), each from the object at
     rest; with ``noise.every_trial`` the pick succeeds when every trial held (it stops at the first that fails),
-    else when the nominal one held."""
+    else when the nominal one held. Each trial starts from a new body of the object (Bullet keeps contact caches
+    on a body), so an outcome never depends on what the world executed before it."""
     held, failure = 0, ""
     base_friction = world.spec.friction
     for trial in range(noise.trials):
@@ -185,6 +191,7 @@ def execute_pick(world: PickWorld, grasp: np.ndarray, resting: np.ndarray, noise
 def _one_pick(world: PickWorld, pose: np.ndarray, resting: np.ndarray) -> str:
     """One trial: '' when the object is held after lifting and shaking, else why not."""
     c = world.client
+    world.carry_payload(None)
     world.set_object_pose(resting)
     pb.setGravity(0, 0, -9.81, physicsClientId=c)
     back = np.eye(4)
