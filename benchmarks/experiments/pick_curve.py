@@ -5,8 +5,9 @@ objects from one view.
 
     .venv/bin/python -m benchmarks.experiments.pick_curve [--sizes 500,2000,8000,32000] [--views 8]
 
-Steps: (1) label (BATCHES; --batches 2 adds the second): random_urdfs[0:160] and 160 seeded household-sized
-shapes (benchmarks/experiments/training_shapes.py), then random_urdfs[160:320] and 160 more shapes, 8 views each, 16
+Steps: (1) label (BATCHES; --batches 2 and 3 add the others): random_urdfs[0:160] and 160 seeded household-sized
+shapes (benchmarks/experiments/training_shapes.py), then random_urdfs[160:320] and [320:480], each with 160 more
+shapes, 8 views each, 16
 candidates executed per view, on the embedded Ray (skipped where data/pick_labels*/pick_labels.zarr holds labels of
 the same spec); (2) per design and size, a network fitted on a
 seeded random subset of the labels (validation: 10% of the objects); (3) each network's picks on the household set
@@ -39,9 +40,10 @@ DESIGNS = {  # name -> PickTrainOptions fields
 }
 
 
-# the labels' batches: (objects, folder, shapes folder, shapes seed); the second doubles the labels
+# the labels' batches: (objects, folder, shapes folder, shapes seed); each adds as many labels again
 BATCHES = ((TRAIN_OBJECTS, "pick_labels", "shapes", 0),
-           ("pybullet:random_urdfs[160:320]+data/shapes2", "pick_labels2", "shapes2", 1))
+           ("pybullet:random_urdfs[160:320]+data/shapes2", "pick_labels2", "shapes2", 1),
+           ("pybullet:random_urdfs[320:480]+data/shapes3", "pick_labels3", "shapes3", 2))
 
 
 def label_spec(objects: str, folder: str):
