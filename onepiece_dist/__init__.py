@@ -1,8 +1,8 @@
 """OnePiece-Dist: cheap grasp datasets by the ONE PIECE method, on Ray.
 
-Layers (imports go downward only; docs/architecture.md, checked by tests/test_layers.py): ``core`` <- ``objects``
-<- ``sim``; ``store`` <- ``learn`` <- ``plan``; all of them <- ``job`` <- ``picks`` <- ``api`` <- ``study`` <- ``cli``.
-``spec`` and ``errors`` are under every layer (``store`` uses ``errors`` only).
+Rooms (imports go downward only; docs/architecture.md, checked by tests/test_layers.py): ``core`` <- ``objects``
+<- ``sim``; ``stats``; ``store`` <- ``learn`` <- ``plan``; all of them <- ``job`` <- ``picks`` <- ``api`` <- ``study``
+<- ``cli``. ``specs`` (on ``gripper``) and ``errors`` are under every room (``store`` uses ``errors`` only).
 
 The names below load on first use, so ``onepiece_dist.learn.dataset`` (the reader) imports with numpy, zarr and
 torch alone.
@@ -28,7 +28,7 @@ __all__ = ["ActorLost", "ClusterUnreachable", "GripperSpec", "JobCancelled", "Jo
 
 def __getattr__(name: str):
     if name in _SPEC_NAMES:  # pydantic specs: imported when first asked for
-        from onepiece_dist import spec
+        from onepiece_dist.specs import job
 
-        return getattr(spec, name)
+        return getattr(job, name)
     raise AttributeError(f"module 'onepiece_dist' has no attribute {name!r}")

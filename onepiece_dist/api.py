@@ -45,8 +45,8 @@ from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.plan.robot import RobotPlan
 from onepiece_dist.plan.robot import plan_from_files as plan_grasps
-from onepiece_dist.plan_spec import PickSpec, PlanSpec
-from onepiece_dist.spec import JobSpec, default_job_id
+from onepiece_dist.specs.job import JobSpec, default_job_id
+from onepiece_dist.specs.plan import PickSpec, PlanSpec
 from onepiece_dist.store import DatasetReader, open_dataset
 from onepiece_dist.version import package_version
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 
 def small_spec(tmp_path: Path, **overrides) -> JobSpec:

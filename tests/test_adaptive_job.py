@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from onepiece_dist.errors import JobError, SpecError
-from onepiece_dist.spec import JobSpec, parse_job_spec
+from onepiece_dist.specs.job import JobSpec, parse_job_spec
 from onepiece_dist.store import open_dataset
 from onepiece_dist.store.dataset import content_digest
 

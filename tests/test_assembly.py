@@ -8,9 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from onepiece_dist.cli import app
-from onepiece_dist.core.classifier import PLANES, classify_occupancy, l_feature_count
-from onepiece_dist.core.layout import (
+from onepiece_dist.cli.main import app
+from onepiece_dist.core.assembly_layout import (
     FACES,
     assembly_geometry,
     corridor_intrusions,
@@ -18,11 +17,12 @@ from onepiece_dist.core.layout import (
     patch_box,
     region_codes,
 )
+from onepiece_dist.core.classifier import PLANES, classify_occupancy, l_feature_count
 from onepiece_dist.core.spatial import PointGrid
 from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.stages.assemble import one_object_points
 from onepiece_dist.job.stages.patches import QUANTUM_LEVELS, read_patches
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 from onepiece_dist.store import open_dataset
 
 GRID = (4, 8, 2)
@@ -66,7 +66,7 @@ def test_equal_scores_and_areas_fall_back_to_plane_order():
 
 @pytest.fixture(scope="module")
 def small_dataset(tmp_path_factory):
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     out = tmp_path_factory.mktemp("asm") / "ds.zarr"
     spec = JobSpec(objects="primitives[0:6]", grasps_per_object=24, output=str(out),
@@ -129,7 +129,7 @@ def test_format_2_stores_each_source_once_and_derives_the_points_the_label_stage
     import dataclasses
     import hashlib
 
-    from onepiece_dist.core.layout import assembly_geometry, layout_patches
+    from onepiece_dist.core.assembly_layout import assembly_geometry, layout_patches
     from onepiece_dist.job.stages.patches import build_patches
     from onepiece_dist.store import PartStore
 
@@ -299,7 +299,7 @@ def read_png(path) -> np.ndarray:
 
 def labelled_spec(tmp_path, perturbations: int, points: int):
     """Two primitives through assembly and the label stage on the one object."""
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     return JobSpec(objects="primitives[0:2]", grasps_per_object=16, output=str(tmp_path / "ds.zarr"),
                    sampler={"surface_points": 2000}, stages=("ingest", "extract", "dedup", "assemble", "label"),
@@ -439,7 +439,7 @@ def test_the_chamfer_distance_taken_in_row_blocks_is_the_brute_force_one(rows):
 def test_the_delivered_copy_leaves_the_extraction_records_and_reads_as_the_original(tmp_path):
     from onepiece_dist.errors import StoreError
     from onepiece_dist.learn.dataset import GraspDataset
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
     from onepiece_dist.store.dataset import delivered_bytes, disk_bytes
 
     out = tmp_path / "b.zarr"

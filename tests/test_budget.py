@@ -9,7 +9,7 @@ import pytest
 
 from onepiece_dist.errors import SpecError
 from onepiece_dist.job.stages.label_budget import allocate, budget_rows
-from onepiece_dist.spec import JobSpec, parse_job_spec
+from onepiece_dist.specs.job import JobSpec, parse_job_spec
 from onepiece_dist.store import open_dataset
 from onepiece_dist.store.dataset import content_digest
 
@@ -87,7 +87,7 @@ def test_killing_a_worker_while_it_labels_a_budget_gives_the_fault_free_dataset(
     from pathlib import Path
 
     from onepiece_dist.api import Client
-    from onepiece_dist.spec import default_job_id
+    from onepiece_dist.specs.job import default_job_id
     from tests.factories import stage_reached
 
     spec = budget_spec(tmp_path, "kill", fraction=0.5).model_copy(update={"grasps_per_object": 48})

@@ -4,7 +4,7 @@ at its floor, a label with per-grasp probabilities lands between."""
 import numpy as np
 import pytest
 
-from onepiece_dist.core.ceiling import label_ceiling
+from onepiece_dist.stats.ceiling import label_ceiling
 
 
 def test_the_ceiling_of_a_deterministic_label_is_one():
@@ -26,7 +26,7 @@ def test_a_label_of_pure_noise_has_its_ceiling_at_its_floor():
 def test_a_label_with_per_grasp_odds_lies_between_and_its_estimate_never_flatters_it():
     """Leave-one-out scores from few draws rank worse than the true odds: the estimate is conservative and rises
     towards the true ceiling (ranking by the odds themselves) as draws are added."""
-    from onepiece_dist.core.ceiling import threshold_ap
+    from onepiece_dist.stats.ceiling import threshold_ap
 
     rng = np.random.default_rng(2)
     p = rng.random(3000)
@@ -41,7 +41,7 @@ def test_a_label_with_per_grasp_odds_lies_between_and_its_estimate_never_flatter
 def test_the_fitted_ceiling_finds_the_odds_ceiling_from_three_draws_and_keeps_both_ends():
     """Ranking by the true odds is the ceiling; three draws per grasp are too coarse to show it directly (the
     leave-one-out figure stays well below), but the odds' spread fitted to their counts finds it."""
-    from onepiece_dist.core.ceiling import ap_against_draws, fitted_ceiling, threshold_ap
+    from onepiece_dist.stats.ceiling import ap_against_draws, fitted_ceiling, threshold_ap
 
     rng = np.random.default_rng(3)
     for odds in (rng.random(3000), rng.beta(0.5, 2.0, 3000)):

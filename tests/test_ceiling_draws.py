@@ -7,11 +7,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from onepiece_dist.core.ceiling import label_ceiling
 from onepiece_dist.core.mesh import enclosed_volume, sample_surface
 from onepiece_dist.core.sampling import object_rng, sample_candidates
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
+from onepiece_dist.stats.ceiling import label_ceiling
 
 pytestmark = pytest.mark.sim
 

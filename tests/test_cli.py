@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from onepiece_dist.cli import app
+from onepiece_dist.cli.main import app
 
 runner = CliRunner()
 
@@ -90,7 +90,7 @@ def test_version_prints_the_installed_package_version():
 
 
 def test_the_exit_code_table_is_in_help_and_in_the_readme():
-    from onepiece_dist.cli_common import EXIT_CODES
+    from onepiece_dist.cli.common import EXIT_CODES
 
     help_text = " ".join(runner.invoke(app, ["--help"], terminal_width=400).output.split())
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
@@ -121,7 +121,7 @@ def test_run_json_prints_the_final_status_and_progress_lines_name_every_stage(tm
 def test_the_progress_bar_is_stopped_when_a_job_fails(monkeypatch):
     import io
 
-    from onepiece_dist.cli_common import ProgressDisplay
+    from onepiece_dist.cli.common import ProgressDisplay
 
     class Terminal(io.StringIO):
         def isatty(self):

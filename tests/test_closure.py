@@ -163,7 +163,7 @@ def test_on_a_real_object_the_smallest_level_is_dexnets_sweep_on_the_same_contac
     from onepiece_dist.core.sampling import object_rng, sample_candidates
     from onepiece_dist.objects import load_object
     from onepiece_dist.objects.sources import resolve_source
-    from onepiece_dist.spec import GripperSpec, JobSpec, SamplerSpec
+    from onepiece_dist.specs.job import GripperSpec, JobSpec, SamplerSpec
 
     mesh = load_object(resolve_source("pybullet:named[3:4]")[0], JobSpec()).mesh
     rng = object_rng(mesh.content_id, 0)

@@ -6,7 +6,7 @@ import pytest
 
 from onepiece_dist.core.closure import CONTACT_STATES, closure_arrays
 from onepiece_dist.job.runtime.local import run_local
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import open_dataset
 
 NAMES = ("fc_mu", "fc_epsilon", "fc_contacts")
@@ -47,7 +47,7 @@ def test_a_job_with_closure_scores_its_grasps_on_the_sources_and_the_patches(tmp
 
 def test_a_label_other_than_physics_needs_the_scores_and_says_so():
     from onepiece_dist.errors import SpecError
-    from onepiece_dist.spec import parse_job_spec
+    from onepiece_dist.specs.job import parse_job_spec
 
     with pytest.raises(SpecError, match="closure.label"):
         parse_job_spec({"closure": {"label": "force_closure"}})

@@ -9,7 +9,7 @@ from scipy.spatial import ConvexHull
 
 from onepiece_dist.core.mesh import box_mesh, make_mesh, merge_meshes
 from onepiece_dist.sim.collision import convex_pieces
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 pytestmark = pytest.mark.sim
 

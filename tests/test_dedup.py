@@ -105,7 +105,7 @@ def test_partitioned_dedup_gives_exactly_the_single_index_result(codes, partitio
 
 @pytest.mark.ray
 def test_dedup_shard_actors_on_ray_match_one_index(ray_session):
-    from onepiece_dist.core.dedup_partitions import DedupPartition, route_codes
+    from benchmarks.speed.dedup_partitions import DedupPartition, route_codes
 
     codes = np.random.default_rng(4).integers(0, 4, (20000, 8)).astype(np.uint8)
     shards = [ray_session.remote(num_cpus=0)(DedupPartition).remote(8, k, 3) for k in range(3)]

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from onepiece_dist.cli import app
+from onepiece_dist.cli.main import app
 from onepiece_dist.core.hand_frames import (
     PANDA_CLOSING_CENTRE,
     PANDA_FINGER_BASE_Z,
@@ -185,7 +185,7 @@ def test_the_per_patch_export_loads_in_pybullet_with_the_label_stages_mass_rule(
     import pybullet as pb
 
     from onepiece_dist.sim.world import MAX_MASS, MIN_MASS
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     result = export(labelled_both, "urdf-patches", tmp_path)
     assert result.exit_code == 0, result.output
@@ -211,7 +211,7 @@ def test_the_per_patch_export_loads_in_pybullet_with_the_label_stages_mass_rule(
 
 def test_exports_without_what_they_need_are_refused_with_the_reason(tmp_path):
     from onepiece_dist.job.runtime.local import run_local
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     bare = tmp_path / "bare.zarr"
     run_local(JobSpec(objects="primitives[0:2]", grasps_per_object=8, output=str(bare),
@@ -232,7 +232,7 @@ def test_names_become_safe_unique_file_names_and_nothing_is_written_outside():
 def test_exports_name_the_gripper_as_acronym_and_graspgen_do(acronym, labelled_both, tmp_path):
     import h5py
 
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     with h5py.File(next((acronym / "grasps").glob("*.h5")), "r") as h5:
         assert h5["gripper/type"][()].decode() == "onepiece_box"  # the job's gripper, by name

@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.gripper_presets import PRESETS
-from onepiece_dist.gripper_urdf import gripper_from_urdf
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.gripper.presets import PRESETS
+from onepiece_dist.gripper.urdf import gripper_from_urdf
+from onepiece_dist.specs.job import JobSpec
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from onepiece_dist.core.mesh import signed_volume
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 
 pytestmark = pytest.mark.sim
@@ -38,7 +38,7 @@ def panda_acronym(household, tmp_path_factory):
     """Every household mesh (units given) through a Panda-preset labelled job, exported to ACRONYM."""
     from typer.testing import CliRunner
 
-    from onepiece_dist.cli import app
+    from onepiece_dist.cli.main import app
 
     folder = tmp_path_factory.mktemp("panda")
     (folder / "job.yaml").write_text("gripper: panda\ngrasps_per_object: 24\nstages: [ingest, extract]\n"

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from onepiece_dist.core import selection
 from onepiece_dist.core.mesh import box_mesh, sample_surface
 from onepiece_dist.core.voxel import crop_regions
+from onepiece_dist.stats import selection
 
 ROOT = Path(__file__).resolve().parents[1]
 lookup = importlib.import_module("onepiece_dist.study.lookup")

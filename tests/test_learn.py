@@ -12,13 +12,13 @@ import torch
 import zarr
 from typer.testing import CliRunner
 
-from onepiece_dist.cli import app
-from onepiece_dist.core.ranking import average_precision
+from onepiece_dist.cli.main import app
 from onepiece_dist.errors import StoreError
 from onepiece_dist.job.stages.evaluate import top_ranked_success
 from onepiece_dist.learn import ChunkBatchSampler, GraspDataset
 from onepiece_dist.learn.train import load_checkpoint, load_model, predict, train_model
-from onepiece_dist.spec import TrainSpec
+from onepiece_dist.specs.job import TrainSpec
+from onepiece_dist.stats.ranking import average_precision
 from tests.factories import synthetic_labelled_dataset
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -7,7 +7,7 @@ import torch
 
 from onepiece_dist.learn import GraspDataset
 from onepiece_dist.learn.train import load_checkpoint, load_model, predict, resolve_device, train_model
-from onepiece_dist.spec import TrainSpec
+from onepiece_dist.specs.job import TrainSpec
 from tests.factories import synthetic_labelled_dataset
 
 pytestmark = pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU")

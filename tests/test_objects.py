@@ -8,7 +8,7 @@ import pytest
 from onepiece_dist.errors import SourceError
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 from tests.factories import box_obj_text, broken_inputs_folder, urdf_text
 

@@ -10,16 +10,16 @@ import numpy as np
 import pytest
 import torch
 
+from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.grasp_context import grasp_context, object_centre
 from onepiece_dist.core.mesh import box_mesh
-from onepiece_dist.core.top_down import top_down_grasps
 from onepiece_dist.core.voxel import crop_regions
 from onepiece_dist.errors import CloudRejected
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.picks.runner import first_failures
 from onepiece_dist.plan.scorer import GraspScorer
-from onepiece_dist.plan_spec import PickLabelSpec, PickSpec
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
+from onepiece_dist.specs.plan import PickLabelSpec, PickSpec
 from tests.test_picks import box_on_table  # noqa: F401 (a fixture)
 from tests.test_plan import save_checkpoint
 
@@ -189,7 +189,7 @@ def test_the_franka_hand_collides_where_the_box_palm_does_not():
 
     from onepiece_dist.core.frames import pose_from_axes
     from onepiece_dist.core.sampling import FRANKA_HAND_BOUNDS, collides
-    from onepiece_dist.gripper_presets import PRESETS
+    from onepiece_dist.gripper.presets import PRESETS
     from onepiece_dist.sim.trials import place, starts_in_collision
     from onepiece_dist.sim.world import SimWorld
 

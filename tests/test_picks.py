@@ -12,8 +12,8 @@ from onepiece_dist.core.frames import pose_from_axes
 from onepiece_dist.core.mesh import box_mesh
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks
 from onepiece_dist.picks.runner import run_picks, summarise
-from onepiece_dist.plan_spec import PickSpec
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
+from onepiece_dist.specs.plan import PickSpec
 from tests.test_plan import save_checkpoint
 
 pytestmark = pytest.mark.sim
@@ -23,7 +23,7 @@ pytestmark = pytest.mark.sim
 def box_on_table():
     from onepiece_dist.sim.pick import PickWorld
     from onepiece_dist.sim.trials import LabelNoise
-    from onepiece_dist.spec import SimSpec
+    from onepiece_dist.specs.job import SimSpec
 
     mesh = box_mesh((0.04, 0.03, 0.06))
     world = PickWorld(GripperSpec())

@@ -40,7 +40,7 @@ PINNED_ARRAYS = ("grasps/code", "grasps/candidate_code", "grasps/object", "uniqu
 
 
 def pinned_spec(output: Path):
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     return JobSpec(objects="pybullet:named[3:4]+pybullet:random_urdfs[0:2]", grasps_per_object=24,
                    output=str(output), stages=("ingest", "extract", "dedup", "assemble", "label"))

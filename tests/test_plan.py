@@ -10,7 +10,7 @@ import pytest
 import torch
 from typer.testing import CliRunner
 
-from onepiece_dist.core.cloud_grasps import (
+from onepiece_dist.core.cloud.grasps import (
     above_plane,
     fit_support_plane,
     sample_cloud_grasps,
@@ -23,8 +23,8 @@ from onepiece_dist.core.sampling import collides
 from onepiece_dist.errors import CheckpointRejected, CloudRejected
 from onepiece_dist.plan import GraspScorer, Observation, depth_to_cloud, plan_grasps, read_cloud
 from onepiece_dist.plan.scorer import cut_crops
-from onepiece_dist.plan_spec import PlanSpec
-from onepiece_dist.spec import GripperSpec, JobSpec
+from onepiece_dist.specs.job import GripperSpec, JobSpec
+from onepiece_dist.specs.plan import PlanSpec
 
 pytestmark = pytest.mark.sim
 
@@ -166,7 +166,7 @@ def test_a_depth_image_drops_missing_pixels_and_a_checkpoint_for_another_gripper
 
 
 def test_onepiece_grasp_writes_json_and_a_picture_and_refuses_bad_input(tmp_path):
-    from onepiece_dist.cli import app
+    from onepiece_dist.cli.main import app
 
     checkpoint = save_checkpoint(tmp_path / "net.pt")
     seen = seen_cloud(box_mesh((0.04, 0.03, 0.06)))

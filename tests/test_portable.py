@@ -72,7 +72,7 @@ def pose_digests() -> dict[str, str]:
     from onepiece_dist.objects.urdf import _origin
     from onepiece_dist.sim.trials import _trajectory
     from onepiece_dist.sim.views import sphere_directions
-    from onepiece_dist.spec import GripperSpec, SamplerSpec
+    from onepiece_dist.specs.job import GripperSpec, SamplerSpec
 
     mesh = cylinder_mesh(0.02, 0.1)
     arrays = {"angles": np.concatenate(portable.sin_cos(np.random.default_rng(2).uniform(-9, 9, 5000))),

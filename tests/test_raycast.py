@@ -72,7 +72,7 @@ def test_hits_agree_with_embree_to_its_float32_precision_on_a_real_mesh():
 
     from onepiece_dist.objects import load_object
     from onepiece_dist.objects.sources import resolve_source
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     mesh = load_object(resolve_source("pybullet:named[3:4]")[0], JobSpec()).mesh
     rng = np.random.default_rng(1)

@@ -13,7 +13,7 @@ from onepiece_dist.api import Client, read_status
 from onepiece_dist.errors import JobError
 from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.runtime.writer import central_name
-from onepiece_dist.spec import JobSpec, default_job_id
+from onepiece_dist.specs.job import JobSpec, default_job_id
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
 from tests.factories import objects_done_at_least, stage_reached

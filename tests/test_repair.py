@@ -9,7 +9,7 @@ import pytest
 from onepiece_dist.core.mesh import box_mesh, enclosed_volume, signed_volume
 from onepiece_dist.core.repair import boundary_edges, closed_volume, connected_pieces, weld
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 CUBE = box_mesh((0.04, 0.06, 0.08))
 

@@ -16,7 +16,7 @@ import pytest
 from onepiece_dist.api import Client, read_status
 from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.status import status_path
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
 from tests.factories import TINY_STUDY as TINY
@@ -172,7 +172,7 @@ def _running_status(job: str, address: list[str], cwd: Path) -> dict | None:
 def test_cluster_commands_say_what_is_wrong_with_their_exit_codes(local_cluster, tmp_path, monkeypatch):
     from typer.testing import CliRunner
 
-    from onepiece_dist.cli import app
+    from onepiece_dist.cli.main import app
 
     address = ["--address", local_cluster]
     missing = onepiece("wait", "job-nonexistent", *address, "--timeout", "5", cwd=tmp_path)
@@ -319,7 +319,7 @@ def test_the_pick_benchmark_on_the_local_multi_node_cluster_gives_the_in_process
     """``onepiece pick --address``: one task per object on the cluster's worker nodes, the same picks as in
     process."""
     from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.plan_spec import PickSpec
+    from onepiece_dist.specs.plan import PickSpec
     from tests.test_picks import SMALL
     from tests.test_plan import save_checkpoint
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from onepiece_dist.cli import app
+from onepiece_dist.cli.main import app
+from onepiece_dist.core.cloud.support_check import support_plane
 from onepiece_dist.core.frames import matrix_from_quat, quat_from_matrix
-from onepiece_dist.core.support_check import support_plane
 from tests.test_plan import save_checkpoint
 
 FX, FY, CX, CY = 300.0, 300.0, 80.0, 60.0
@@ -99,7 +99,7 @@ def test_a_cloud_without_a_viewpoint_gets_an_estimated_camera_said_in_the_plan_o
     from onepiece_dist.core.frames import transform_points
     from onepiece_dist.errors import CloudRejected
     from onepiece_dist.plan import GraspScorer, Observation, depth_to_cloud, plan_grasps
-    from onepiece_dist.plan_spec import PlanSpec
+    from onepiece_dist.specs.plan import PlanSpec
 
     scorer = GraspScorer(save_checkpoint(tmp_path / "net.pt"))
     seen = depth_to_cloud(depth_millimetres() / 1000, FX, FY, CX, CY)

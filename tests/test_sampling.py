@@ -4,7 +4,7 @@ import pytest
 from onepiece_dist.core.frames import to_gripper_frame
 from onepiece_dist.core.mesh import box_mesh, cylinder_mesh, sample_surface
 from onepiece_dist.core.sampling import collides, object_rng, sample_candidates
-from onepiece_dist.spec import GripperSpec, SamplerSpec
+from onepiece_dist.specs.job import GripperSpec, SamplerSpec
 
 GRIPPER = GripperSpec()
 

@@ -11,13 +11,13 @@ import pytest
 from typer.testing import CliRunner
 
 from onepiece_dist.api import Client, read_status
-from onepiece_dist.cli import app
+from onepiece_dist.cli.main import app
 from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.runtime.registry import JobRegistry
 from onepiece_dist.job.runtime.writer import DatasetWriter
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.objects import resolve_source
-from onepiece_dist.spec import default_job_id
+from onepiece_dist.specs.job import default_job_id
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
 from tests.factories import objects_done_at_least
@@ -271,7 +271,7 @@ def test_an_embedded_ray_starts_in_a_process_that_first_talked_to_a_cluster(tmp_
     import subprocess
     import sys
 
-    script = ("import ray\nfrom typer.testing import CliRunner\nfrom onepiece_dist.cli import app\n"
+    script = ("import ray\nfrom typer.testing import CliRunner\nfrom onepiece_dist.cli.main import app\n"
               "from onepiece_dist.job.runtime.ray_env import connect\n"
               f"out = {str(tmp_path / 'x.zarr')!r}\n"
               "first = CliRunner().invoke(app, ['run', '--address', '127.0.0.1:9', '--out', out])\n"

@@ -9,7 +9,7 @@ from onepiece_dist.job.stages.extract import extract_arrays
 from onepiece_dist.objects import load_object, resolve_source
 from onepiece_dist.sim.trials import OUTCOMES, extract_trial, gripper_path, run_trials
 from onepiece_dist.sim.world import SimWorld, matrix_from_pose, process_world
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from tests.factories import box_slabs
 
 pytestmark = pytest.mark.sim
@@ -76,7 +76,7 @@ def test_settled_codes_differ_from_static_on_a_concave_object_and_are_stored(tmp
 
 def test_robust_quality_is_the_success_fraction_over_perturbed_trials(box_world):
     from onepiece_dist.sim.trials import LabelNoise
-    from onepiece_dist.spec import SimSpec
+    from onepiece_dist.specs.job import SimSpec
 
     noise = LabelNoise.from_spec(SimSpec(label_trials=4))
     good = run_trials(box_world, top_grasp(), label=True, noise=noise, rng=np.random.default_rng(0))
@@ -156,7 +156,7 @@ def test_a_cylinder_is_held_across_its_diameter_and_missed_beside_it():
 
 def test_the_every_trial_rule_labels_positive_only_grasps_that_held_in_all_k_trials(box_world):
     from onepiece_dist.sim.trials import LabelNoise
-    from onepiece_dist.spec import SimSpec
+    from onepiece_dist.specs.job import SimSpec
 
     poses = np.concatenate([top_grasp(x_offset=x) for x in (0.0, 0.008, 0.012, 0.014)])
     shaky = {"label_trials": 4, "pose_noise": 0.02, "friction_noise": 0.9}
@@ -213,7 +213,7 @@ def test_a_payload_at_the_grasp_centre_makes_the_label_ignore_mass_outside_the_g
     object itself, the long bar's weight far from the fingers twists it out; with ``sim.load: grasp`` both lift
     the same payload at the grasp centre and hold."""
     from onepiece_dist.sim.trials import LabelNoise
-    from onepiece_dist.spec import SimSpec
+    from onepiece_dist.specs.job import SimSpec
 
     world, held = SimWorld(SPEC.gripper), {}
     try:
@@ -234,7 +234,7 @@ def test_payload_trials_restore_the_object_and_keep_its_file_only_while_it_is_lo
     starts a new client at the next object and gives the same trials as a fresh one."""
     from onepiece_dist.sim import world as sim_world
     from onepiece_dist.sim.trials import LabelNoise
-    from onepiece_dist.spec import SimSpec
+    from onepiece_dist.specs.job import SimSpec
 
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
     monkeypatch.setattr(sim_world, "PAYLOAD_REBUILDS_PER_CLIENT", 1)

@@ -4,7 +4,7 @@ import pytest
 from pydantic import ValidationError
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.spec import GripperSpec, JobSpec, load_job_spec, parse_job_spec
+from onepiece_dist.specs.job import GripperSpec, JobSpec, load_job_spec, parse_job_spec
 
 
 def test_defaults_are_a_panda_like_hand_and_64_bit_codes():

@@ -130,7 +130,7 @@ def test_quick_is_the_quick_example_study():
 
 def test_a_stage_the_pipeline_does_not_run_is_refused_by_the_spec():
     from onepiece_dist.job import pipeline
-    from onepiece_dist.spec import STAGES, parse_job_spec
+    from onepiece_dist.specs.job import STAGES, parse_job_spec
 
     with pytest.raises(SpecError, match=r"stages\.1 = \"report\""):
         parse_job_spec({"stages": ["ingest", "report"]})
@@ -426,7 +426,7 @@ def test_the_committed_key_study_extended_with_u_reused_the_key_studys_work_and_
 
 
 def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
-    from onepiece_dist.core.selection import first_rows, least_sure
+    from onepiece_dist.stats.selection import first_rows, least_sure
 
     inverse = np.array([0, 0, 0, 1, 1, 2, 3, 3])
     first = first_rows(inverse, 4, np.random.default_rng(0))

@@ -9,7 +9,7 @@ import pytest
 import trimesh
 from typer.testing import CliRunner
 
-from onepiece_dist.cli import app
+from onepiece_dist.cli.main import app
 from onepiece_dist.core.mesh import box_mesh, make_mesh, sample_surface
 from onepiece_dist.core.repair import fan_fill
 from onepiece_dist.errors import MeshRejected

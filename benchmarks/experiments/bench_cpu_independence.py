@@ -54,7 +54,7 @@ FORMULAS = ("shipped", "np.sin", "blas", "embree", "embree+1ulp")
 
 
 def job_spec(job: str, output: Path):
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     if job == "pinned":
         from tests.test_pinned_job import pinned_spec

@@ -28,7 +28,7 @@ from onepiece_dist.objects import load_object, resolve_source
 from onepiece_dist.sim.collision import convex_pieces
 from onepiece_dist.sim.trials import LabelNoise, run_trials
 from onepiece_dist.sim.world import process_world
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 GRASPS = 48
 SETTINGS = {"vhacd": ("vhacd", {}), "coacd": ("coacd", {}), "vhacd_fine": ("vhacd", {"resolution": 1_000_000}),

@@ -16,7 +16,7 @@ from datetime import date
 from pathlib import Path
 
 from onepiece_dist.job.status import JobStatus
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import open_dataset
 from onepiece_dist.store.dataset import disk_bytes
 

@@ -30,7 +30,7 @@ import numpy as np
 from benchmarks.pages.finite_set_page import plot, write_page
 from onepiece_dist.core.dedup import unique_codes
 from onepiece_dist.core.similar import similar_clusters
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 ROOT = Path(__file__).resolve().parents[2]
 ORDERS = 5  # seeded object orders: the spread of U at each N

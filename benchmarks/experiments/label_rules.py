@@ -22,7 +22,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 from onepiece_dist.job.runtime.local import run_local  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
+from onepiece_dist.specs.job import JobSpec  # noqa: E402
 from onepiece_dist.store import open_dataset  # noqa: E402
 
 OBJECTS, GRASPS, TRIALS = "pybullet:random_urdfs[500:516]", 60, 4

@@ -47,7 +47,7 @@ BATCHES = ((TRAIN_OBJECTS, "pick_labels", "shapes", 0),
 
 
 def label_spec(objects: str, folder: str):
-    from onepiece_dist.plan_spec import PickLabelSpec
+    from onepiece_dist.specs.plan import PickLabelSpec
 
     return PickLabelSpec(objects=objects, output=f"data/{folder}", views=8, per_view=16)
 
@@ -92,7 +92,7 @@ def fit(all_labels, size: int, design: str, seed: int = 0) -> dict:
 def picks(checkpoint: str, views: int, methods: tuple[str, ...] = ("network",), name: str = "household") -> dict:
     from benchmarks.experiments.household import household_objects
     from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.plan_spec import PickSpec
+    from onepiece_dist.specs.plan import PickSpec
 
     spec = PickSpec(objects=str(household_objects()), checkpoint=str(ROOT / checkpoint),
                     output=str(OUT / "picks" / name), views=views, attempts=3, pictures=0, methods=methods)

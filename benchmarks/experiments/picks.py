@@ -34,7 +34,7 @@ TARGETS = {"first_attempt": 0.85, "above_heuristics": 0.20, "procedural": 0.80, 
 def trained_checkpoint() -> tuple[Path, dict]:
     """The cheapest plan's network (trained here unless it already is) and what its job measured."""
     from onepiece_dist.api import read_status, run_job
-    from onepiece_dist.spec import load_job_spec
+    from onepiece_dist.specs.job import load_job_spec
 
     spec = load_job_spec(TRAIN_SPEC, {"output": str(TRAIN_OUT)})
     checkpoint = Path(f"{TRAIN_OUT}.train") / "best.pt"
@@ -62,7 +62,7 @@ def training_summary(status) -> dict:
 
 def run_set(name: str, objects: str, source: str, checkpoint: Path, folder: Path) -> dict:
     from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.plan_spec import PickSpec
+    from onepiece_dist.specs.plan import PickSpec
 
     spec = PickSpec(objects=objects, checkpoint=str(checkpoint), output=str(folder / name), views=VIEWS,
                     attempts=ATTEMPTS, pictures=PICTURES)

@@ -24,7 +24,7 @@ import zarr
 
 from benchmarks.pages.committed import RESULTS
 from onepiece_dist.api import relabel_report, relabel_spec, resolve_source, run_job
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 ACRONYM_COMMIT = "d02f58fb3a556c3b719976e206cce0dce0103199"
 GRASPS = "data/examples/grasps/Mug_10f6e09036350e92b3f21f1137c3c347_0.0002682457830986903.h5"

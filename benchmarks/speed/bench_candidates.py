@@ -46,7 +46,7 @@ from onepiece_dist.core.sampling import (  # noqa: E402
 )
 from onepiece_dist.job.stages.extract import extract_arrays  # noqa: E402
 from onepiece_dist.objects import load_object, resolve_source  # noqa: E402
-from onepiece_dist.spec import JobSpec  # noqa: E402
+from onepiece_dist.specs.job import JobSpec  # noqa: E402
 
 OBJECT = "pybullet:random_urdfs[0:1]"
 TARGET = 10_000

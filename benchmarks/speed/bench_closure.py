@@ -37,7 +37,7 @@ def meshes_and_poses():
     from onepiece_dist.core.sampling import object_rng, sample_candidates
     from onepiece_dist.objects import load_object
     from onepiece_dist.objects.sources import resolve_source
-    from onepiece_dist.spec import GripperSpec, JobSpec, SamplerSpec
+    from onepiece_dist.specs.job import GripperSpec, JobSpec, SamplerSpec
 
     out = []
     for ref in resolve_source(OBJECTS):

@@ -42,7 +42,7 @@ from benchmarks.speed.bench_sim import load_all, protocol_rates, time_protocols
 from benchmarks.speed.process_tree import ProcessTree
 from onepiece_dist.api import run_job
 from onepiece_dist.objects import resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import open_dataset
 from onepiece_dist.store.dataset import disk_bytes
 

@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 import psutil
 
+from benchmarks.speed.dedup_partitions import DedupPartition, route_codes
 from onepiece_dist.core.dedup import DedupIndex, merge_partitions, merge_unique, unique_codes
-from onepiece_dist.core.dedup_partitions import DedupPartition, route_codes
 from onepiece_dist.job.runtime.writer import DatasetWriter
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 
 HERE = Path(__file__).resolve().parents[1]

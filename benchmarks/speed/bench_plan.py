@@ -36,7 +36,7 @@ def scenes():
     from onepiece_dist.objects import load_object, resolve_source
     from onepiece_dist.plan.observation import Observation
     from onepiece_dist.sim.pick import PickWorld, observe, pick_camera
-    from onepiece_dist.spec import GripperSpec, JobSpec
+    from onepiece_dist.specs.job import GripperSpec, JobSpec
 
     world, out = PickWorld(GripperSpec()), []
     for k, ref in enumerate(resolve_source(SCENES)):
@@ -60,7 +60,7 @@ def scorer(folder: Path, device: str = "cpu"):
     from onepiece_dist.learn.train import crop_record
     from onepiece_dist.plan.scorer import GraspScorer
     from onepiece_dist.plan.shipped import NETWORK
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     if NETWORK.is_file():
         return GraspScorer(NETWORK, device=device)
@@ -98,7 +98,7 @@ def measure(folder: Path) -> dict:
     import torch
 
     from onepiece_dist.plan.planner import plan_grasps, propose
-    from onepiece_dist.plan_spec import PlanSpec
+    from onepiece_dist.specs.plan import PlanSpec
 
     torch.set_num_threads(1)
     net, spec, rows = scorer(folder), PlanSpec(candidates=CANDIDATES), []

@@ -31,7 +31,7 @@ import numpy as np
 from benchmarks.speed.bench_sim import load_all, time_protocols
 from benchmarks.speed.process_tree import ProcessTree, process_kind
 from onepiece_dist.job.runtime.ray_env import connect
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 OBJECTS = os.environ.get("BENCH_SCALING_OBJECTS", "pybullet:random_urdfs[0:16]")
 GRASPS = int(os.environ.get("BENCH_SCALING_GRASPS", 128))

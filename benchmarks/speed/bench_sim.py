@@ -32,7 +32,7 @@ from onepiece_dist.objects import load_object, resolve_source
 from onepiece_dist.sim.collision import convex_pieces
 from onepiece_dist.sim.trials import place, run_trials
 from onepiece_dist.sim.world import PhysicsSettings, SimWorld, process_world
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 OBJECTS = os.environ.get("BENCH_SIM_OBJECTS", "pybullet:random_urdfs[0:8]")
 GRASPS = int(os.environ.get("BENCH_SIM_GRASPS", 64))

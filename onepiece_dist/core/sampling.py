@@ -14,7 +14,7 @@ from onepiece_dist.core.frames import compose_rotations, gripper_frame_batches, 
 from onepiece_dist.core.mesh import TriangleMesh
 from onepiece_dist.core.portable import sin_cos
 from onepiece_dist.core.raycast import cast_rays
-from onepiece_dist.spec import GripperSpec, SamplerSpec
+from onepiece_dist.specs.job import GripperSpec, SamplerSpec
 
 _RAY_START = 1e-5
 _COLLISION_POINTS = 4000

@@ -1,4 +1,4 @@
-"""The label drawn again on a held-out dataset, for its own ceiling (core.ceiling): a seeded sample of its candidates,
+"""The label drawn again on a held-out dataset, for its own ceiling (stats.ceiling): a seeded sample of its candidates,
 each several times, every draw a new execution of the job's label protocol (sim.trials.label_draws).
 
 Runs where it is called, its simulation in a pinned process (job.runtime.pinned_child): one object at a time, each
@@ -15,7 +15,7 @@ from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.sim.collision import load_simulated
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 
 def sample_rows(count: int, sample: int, seed: int) -> np.ndarray:

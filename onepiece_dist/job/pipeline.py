@@ -30,7 +30,7 @@ from onepiece_dist.job.status import (
     TrainingReport,
 )
 from onepiece_dist.objects import ObjectRef, resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 if TYPE_CHECKING:  # torch loads where a trainer trains
     import numpy as np

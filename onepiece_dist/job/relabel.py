@@ -18,7 +18,7 @@ import numpy as np
 from onepiece_dist.errors import SourceError
 from onepiece_dist.objects.foreign import preset_for, read_foreign_grasps
 from onepiece_dist.objects.sources import ObjectRef
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import DatasetReader
 
 

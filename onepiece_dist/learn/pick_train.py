@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from onepiece_dist.core.ranking import average_precision
 from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
+from onepiece_dist.stats.ranking import average_precision
 from onepiece_dist.store.pick_labels import PickLabels
 
 HALF_TURN = np.array([1.0, -1.0, -1.0], np.float32)  # (u, v, t) -> (u, -v, -t)

@@ -11,10 +11,10 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader
 
-from onepiece_dist.core.ranking import average_precision
 from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate
 from onepiece_dist.learn.models import MODELS
-from onepiece_dist.spec import JobSpec, TrainSpec
+from onepiece_dist.specs.job import JobSpec, TrainSpec
+from onepiece_dist.stats.ranking import average_precision
 
 LAST, BEST = "last.pt", "best.pt"
 

@@ -25,7 +25,7 @@ from onepiece_dist.core.hand_frames import from_panda
 from onepiece_dist.errors import PathEscape, SourceError
 from onepiece_dist.objects.paths import confined
 
-# Gripper names in the field's files, and the preset (gripper_presets) each is.
+# Gripper names in the field's files, and the preset (gripper.presets) each is.
 GRIPPER_PRESETS = {"onepiece_box": None, "panda": "panda", "franka_panda": "panda", "robotiq_2f_85": "robotiq_2f85",
                    "robotiq_2f85": "robotiq_2f85", "robotiq_2f_140": "robotiq_2f140", "robotiq_2f140": "robotiq_2f140"}
 ACRONYM_HELD = "grasps/qualities/flex/object_in_gripper"

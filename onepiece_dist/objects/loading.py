@@ -26,7 +26,7 @@ from onepiece_dist.objects.meshio import parse_mesh_bytes
 from onepiece_dist.objects.paths import confined
 from onepiece_dist.objects.sources import ObjectRef
 from onepiece_dist.objects.urdf import GeometryElement, parse_urdf
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 
 @dataclass(frozen=True)

@@ -23,8 +23,8 @@ from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.picks.views import Executions, index_of, observe_view
 from onepiece_dist.plan.planner import rank
 from onepiece_dist.plan.scorer import GraspScorer
-from onepiece_dist.plan_spec import PickSpec
 from onepiece_dist.sim.collision import load_simulated
+from onepiece_dist.specs.plan import PickSpec
 
 
 @dataclass(frozen=True)

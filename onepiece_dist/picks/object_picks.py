@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.cloud_grasps import SupportPlane, above_plane, antipodal_scores, cloud_normals
+from onepiece_dist.core.cloud.grasps import SupportPlane, above_plane, antipodal_scores, cloud_normals
+from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import compose_poses, transform_points
 from onepiece_dist.core.grasp_context import WORLD_DOWN
 from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import sample_candidates
-from onepiece_dist.core.top_down import top_down_grasps
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
 from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view
@@ -28,8 +28,8 @@ from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import PlannedGrasp, Proposals, gravity, rank, with_context
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
-from onepiece_dist.plan_spec import PickSpec
 from onepiece_dist.sim.collision import load_simulated
+from onepiece_dist.specs.plan import PickSpec
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,8 @@ from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.picks.runner import PoolStatus, run_each_in_process
 from onepiece_dist.picks.views import Executions, observe_view
 from onepiece_dist.plan.scorer import CropRecord
-from onepiece_dist.plan_spec import PickLabelSpec
 from onepiece_dist.sim.collision import load_simulated
+from onepiece_dist.specs.plan import PickLabelSpec
 from onepiece_dist.store.pick_labels import FAILURE_CODES, LabelledObject, write_pick_labels
 
 

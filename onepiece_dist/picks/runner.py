@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.intervals import bootstrap_interval
 from onepiece_dist.job.runtime.actors import restartable_actor
 from onepiece_dist.job.runtime.crashes import CrashLog, crash_folder
 from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
@@ -25,7 +24,8 @@ from onepiece_dist.job.stages.evaluate import SEPARABLE  # the one range: a gues
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan.scorer import GraspScorer
-from onepiece_dist.plan_spec import PickSpec
+from onepiece_dist.specs.plan import PickSpec
+from onepiece_dist.stats.intervals import bootstrap_interval
 
 REPORT_FILE = "picks.json"
 

@@ -13,7 +13,7 @@ from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.plan.observation import MIN_POINTS, Observation
 from onepiece_dist.plan.planner import Proposals, propose
 from onepiece_dist.plan.scorer import CropRecord
-from onepiece_dist.plan_spec import PickSpec
+from onepiece_dist.specs.plan import PickSpec
 
 # the pools a candidate is drawn from, each with a stream of generators of its own
 POOLS = {"view": 0, "mesh": 1, "top_down": 2}

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.frames import transform_points
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 
 MAX_DRAWN_POINTS = 6000
 

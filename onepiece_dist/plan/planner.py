@@ -1,5 +1,5 @@
 """Grasps planned on an observed cloud: find the support plane, sample candidates on the object's points (GPD
-style, core.cloud_grasps), cut each candidate's crop as the training crops are cut, score them with the network,
+style, core.cloud.grasps), cut each candidate's crop as the training crops are cut, score them with the network,
 rank with pose-distance non-maximum suppression. Typed results, JSON-ready."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from onepiece_dist.core.cloud_grasps import (
+from onepiece_dist.core.cloud.grasps import (
     CloudCandidates,
     SupportPlane,
     dot3,
@@ -18,14 +18,14 @@ from onepiece_dist.core.cloud_grasps import (
     suppress_near,
     voxel_downsample,
 )
+from onepiece_dist.core.cloud.support_check import support_plane
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.hand_frames import to_panda
-from onepiece_dist.core.support_check import support_plane
 from onepiece_dist.errors import CloudRejected
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
-from onepiece_dist.plan_spec import PlanSpec
+from onepiece_dist.specs.plan import PlanSpec
 
 THIN_ABOVE, THIN_CELL = 300_000, 0.0015  # points; m (a 320 px view at 0.65 m: about 1.7 mm a pixel)
 PREGRASP = 0.05  # m back along the approach, where the hand opens before it moves in (the pick benchmark's)

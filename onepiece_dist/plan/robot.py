@@ -23,8 +23,8 @@ from onepiece_dist.plan.observation import Observation, read_cloud
 from onepiece_dist.plan.planner import GraspPlan, plan_grasps
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan.shipped import shipped_network
-from onepiece_dist.plan_spec import PlanSpec
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
+from onepiece_dist.specs.plan import PlanSpec
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ import numpy as np
 from onepiece_dist.core.mesh import resample_crops
 from onepiece_dist.core.voxel import canonical_codes, crop_regions, unpack_codes
 from onepiece_dist.errors import CheckpointRejected, CloudRejected
-from onepiece_dist.spec import GripperSpec, VoxelSpec
+from onepiece_dist.specs.job import GripperSpec, VoxelSpec
 
 SCORE_DECIMALS = 6
 CPU_BATCH, GPU_BATCH = 16, 512  # crops per call: 16 scored fastest on one core (0.45 s for 211 crops, 256: 0.68 s)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.frames import quat_from_matrix
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 
 PANDA_FINGER_JOINTS = 0.0584  # m along the hand's z
 PANDA_GRASP_TARGET = 0.105  # m along the hand's z

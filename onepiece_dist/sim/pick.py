@@ -25,7 +25,7 @@ from onepiece_dist.sim.trials import (
 )
 from onepiece_dist.sim.views import Camera, back_project, camera_at, depth_image
 from onepiece_dist.sim.world import SimWorld, matrix_from_pose
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 
 TABLE_HALF = 0.5  # m: the table's half width
 TABLE_THICKNESS = 0.02

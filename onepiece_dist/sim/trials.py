@@ -19,7 +19,7 @@ import pybullet as pb
 from onepiece_dist.core import portable
 from onepiece_dist.core.frames import apply_rotation, compose_poses, invert_poses, perturb_pose, quat_from_matrix
 from onepiece_dist.sim.world import SimWorld
-from onepiece_dist.spec import SimSpec
+from onepiece_dist.specs.job import SimSpec
 
 CLOSE_SPEED = 0.25  # m/s per finger
 SETTLE_TIME = 0.05  # s after the fingers stall
@@ -249,7 +249,7 @@ def label_draws(world: SimWorld, poses: np.ndarray, rngs: list[np.random.Generat
                 draws: int) -> np.ndarray:
     """(n, draws) bool: the label of each candidate ``poses[i]`` drawn ``draws`` times again, each draw a new
     execution of the protocol (its nominal trial perturbed too, so a repeat is not the same execution), with
-    grasp i's draws from ``rngs[i]``: the label's own repeatability (core.ceiling). The object itself is lifted
+    grasp i's draws from ``rngs[i]``: the label's own repeatability (stats.ceiling). The object itself is lifted
     (a payload label, sim.load: grasp, is not drawn again here)."""
     out = np.zeros((len(poses), draws), dtype=bool)
     for i, pose in enumerate(poses):

@@ -22,7 +22,7 @@ import pybullet as pb
 
 from onepiece_dist.core.frames import apply_rotation, quat_from_matrix
 from onepiece_dist.core.sampling import FRANKA_FINGERTIP_Z, FRANKA_HAND
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 
 TIME_STEP = 1.0 / 240.0
 SOLVER_ITERATIONS = 50

@@ -1,4 +1,4 @@
-"""The dataset format (v1) in one place: its version, the check every reader makes, and the grasp-array schema
+"""The dataset format in one place: its version, the check every reader makes, and the grasp-array schema
 that every writer (extraction parts, the commit, the label stage) and every reader uses.
 
 Imports numpy only, so outside readers can use it without the rest of the package.

@@ -23,8 +23,8 @@ from collections.abc import Callable
 import numpy as np
 
 from onepiece_dist.core.dedup import unique_codes
-from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.learn.train import StepResult, StepRun
+from onepiece_dist.stats.selection import first_rows, least_sure
 from onepiece_dist.store import open_dataset
 from onepiece_dist.study.result import ArmRound
 from onepiece_dist.study.spec import StudySpec

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from onepiece_dist.job.status import JobStatus
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.study.spec import StudySpec
 
 Run = Callable[[JobSpec, str], JobStatus]  # (spec, job name) -> the finished job's status

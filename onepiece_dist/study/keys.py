@@ -21,7 +21,7 @@ from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_regions, pack_codes, voxel_indices
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.study.lookup import key_lookup
 from onepiece_dist.study.result import KeyMeasure
 from onepiece_dist.study.spec import StudyKey

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.ceiling import threshold_ap
 from onepiece_dist.core.dedup import unique_codes
-from onepiece_dist.core.selection import one_grasp_per_key
+from onepiece_dist.stats.ceiling import threshold_ap
+from onepiece_dist.stats.selection import one_grasp_per_key
 from onepiece_dist.study.result import KeyLookup, LookupRanking
 
 

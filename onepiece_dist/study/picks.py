@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.intervals import bootstrap_interval
 from onepiece_dist.learn.train import StepResult
 from onepiece_dist.picks.networks import run_network_picks
 from onepiece_dist.picks.runner import SEPARABLE
-from onepiece_dist.plan_spec import PICK_SIM, PickSpec
+from onepiece_dist.specs.plan import PICK_SIM, PickSpec
+from onepiece_dist.stats.intervals import bootstrap_interval
 from onepiece_dist.study.result import Arm, ArmPicks, Measure, PicksJudgement
 from onepiece_dist.study.spec import StudySpec
 from onepiece_dist.study.training import ArmRun, weights_at

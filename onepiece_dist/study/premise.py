@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from onepiece_dist.core.ceiling import threshold_ap
 from onepiece_dist.core.dedup import unique_codes
 from onepiece_dist.core.similar import similar_clusters
 from onepiece_dist.job.stages.label_transfer import patch_labels
+from onepiece_dist.stats.ceiling import threshold_ap
 from onepiece_dist.store import DatasetReader
 from onepiece_dist.study.result import LabelFit, Premise
 from onepiece_dist.study.stats import label_agreement, pair_agreement, share_decided

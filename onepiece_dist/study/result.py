@@ -9,7 +9,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from onepiece_dist.frozen import Frozen
+from onepiece_dist.specs.frozen import Frozen
 from onepiece_dist.study.spec import StudySpec
 
 FORMAT = 1  # bump when a field changes meaning
@@ -191,7 +191,7 @@ class KeyMeasure(Frozen):
 
 
 class Ceiling(Frozen):
-    """The label's own ceiling on a seeded sample of held-out candidates (core.ceiling), each labelled again by
+    """The label's own ceiling on a seeded sample of held-out candidates (stats.ceiling), each labelled again by
     fresh executions: draws per grasp, their positive rate (the floor: a constant predictor's AP), the chance two
     executions of one grasp agree, the best AP against one execution as the draws alone show it (leave one out: a
     lower bound with few draws) and with the odds' spread fitted to the draws (the ceiling); and each arm's

@@ -23,7 +23,6 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.api import run_job
-from onepiece_dist.core.ceiling import ap_against_draws, label_ceiling
 from onepiece_dist.errors import MeshRejected, SourceError, SpecError
 from onepiece_dist.job.label_draws import heldout_label_draws
 from onepiece_dist.job.runtime.ray_env import connect
@@ -32,7 +31,8 @@ from onepiece_dist.job.stages.label_budget import budget_rows
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.learn.train import StepResult, StepRun
 from onepiece_dist.objects import load_object, resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
+from onepiece_dist.stats.ceiling import ap_against_draws, label_ceiling
 from onepiece_dist.store import open_dataset
 from onepiece_dist.study.adaptive import adaptive_rows
 from onepiece_dist.study.costs import arm_costs

@@ -13,9 +13,9 @@ from typing import Any, Literal
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.frozen import Frozen
-from onepiece_dist.spec import GripperSpec, JobSpec, describe_validation_error
-from onepiece_dist.spec_labels import RoundsRule
+from onepiece_dist.specs.frozen import Frozen
+from onepiece_dist.specs.job import GripperSpec, JobSpec, describe_validation_error
+from onepiece_dist.specs.labels import RoundsRule
 
 
 class StudyTraining(Frozen):
@@ -211,7 +211,7 @@ def parse_study_spec(data: dict[str, Any], source: str = "<study>") -> StudySpec
     try:
         return StudySpec.model_validate(data)
     except ValidationError as err:
-        raise SpecError(describe_validation_error(err, source).replace("invalid job spec", "invalid study")) from None
+        raise SpecError(describe_validation_error(err, source, "study")) from None
 
 
 def load_study_spec(path: str | Path | None, overrides: dict[str, Any], quick: bool = False) -> StudySpec:

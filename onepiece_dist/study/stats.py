@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from onepiece_dist.core.ceiling import threshold_ap  # noqa: F401 - the study's AP over tied scores
-from onepiece_dist.core.intervals import bootstrap_interval, percentile_interval
-from onepiece_dist.core.ranking import average_precision
+from onepiece_dist.stats.ceiling import threshold_ap  # noqa: F401 - the study's AP over tied scores
+from onepiece_dist.stats.intervals import bootstrap_interval, percentile_interval
+from onepiece_dist.stats.ranking import average_precision
 
 
 def per_object_top(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray,

@@ -25,7 +25,7 @@ from onepiece_dist.objects import load_object
 from onepiece_dist.objects.meshio import write_obj
 from onepiece_dist.objects.paths import confined
 from onepiece_dist.objects.sources import resolve_source
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import DatasetReader
 
 ONE_OBJECT = "one_object"  # the name the assembled one object exports under

@@ -50,7 +50,7 @@ def render_grasps(reader: DatasetReader, mesh: tuple, count: int, hand: str) -> 
     import pybullet as pb
 
     from onepiece_dist.sim.hand import add_hand
-    from onepiece_dist.spec import GripperSpec
+    from onepiece_dist.specs.job import GripperSpec
 
     if not reader.has("assembled/grasps/pose"):
         raise MissingAssembly(f"{reader.path}: no labelled grasps on the one object (run the label stage)")

@@ -20,7 +20,7 @@ from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
 from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.objects import ObjectRef
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 if TYPE_CHECKING:
     from onepiece_dist.learn.train import StepResult, StepRun

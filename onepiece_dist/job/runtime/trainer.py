@@ -15,7 +15,7 @@ from onepiece_dist.errors import JobError
 from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
 from onepiece_dist.job.stages.evaluate import evaluation_spec, protocol_of, score_heldout
 from onepiece_dist.job.status import EvaluationReport, TrainingReport
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 
 if TYPE_CHECKING:  # torch loads where a trainer trains, not where a job is described
     from onepiece_dist.learn.train import StepResult, StepRun

@@ -25,7 +25,7 @@ from onepiece_dist.job.stages.label_rounds import round_weights
 from onepiece_dist.job.stages.label_transfer import measure_transfer
 from onepiece_dist.job.stages.patch_shards import merge_patch_shards, patch_tasks
 from onepiece_dist.job.status import AdaptiveReport, AssemblyReport, LabelReport
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
 from onepiece_dist.store.dataset import update_attributes, write_groups
 

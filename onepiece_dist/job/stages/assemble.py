@@ -9,10 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.classifier import PLANES, classify_codes
-from onepiece_dist.core.clip import hull_mesh
-from onepiece_dist.core.frames import transform_points
-from onepiece_dist.core.layout import (
+from onepiece_dist.core.assembly_layout import (
     assembly_geometry,
     corridor_intrusions,
     cube_points,
@@ -21,13 +18,16 @@ from onepiece_dist.core.layout import (
     placement_point_grid,
     region_codes,
 )
+from onepiece_dist.core.classifier import PLANES, classify_codes
+from onepiece_dist.core.clip import hull_mesh
+from onepiece_dist.core.frames import transform_points
 from onepiece_dist.core.mesh import solid_properties
 from onepiece_dist.core.voxel import crop_points
 from onepiece_dist.errors import MissingAssembly
 from onepiece_dist.job.stages.patches import Patches, read_patches
 from onepiece_dist.job.status import AssemblyReport
 from onepiece_dist.objects.meshio import write_obj, write_ply
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store.dataset import DatasetReader, write_group
 
 URDF_TEMPLATE = """<?xml version="1.0"?>

@@ -10,7 +10,7 @@ import numpy as np
 from onepiece_dist.core.dedup import DedupIndex
 from onepiece_dist.core.similar import similar_clusters
 from onepiece_dist.job.results import CommitSummary, ObjectResult
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import GroupAppender, ObjectTable, begin_dataset, finish_dataset
 from onepiece_dist.store.format import CORE_GRASP_ARRAYS, GRASP_DTYPES, grasp_row_shape

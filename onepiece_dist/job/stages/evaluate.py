@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.intervals import bootstrap_interval
-from onepiece_dist.core.ranking import average_precision
 from onepiece_dist.job.status import EvaluationReport, JobStatus
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
+from onepiece_dist.stats.intervals import bootstrap_interval
+from onepiece_dist.stats.ranking import average_precision
 
 SEPARABLE = (0.1, 0.9)  # held-out positive rates outside this range leave a ranking nothing to separate
 

@@ -23,10 +23,10 @@ from onepiece_dist.objects.foreign import read_foreign_grasps
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import propose
 from onepiece_dist.plan.scorer import CropRecord
-from onepiece_dist.plan_spec import PlanSpec
 from onepiece_dist.sim.collision import convex_pieces
 from onepiece_dist.sim.views import camera_for_grasps, object_views
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
+from onepiece_dist.specs.plan import PlanSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.format import grasp_arrays
 

@@ -20,7 +20,7 @@ from onepiece_dist.job.results import LabelTask, ShardResult
 from onepiece_dist.job.stages.label_transfer import label_on_sources
 from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.status import LabelReport
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader, write_group
 from onepiece_dist.store.format import GRASP_DTYPES, grasp_arrays

@@ -29,7 +29,7 @@ from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.stages.patches import Patches, read_patches
 from onepiece_dist.job.status import LabelReport
 from onepiece_dist.sim.views import camera_at, framing_distance, views_from
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader, write_group
 from onepiece_dist.store.format import grasp_arrays, grasp_row_shape

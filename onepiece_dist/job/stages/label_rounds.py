@@ -25,12 +25,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.selection import first_rows, least_sure
 from onepiece_dist.errors import JobError, SpecError
 from onepiece_dist.job.results import LabelTask, ShardResult
 from onepiece_dist.job.stages.label_budget import labels_key, row_shards
 from onepiece_dist.job.status import AdaptiveReport, AdaptiveRound, JobStatus
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
+from onepiece_dist.stats.selection import first_rows, least_sure
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader
 

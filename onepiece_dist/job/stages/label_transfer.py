@@ -22,7 +22,7 @@ from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.job.stages.extract import closure_labelled
 from onepiece_dist.job.stages.patches import source_geometry
 from onepiece_dist.job.status import PairAgreement, TransferReport
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
 
 

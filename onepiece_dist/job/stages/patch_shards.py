@@ -26,7 +26,7 @@ from onepiece_dist.job.stages.patches import (
     build_patches,
     source_geometry,
 )
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader
 

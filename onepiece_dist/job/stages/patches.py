@@ -14,13 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from onepiece_dist.core.assembly_layout import patch_box
 from onepiece_dist.core.clip import clip_to_box
 from onepiece_dist.core.frames import rotate_points
-from onepiece_dist.core.layout import patch_box
 from onepiece_dist.core.ragged import row_offsets, split_rows, stack_rows
 from onepiece_dist.errors import StoreError
 from onepiece_dist.job.results import ObjectPartMeta, part_key
-from onepiece_dist.spec import GripperSpec, JobSpec
+from onepiece_dist.specs.job import GripperSpec, JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
 
 SURFACE, PIECE_VERTICES, PIECE_SIZES = "object_surface", "object_piece_vertices", "object_piece_sizes"

@@ -8,9 +8,9 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli_common import EXIT_USAGE, Address, err
+from onepiece_dist.cli.common import EXIT_USAGE, Address, err
 from onepiece_dist.errors import CheckpointRejected, CloudRejected, OnePieceError, SourceError, SpecError
-from onepiece_dist.gripper_presets import gripper_fields
+from onepiece_dist.gripper.presets import gripper_fields
 
 
 def _floats(text: str | None, count: int, name: str) -> list[float] | None:
@@ -31,7 +31,7 @@ def _gripper(path: Path | None):
         return None
     import yaml
 
-    from onepiece_dist.spec import GripperSpec
+    from onepiece_dist.specs.job import GripperSpec
 
     try:
         return GripperSpec.model_validate(gripper_fields(yaml.safe_load(path.read_text()) or {}))
@@ -78,7 +78,7 @@ def grasp(
     from onepiece_dist.api import plan_grasps
     from onepiece_dist.plan import write_plan
     from onepiece_dist.plan.shipped import shipped_summary
-    from onepiece_dist.plan_spec import PlanSpec
+    from onepiece_dist.specs.plan import PlanSpec
 
     view = _floats(viewpoint, 3, "--viewpoint")
     try:
@@ -133,7 +133,7 @@ def pick(
     """The simulated pick benchmark: objects settled on a table, one depth camera, the planner's best grasp executed
     with the label protocol; first-attempt and within-k pick success beside the baselines and the oracle."""
     from onepiece_dist.api import run_picks
-    from onepiece_dist.plan_spec import parse_pick_spec
+    from onepiece_dist.specs.plan import parse_pick_spec
 
     given = _spec_mapping(spec_file)
     given.update({"checkpoint": str(checkpoint), "objects": objects, "output": str(out), "views": views,

@@ -1,6 +1,6 @@
 """Grippers people own, as GripperSpec fields (plain values; ``gripper: panda`` in a job spec picks one).
 
-Sources (shared/reference/peers.md, checked against the vendors' public figures where they could be read):
+Sources (the peers' public files and the vendors' public figures, where they could be read):
 - Franka Panda hand: 8 cm stroke (two 0-4 cm prismatic joints, pybullet_data franka_panda/panda.urdf); fingers
   from 6.6 to 11.2 cm along the approach (acronym_tools' gripper marker): 4.6 cm long; pad face 17.5 mm wide
   (franka_ros' grasping pads); 70 N continuous grip force (as 6-DOF GraspNet used).
@@ -32,9 +32,9 @@ PRESETS: dict[str, dict[str, float | str]] = {
 
 def gripper_fields(value: Any) -> Any:
     """A gripper given as a preset's name, or as a mapping with ``preset: NAME`` or ``urdf: PATH`` (its finger
-    links, gripper_urdf) and overrides, as its fields."""
+    links, gripper.urdf) and overrides, as its fields."""
     if isinstance(value, dict) and "urdf" in value:
-        from onepiece_dist.gripper_urdf import gripper_from_urdf
+        from onepiece_dist.gripper.urdf import gripper_from_urdf
 
         return {**gripper_from_urdf(value["urdf"]), **{k: v for k, v in value.items() if k != "urdf"}}
     name = value if isinstance(value, str) else value.get("preset") if isinstance(value, dict) else None

@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli_common import EXIT_USAGE, Address, err, exit_codes
+from onepiece_dist.cli.common import EXIT_USAGE, Address, err, exit_codes
 
 study_app = typer.Typer(add_completion=False, no_args_is_help=True,
                         help="A study: arms A, B and R on your train objects, scored on held-out objects.")

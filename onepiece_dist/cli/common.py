@@ -40,14 +40,14 @@ def err(message: str) -> None:
 
 def spec_default(field: str) -> str:
     """A JobSpec field's default, for --help."""
-    from onepiece_dist.spec import JobSpec
+    from onepiece_dist.specs.job import JobSpec
 
     return f"(default: {JobSpec.model_fields[field].default})"
 
 
 def build_spec(spec_file: Path | None, overrides: dict[str, Any]):
     """The JobSpec from an optional file plus command-line overrides (None values ignored)."""
-    from onepiece_dist.spec import load_job_spec, parse_job_spec
+    from onepiece_dist.specs.job import load_job_spec, parse_job_spec
 
     given = {k: v for k, v in overrides.items() if v is not None}
     if spec_file is not None:
@@ -74,7 +74,7 @@ def spec_overrides(objects: str | None, out: str | None, grasps: int | None, see
 def spec_or_exit(spec_file: Path | None, overrides: dict, spec_json: str | None = None):
     try:
         if spec_json is not None:
-            from onepiece_dist.spec import parse_job_spec
+            from onepiece_dist.specs.job import parse_job_spec
 
             return parse_job_spec(json.loads(spec_json), "--spec-json")
         return build_spec(spec_file, overrides)

@@ -17,7 +17,7 @@ from onepiece_dist.core.frames import apply_rotation, closing_region_bounds, in_
 from onepiece_dist.core.portable import sin_cos
 from onepiece_dist.core.sampling import collides, gripper_boxes, plane_normals
 from onepiece_dist.core.spatial import box_corners
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 
 NEIGHBOURS = 16  # points in a normal's neighbourhood
 CURVATURE_NEIGHBOURS = 32  # normals in a curvature axis's neighbourhood

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from onepiece_dist.core.cloud_grasps import dot3
+from onepiece_dist.core.cloud.grasps import dot3
 from onepiece_dist.core.frames import pose_from_axes
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 
 CLEARANCE = 0.005  # m
 

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli_common import (
+from onepiece_dist.cli.common import (
     EXIT_USAGE,
     Address,
     Grasps,
@@ -78,7 +78,7 @@ def _worker_runtime_env() -> dict | None:
     """workers/runtime_env.yaml when run from a checkout, else none (nodes run the installed package)."""
     import yaml
 
-    path = Path(__file__).resolve().parents[1] / "workers" / "runtime_env.yaml"
+    path = Path(__file__).resolve().parents[2] / "workers" / "runtime_env.yaml"
     return yaml.safe_load(path.read_text()) if path.is_file() else None
 
 

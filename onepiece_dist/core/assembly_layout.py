@@ -19,7 +19,7 @@ from onepiece_dist.core.frames import pose_from_axes, to_gripper_frame, transfor
 from onepiece_dist.core.mesh import merge_meshes
 from onepiece_dist.core.spatial import PointGrid, posed_box_bounds
 from onepiece_dist.core.voxel import crop_codes
-from onepiece_dist.spec import GripperSpec
+from onepiece_dist.specs.job import GripperSpec
 
 PATCH_MARGIN = 0.005  # m: the patch box's reach beyond the closing region across the fingers' width and height
 PATCH_SUPPORT = 0.01  # m: material kept beyond the fingertips (what supports the surface the pads hold)

@@ -7,8 +7,8 @@ from pathlib import Path
 
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.objects.supplement import SupplementReport, SupplementSpec
-from onepiece_dist.plan_spec import PickSpec, PlanSpec
-from onepiece_dist.spec import JobSpec
+from onepiece_dist.specs.job import JobSpec
+from onepiece_dist.specs.plan import PickSpec, PlanSpec
 from onepiece_dist.store.layout import ARRAYS, DatasetAttributes
 from onepiece_dist.study.result import StudyResult
 from onepiece_dist.study.spec import StudySpec

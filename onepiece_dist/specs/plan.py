@@ -8,8 +8,8 @@ from typing import Any, Literal
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.frozen import Frozen
-from onepiece_dist.spec import (
+from onepiece_dist.specs.frozen import Frozen
+from onepiece_dist.specs.job import (
     GripperSpec,
     JobSpec,
     SamplerSpec,
@@ -117,7 +117,7 @@ def parse_pick_spec(data: dict[str, Any], source: str = "<pick spec>") -> PickSp
     try:
         return PickSpec.model_validate(data)
     except ValidationError as err:
-        raise SpecError(describe_validation_error(err, source).replace("invalid job spec", "invalid pick spec")) \
+        raise SpecError(describe_validation_error(err, source, "pick spec")) \
             from None
 
 

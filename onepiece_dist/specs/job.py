@@ -15,9 +15,9 @@ from typing import Any, Literal
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from onepiece_dist.errors import SpecError
-from onepiece_dist.frozen import Frozen
-from onepiece_dist.gripper_presets import gripper_fields
-from onepiece_dist.spec_labels import AdaptiveSpec, BudgetSpec, EvaluateSpec
+from onepiece_dist.gripper.presets import gripper_fields
+from onepiece_dist.specs.frozen import Frozen
+from onepiece_dist.specs.labels import AdaptiveSpec, BudgetSpec, EvaluateSpec
 
 RESULTS_REVISION = 4  # bump when code changes what an extraction produces (2: one rigid body, coupled fingers;
 #                      3: parts keep the object's surface points and convex pieces, for patches; 4: fc_epsilon's
@@ -265,7 +265,7 @@ class JobSpec(Frozen):
                                   "grasps (assembled/grasps/points): per extracted grasp a few hundred bytes, "
                                   "not 4.5 kB.")
     gripper: GripperSpec = Field(GripperSpec(), description="The gripper: its fields, or a preset's name (panda, "
-                                 "robotiq_2f85, robotiq_2f140; onepiece_dist/gripper_presets.py), or a mapping "
+                                 "robotiq_2f85, robotiq_2f140; onepiece_dist/gripper/presets.py), or a mapping "
                                  "with preset: NAME, or urdf: PATH (read from its finger links), and fields that "
                                  "differ from it.")
     voxel: VoxelSpec = VoxelSpec()
@@ -357,8 +357,10 @@ def parse_job_spec(data: dict[str, Any], source: str = "<spec>") -> JobSpec:
         raise SpecError(describe_validation_error(err, source)) from None
 
 
-def describe_validation_error(err: ValidationError, source: str) -> str:
-    lines = [f"{source}: invalid job spec"]
+def describe_validation_error(err: ValidationError, source: str, what: str = "job spec") -> str:
+    """``source``'s errors, one line per field: its path, the value given and what is wrong (``what``: the kind
+    of file, as the user calls it)."""
+    lines = [f"{source}: invalid {what}"]
     for item in err.errors():
         field = ".".join(str(p) for p in item["loc"]) or "<root>"
         value = item.get("input")

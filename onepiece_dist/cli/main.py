@@ -1,7 +1,7 @@
 """The `onepiece` command line: each command builds a spec and calls one library function.
 
 Machine-readable output (paths, --json) goes to stdout; human output and progress to stderr. Exit codes: see
-``cli_common.EXIT_CODES`` (printed by --help and in the README).
+``cli.common.EXIT_CODES`` (printed by --help and in the README).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli_common import (
+from onepiece_dist.cli.common import (
     EXIT_FAILED,
     EXIT_TABLE,
     EXIT_USAGE,
@@ -30,10 +30,10 @@ from onepiece_dist.cli_common import (
     spec_or_exit,
     spec_overrides,
 )
-from onepiece_dist.cli_jobs import register as register_job_commands
-from onepiece_dist.cli_label import register as register_label_commands
-from onepiece_dist.cli_plan import register as register_plan_commands
-from onepiece_dist.cli_study import study_app
+from onepiece_dist.cli.jobs import register as register_job_commands
+from onepiece_dist.cli.label import register as register_label_commands
+from onepiece_dist.cli.plan import register as register_plan_commands
+from onepiece_dist.cli.study import study_app
 from onepiece_dist.errors import JobError, JobNotFound, MeshRejected, SourceError, SpecError, StoreError
 from onepiece_dist.sim.libm import restart_pinned
 from onepiece_dist.version import package_version
@@ -137,7 +137,7 @@ def resume(
 ) -> None:
     """Run a job again from its status: committed objects are reused, the rest is extracted."""
     from onepiece_dist.api import read_status
-    from onepiece_dist.spec import parse_job_spec
+    from onepiece_dist.specs.job import parse_job_spec
 
     try:
         status = read_status(job)
@@ -287,7 +287,7 @@ def supplement(
     from pydantic import ValidationError
 
     from onepiece_dist.objects.supplement import SupplementSpec, supplement_scan
-    from onepiece_dist.spec import describe_validation_error
+    from onepiece_dist.specs.job import describe_validation_error
 
     try:
         options = SupplementSpec(method=method, units=units)
@@ -310,11 +310,11 @@ def schema(
 ) -> None:
     """Write JSON Schemas of the job spec, job status and dataset layout (and, in a checkout, the tables of
     docs/dataset_format.md and examples/job.yaml)."""
-    from onepiece_dist.schemas import refresh_format_page, render_example_job, write_schemas
+    from onepiece_dist.cli.schema_files import refresh_format_page, render_example_job, write_schemas
 
     for path in write_schemas(out):
         typer.echo(str(path))
-    checkout = Path(__file__).resolve().parents[1]
+    checkout = Path(__file__).resolve().parents[2]
     page, example = checkout / "docs" / "dataset_format.md", checkout / "examples" / "job.yaml"
     if page.is_file():
         refresh_format_page(page)

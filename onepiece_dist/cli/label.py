@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli_common import Address, build_spec, err, exit_codes
+from onepiece_dist.cli.common import Address, build_spec, err, exit_codes
 
 
 def label(

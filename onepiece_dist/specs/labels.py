@@ -7,7 +7,7 @@ import math
 
 from pydantic import Field, field_validator, model_validator
 
-from onepiece_dist.frozen import Frozen
+from onepiece_dist.specs.frozen import Frozen
 
 
 class BudgetSpec(Frozen):

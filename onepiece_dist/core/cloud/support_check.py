@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from onepiece_dist.core.cloud_grasps import SupportPlane, dot3, fit_support_plane
+from onepiece_dist.core.cloud.grasps import SupportPlane, dot3, fit_support_plane
 
 ABOVE = 0.004  # m: off the plane
 MIN_SHARE = 0.5  # of the points off the plane that must stand above it
@@ -28,7 +28,7 @@ def holds_objects(points: np.ndarray, plane: SupportPlane, up: np.ndarray | None
 
 def support_plane(points: np.ndarray, rng: np.random.Generator, towards: np.ndarray | None = None,
                   up: np.ndarray | None = None, tolerance: float = 0.004) -> SupportPlane | None:
-    """The plane the objects stand on: the dominant plane (core.cloud_grasps.fit_support_plane, its normal along
+    """The plane the objects stand on: the dominant plane (core.cloud.grasps.fit_support_plane, its normal along
     ``towards``, the camera's side) checked by :func:`holds_objects`; when it holds nothing, the dominant plane of
     the points off it, once; None when neither does."""
     plane = fit_support_plane(points, rng, up=towards if up is None else up, tolerance=tolerance)
