@@ -53,3 +53,53 @@ def test_the_fitted_ceiling_finds_the_odds_ceiling_from_three_draws_and_keeps_bo
     assert fitted_ceiling(np.repeat((rng.random(400) < 0.3)[:, None], 3, axis=1)) == 1.0
     noise = rng.random((4000, 3)) < 0.3
     assert fitted_ceiling(noise) == pytest.approx(noise.mean(), abs=0.02)
+
+
+def true_ceiling(density) -> float:
+    """The ceiling of odds distributed as ``density`` on (0, 1): ranking by the odds, many grasps."""
+    from onepiece_dist.stats.ceiling import odds_ap
+
+    grid = (np.arange(20_000) + 0.5) / 20_000
+    return odds_ap(grid, density(grid))
+
+
+@pytest.mark.parametrize("name", ["uniform", "beta(0.5, 2)"])
+def test_the_measured_ceiling_of_known_odds_holds_the_true_ceiling_in_its_interval(name):
+    """Issue 58: 16 draws on 256 grasps measure the ceiling: the true one (ranking by the known odds) lies in the
+    measured interval, which is a few points wide; the moment fit's range is reported beside it."""
+    from onepiece_dist.stats.ceiling import measured_ceiling
+
+    rng = np.random.default_rng(7)
+    draw_odds, density = {"uniform": (lambda n: rng.random(n), np.ones_like),
+                          "beta(0.5, 2)": (lambda n: rng.beta(0.5, 2.0, n),
+                                           lambda x: x ** -0.5 * (1 - x))}[name]
+    odds = draw_odds(256)
+    measured = measured_ceiling(rng.random((256, 16)) < odds[:, None])
+    truth = true_ceiling(density)
+    assert measured.low <= truth <= measured.high, (truth, measured)
+    assert measured.high - measured.low < 0.2 and measured.low <= measured.ap <= measured.high
+    assert measured.moment_range[0] <= measured.moment_range[1] and measured.positive_rate < measured.low
+
+
+def test_the_measured_ceiling_keeps_both_ends_and_asks_for_enough_draws():
+    from onepiece_dist.stats.ceiling import measured_ceiling
+
+    rng = np.random.default_rng(8)
+    deterministic = measured_ceiling(np.repeat((rng.random(200) < 0.3)[:, None], 16, axis=1))
+    assert deterministic.ap == pytest.approx(1.0) and deterministic.low > 0.95
+    noise = measured_ceiling(rng.random((256, 16)) < 0.3)
+    assert noise.low <= 0.3 <= noise.high and noise.ap < 0.35  # the odds 0.3 for every grasp: AP 0.3
+    with pytest.raises(ValueError, match="at least 8 draws"):
+        measured_ceiling(np.ones((5, 3), bool))
+
+
+def test_a_study_ceiling_is_measured_where_the_study_drew_enough_and_places_the_arms_against_it():
+    from onepiece_dist.study.runner import ceiling_of
+
+    rng = np.random.default_rng(9)
+    odds = rng.random(128)
+    many = ceiling_of(np.arange(128), rng.random((128, 16)) < odds[:, None], [])
+    few = ceiling_of(np.arange(128), rng.random((128, 3)) < odds[:, None], [])
+    assert many.measured_ap is not None and many.measured_interval[0] <= many.measured_ap <= many.measured_interval[1]
+    assert many.ceiling == many.measured_ap and many.share_of_way(many.measured_ap) == pytest.approx(1.0)
+    assert few.measured_ap is None and few.ceiling == few.fitted_ap

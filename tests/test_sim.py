@@ -265,3 +265,20 @@ def test_payload_trials_restore_the_object_and_keep_its_file_only_while_it_is_lo
         used.close()
         fresh.close()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_ceilings_draws_lift_what_the_label_lifts():
+    """Issue 58: the label's draws (its ceiling) carry the label's load: on the long bar the object itself twists
+    out of the fingers, a payload at the grasp centre holds, draw after draw as in the label."""
+    from onepiece_dist.sim.trials import LabelNoise, label_draws
+    from onepiece_dist.specs.job import SimSpec
+
+    world, mesh = SimWorld(SPEC.gripper), box_mesh((0.3, 0.03, 0.03))
+    try:
+        world.load_object([mesh.vertices], enclosed_volume(mesh), 2000.0)
+        drawn = {load: label_draws(world, end_grasp(0.3), [np.random.default_rng(1)],
+                                   LabelNoise.from_spec(SimSpec(load=load, load_mass=0.5)), 4)
+                 for load in ("object", "grasp")}
+    finally:
+        world.close()
+    assert drawn["grasp"].mean() >= 0.75 and drawn["object"].mean() <= 0.25, drawn

@@ -11,6 +11,7 @@ trial's success or, with ``sim.success: every_trial``, success in all K trials.
 from __future__ import annotations
 
 import functools
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -249,17 +250,32 @@ def label_draws(world: SimWorld, poses: np.ndarray, rngs: list[np.random.Generat
                 draws: int) -> np.ndarray:
     """(n, draws) bool: the label of each candidate ``poses[i]`` drawn ``draws`` times again, each draw a new
     execution of the protocol (its nominal trial perturbed too, so a repeat is not the same execution), with
-    grasp i's draws from ``rngs[i]``: the label's own repeatability (stats.ceiling). The object itself is lifted
-    (a payload label, sim.load: grasp, is not drawn again here)."""
+    grasp i's draws from ``rngs[i]``: the label's own repeatability (stats.ceiling). What is lifted is what the
+    label lifts: the object, or with a payload (sim.load: grasp) the payload at the grasp centre."""
     out = np.zeros((len(poses), draws), dtype=bool)
     for i, pose in enumerate(poses):
-        for j in range(draws):
-            first = perturbed_trial(world, pose, rngs[i], noise)
-            if noise.every_trial:
-                out[i, j] = first and label_quality(world, pose, rngs[i], noise) == noise.trials - 1
-            else:
-                out[i, j] = first
+        with carrying_load(world, pose, noise):
+            for j in range(draws):
+                first = perturbed_trial(world, pose, rngs[i], noise)
+                if noise.every_trial:
+                    out[i, j] = first and label_quality(world, pose, rngs[i], noise) == noise.trials - 1
+                else:
+                    out[i, j] = first
     return out
+
+
+@contextmanager
+def carrying_load(world: SimWorld, pose: np.ndarray, noise: LabelNoise):
+    """The label's load while it is simulated: with a payload (``noise.payload``) the object is rebuilt as a weight
+    centred at the grasp centre (the closing region's centre at ``pose``), and restored afterwards."""
+    if noise.payload is not None:
+        centre = apply_rotation(pose[:3, :3], [world.spec.closing_depth / 2, 0.0, 0.0]) + pose[:3, 3]
+        world.carry_payload(centre, noise.payload)
+    try:
+        yield
+    finally:
+        if noise.payload is not None:
+            world.carry_payload(None)
 
 
 def run_trials(world: SimWorld, poses: np.ndarray, label: bool = False, noise: LabelNoise | None = None,
@@ -289,14 +305,8 @@ def label_grasp(world: SimWorld, pose: np.ndarray, rng: np.random.Generator,
     slip). The nominal trial lifts and shakes the grasp just closed; with a payload (``noise.payload``) the object
     is rebuilt as a weight centred at the grasp centre (the closing region's centre at ``pose``) and closed on
     again, and the object itself is restored afterwards."""
-    if noise.payload is not None:
-        centre = apply_rotation(pose[:3, :3], [world.spec.closing_depth / 2, 0.0, 0.0]) + pose[:3, 3]
-        world.carry_payload(centre, noise.payload)
-    try:
+    with carrying_load(world, pose, noise):
         held = noise.payload is None or extract_trial(world, pose)[0] == 0
         success, slip = lift_and_shake(world, world.gripper_pose()) if held else (False, np.nan)
         quality = (success + label_quality(world, pose, rng, noise)) / noise.trials
-    finally:
-        if noise.payload is not None:
-            world.carry_payload(None)
     return (quality == 1.0 if noise.every_trial else success), quality, slip

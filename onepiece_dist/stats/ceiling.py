@@ -89,3 +89,85 @@ def fitted_ceiling(draws: np.ndarray, samples: int = 200_000, seed: int = 0) -> 
 def ap_against_draws(scores: np.ndarray, draws: np.ndarray) -> float:
     """The mean AP of ``scores`` (n,) against each of the draws (n, r) of the same grasps' label."""
     return float(np.mean([threshold_ap(scores, draws[:, j]) for j in range(draws.shape[1])]))
+
+
+# the odds a grasp may have, where the measured ceiling places the grasps (1% apart)
+ODDS_GRID = np.linspace(0.0, 1.0, 101)
+MEASURED_DRAWS = 8  # draws per grasp from which the ceiling is measured, not only bounded and fitted
+ITERATIONS = 200  # of expectation-maximisation from even weights: stopped early, it keeps the odds smooth
+
+
+@dataclass(frozen=True)
+class MeasuredCeiling:
+    """The ceiling measured from many draws per grasp (issue 58): ``ap``, the AP of ranking by the odds against
+    one draw with the grasps' odds distributed as their draws show it (the distribution of odds that makes the
+    draws' counts most likely, on ODDS_GRID), and its 95% interval (``low``, ``high``) from resampling the grasps;
+    ``moment_range``, the AP of every two-point odds distribution with the draws' mean and spread of odds (what
+    two moments alone allow: a cross-check, not the figure)."""
+
+    grasps: int
+    draws: int
+    positive_rate: float
+    ap: float
+    low: float
+    high: float
+    moment_range: tuple[float, float]
+
+
+def measured_ceiling(draws: np.ndarray, resamples: int = 400, seed: int = 0) -> MeasuredCeiling:
+    """The ceiling of a label from ``draws`` (n, r) bool: r >= 8 draws of each of n grasps (16 draws on 128-256
+    grasps measure it to a few points). Seeded: the same draws give the same figures."""
+    draws = np.asarray(draws, dtype=bool)
+    n, r = draws.shape
+    if r < MEASURED_DRAWS or n == 0:
+        raise ValueError(f"measured_ceiling needs at least 8 draws of at least one grasp, got {draws.shape}")
+    counts = np.bincount(draws.sum(axis=1), minlength=r + 1)
+    rng = np.random.default_rng([seed, 58])
+    again = [odds_ap(ODDS_GRID, odds_distribution(rng.multinomial(n, counts / n), r)) for _ in range(resamples)]
+    ap = odds_ap(ODDS_GRID, odds_distribution(counts, r))
+    low, high = 2 * ap - np.percentile(again, [97.5, 2.5])  # the basic bootstrap: the resamples' bias turned back
+    return MeasuredCeiling(n, r, float(draws.mean()), ap, float(low), float(high), moment_range(draws))
+
+
+def odds_distribution(counts: np.ndarray, draws: int, iterations: int = ITERATIONS) -> np.ndarray:
+    """The weights on ODDS_GRID of the odds distribution that makes ``counts`` (r + 1,) (how many grasps held k of
+    ``draws`` draws) most likely (the nonparametric maximum likelihood, by expectation-maximisation)."""
+    k = np.arange(draws + 1)[:, None]
+    like = ODDS_GRID ** k * (1 - ODDS_GRID) ** (draws - k)  # numpy's 0 ** 0 is 1: the grid's ends
+    weights = np.full(len(ODDS_GRID), 1.0 / len(ODDS_GRID))
+    share = np.asarray(counts, dtype=np.float64) / max(float(np.sum(counts)), 1.0)
+    for _ in range(iterations):
+        mixed = like @ weights
+        weights = weights * (like.T @ np.where(mixed > 0, share / np.where(mixed > 0, mixed, 1.0), 0.0))
+    return weights / weights.sum()
+
+
+def odds_ap(odds: np.ndarray, weights: np.ndarray) -> float:
+    """The AP of ranking grasps by their ``odds`` against one draw, for grasps whose odds take the values ``odds``
+    with ``weights`` (many grasps: each group of equal odds counts together, as threshold_ap counts ties)."""
+    order = np.argsort(-np.asarray(odds, dtype=np.float64), kind="stable")
+    p, w = np.asarray(odds, dtype=np.float64)[order], np.asarray(weights, dtype=np.float64)[order]
+    keep = w > 0
+    p, w = p[keep], w[keep]
+    positives = np.cumsum(w * p)
+    if positives[-1] <= 0:
+        return 0.0
+    return float(np.sum(w * p / positives[-1] * positives / np.cumsum(w)))
+
+
+def moment_range(draws: np.ndarray, steps: int = 200) -> tuple[float, float]:
+    """The lowest and highest AP of the two-point odds distributions whose mean and variance are those the draws'
+    counts give (fitted_ceiling's moments): two moments do not fix the ceiling, and this is by how much."""
+    draws = np.asarray(draws, dtype=bool)
+    n, r = draws.shape
+    mean = float(draws.mean())
+    spread = (float(draws.mean(axis=1).var(ddof=1)) - mean * (1 - mean) / r) / (1 - 1 / r) if n > 1 else 0.0
+    if mean in (0.0, 1.0) or spread <= 0:
+        return (mean, mean)
+    spread = min(spread, mean * (1 - mean) * (1 - 1e-9))
+    aps = []
+    for low in np.linspace(0.0, mean - spread / (1 - mean), steps):  # the lower odds; the higher one then follows
+        high = mean + spread / (mean - low)
+        weight = (mean - low) / (high - low)
+        aps.append(odds_ap(np.array([low, high]), np.array([1 - weight, weight])))
+    return (float(min(aps)), float(max(aps)))

@@ -106,13 +106,27 @@ def ceiling_lines(result: StudyResult) -> list[str]:
     way = lambda name: ("n/a" if c.share_of_way(c.arm_ap[name]) is None  # noqa: E731
                         else pct(c.share_of_way(c.arm_ap[name])))
     a = result.arms[0].name
+    how = ("measured, below" if c.measured_ap is not None
+           else "ranking by each grasp's odds, their spread fitted to the draws")
     return [f"The label's own ceiling ({c.grasps} held-out candidates, each executed {c.draws} times again with "
             f"fresh perturbations): two executions of one grasp agree {pct(c.agreement)}; against one execution the "
             f"floor (positive rate) is {c.positive_rate:.3f} and the best AP a predictor could reach "
-            f"{c.fitted_ap:.3f} (ranking by each grasp's odds, their spread fitted to the draws; the draws alone "
-            f"show at least {c.ceiling_ap:.3f}). On the same executions A's networks reach AP {c.arm_ap[a]:.3f}: "
+            f"{c.ceiling:.3f} ({how}; the draws alone show at least {c.ceiling_ap:.3f}). On the same executions "
+            f"A's networks reach AP {c.arm_ap[a]:.3f}: "
             f"**{way(a)} of the way from the floor to the ceiling**; "
-            + ", ".join(f"{name} {way(name)}" for name in c.arm_ap if name != a) + "."]
+            + ", ".join(f"{name} {way(name)}" for name in c.arm_ap if name != a) + "."] + measured_lines(c)
+
+
+def measured_lines(c) -> list[str]:
+    """The measured ceiling (issue 58), where the study drew enough executions per grasp to measure it."""
+    if c.measured_ap is None:
+        return []
+    low, high = c.measured_interval
+    return ["", f"Measured from {c.draws} executions of each of the {c.grasps} grasps, the ceiling is "
+            f"**{c.measured_ap:.3f} [{low:.3f}, {high:.3f}]** (the odds' distribution their counts make most likely; "
+            "95% interval, grasps resampled): the arms above are placed against it. Two moments alone allow "
+            f"{c.moment_range[0]:.3f} to {c.moment_range[1]:.3f} (two-point odds with the draws' mean and spread); "
+            f"the moment fit says {c.fitted_ap:.3f}."]
 
 
 def adaptive_target_lines(result: StudyResult, u) -> list[str]:
@@ -291,7 +305,7 @@ def plot_curves(result: StudyResult, path: Path) -> bool:
                         fmt=marker + ("-" if kind == "R" else ""), capsize=3, label=kind)
         ax.plot([a.cost.labelled_grasps], [getattr(a.heldout, name).mean], "k*", markersize=10, label="A")
         if name == "ap" and result.ceiling is not None:
-            ax.axhline(result.ceiling.fitted_ap, color="tab:red", ls="--", label="the label's ceiling")
+            ax.axhline(result.ceiling.ceiling, color="tab:red", ls="--", label="the label's ceiling")
             ax.axhline(result.ceiling.positive_rate, color="0.5", ls=":", label="floor (positive rate)")
         ax.set_xscale("log")
         ax.set_xlabel("labelled grasps")

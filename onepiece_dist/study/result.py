@@ -204,10 +204,20 @@ class Ceiling(Frozen):
     ceiling_ap: float = Field(description="Leave-one-out: at least this.")
     fitted_ap: float = Field(description="The ceiling: ranking by the odds, their spread fitted to the draws.")
     arm_ap: dict[str, float] = Field(default_factory=dict, description="Each arm's AP against the executions.")
+    measured_ap: float | None = Field(None, description="With 8 draws or more: the ceiling measured (the odds' "
+                                      "distribution the draws' counts make most likely; stats.measured_ceiling).")
+    measured_interval: tuple[float, float] | None = Field(None, description="Its 95% interval (grasps resampled).")
+    moment_range: tuple[float, float] | None = Field(None, description="The AP range of the two-point odds that "
+                                                     "match the draws' two moments (the fit's cross-check).")
+
+    @property
+    def ceiling(self) -> float:
+        """The ceiling the arms are placed against: the measured one where there is one, else the fitted one."""
+        return self.fitted_ap if self.measured_ap is None else self.measured_ap
 
     def share_of_way(self, ap: float) -> float | None:
-        """Where ``ap`` stands from the floor (0) to the fitted ceiling (1); None when the ceiling is the floor."""
-        span = self.fitted_ap - self.positive_rate
+        """Where ``ap`` stands from the floor (0) to the ceiling (1); None when the ceiling is the floor."""
+        span = self.ceiling - self.positive_rate
         return None if span <= 1e-12 else (ap - self.positive_rate) / span
 
 

@@ -32,7 +32,7 @@ from onepiece_dist.job.status import JobStatus
 from onepiece_dist.learn.train import StepResult, StepRun
 from onepiece_dist.objects import load_object, resolve_source
 from onepiece_dist.specs.job import JobSpec
-from onepiece_dist.stats.ceiling import ap_against_draws, label_ceiling
+from onepiece_dist.stats.ceiling import MEASURED_DRAWS, ap_against_draws, label_ceiling, measured_ceiling
 from onepiece_dist.store import open_dataset
 from onepiece_dist.study.adaptive import adaptive_rows
 from onepiece_dist.study.costs import arm_costs
@@ -237,7 +237,12 @@ def ceiling_of(rows: np.ndarray, draws: np.ndarray, trained: list[tuple[ArmRun, 
     for job, result in trained:
         scores.setdefault(job.arm, []).append(result.scores[rows])
     arm_ap = {arm: round(ap_against_draws(np.mean(found, axis=0), draws), 4) for arm, found in scores.items()}
-    return Ceiling(**dataclasses.asdict(label_ceiling(draws)), arm_ap=arm_ap)
+    measured = {}
+    if draws.shape[1] >= MEASURED_DRAWS:
+        m = measured_ceiling(draws)
+        measured = {"measured_ap": round(m.ap, 4), "measured_interval": (round(m.low, 4), round(m.high, 4)),
+                    "moment_range": tuple(round(x, 4) for x in m.moment_range)}
+    return Ceiling(**dataclasses.asdict(label_ceiling(draws)), arm_ap=arm_ap, **measured)
 
 
 def check_jobs(records: dict[str, JobRecord]) -> None:
