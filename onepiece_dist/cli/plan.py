@@ -103,8 +103,8 @@ def _print_plan(plan, json_path: Path, png: Path | None) -> None:
     for note in plan.notes:
         err(f"note: {note}")
     c = plan.counts
-    err(f"{plan.source}: {c['sampled']} placements, {c['collided']} collided, {c['below_plane']} below the "
-        f"plane, {c['too_few_points']} with too few points, {c['scored']} scored in {plan.seconds['total']:.2f} s")
+    err(f"{plan.source}: {c.sampled} placements, {c.collided} collided, {c.below_plane} below the "
+        f"plane, {c.too_few_points} with too few points, {c.scored} scored in {plan.seconds['total']:.2f} s")
     for g in plan.grasps:
         centre = g.pose[:3, 3]
         err(f"  #{g.rank}  score {g.score:.3f}  palm at ({centre[0]:+.3f}, {centre[1]:+.3f}, {centre[2]:+.3f}) m  "

@@ -26,7 +26,7 @@ from onepiece_dist.objects import ObjectRef, load_object
 from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view
 from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
-from onepiece_dist.plan.planner import PlannedGrasp, Proposals, gravity, rank, with_context
+from onepiece_dist.plan.planner import PlanCounts, PlannedGrasp, Proposals, gravity, rank, with_context
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickSpec
@@ -189,7 +189,9 @@ def _full_mesh_proposals(spec: PickSpec, scorer: GraspScorer, mesh, seen: PickVi
     if not keep.any():
         return None
     crops = with_context(crops, poses[keep], world_surface, WORLD_DOWN, gripper.closing_depth)
-    return Proposals(poses[keep], crops, world_surface, seen.proposals.plane, {})
+    counts = PlanCounts(found.tried, found.rejected_collision, len(found.poses) - len(poses), int(np.sum(~keep)),
+                        int(np.sum(keep)))
+    return Proposals(poses[keep], crops, world_surface, seen.proposals.plane, counts)
 
 
 def _draw(spec: PickSpec, scorer: GraspScorer, name: str, seen: PickView, ranked: tuple[PlannedGrasp, ...],

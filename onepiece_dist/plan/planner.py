@@ -64,6 +64,23 @@ class PlannedGrasp:
 
 
 @dataclass(frozen=True)
+class PlanCounts:
+    """Where the tried candidates of one observation went: placements sampled, those that collided with the
+    cloud, those below the support plane, those whose crop held too few points, the candidates left, and (in a
+    plan) how many the network scored."""
+
+    sampled: int
+    collided: int
+    below_plane: int
+    too_few_points: int
+    candidates: int
+    scored: int = 0
+
+    def to_json(self) -> dict[str, int]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
 class Proposals:
     """The candidates of one observation before ranking: poses (n, 4, 4), their crops, the object's points (the
     cloud less the support plane), the plane (or None), where the tried candidates went, the seconds each step
@@ -73,7 +90,7 @@ class Proposals:
     crops: Crops
     object_points: np.ndarray
     plane: SupportPlane | None
-    counts: dict[str, int]
+    counts: PlanCounts
     seconds: dict[str, float] = field(default_factory=dict)
     viewpoint: np.ndarray | None = None
 
@@ -84,7 +101,7 @@ class GraspPlan:
 
     source: str
     grasps: tuple[PlannedGrasp, ...]
-    counts: dict[str, int]
+    counts: PlanCounts
     plane: SupportPlane | None
     seconds: dict[str, float]
     notes: tuple[str, ...] = ()
@@ -109,7 +126,7 @@ class GraspPlan:
                 "ours (u approach, v closing, origin at the palm centre); panda_pose, and position + quaternion "
                 "(x, y, z, w): the Franka Panda hand (z approach, x closing, origin at the hand base); pregrasp: "
                 "that hand 5 cm back along z",
-                "counts": self.counts, "support_plane": plane, "notes": list(self.notes),
+                "counts": self.counts.to_json(), "support_plane": plane, "notes": list(self.notes),
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "grasps": [g.to_json() for g in self.grasps]}
 
@@ -153,9 +170,8 @@ def _thin(points: np.ndarray, cell: float) -> np.ndarray:
     return points[voxel_downsample(points, cell)] if cell > 0 and len(points) else points
 
 
-def _counts(found: CloudCandidates, empty: int) -> dict[str, int]:
-    return {"sampled": found.sampled, "collided": found.collided, "below_plane": found.below_plane,
-            "too_few_points": empty, "candidates": len(found.poses) - empty}
+def _counts(found: CloudCandidates, empty: int) -> PlanCounts:
+    return PlanCounts(found.sampled, found.collided, found.below_plane, empty, len(found.poses) - empty)
 
 
 def rank(proposals: Proposals, scores: np.ndarray, record: CropRecord, spec: PlanSpec,
@@ -201,8 +217,8 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     grasps = rank(proposals, scores, scorer.record, spec)
     seconds = {**proposals.seconds, "score": scored - clock, "rank": time.perf_counter() - scored}
     seconds["total"] = sum(seconds.values())
-    return GraspPlan(observation.source, grasps, {**proposals.counts, "scored": len(scores)}, proposals.plane,
-                     seconds, notes)
+    counts = dataclasses.replace(proposals.counts, scored=len(scores))
+    return GraspPlan(observation.source, grasps, counts, proposals.plane, seconds, notes)
 
 
 ESTIMATED_DISTANCE = 0.6  # m above the support plane's points where a camera of unknown position is put

@@ -158,7 +158,7 @@ def view_candidates(spec: JobSpec, views, rng: np.random.Generator) -> tuple[Gra
         found = propose(Observation(cloud, camera[:3, 3], f"view {k}"), record, plan, rng)
         poses.append(found.poses)
         sampled_on.append(np.full(len(found.poses), k, dtype=np.int64))
-        tried += found.counts["sampled"]
+        tried += found.counts.sampled
     poses = np.concatenate(poses) if poses else np.zeros((0, 4, 4))
     widths = np.full(len(poses), spec.gripper.max_opening)
     return (GraspCandidates(poses, widths, tried, tried - len(poses)),
