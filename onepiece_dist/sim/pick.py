@@ -23,7 +23,7 @@ from onepiece_dist.sim.trials import (
     lift_steps,
     move_gripper,
 )
-from onepiece_dist.sim.views import Camera, back_project, camera_at, depth_image
+from onepiece_dist.sim.views import Camera, back_project, camera_at, depth_images
 from onepiece_dist.sim.world import SimWorld, matrix_from_pose
 from onepiece_dist.specs.job import GripperSpec
 
@@ -127,19 +127,9 @@ def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, ca
             rng: np.random.Generator, depth_noise: float = 0.0) -> np.ndarray:
     """(m, 3) world points the camera sees of the object at ``object_pose`` on the table, kept within WORKSPACE
     of the object's resting place (a workspace crop), with Gaussian ``depth_noise`` (m) along each ray."""
-    client = pb.connect(pb.DIRECT)
-    try:
-        world_vertices = transform_points(vertices, object_pose)
-        shape = pb.createVisualShape(pb.GEOM_MESH, vertices=world_vertices.tolist(),
-                                     indices=np.asarray(faces, int).ravel().tolist(), physicsClientId=client)
-        pb.createMultiBody(baseVisualShapeIndex=shape, physicsClientId=client)
-        table = pb.createVisualShape(pb.GEOM_BOX, halfExtents=[TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2],
-                                     physicsClientId=client)
-        pb.createMultiBody(baseVisualShapeIndex=table, basePosition=[0, 0, -TABLE_THICKNESS / 2],
-                           physicsClientId=client)
-        points = back_project(depth_image(pb, client, camera), camera)
-    finally:
-        pb.disconnect(client)
+    table = (np.array([TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2]), np.array([0.0, 0.0, -TABLE_THICKNESS / 2]))
+    depth = depth_images(transform_points(vertices, object_pose), faces, [camera], table)[0]
+    points = back_project(depth, camera)
     if depth_noise > 0 and len(points):
         rays = points - camera.pose[:3, 3]
         rays /= np.linalg.norm(rays, axis=1, keepdims=True)

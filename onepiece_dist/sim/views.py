@@ -83,6 +83,14 @@ def render_depth(vertices: np.ndarray, faces: np.ndarray, cameras: list[Camera])
 
     vertices (V, 3) float, faces (F, 3) int; all cameras share one image size.
     """
+    return np.stack(depth_images(vertices, faces, cameras)).astype(np.float32)
+
+
+def depth_images(vertices: np.ndarray, faces: np.ndarray, cameras: list[Camera],
+                 box: tuple[np.ndarray, np.ndarray] | None = None) -> list[np.ndarray]:
+    """Each camera's (size, size) float64 depth buffer of a scene of the mesh (its vertices where they are) and,
+    where given, a ``box`` (half extents (3,), centre (3,)): the one scene builder of every depth view (the
+    job's views, the pick benchmark's camera over its table)."""
     import pybullet as pb
 
     client = pb.connect(pb.DIRECT)
@@ -90,7 +98,10 @@ def render_depth(vertices: np.ndarray, faces: np.ndarray, cameras: list[Camera])
         shape = pb.createVisualShape(pb.GEOM_MESH, vertices=np.asarray(vertices, float).tolist(),
                                      indices=np.asarray(faces, int).ravel().tolist(), physicsClientId=client)
         pb.createMultiBody(baseVisualShapeIndex=shape, physicsClientId=client)
-        return np.stack([depth_image(pb, client, camera) for camera in cameras]).astype(np.float32)
+        if box is not None:
+            block = pb.createVisualShape(pb.GEOM_BOX, halfExtents=list(box[0]), physicsClientId=client)
+            pb.createMultiBody(baseVisualShapeIndex=block, basePosition=list(box[1]), physicsClientId=client)
+        return [depth_image(pb, client, camera) for camera in cameras]
     finally:
         pb.disconnect(client)
 
