@@ -37,6 +37,7 @@ DESIGNS = {  # name -> PickTrainOptions fields
     "crop_only": {"model": "pointnet_small"},
     "context_balanced": {"model": "pointnet_context", "balanced": True},
     "context_share": {"model": "pointnet_context", "target": "share"},
+    "context_wide": {"model": "pointnet_context_wide"},
 }
 
 

@@ -13,6 +13,7 @@ DESIGN_WORDS = {
     "crop_only": "crop alone (no context), every-trial target",
     "context_balanced": "crop + context, balanced batches",
     "context_share": "crop + context, target: the share of trials that held",
+    "context_wide": "crop + context, PointNet at width 64 (four times the compute of width 32)",
 }
 FLAT = ("random", "analytic", "top_down", "oracle")
 

@@ -59,11 +59,16 @@ def PointNetWithContext() -> PointNetGrasp:  # noqa: N802 (a model constructor, 
     return PointNetGrasp(width=32, context=6)
 
 
+def WidePointNetWithContext() -> PointNetGrasp:  # noqa: N802
+    """The context PointNet at width 64 (four times the compute): does capacity bound the picks?"""
+    return PointNetGrasp(width=64, context=6)
+
+
 def SmallPointNet() -> PointNetGrasp:  # noqa: N802
     """The same PointNet on the crop alone (the context's ablation)."""
     return PointNetGrasp(width=32)
 
 
 MODELS = {"pointnet": PointNetGrasp, "voxel": VoxelCNN, "pointnet_context": PointNetWithContext,
-          "pointnet_small": SmallPointNet}
-CONTEXT_MODELS = frozenset({"pointnet_context"})  # models that read batch["context"]
+          "pointnet_context_wide": WidePointNetWithContext, "pointnet_small": SmallPointNet}
+CONTEXT_MODELS = frozenset({"pointnet_context", "pointnet_context_wide"})  # models that read batch["context"]
