@@ -34,14 +34,19 @@ def ship(point: dict, curve: dict) -> dict:
     NETWORK.parent.mkdir(parents=True, exist_ok=True)
     torch.save({"model": saved["model"], "state_dict": saved["state_dict"], "crop": saved["crop"]}, NETWORK)
     record = {"design": point["design"], "model": saved["model"], "labels": point["labels"],
-              "training_objects": " + ".join(spec["objects"] for spec in curve["labels"].get("specs") or
-                                             [curve["labels"]["spec"]]), "trained_by":
+              "training_objects": " + ".join(spec["objects"] for spec in trained_on(point, curve)), "trained_by":
               "python -m benchmarks.experiments.pick_curve, then python -m benchmarks.experiments.ship_network",
               "household_first_attempt": {"rate": point["picks"]["methods"]["network"]["first_attempt"],
                                           "interval": point["picks"]["methods"]["network"]["interval"],
                                           "views": None, "from": "benchmarks/results/pick_curve.json"}}
     RECORD.write_text(json.dumps(record, indent=1) + "\n")
     return record
+
+
+def trained_on(point: dict, curve: dict) -> list[dict]:
+    """The label batches' specs the point's network was fitted on (its first ``batches``)."""
+    specs = curve["labels"].get("specs") or [curve["labels"]["spec"]]
+    return specs[: point.get("batches", 1)]
 
 
 def record_picks() -> dict:
