@@ -243,3 +243,22 @@ def test_a_view_sampled_job_keeps_candidates_that_close_on_nothing():
         kept[sampling] = (ok.tolist(), grasps["width"].tolist(), grasps["success"].tolist(), meta["dropped_no_contact"])
     assert kept["view"][0] == [True, True] and kept["view"][1][1] == 0.0 and kept["view"][2][1] == 0
     assert kept["mesh"][0] == [True, False] and kept["view"][3] == kept["mesh"][3] == 1
+
+
+def test_a_checkpoint_is_read_as_a_typed_record_and_bad_ones_are_refused_by_name(tmp_path):
+    """Issue 57: learn.train.read_network gives the model's name, weights and crop record; a file that is no
+    checkpoint, one without weights, and one of a model this package does not build are refused with the file's
+    name and what is wrong, never a KeyError."""
+    from onepiece_dist.learn.train import read_network
+
+    saved = read_network(save_checkpoint(tmp_path / "net.pt"))
+    assert saved.model == "pointnet" and saved.crop["points_per_grasp"] == JobSpec().sim.points_per_grasp
+    assert saved.build().training is False
+    (tmp_path / "text.pt").write_text("not a checkpoint")
+    torch.save({"model": "pointnet"}, tmp_path / "bare.pt")
+    torch.save({"model": "transformer", "state_dict": {}}, tmp_path / "other.pt")
+    for name, why in (("text.pt", "not a readable checkpoint"), ("bare.pt", "no model and state_dict"),
+                      ("other.pt", "'transformer' is not one this package builds")):
+        with pytest.raises(CheckpointRejected, match=why) as refused:
+            GraspScorer(tmp_path / name, device="cpu")
+        assert name in str(refused.value)

@@ -4,6 +4,7 @@ grasp), per-epoch metrics, checkpoints as plain state dicts loaded with ``weight
 from __future__ import annotations
 
 import os
+import pickle
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader
 
+from onepiece_dist.errors import CheckpointRejected
 from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate
 from onepiece_dist.learn.models import MODELS
 from onepiece_dist.specs.job import JobSpec, TrainSpec
@@ -43,6 +45,39 @@ def load_checkpoint(path: str | os.PathLike) -> dict:
     return torch.load(path, map_location="cpu", weights_only=True)
 
 
+@dataclass(frozen=True)
+class SavedNetwork:
+    """A grasp network's checkpoint as read: the model's name (learn.models.MODELS), its weights, and the crop
+    record it was trained on (None in checkpoints older than crop records)."""
+
+    path: str
+    model: str
+    state_dict: dict
+    crop: dict | None
+
+    def build(self) -> torch.nn.Module:
+        """The model with these weights, in evaluation mode, on the CPU."""
+        model = MODELS[self.model]()
+        model.load_state_dict(self.state_dict)
+        return model.eval()
+
+
+def read_network(path: str | os.PathLike) -> SavedNetwork:
+    """The network saved at ``path``; :class:`CheckpointRejected` names the file and what is wrong with it."""
+    path = str(path)
+    try:
+        saved = load_checkpoint(path)
+    except (OSError, RuntimeError, EOFError, pickle.UnpicklingError) as err:  # a planted pickle lands here too
+        why = str(err).splitlines()[0][:200]
+        raise CheckpointRejected(f"{path}: not a readable checkpoint ({type(err).__name__}: {why})") from None
+    if not isinstance(saved, dict) or "model" not in saved or "state_dict" not in saved:
+        raise CheckpointRejected(f"{path}: not a grasp-network checkpoint (no model and state_dict)")
+    if saved["model"] not in MODELS:
+        raise CheckpointRejected(f"{path}: its model {saved['model']!r} is not one this package builds "
+                                 f"({', '.join(sorted(MODELS))}): train it with this version, or upgrade")
+    return SavedNetwork(path, saved["model"], saved["state_dict"], saved.get("crop"))
+
+
 def load_round_model(dataset: str | os.PathLike, number: int) -> torch.nn.Module:
     """The network of adaptive labelling's round ``number``, from the dataset's ``adaptive/round_NNN/`` arrays
     (plain arrays: nothing is unpickled)."""
@@ -56,10 +91,7 @@ def load_round_model(dataset: str | os.PathLike, number: int) -> torch.nn.Module
 
 
 def load_model(path: str | os.PathLike) -> torch.nn.Module:
-    checkpoint = load_checkpoint(path)
-    model = MODELS[checkpoint["model"]]()
-    model.load_state_dict(checkpoint["state_dict"])
-    return model.eval()
+    return read_network(path).build()
 
 
 def predict(model: torch.nn.Module, dataset: GraspDataset, batch_size: int = 256,

@@ -68,20 +68,15 @@ class GraspScorer:
     another is refused (its crops would mean other shapes)."""
 
     def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto"):
-        from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
-        from onepiece_dist.learn.train import load_checkpoint, resolve_device
+        from onepiece_dist.learn.models import CONTEXT_MODELS
+        from onepiece_dist.learn.train import read_network, resolve_device
 
         self.path = str(checkpoint)
-        try:
-            saved = load_checkpoint(self.path)
-        except (OSError, RuntimeError, EOFError) as err:
-            raise CheckpointRejected(f"{self.path}: not a readable checkpoint ({type(err).__name__}: {err})") from None
-        self.record = _crop_record(saved, self.path, gripper)
+        saved = read_network(self.path)
+        self.record = _crop_record(saved, gripper)
         self.device = resolve_device(device)
-        self.model = MODELS[saved["model"]]()
-        self.reads_context = saved["model"] in CONTEXT_MODELS
-        self.model.load_state_dict(saved["state_dict"])
-        self.model.to(self.device).eval()
+        self.reads_context = saved.model in CONTEXT_MODELS
+        self.model = saved.build().to(self.device)
 
     @property
     def gripper(self) -> GripperSpec:
@@ -118,22 +113,21 @@ class GraspScorer:
         return np.ascontiguousarray(crops.context, dtype=np.float32)
 
 
-def _crop_record(saved: dict, path: str, gripper: GripperSpec | None) -> CropRecord:
-    if not isinstance(saved, dict) or "model" not in saved or "state_dict" not in saved:
-        raise CheckpointRejected(f"{path}: not a grasp-network checkpoint (no model and state_dict)")
-    crop = saved.get("crop")
+def _crop_record(saved, gripper: GripperSpec | None) -> CropRecord:
+    """The crop ``saved`` (learn.train.SavedNetwork) was trained on, checked against the caller's ``gripper``."""
+    path, crop = saved.path, saved.crop
     if crop is None:
         if gripper is None:
             raise CheckpointRejected(f"{path}: the checkpoint does not say which gripper it was trained for (trained "
-                                "before checkpoints kept their crop): name the gripper (--gripper FILE)")
-        return CropRecord(gripper, VoxelSpec(), 750, saved["model"])
+                                     "before checkpoints kept their crop): name the gripper (--gripper FILE)")
+        return CropRecord(gripper, VoxelSpec(), 750, saved.model)
     trained = GripperSpec.model_validate(crop["gripper"])
-    if gripper is not None and gripper != trained:
-        differs = [name for name in GripperSpec.model_fields if getattr(gripper, name) != getattr(trained, name)]
-        if differs == ["name"]:  # the same hand under another name
-            return CropRecord(trained, VoxelSpec.model_validate(crop["voxel"]), int(crop["points_per_grasp"]),
-                              saved["model"])
-        raise CheckpointRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
-                            f"{', '.join(differs)}: trained {', '.join(f'{n}={getattr(trained, n)}' for n in differs)}"
-                            "): plan with the checkpoint's gripper, or train a network for this one")
-    return CropRecord(trained, VoxelSpec.model_validate(crop["voxel"]), int(crop["points_per_grasp"]), saved["model"])
+    voxel, points = VoxelSpec.model_validate(crop["voxel"]), int(crop["points_per_grasp"])
+    if gripper is None or gripper == trained:
+        return CropRecord(trained, voxel, points, saved.model)
+    differs = [name for name in GripperSpec.model_fields if getattr(gripper, name) != getattr(trained, name)]
+    if differs == ["name"]:  # the same hand under another name
+        return CropRecord(trained, voxel, points, saved.model)
+    raise CheckpointRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
+                             f"{', '.join(differs)}: trained {', '.join(f'{n}={getattr(trained, n)}' for n in differs)}"
+                             "): plan with the checkpoint's gripper, or train a network for this one")

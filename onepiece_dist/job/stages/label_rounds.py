@@ -155,9 +155,9 @@ WEIGHT = "weight."  # a round part's arrays named so hold its network's weights
 
 def checkpoint_arrays(path: str | os.PathLike) -> dict[str, np.ndarray]:
     """A network checkpoint's weights as numpy arrays (loaded with ``weights_only=True``)."""
-    from onepiece_dist.learn.train import load_checkpoint
+    from onepiece_dist.learn.train import read_network
 
-    return {name: tensor.numpy() for name, tensor in load_checkpoint(path)["state_dict"].items()}
+    return {name: tensor.numpy() for name, tensor in read_network(path).state_dict.items()}
 
 
 def round_weights(parts: PartStore, key: str) -> dict[str, np.ndarray]:
