@@ -19,9 +19,9 @@ from onepiece_dist.core.assembly_layout import (
 )
 from onepiece_dist.core.classifier import PLANES, classify_occupancy, l_feature_count
 from onepiece_dist.core.spatial import PointGrid
+from onepiece_dist.job.patches import QUANTUM_LEVELS, read_patches
 from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.stages.assemble import one_object_points
-from onepiece_dist.job.stages.patches import QUANTUM_LEVELS, read_patches
 from onepiece_dist.specs.job import GripperSpec
 from onepiece_dist.store import open_dataset
 
@@ -130,7 +130,7 @@ def test_format_2_stores_each_source_once_and_derives_the_points_the_label_stage
     import hashlib
 
     from onepiece_dist.core.assembly_layout import assembly_geometry, layout_patches
-    from onepiece_dist.job.stages.patches import build_patches
+    from onepiece_dist.job.patches import build_patches
     from onepiece_dist.store import PartStore
 
     spec, out, _ = small_dataset
@@ -464,8 +464,8 @@ def test_the_delivered_copy_leaves_the_extraction_records_and_reads_as_the_origi
 
 
 def test_patches_cut_in_shards_equal_the_ones_cut_in_one_go_and_a_resumed_stage_reuses_its_shards(small_dataset):
+    from onepiece_dist.job.patches import build_patches
     from onepiece_dist.job.stages.patch_shards import build_patch_shard, merge_patch_shards, patch_tasks
-    from onepiece_dist.job.stages.patches import build_patches
     from onepiece_dist.store import PartStore
 
     spec, out, _ = small_dataset

@@ -71,7 +71,7 @@ def patch_formula(formula: str) -> None:
 
         sampling.sin_cos = lambda angle: (np.sin(angle), np.cos(angle))
     elif formula == "blas":
-        import onepiece_dist.job.stages.patches as patches
+        import onepiece_dist.job.patches as patches
 
         patches.rotate_points = lambda points, rot: np.asarray(points, dtype=np.float64) @ rot
     elif formula in ("embree", "embree+1ulp"):

@@ -58,7 +58,7 @@ def codes_at(spec: JobSpec, resolution_mm: float) -> tuple[np.ndarray, int]:
     """(N, B) codes of every extracted grasp at ``resolution_mm``, cropped at its settled pose from its object's
     stored surface points (the job's own codes at its resolution), and the code's bit count."""
     from onepiece_dist.core.voxel import crop_codes
-    from onepiece_dist.job.stages.patches import source_geometry
+    from onepiece_dist.job.patches import source_geometry
     from onepiece_dist.store import PartStore, open_dataset
 
     reader = open_dataset(spec.output)

@@ -19,8 +19,8 @@ import numpy as np
 from onepiece_dist.core.frames import quat_from_matrix
 from onepiece_dist.errors import MissingAssembly
 from onepiece_dist.job.exports.grasp_files import ExportFolder
+from onepiece_dist.job.patches import read_patches
 from onepiece_dist.job.stages.assemble import URDF_TEMPLATE, solid_of_pieces, write_pieces_obj
-from onepiece_dist.job.stages.patches import read_patches
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import DatasetReader
 

@@ -1,5 +1,5 @@
 """The assemble stage (run by the central actor after the dataset is committed): classify every unique code, lay
-its patch (real geometry, job/stages/patches.py) out on the one object, prove the round trip (codes and Chamfer
+its patch (real geometry, job/patches.py) out on the one object, prove the round trip (codes and Chamfer
 distance to the representatives' points), and store it under ``assembled/``; export as OBJ, PLY or URDF."""
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from onepiece_dist.core.frames import transform_points
 from onepiece_dist.core.mesh import solid_properties
 from onepiece_dist.core.voxel import crop_points
 from onepiece_dist.errors import MissingAssembly
-from onepiece_dist.job.stages.patches import Patches, read_patches
+from onepiece_dist.job.patches import Patches, read_patches
 from onepiece_dist.job.status import AssemblyReport
 from onepiece_dist.objects.meshio import write_obj, write_ply
 from onepiece_dist.specs.job import JobSpec

@@ -16,9 +16,9 @@ import os
 import numpy as np
 
 from onepiece_dist.errors import SpecError
+from onepiece_dist.job.made_once import shard_once
 from onepiece_dist.job.results import LabelTask, ShardResult
 from onepiece_dist.job.stages.label_transfer import label_on_sources
-from onepiece_dist.job.stages.made_once import shard_once
 from onepiece_dist.job.status import LabelReport
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore

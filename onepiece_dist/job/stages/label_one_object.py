@@ -2,7 +2,7 @@
 around it, so the labelled data cover each unique shape's neighbourhood (docs/assembly.md).
 
 A trial at one patch must not depend on the rest of the assembly, so each patch is simulated as its own body:
-its convex pieces (real geometry clipped from the source object, job/stages/patches.py), with the source object's
+its convex pieces (real geometry clipped from the source object, job/patches.py), with the source object's
 mass (the mass rule: the fingers lift and shake what they lifted and shook on the source; with ``sim.load: grasp``
 every trial, here and on the sources, lifts the same payload at the grasp centre instead). Crops for codes and
 points come from the patch's real surface points. Results go to ``assembled/grasps/`` in the same layout as
@@ -22,11 +22,11 @@ from onepiece_dist.core.frames import compose_poses, perturb_pose
 from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.core.voxel import crop_codes, crop_regions
+from onepiece_dist.job.made_once import shard_once
+from onepiece_dist.job.patches import Patches, read_patches
 from onepiece_dist.job.results import LabelTask, ShardResult
 from onepiece_dist.job.stages import label_budget  # the module: a test injects a fault into its shard function
 from onepiece_dist.job.stages.extract import closure_labelled
-from onepiece_dist.job.stages.made_once import shard_once
-from onepiece_dist.job.stages.patches import Patches, read_patches
 from onepiece_dist.job.status import LabelReport
 from onepiece_dist.sim.views import camera_at, framing_distance, views_from
 from onepiece_dist.specs.job import JobSpec

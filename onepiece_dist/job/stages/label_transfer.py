@@ -19,8 +19,8 @@ import numpy as np
 
 from onepiece_dist.core.clip import pieces_mesh
 from onepiece_dist.core.sampling import object_rng
+from onepiece_dist.job.patches import source_geometry
 from onepiece_dist.job.stages.extract import closure_labelled
-from onepiece_dist.job.stages.patches import source_geometry
 from onepiece_dist.job.status import PairAgreement, TransferReport
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore

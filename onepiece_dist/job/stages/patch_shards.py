@@ -18,14 +18,14 @@ import numpy as np
 
 from onepiece_dist.core.ragged import row_offsets, split_rows, stack_rows
 from onepiece_dist.errors import JobError
-from onepiece_dist.job.results import PatchTask, ShardResult
-from onepiece_dist.job.stages.made_once import shard_once
-from onepiece_dist.job.stages.patches import (
+from onepiece_dist.job.made_once import shard_once
+from onepiece_dist.job.patches import (
     Patches,
     as_stored,
     build_patches,
     source_geometry,
 )
+from onepiece_dist.job.results import PatchTask, ShardResult
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 from onepiece_dist.store.dataset import DatasetReader
