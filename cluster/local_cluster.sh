@@ -19,7 +19,7 @@ dashboard_port=${ONEPIECE_DASHBOARD_PORT:-8265}
 agent_port=${ONEPIECE_AGENT_PORT:-52300}
 export RAY_USAGE_STATS_ENABLED=0 RAY_AUTH_MODE=token PATH="$venv/bin:$PATH"
 # The GCS checks each node every second (Ray's default: 3 s): a dead node is found in 5 s instead of 15, a busy one
-# that answers late still has 5 x 10 s of timeouts (the embedded Ray does the same: job/runtime/ray_env.py)
+# that answers late still has 5 x 10 s of timeouts (the embedded Ray does the same: runtime/ray_env.py)
 export RAY_health_check_period_ms=1000
 ray_start() { "$venv/bin/python" "$here/cluster/ray_start_loopback.py" "$@"; }
 

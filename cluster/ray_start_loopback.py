@@ -30,7 +30,7 @@ if __name__ == "__main__":
     from ray.scripts.scripts import main
 
     if "--head" in sys.argv[1:] and os.environ.get("RAY_AUTH_MODE", "").lower() == "token":
-        from onepiece_dist.job.runtime.ray_env import ensure_token_file
+        from onepiece_dist.runtime.ray_env import ensure_token_file
 
         ensure_token_file()  # atomically, before Ray would write one that a Ray starting beside it overwrites
 

@@ -36,15 +36,15 @@ from onepiece_dist.errors import (
 )
 from onepiece_dist.job.pipeline import ProgressFn
 from onepiece_dist.job.relabel import RelabelReport, relabel_report, relabel_spec
-from onepiece_dist.job.runtime.local import run_local
-from onepiece_dist.job.runtime.ray_env import connect, loopback_environment
-from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK, RegistryClient
 from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, protocol_of, score_heldout
 from onepiece_dist.job.status import STATUS_SUFFIX, EvaluationReport, JobStatus, status_path
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.plan.robot import RobotPlan
 from onepiece_dist.plan.robot import plan_from_files as plan_grasps
+from onepiece_dist.runtime.local import run_local
+from onepiece_dist.runtime.ray_env import connect, loopback_environment
+from onepiece_dist.runtime.registry import CLUSTER_INFO_MARK, RegistryClient
 from onepiece_dist.specs.job import JobSpec, default_job_id
 from onepiece_dist.specs.plan import PickSpec, PlanSpec
 from onepiece_dist.store import DatasetReader, open_dataset
@@ -69,7 +69,7 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
         return run_local(spec, job_id=job_id, progress=progress, refs=refs)
     import ray
 
-    from onepiece_dist.job.runtime.ray_runner import run_on_ray
+    from onepiece_dist.runtime.ray_runner import run_on_ray
 
     started_here = not ray.is_initialized()
     _connect_or_raise(connect, address)
@@ -265,7 +265,7 @@ class Client:
         return json.loads(lines[-1][len(CLUSTER_INFO_MARK):])
 
     def _submit_local(self, spec: JobSpec, job_id: str) -> JobHandle:
-        from onepiece_dist.job.runtime.ray_runner import run_on_ray
+        from onepiece_dist.runtime.ray_runner import run_on_ray
 
         connect(None)
         handle = JobHandle(self, job_id, spec.output)

@@ -122,7 +122,7 @@ def spec_factory(tmp_path):
 def fault_free(tmp_path_factory):
     """``fault_free(spec)``: the folder of ``spec``'s dataset run in-process, without faults, once per test session
     for each spec (its output left out); the reference that the faulted runs of that spec must equal."""
-    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.runtime.local import run_local
 
     made: dict[str, str] = {}
 
@@ -142,7 +142,7 @@ def ray_session():
     """An embedded, loopback-only Ray shared by a test module."""
     import ray
 
-    from onepiece_dist.job.runtime.ray_env import connect
+    from onepiece_dist.runtime.ray_env import connect
 
     connect(None, num_cpus=2)
     yield ray

@@ -6,9 +6,9 @@ import ast
 import inspect
 import textwrap
 
-from onepiece_dist.job.runtime import ray_runner, registry, trainer, writer
-from onepiece_dist.job.runtime.actors import ActorClient
 from onepiece_dist.picks import runner as pick_runner
+from onepiece_dist.runtime import ray_runner, registry, trainer, writer
+from onepiece_dist.runtime.actors import ActorClient
 
 
 def called_by_name(cls: type, calls: tuple[str, ...] = ("call", "send")) -> set[str]:

@@ -54,9 +54,9 @@ def stop_by_rule(record: dict, plan: dict, labels: int) -> str | None:
 @pytest.mark.sim
 @pytest.mark.slow
 def test_an_adaptive_job_stops_by_its_rule_and_keeps_every_round_in_the_dataset(tmp_path):
-    from onepiece_dist.job.runtime.local import run_local
     from onepiece_dist.learn.dataset import GraspDataset
     from onepiece_dist.learn.train import load_round_model, predict
+    from onepiece_dist.runtime.local import run_local
 
     status = run_local(adaptive_spec(tmp_path, "a"))
     ds = open_dataset(tmp_path / "a.zarr")
@@ -98,9 +98,9 @@ def test_an_adaptive_job_stops_by_its_rule_and_keeps_every_round_in_the_dataset(
 @pytest.mark.slow
 def test_an_adaptive_job_killed_mid_round_resumes_at_that_round_with_the_same_dataset(tmp_path, monkeypatch,
                                                                                       fault_free):
-    from onepiece_dist.job.runtime import trainer
-    from onepiece_dist.job.runtime.local import run_local
     from onepiece_dist.job.stages import label_budget as budget
+    from onepiece_dist.runtime import trainer
+    from onepiece_dist.runtime.local import run_local
 
     spec = adaptive_spec(tmp_path, "killed")
     reference = fault_free(spec)

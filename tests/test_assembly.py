@@ -20,8 +20,8 @@ from onepiece_dist.core.assembly_layout import (
 from onepiece_dist.core.classifier import PLANES, classify_occupancy, l_feature_count
 from onepiece_dist.core.spatial import PointGrid
 from onepiece_dist.job.patches import QUANTUM_LEVELS, read_patches
-from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.stages.assemble import one_object_points
+from onepiece_dist.runtime.local import run_local
 from onepiece_dist.specs.job import GripperSpec
 from onepiece_dist.store import open_dataset
 

@@ -45,7 +45,7 @@ def budget_spec(tmp_path, name: str, **budget) -> JobSpec:
 
 @pytest.mark.sim
 def test_a_count_below_the_objects_is_refused_before_any_work(tmp_path):
-    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.runtime.local import run_local
 
     with pytest.raises(SpecError, match=r"budget\.count=3 is below the job's 4 objects"):
         run_local(budget_spec(tmp_path, "few", count=3))
@@ -55,8 +55,8 @@ def test_a_count_below_the_objects_is_refused_before_any_work(tmp_path):
 @pytest.mark.sim
 @pytest.mark.slow
 def test_a_budget_job_labels_exactly_its_budget_over_every_object_and_again_the_same(tmp_path):
-    from onepiece_dist.job.runtime.local import run_local
     from onepiece_dist.learn.dataset import GraspDataset
+    from onepiece_dist.runtime.local import run_local
 
     first = run_local(budget_spec(tmp_path, "a", count=10))
     ds = open_dataset(tmp_path / "a.zarr")

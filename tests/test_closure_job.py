@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from onepiece_dist.core.closure import CONTACT_STATES, closure_arrays
-from onepiece_dist.job.runtime.local import run_local
+from onepiece_dist.runtime.local import run_local
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import open_dataset
 

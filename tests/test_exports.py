@@ -210,7 +210,7 @@ def test_the_per_patch_export_loads_in_pybullet_with_the_label_stages_mass_rule(
 
 
 def test_exports_without_what_they_need_are_refused_with_the_reason(tmp_path):
-    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.runtime.local import run_local
     from onepiece_dist.specs.job import JobSpec
 
     bare = tmp_path / "bare.zarr"

@@ -37,20 +37,23 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     "learn": ({"errors", "specs", "store", "core", "stats"}, {"numpy", "torch", "zarr"}),
     # planning on a camera's cloud: candidates, crops as the training's, the network's scores, the picture
     "plan": (BASE | {"core", "learn"}, {"numpy", "torch", "open3d", "matplotlib"}),
-    # the job: its pipeline, contracts and status; stages/ (what a worker or the writer does), runtime/ (in process,
-    # a pinned child, Ray), exports/ (files only the CLI writes); job/relabel.py and job/label_draws.py run on it
+    # the job: its pipeline, contracts and status; stages/ (what a worker or the writer does), exports/ (files only
+    # the CLI writes); no Ray: where the work runs is the runtime's
     "job": (BASE | {"core", "stats", "objects", "sim", "store", "learn", "plan"},
-            {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil",
+            {"numpy", "torch", "pybullet", "pybullet_data", "pydantic", "yaml",
              "h5py"}),  # h5py: the ACRONYM export only (the formats extra)
-    # the pick benchmark: one object's views and choosers, a task per object on the job's worker pool
-    "picks": (BASE | {"core", "stats", "objects", "sim", "store", "plan", "job"},
+    # where every job's work runs: in process, a pinned child, Ray's actors and pools
+    "runtime": (BASE | {"core", "stats", "objects", "sim", "store", "learn", "plan", "job"},
+                {"numpy", "ray", "torch", "pybullet", "pybullet_data", "pydantic", "yaml", "psutil"}),
+    # the pick benchmark: one object's views and choosers, a task per object on the runtime's worker pool
+    "picks": (BASE | {"core", "stats", "objects", "sim", "store", "plan", "job", "runtime"},
               {"numpy", "ray", "torch", "pydantic"}),
-    "api": (BASE | {"objects", "job", "picks", "plan", "store"}, {"ray"}),
+    "api": (BASE | {"objects", "job", "runtime", "picks", "plan", "store"}, {"ray"}),
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
-    "study": (BASE | {"api", "job", "picks", "learn", "store", "core", "stats", "objects"},
+    "study": (BASE | {"api", "job", "runtime", "picks", "learn", "store", "core", "stats", "objects", "sim"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),
     # the command, one module per group; schema_files writes the models' schemas and the pages rendered from them
-    "cli": (BASE | {"gripper", "api", "objects", "sim", "job", "picks", "plan", "store", "study"},
+    "cli": (BASE | {"gripper", "api", "objects", "sim", "job", "runtime", "picks", "plan", "store", "study"},
             {"typer", "rich", "yaml", "pydantic", "numpy"}),
 }
 LOOSE_AT_MOST, MODULES_PER_FOLDER = 5, 18
@@ -205,7 +208,7 @@ def circles(graph: dict[str, set[str]]) -> list[list[str]]:
 def test_no_module_of_the_package_imports_itself_through_others():
     """Issue 48: no import circle anywhere in the package, lazy imports counted (a circle the guard can see)."""
     graph = package_import_graph()
-    assert graph["onepiece_dist.job.runtime.local"] >= {"onepiece_dist.job.pipeline"}, "the graph sees imports"
+    assert graph["onepiece_dist.runtime.local"] >= {"onepiece_dist.job.pipeline"}, "the graph sees imports"
     assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}})[0] == ["a", "b", "c", "a"]
     assert circles(graph) == []
 
@@ -217,10 +220,10 @@ def test_the_job_stages_and_exports_import_nothing_from_the_runtime():
     rooms = ("onepiece_dist.job.stages.", "onepiece_dist.job.exports.")
     stages = [m for m in graph if m.startswith(rooms)]
     assert len(stages) >= 12, stages
-    reaching = {m: sorted(t for t in graph[m] if t.startswith("onepiece_dist.job.runtime")
+    reaching = {m: sorted(t for t in graph[m] if t.startswith("onepiece_dist.runtime")
                           or t == "onepiece_dist.job.pipeline") for m in stages}
     assert {m: t for m, t in reaching.items() if t} == {}
-    runtimes = [m for m in graph if m.startswith("onepiece_dist.job.runtime.")]
+    runtimes = [m for m in graph if m.startswith("onepiece_dist.runtime.")]
     assert any(t.startswith("onepiece_dist.job.stages.") for m in runtimes for t in graph[m])  # the rule can see
 
 

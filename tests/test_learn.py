@@ -202,8 +202,8 @@ def test_the_reader_imports_with_numpy_zarr_and_torch_alone(synthetic):
 
 
 def test_device_selection_here_and_for_the_trainer_actor():
-    from onepiece_dist.job.runtime.trainer import trainer_gpus
     from onepiece_dist.learn.train import resolve_device
+    from onepiece_dist.runtime.trainer import trainer_gpus
 
     assert resolve_device("cpu").type == "cpu"
     assert resolve_device("auto").type == ("cuda" if torch.cuda.is_available() else "cpu")

@@ -84,7 +84,7 @@ def test_an_actor_computes_as_the_oldest_cpu_even_on_a_node_started_without_the_
     Ray started from a process without the mask still runs our actors pinned."""
     script = """
 import ray
-from onepiece_dist.job.runtime.actors import restartable_actor
+from onepiece_dist.runtime.actors import restartable_actor
 from tests.test_libm import libm_bits
 class Probe:
     def bits(self):
@@ -106,14 +106,14 @@ def test_a_job_run_in_process_from_an_unpinned_process_gives_the_pinned_dataset(
     """A script that runs a job in process without the mask (the Python API in a notebook) simulates in a pinned
     child: its dataset is the one the pinned suite makes, bit for bit, on a job where the two builds give
     different slips."""
-    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.runtime.local import run_local
     from onepiece_dist.store.dataset import content_digest
     from tests.test_pinned_job import pinned_spec
 
     spec = pinned_spec(tmp_path / "pinned.zarr").model_copy(update={"objects": DIFFERS_BY_BUILD})
     run_local(spec)
     script = ("from tests.test_pinned_job import pinned_spec; "
-              "from onepiece_dist.job.runtime.local import run_local; from pathlib import Path; "
+              "from onepiece_dist.runtime.local import run_local; from pathlib import Path; "
               f"run_local(pinned_spec(Path({str(tmp_path / 'unpinned.zarr')!r})).model_copy("
               f"update={{'objects': {DIFFERS_BY_BUILD!r}}}))")
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=unpinned(os.environ),

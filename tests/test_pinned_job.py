@@ -58,7 +58,7 @@ def array_pins(path: Path) -> dict[str, str]:
 
 
 def run_pinned_job(folder: Path) -> dict[str, str]:
-    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.runtime.local import run_local
 
     output = folder / "pinned.zarr"
     run_local(pinned_spec(output))

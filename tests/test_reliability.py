@@ -11,8 +11,8 @@ import pytest
 import onepiece_dist.store.parts as parts_module
 from onepiece_dist.api import Client, read_status
 from onepiece_dist.errors import JobError
-from onepiece_dist.job.runtime.local import run_local
-from onepiece_dist.job.runtime.writer import central_name
+from onepiece_dist.runtime.local import run_local
+from onepiece_dist.runtime.writer import central_name
 from onepiece_dist.specs.job import JobSpec, default_job_id
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
@@ -119,7 +119,7 @@ def test_killing_the_central_actor_while_it_assembles_gives_the_fault_free_datas
 @pytest.mark.ray
 def test_killing_the_trainer_mid_training_resumes_from_its_last_epoch_with_the_same_metrics(ray_session, tmp_path,
                                                                                             record_figure):
-    from onepiece_dist.job.runtime.ray_runner import run_on_ray
+    from onepiece_dist.runtime.ray_runner import run_on_ray
     from tests.factories import synthetic_labelled_dataset
 
     ray = ray_session
@@ -228,7 +228,7 @@ def test_killing_a_worker_while_it_cuts_patches_gives_the_fault_free_dataset(ray
     import os
     import signal
 
-    from onepiece_dist.job.runtime.crashes import crash_folder
+    from onepiece_dist.runtime.crashes import crash_folder
 
     spec = labelled_spec(spec_factory, tmp_path, "patchkill")
     job_id = default_job_id(spec)

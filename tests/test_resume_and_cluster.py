@@ -14,8 +14,8 @@ import psutil
 import pytest
 
 from onepiece_dist.api import Client, read_status
-from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.job.status import status_path
+from onepiece_dist.runtime.local import run_local
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
@@ -89,7 +89,7 @@ def cluster_exposed_sockets() -> list:
 
 
 RAY_DEFAULT_AGENT_PORT = 52365  # what every embedded Ray's agent takes (ray.init has no switch for it)
-EMBEDDED_RAY = ("from onepiece_dist.job.runtime.ray_env import connect; connect(None, num_cpus=1); "
+EMBEDDED_RAY = ("from onepiece_dist.runtime.ray_env import connect; connect(None, num_cpus=1); "
                 "print('up', flush=True); import sys; sys.stdin.read()")  # holds its Ray until stdin closes
 
 

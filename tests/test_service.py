@@ -12,11 +12,11 @@ from typer.testing import CliRunner
 
 from onepiece_dist.api import Client, read_status
 from onepiece_dist.cli.main import app
-from onepiece_dist.job.runtime.local import run_local
-from onepiece_dist.job.runtime.registry import JobRegistry
-from onepiece_dist.job.runtime.writer import DatasetWriter
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.objects import resolve_source
+from onepiece_dist.runtime.local import run_local
+from onepiece_dist.runtime.registry import JobRegistry
+from onepiece_dist.runtime.writer import DatasetWriter
 from onepiece_dist.specs.job import default_job_id
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
@@ -99,7 +99,7 @@ class PoisonWorker:
     pybullet do), or, with ``kills``, the process is SIGKILLed (as from outside) its first ``kills`` times on it."""
 
     def __init__(self, spec, poison: str, crashes: str, kills: int = 0, counter: str = ""):
-        from onepiece_dist.job.runtime.ray_runner import SimWorker
+        from onepiece_dist.runtime.ray_runner import SimWorker
 
         self.inner, self.poison, self.kills, self.counter = SimWorker(spec, crashes=crashes), poison, kills, counter
 
@@ -138,7 +138,7 @@ class RecordingActor:
 def test_the_last_items_go_only_to_idle_workers():
     from collections import deque
 
-    from onepiece_dist.job.runtime.ray_runner import IN_FLIGHT_PER_WORKER, WorkerPool
+    from onepiece_dist.runtime.ray_runner import IN_FLIGHT_PER_WORKER, WorkerPool
 
     actors = [RecordingActor(), RecordingActor()]
     pool = WorkerPool(actors, registry=None, status=None, on_result=lambda result: None)
@@ -160,9 +160,9 @@ def test_the_last_items_go_only_to_idle_workers():
 
 
 def run_poison_pool(ray, spec, job_id: str, **poison) -> tuple[list, JobStatus]:
-    from onepiece_dist.job.runtime.crashes import crash_folder
-    from onepiece_dist.job.runtime.ray_runner import WorkerPool
-    from onepiece_dist.job.runtime.registry import RegistryClient
+    from onepiece_dist.runtime.crashes import crash_folder
+    from onepiece_dist.runtime.ray_runner import WorkerPool
+    from onepiece_dist.runtime.registry import RegistryClient
 
     refs = resolve_source(spec.objects)
     crashes = crash_folder(spec.parts_folder(), job_id)
@@ -181,7 +181,7 @@ def run_poison_pool(ray, spec, job_id: str, **poison) -> tuple[list, JobStatus]:
 @pytest.mark.ray
 @pytest.mark.slow
 def test_a_poison_object_is_quarantined_and_the_rest_proceeds(ray_session, spec_factory, tmp_path, record_figure):
-    from onepiece_dist.job.runtime.ray_runner import MAX_CRASHES
+    from onepiece_dist.runtime.ray_runner import MAX_CRASHES
 
     spec = job_spec(spec_factory, tmp_path, "poison", objects="primitives[0:3]", grasps=8)
     results, status = run_poison_pool(ray_session, spec, "poison-test")
@@ -195,7 +195,7 @@ def test_a_poison_object_is_quarantined_and_the_rest_proceeds(ray_session, spec_
 @pytest.mark.slow
 def test_an_object_whose_worker_is_killed_from_outside_is_not_taken_for_a_poison(ray_session, spec_factory,
                                                                                    tmp_path, record_figure):
-    from onepiece_dist.job.runtime.ray_runner import MAX_CRASHES
+    from onepiece_dist.runtime.ray_runner import MAX_CRASHES
 
     spec = job_spec(spec_factory, tmp_path, "killed", objects="primitives[0:3]", grasps=8)
     results, status = run_poison_pool(ray_session, spec, "killed-test", kills=MAX_CRASHES + 1,
@@ -208,7 +208,7 @@ def test_an_object_whose_worker_is_killed_from_outside_is_not_taken_for_a_poison
 
 @pytest.mark.ray
 def test_every_socket_of_our_ray_is_on_loopback(ray_session, record_figure):
-    from onepiece_dist.job.runtime.ray_env import TOKEN_FILE
+    from onepiece_dist.runtime.ray_env import TOKEN_FILE
 
     ours = {p.pid for p in psutil.Process().children(recursive=True)}
     listening = [c for c in psutil.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN and c.pid in ours]
@@ -225,7 +225,7 @@ def _token_at_the_barrier(path: str, barrier) -> str:
     fault: a wide window between finding no token and having written one)."""
     import secrets
 
-    from onepiece_dist.job.runtime.ray_env import ensure_token_file
+    from onepiece_dist.runtime.ray_env import ensure_token_file
 
     make = secrets.token_hex
     secrets.token_hex = lambda nbytes: (time.sleep(0.2), make(nbytes))[1]
@@ -238,7 +238,7 @@ def test_processes_making_the_token_at_once_all_get_the_one_token_that_stays(tmp
     and one Ray's workers read the other's. Eight processes racing for it here must agree on one."""
     import multiprocessing
 
-    from onepiece_dist.job.runtime.ray_env import ensure_token_file
+    from onepiece_dist.runtime.ray_env import ensure_token_file
 
     path = tmp_path / ".ray" / "auth_token"
     context = multiprocessing.get_context("spawn")
@@ -258,7 +258,7 @@ def test_our_ray_declares_a_dead_node_dead_within_seconds(ray_session):
     """The GCS checks each node every second (Ray's default, 3 s, took 15 s to declare a killed node dead)."""
     from ray._raylet import Config
 
-    from onepiece_dist.job.runtime.ray_env import HEALTH_CHECK_PERIOD_MS
+    from onepiece_dist.runtime.ray_env import HEALTH_CHECK_PERIOD_MS
 
     period_s, failures = Config.health_check_period_ms() / 1000, Config.health_check_failure_threshold()
     assert period_s == HEALTH_CHECK_PERIOD_MS / 1000 and period_s * failures <= 5
@@ -272,7 +272,7 @@ def test_an_embedded_ray_starts_in_a_process_that_first_talked_to_a_cluster(tmp_
     import sys
 
     script = ("import ray\nfrom typer.testing import CliRunner\nfrom onepiece_dist.cli.main import app\n"
-              "from onepiece_dist.job.runtime.ray_env import connect\n"
+              "from onepiece_dist.runtime.ray_env import connect\n"
               f"out = {str(tmp_path / 'x.zarr')!r}\n"
               "first = CliRunner().invoke(app, ['run', '--address', '127.0.0.1:9', '--out', out])\n"
               "assert first.exit_code == 3, first.output\n"

@@ -54,7 +54,7 @@ def test_radius_zero_is_exact_dedup_and_members_stay_near_their_links():
 
 
 def test_a_job_with_a_radius_maps_every_grasp_to_its_cluster_representative(spec_factory):
-    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.runtime.local import run_local
     from onepiece_dist.store import open_dataset
 
     exact = run_local(spec_factory())

@@ -7,7 +7,7 @@ import pytest
 import zarr
 
 from onepiece_dist.errors import StoreError
-from onepiece_dist.job.runtime.local import run_local
+from onepiece_dist.runtime.local import run_local
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
 

@@ -13,9 +13,9 @@ from onepiece_dist.cli.main import app
 from onepiece_dist.core.mesh import box_mesh, make_mesh, sample_surface
 from onepiece_dist.core.repair import fan_fill
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.objects.meshio import parse_mesh_bytes
 from onepiece_dist.objects.supplement import estimate_normals, hausdorff, supplement_scan
+from onepiece_dist.runtime.local import run_local
 from tests.factories import noisy_scan, torus_mesh
 
 HAUSDORFF_TOLERANCE = 0.003  # m, for a 5-10 cm object scanned with 0.5 mm noise and 2 % outliers

@@ -7,8 +7,8 @@ import pytest
 from onepiece_dist.api import Client
 from onepiece_dist.core.frames import invert_poses
 from onepiece_dist.core.mesh import box_mesh
-from onepiece_dist.job.runtime.local import run_local
 from onepiece_dist.objects import load_object, resolve_source
+from onepiece_dist.runtime.local import run_local
 from onepiece_dist.sim.views import camera_for_grasps, object_views, orbit_cameras
 from onepiece_dist.store import open_dataset
 

@@ -102,7 +102,7 @@ def run_one(job: str, formula: str, keep: Path) -> dict[str, str]:
     """Run ``job`` in this process; save the arrays in SAVED to ``keep`` (.npz). -> {array: digest}"""
     import zarr
 
-    from onepiece_dist.job.runtime.local import run_local
+    from onepiece_dist.runtime.local import run_local
 
     patch_formula(formula)
     with tempfile.TemporaryDirectory() as scratch:

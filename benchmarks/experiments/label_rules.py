@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-from onepiece_dist.job.runtime.local import run_local  # noqa: E402
+from onepiece_dist.runtime.local import run_local  # noqa: E402
 from onepiece_dist.specs.job import JobSpec  # noqa: E402
 from onepiece_dist.store import open_dataset  # noqa: E402
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 from onepiece_dist.api import Client  # noqa: E402
-from onepiece_dist.job.runtime.local import run_local  # noqa: E402
+from onepiece_dist.runtime.local import run_local  # noqa: E402
 from onepiece_dist.specs.job import JobSpec, default_job_id  # noqa: E402
 from onepiece_dist.store import open_dataset  # noqa: E402
 from onepiece_dist.store.dataset import content_digest  # noqa: E402

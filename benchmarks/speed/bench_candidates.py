@@ -119,8 +119,8 @@ def profile(spec: JobSpec, mesh) -> dict:
 
 
 def label_profile() -> dict:
-    from onepiece_dist.job.runtime.local import run_local
     from onepiece_dist.job.stages.label_one_object import label_patches, label_tasks
+    from onepiece_dist.runtime.local import run_local
 
     output = str(Path(tempfile.mkdtemp(prefix="onepiece-label-")) / "one.zarr")
     spec = JobSpec(objects="pybullet:random_urdfs[0:4]", grasps_per_object=200, output=output,

@@ -83,7 +83,7 @@ def main() -> dict:
                    train={"model": args.train_model, "epochs": args.train_epochs})
     import ray
 
-    from onepiece_dist.job.runtime.ray_env import connect
+    from onepiece_dist.runtime.ray_env import connect
 
     protocols = ProtocolClock(spec, folder)
     protocols.time()  # before Ray starts: one core, nothing else running

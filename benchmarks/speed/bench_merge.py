@@ -29,7 +29,7 @@ import psutil
 
 from benchmarks.speed.dedup_partitions import DedupPartition, route_codes
 from onepiece_dist.core.dedup import DedupIndex, merge_partitions, merge_unique, unique_codes
-from onepiece_dist.job.runtime.writer import DatasetWriter
+from onepiece_dist.runtime.writer import DatasetWriter
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 
@@ -140,7 +140,7 @@ def main() -> dict:
     sizes = [int(float(x) * 1_000_000) for x in args.sizes.split(",")]
     central = [central_merge(n, args.batch) for n in sizes]
     baseline = resort_baseline(sizes[0], args.batch)
-    from onepiece_dist.job.runtime.ray_env import connect
+    from onepiece_dist.runtime.ray_env import connect
 
     connect(None, num_cpus=os.cpu_count())
     try:

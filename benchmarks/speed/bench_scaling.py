@@ -30,7 +30,7 @@ import numpy as np
 
 from benchmarks.speed.bench_sim import load_all, time_protocols
 from benchmarks.speed.process_tree import ProcessTree, process_kind
-from onepiece_dist.job.runtime.ray_env import connect
+from onepiece_dist.runtime.ray_env import connect
 from onepiece_dist.specs.job import JobSpec
 
 OBJECTS = os.environ.get("BENCH_SCALING_OBJECTS", "pybullet:random_urdfs[0:16]")
@@ -58,7 +58,7 @@ class SpeedProbe:
 def measure(workers: int, probe: SpeedProbe) -> dict:
     import ray
 
-    from onepiece_dist.job.runtime.ray_runner import run_on_ray
+    from onepiece_dist.runtime.ray_runner import run_on_ray
 
     before = probe.speed()
     with tempfile.TemporaryDirectory() as folder:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.job.runtime.local import run_local
+from onepiece_dist.runtime.local import run_local
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import open_dataset
 from onepiece_dist.store.dataset import disk_bytes

@@ -1,5 +1,5 @@
 """Hash-prefix partitions of the global dedup, for corpora where one central index is not enough
-(docs/scaling.md); the job's own central actor is in job/runtime/writer.py."""
+(docs/scaling.md); the job's own central actor is in runtime/writer.py."""
 
 from __future__ import annotations
 

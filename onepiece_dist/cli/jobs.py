@@ -26,9 +26,9 @@ from onepiece_dist.cli.common import (
     spec_or_exit,
     spec_overrides,
 )
-from onepiece_dist.job.runtime.ray_env import connect
-from onepiece_dist.job.runtime.registry import CLUSTER_INFO_MARK
-from onepiece_dist.job.runtime.registry import cluster_info as read_cluster
+from onepiece_dist.runtime.ray_env import connect
+from onepiece_dist.runtime.registry import CLUSTER_INFO_MARK
+from onepiece_dist.runtime.registry import cluster_info as read_cluster
 
 Timeout = Annotated[float | None, typer.Option(help="Give up after this many seconds (exit 4).")]
 AsJson = Annotated[bool, typer.Option("--json", help="Print only JSON on stdout.")]

@@ -43,7 +43,7 @@ log = logging.getLogger("onepiece_dist.job")  # progress lines: the CLI shows th
 
 
 class Central(Protocol):
-    """The central actor's job-facing methods: :class:`~onepiece_dist.job.runtime.writer.DatasetWriter` in process,
+    """The central actor's job-facing methods: :class:`~onepiece_dist.runtime.writer.DatasetWriter` in process,
     its client on Ray."""
 
     def commit(self, results: list[ObjectResult]) -> CommitSummary: ...

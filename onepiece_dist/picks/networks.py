@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.picks.views import Executions, index_of, observe_view
 from onepiece_dist.plan.planner import rank
 from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickSpec
 
@@ -81,7 +81,7 @@ def _view(spec: PickSpec, scorers: list[GraspScorer], world, mesh, view: int) ->
 
 
 def run_network_picks(spec: PickSpec, checkpoints: tuple[str, ...]) -> list[NetworkPicks]:
-    """Every object of ``spec.objects``, one at a time in a pinned simulation process (job.runtime.pinned_child)."""
+    """Every object of ``spec.objects``, one at a time in a pinned simulation process (runtime.pinned_child)."""
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     simulate, results = PinnedSimulation(), []
     try:

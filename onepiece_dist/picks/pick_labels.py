@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.job.runtime.actors import restartable_actor
-from onepiece_dist.job.runtime.ray_env import connect
-from onepiece_dist.job.runtime.registry import RegistryClient
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.picks.runner import PoolStatus, run_each_in_process
 from onepiece_dist.picks.views import Executions, observe_view
 from onepiece_dist.plan.scorer import CropRecord
+from onepiece_dist.runtime.actors import restartable_actor
+from onepiece_dist.runtime.ray_env import connect
+from onepiece_dist.runtime.registry import RegistryClient
 from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickLabelSpec
 from onepiece_dist.store.pick_labels import FAILURE_CODES, LabelledObject, write_pick_labels
@@ -93,7 +93,7 @@ def run_pick_labels(spec: PickLabelSpec, address: str | None = None, in_process:
 def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None) -> list[LabelledObject]:
     import ray
 
-    from onepiece_dist.job.runtime.ray_runner import WorkerPool, worker_count
+    from onepiece_dist.runtime.ray_runner import WorkerPool, worker_count
 
     started_here = not ray.is_initialized()
     connect(address)

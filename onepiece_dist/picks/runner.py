@@ -15,15 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.job.runtime.actors import restartable_actor
-from onepiece_dist.job.runtime.crashes import CrashLog, crash_folder
-from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
-from onepiece_dist.job.runtime.ray_env import connect
-from onepiece_dist.job.runtime.registry import RegistryClient
 from onepiece_dist.job.stages.evaluate import SEPARABLE  # the one range: a guess's rate outside it ranks nothing
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.runtime.actors import restartable_actor
+from onepiece_dist.runtime.crashes import CrashLog, crash_folder
+from onepiece_dist.runtime.pinned_child import PinnedSimulation
+from onepiece_dist.runtime.ray_env import connect
+from onepiece_dist.runtime.registry import RegistryClient
 from onepiece_dist.specs.plan import PickSpec
 from onepiece_dist.stats.intervals import bootstrap_interval
 
@@ -132,7 +132,7 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
 
 
 def run_each_in_process(task: Callable, spec, refs: list[ObjectRef], progress=None) -> list:
-    """``task(spec, ref, index)`` for every object in turn, in a pinned simulation child (job.runtime.pinned_child),
+    """``task(spec, ref, index)`` for every object in turn, in a pinned simulation child (runtime.pinned_child),
     results in object order; ``progress`` sees each."""
     simulate, results = PinnedSimulation(), []
     try:
@@ -155,7 +155,7 @@ class PickWorker:
     def pick(self, ref: ObjectRef, index: int) -> ObjectPicks:
         if self.crash_log is not None:
             self.crash_log.starting("pick", index)
-        from onepiece_dist.job.runtime.ray_runner import node_id
+        from onepiece_dist.runtime.ray_runner import node_id
 
         return dataclasses.replace(pick_object(self.spec, ref, index), node=node_id())
 
@@ -175,7 +175,7 @@ def pick_job_id(spec: PickSpec) -> str:
 def _run_on_ray(spec: PickSpec, refs: list[ObjectRef], address: str | None, progress) -> list[ObjectPicks]:
     import ray
 
-    from onepiece_dist.job.runtime.ray_runner import WorkerPool, worker_count
+    from onepiece_dist.runtime.ray_runner import WorkerPool, worker_count
 
     started_here = not ray.is_initialized()
     connect(address)

@@ -24,13 +24,12 @@ import numpy as np
 
 from onepiece_dist.api import run_job
 from onepiece_dist.errors import MeshRejected, SourceError, SpecError
-from onepiece_dist.job.label_draws import heldout_label_draws
-from onepiece_dist.job.runtime.ray_env import connect
-from onepiece_dist.job.runtime.trainer import Trainer, run_step_runs, trainers_on_ray
 from onepiece_dist.job.stages.label_budget import budget_rows
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.learn.train import StepResult, StepRun
 from onepiece_dist.objects import load_object, resolve_source
+from onepiece_dist.runtime.ray_env import connect
+from onepiece_dist.runtime.trainer import Trainer, run_step_runs, trainers_on_ray
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.stats.ceiling import MEASURED_DRAWS, ap_against_draws, label_ceiling, measured_ceiling
 from onepiece_dist.store import open_dataset
@@ -39,6 +38,7 @@ from onepiece_dist.study.costs import arm_costs
 from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
 from onepiece_dist.study.jobs import JobRecord, StudyJobs, run_or_reuse, study_jobs
 from onepiece_dist.study.keys import key_measures
+from onepiece_dist.study.label_draws import heldout_label_draws
 from onepiece_dist.study.lookup import key_lookup
 from onepiece_dist.study.page import write_pages
 from onepiece_dist.study.picks import judge_by_picks, judges_picks, weights_base

@@ -6,8 +6,8 @@ cluster-wide actor. Each job's status is also written beside its dataset, so it 
 
 from __future__ import annotations
 
-from onepiece_dist.job.runtime.actors import ActorClient
-from onepiece_dist.job.runtime.ray_env import NAMESPACE
+from onepiece_dist.runtime.actors import ActorClient
+from onepiece_dist.runtime.ray_env import NAMESPACE
 from onepiece_dist.version import package_version
 
 ACTIVE = ("pending", "running")

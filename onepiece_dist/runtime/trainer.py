@@ -12,9 +12,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from onepiece_dist.errors import JobError
-from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
 from onepiece_dist.job.stages.evaluate import evaluation_spec, protocol_of, score_heldout
 from onepiece_dist.job.status import EvaluationReport, TrainingReport
+from onepiece_dist.runtime.actors import ActorClient, restartable_actor
 from onepiece_dist.specs.job import JobSpec
 
 if TYPE_CHECKING:  # torch loads where a trainer trains, not where a job is described

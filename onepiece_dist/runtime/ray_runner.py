@@ -23,16 +23,16 @@ from ray.exceptions import OutOfMemoryError, RaySystemError
 from onepiece_dist.errors import JobCancelled, JobError, RuntimeLost
 from onepiece_dist.job.pipeline import ProgressFn, Runtime, new_status, run_pipeline
 from onepiece_dist.job.results import LabelTask, ObjectResult, PatchTask, ShardResult
-from onepiece_dist.job.runtime.actors import restartable_actor
-from onepiece_dist.job.runtime.crashes import CrashLog, crash_folder, crashed_on
-from onepiece_dist.job.runtime.registry import RegistryClient
-from onepiece_dist.job.runtime.trainer import TrainerClient
-from onepiece_dist.job.runtime.writer import WriterClient, central_name
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
 from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.objects import ObjectRef
+from onepiece_dist.runtime.actors import restartable_actor
+from onepiece_dist.runtime.crashes import CrashLog, crash_folder, crashed_on
+from onepiece_dist.runtime.registry import RegistryClient
+from onepiece_dist.runtime.trainer import TrainerClient
+from onepiece_dist.runtime.writer import WriterClient, central_name
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
 
@@ -56,7 +56,7 @@ class SimWorker:
         self.crash_log = CrashLog(crashes) if crashes else None
 
     def starting(self, method: str, index: int) -> None:
-        """Note the item in this process's crash record (see :mod:`onepiece_dist.job.runtime.crashes`)."""
+        """Note the item in this process's crash record (see :mod:`onepiece_dist.runtime.crashes`)."""
         if self.crash_log is not None:
             self.crash_log.starting(method, index)
 
@@ -230,7 +230,7 @@ class WorkerPool:
 
     When a worker dies, the items it held are re-run one at a time on an otherwise idle worker (suspects), so a
     later death is attributable: an item that crashes its worker MAX_CRASHES times while running alone (a crash
-    record in ``crashes``, see :mod:`onepiece_dist.job.runtime.crashes`, or a kill by Ray's memory monitor), or whose
+    record in ``crashes``, see :mod:`onepiece_dist.runtime.crashes`, or a kill by Ray's memory monitor), or whose
     worker dies MAX_UNEXPLAINED times while running it alone with no record (killed from outside), is
     quarantined (``quarantined(index, item, reason)`` is its result); innocent items that only shared a worker
     with it are never counted against. Without a crash folder every death counts as a crash. Results come back

@@ -1,7 +1,7 @@
 """The label drawn again on a held-out dataset, for its own ceiling (stats.ceiling): a seeded sample of its candidates,
 each several times, every draw a new execution of the job's label protocol (sim.trials.label_draws).
 
-Runs where it is called, its simulation in a pinned process (job.runtime.pinned_child): one object at a time, each
+Runs where it is called, its simulation in a pinned process (runtime.pinned_child): one object at a time, each
 grasp's draws from its own generator ([seed, row]), so the draws do not depend on the sample's order or size.
 """
 
@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
+from onepiece_dist.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.job import JobSpec
 

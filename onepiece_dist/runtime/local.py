@@ -12,14 +12,14 @@ from typing import TYPE_CHECKING
 
 from onepiece_dist.job.pipeline import ProgressFn, Runtime, new_status, run_pipeline
 from onepiece_dist.job.results import LabelTask, ObjectResult, PatchTask, ShardResult
-from onepiece_dist.job.runtime.pinned_child import PinnedSimulation
-from onepiece_dist.job.runtime.trainer import Trainer
-from onepiece_dist.job.runtime.writer import DatasetWriter
 from onepiece_dist.job.stages.extract import extract_object
 from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
 from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.objects import ObjectRef
+from onepiece_dist.runtime.pinned_child import PinnedSimulation
+from onepiece_dist.runtime.trainer import Trainer
+from onepiece_dist.runtime.writer import DatasetWriter
 from onepiece_dist.specs.job import JobSpec
 
 if TYPE_CHECKING:

@@ -14,9 +14,6 @@ import numpy as np
 from onepiece_dist.core.dedup import DedupIndex
 from onepiece_dist.errors import JobError, MissingAssembly
 from onepiece_dist.job.results import CommitSummary, LabelTask, ObjectResult, PatchTask, ShardResult
-from onepiece_dist.job.runtime.actors import ActorClient, restartable_actor
-from onepiece_dist.job.runtime.ray_env import NAMESPACE
-from onepiece_dist.job.runtime.registry import on_this_node
 from onepiece_dist.job.stages.assemble import assemble_dataset
 from onepiece_dist.job.stages.commit import commit_dataset
 from onepiece_dist.job.stages.label_budget import budget_tasks, write_budget_labels
@@ -25,6 +22,9 @@ from onepiece_dist.job.stages.label_rounds import round_weights
 from onepiece_dist.job.stages.label_transfer import measure_transfer
 from onepiece_dist.job.stages.patch_shards import merge_patch_shards, patch_tasks
 from onepiece_dist.job.status import AdaptiveReport, AssemblyReport, LabelReport
+from onepiece_dist.runtime.actors import ActorClient, restartable_actor
+from onepiece_dist.runtime.ray_env import NAMESPACE
+from onepiece_dist.runtime.registry import on_this_node
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import DatasetReader, PartStore
 from onepiece_dist.store.dataset import update_attributes, write_groups

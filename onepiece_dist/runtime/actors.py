@@ -11,7 +11,7 @@ import time
 from typing import ClassVar
 
 from onepiece_dist.errors import ActorLost, RuntimeLost
-from onepiece_dist.job.runtime.ray_env import NAMESPACE
+from onepiece_dist.runtime.ray_env import NAMESPACE
 from onepiece_dist.sim.libm import worker_environment
 
 ACTOR_PATIENCE_S = 120.0  # how long a central actor may take to come back
