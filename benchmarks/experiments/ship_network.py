@@ -19,12 +19,21 @@ ROOT = HERE.parent
 
 
 def best_point(curve: dict) -> dict:
-    """The design whose largest network picks most on the household views (ties: fewer labels)."""
+    """The design whose largest network picks most on the household views; ties go to the network cheaper to run
+    (fewer weights: a robot plans with it), then to fewer labels."""
     largest = {}
     for point in curve["points"]:
         if point["labels"] >= largest.get(point["design"], {"labels": -1})["labels"]:
             largest[point["design"]] = point
-    return max(largest.values(), key=lambda p: (p["picks"]["methods"]["network"]["first_attempt"], -p["labels"]))
+    return max(largest.values(), key=lambda p: (p["picks"]["methods"]["network"]["first_attempt"],
+                                                -weights(p["options"]["model"]), -p["labels"]))
+
+
+def weights(model: str) -> int:
+    """How many weights the model ``model`` has."""
+    from onepiece_dist.learn.models import MODELS
+
+    return sum(t.numel() for t in MODELS[model]().parameters())
 
 
 def ship(point: dict, curve: dict) -> dict:
