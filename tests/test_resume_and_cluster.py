@@ -40,8 +40,17 @@ def wait_for(predicate, timeout: float, what: str):
 
 
 def ray_daemons_under(pid: int) -> list[psutil.Process]:
-    """The raylets and GCS servers that process ``pid``'s embedded Ray started (its descendants)."""
-    return [p for p in psutil.Process(pid).children(recursive=True) if p.name() in ("raylet", "gcs_server")]
+    """The raylets and GCS servers that process ``pid``'s embedded Ray started (its descendants). A short-lived
+    descendant (a worker starting or ending) may be gone between the listing and the look at its name: skipped
+    (CI met it once: NoSuchProcess)."""
+    found = []
+    for process in psutil.Process(pid).children(recursive=True):
+        try:
+            if process.name() in ("raylet", "gcs_server"):
+                found.append(process)
+        except psutil.NoSuchProcess:
+            continue
+    return found
 
 
 def objects_done(output: Path) -> int:
