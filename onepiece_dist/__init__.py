@@ -2,7 +2,8 @@
 
 Rooms (imports go downward only; docs/architecture.md, checked by tests/test_layers.py): ``core`` <- ``objects``
 <- ``sim``; ``stats``; ``store`` <- ``learn`` <- ``plan``; all of them <- ``job`` <- ``runtime`` <- ``picks``
-<- ``api`` <- ``study`` <- ``cli``. ``specs`` (on ``gripper``) and ``errors`` are under every room (``store`` uses ``errors`` only).
+<- ``api`` <- ``study`` <- ``cli``. ``specs`` (on ``gripper``) and ``errors`` are under every room (``store`` uses
+``errors`` only).
 
 The names below load on first use, so ``onepiece_dist.learn.dataset`` (the reader) imports with numpy, zarr and
 torch alone.

@@ -7,13 +7,12 @@ objects from one view.
 
 Steps: (1) label (BATCHES; --batches 2 and 3 add the others): random_urdfs[0:160] and 160 seeded household-sized
 shapes (benchmarks/experiments/training_shapes.py), then random_urdfs[160:320] and [320:480], each with 160 more
-shapes, 8 views each, 16
-candidates executed per view, on the embedded Ray (skipped where data/pick_labels*/pick_labels.zarr holds labels of
-the same spec); (2) per design and size, a network fitted on a
+shapes, 8 views each, 16 candidates executed per view, on the embedded Ray (skipped where
+data/pick_labels*/pick_labels.zarr holds labels of the same spec); (2) per design and size, a network fitted on a
 seeded random subset of the labels (validation: 10% of the objects); (3) each network's picks on the household set
 (benchmarks/experiments/household.py), the network chooser alone. Core-seconds of a point: the labelling's
-core-seconds in proportion to its labels, plus the fit's. Results: benchmarks/results/pick_curve.json; the best
-design's largest network is copied to data/pick_curve/best.pt.
+core-seconds in proportion to its labels, plus the fit's. Results: benchmarks/results/pick_curve.json; the network
+to ship is chosen from them by benchmarks/experiments/ship_network.py.
 """
 
 from __future__ import annotations

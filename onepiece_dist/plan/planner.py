@@ -137,7 +137,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     clock = time.perf_counter()
     points, gripper = observation.points, record.gripper
     if len(points) > THIN_ABOVE:  # millions of points: thinned to about a depth camera's density first
-        points = points[voxel_downsample(points, THIN_CELL)]
+        points = _thin(points, THIN_CELL)
     plane = None
     if spec.support_plane == "auto":
         up = None if observation.viewpoint is None else observation.viewpoint - points.mean(axis=0)

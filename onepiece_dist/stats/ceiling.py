@@ -69,13 +69,10 @@ def fitted_ceiling(draws: np.ndarray, samples: int = 200_000, seed: int = 0) -> 
     1; draws independent of the grasp (no spread of odds) give the floor. Seeded: the same draws give the same
     figure."""
     draws = np.asarray(draws, dtype=bool)
-    n, r = draws.shape
-    mean = float(draws.mean())
+    n, mean = len(draws), float(draws.mean())
     if mean in (0.0, 1.0):
         return mean
-    shares = draws.mean(axis=1)
-    seen, by_chance = float(shares.var(ddof=1)), mean * (1 - mean) / r
-    spread = (seen - by_chance) / (1 - 1 / r)  # the odds' own variance
+    seen, by_chance, spread = _share_variance(draws, mean)
     if seen - by_chance <= seen * np.sqrt(2 / max(n - 1, 1)):  # within a standard error of none
         return mean
     if spread >= mean * (1 - mean) * (1 - 1e-9):
@@ -84,6 +81,14 @@ def fitted_ceiling(draws: np.ndarray, samples: int = 200_000, seed: int = 0) -> 
     rng = np.random.default_rng([seed, 51])
     odds = rng.beta(mean * total, (1 - mean) * total, samples)
     return threshold_ap(odds, rng.random(samples) < odds)
+
+
+def _share_variance(draws: np.ndarray, mean: float) -> tuple[float, float, float]:
+    """The variance of the grasps' success shares, what r draws add to it by themselves, and what is left: the
+    variance of the odds themselves (the method of moments that fitted_ceiling and moment_range share)."""
+    r = draws.shape[1]
+    seen, by_chance = float(draws.mean(axis=1).var(ddof=1)), mean * (1 - mean) / r
+    return seen, by_chance, (seen - by_chance) / (1 - 1 / r)
 
 
 def ap_against_draws(scores: np.ndarray, draws: np.ndarray) -> float:
@@ -159,9 +164,8 @@ def moment_range(draws: np.ndarray, steps: int = 200) -> tuple[float, float]:
     """The lowest and highest AP of the two-point odds distributions whose mean and variance are those the draws'
     counts give (fitted_ceiling's moments): two moments do not fix the ceiling, and this is by how much."""
     draws = np.asarray(draws, dtype=bool)
-    n, r = draws.shape
-    mean = float(draws.mean())
-    spread = (float(draws.mean(axis=1).var(ddof=1)) - mean * (1 - mean) / r) / (1 - 1 / r) if n > 1 else 0.0
+    n, mean = len(draws), float(draws.mean())
+    spread = _share_variance(draws, mean)[2] if n > 1 else 0.0
     if mean in (0.0, 1.0) or spread <= 0:
         return (mean, mean)
     spread = min(spread, mean * (1 - mean) * (1 - 1e-9))
