@@ -262,3 +262,35 @@ def test_a_checkpoint_is_read_as_a_typed_record_and_bad_ones_are_refused_by_name
         with pytest.raises(CheckpointRejected, match=why) as refused:
             GraspScorer(tmp_path / name, device="cpu")
         assert name in str(refused.value)
+
+
+def test_the_label_stage_cuts_its_crops_as_the_planner_does_canonical_codes_included():
+    """One crop recipe (core.voxel.network_inputs): the label stage's stored codes and points of settled poses are
+    the planner's crops of the same points and poses with the same draws, canonical codes included (the label
+    stage stored uncanonical codes under a canonical voxel spec before)."""
+    from onepiece_dist.core.mesh import sample_surface
+    from onepiece_dist.core.sampling import sample_candidates
+    from onepiece_dist.core.voxel import canonical_codes
+    from onepiece_dist.job.stages.label_one_object import _collect
+    from onepiece_dist.plan.scorer import CropRecord
+    from onepiece_dist.sim.trials import TrialBatch
+
+    spec = JobSpec(voxel={"canonical": True}, sim={"points_per_grasp": 32})
+    mesh = box_mesh((0.05, 0.03, 0.07))
+    points, normals = sample_surface(mesh, 3000, np.random.default_rng(0))
+    poses = sample_candidates(mesh, points, normals, 24, spec.gripper, spec.sampler, np.random.default_rng(1)).poses
+    n = len(poses)
+    batch = TrialBatch(np.zeros(n, np.int8), poses, np.zeros(n), np.zeros(n), np.zeros(n, np.int64),
+                       np.ones(n, bool), np.ones(n), np.zeros(n))
+    rows = {name: [] for name in ("patch", "pose", "candidate_pose", "width", "shift", "quality", "slip",
+                                  "success", "code", "candidate_code", "points")}
+    _collect(rows, 0, np.eye(4), points, poses, batch, spec, np.random.default_rng(5))
+    planned = cut_crops(points, poses, CropRecord(spec.gripper, spec.voxel, 32, "pointnet"),
+                        np.random.default_rng(5))
+    assert n >= 10 and (planned.counts > 0).all()
+    assert np.array_equal(rows["code"][0], planned.codes) and np.array_equal(rows["points"][0], planned.points)
+    assert np.array_equal(canonical_codes(rows["code"][0], spec.grid_shape()), rows["code"][0])
+    assert np.array_equal(canonical_codes(rows["candidate_code"][0], spec.grid_shape()), rows["candidate_code"][0])
+    raw = cut_crops(points, poses, CropRecord(spec.gripper, spec.voxel.model_copy(update={"canonical": False}), 32,
+                                              "pointnet"), np.random.default_rng(5))
+    assert not np.array_equal(raw.codes, planned.codes)  # the turn matters for some of these crops

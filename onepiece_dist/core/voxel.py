@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from onepiece_dist.core.frames import closing_region_bounds, gripper_frame_batches, to_gripper_frame
+from onepiece_dist.core.mesh import resample_crops
 from onepiece_dist.core.spatial import PointGrid, posed_box_bounds
 
 
@@ -34,6 +35,21 @@ def canonical_codes(codes: np.ndarray, grid_shape: tuple[int, int, int]) -> np.n
     codes : (n, B) uint8 -> (n, B) uint8
     """
     return bytewise_smaller(codes, pack_codes(unpack_codes(codes, grid_shape)[:, :, ::-1, ::-1]))
+
+
+def network_inputs(codes: np.ndarray, inside: list[np.ndarray], grid_shape: tuple[int, int, int], canonical: bool,
+                   points_per_grasp: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray | None]:
+    """The network's inputs of crops cut by :func:`crop_regions`, one recipe for the job's extraction, its label
+    stage and the planner: the codes (canonical when the voxel spec asks) and each crop's points ``inside``
+    resampled to P = ``points_per_grasp`` (n, P, 3) float16, drawn from ``rng`` in crop order (an empty crop draws
+    nothing; P = 0: no points, None, and nothing drawn). -> codes (n, B) uint8, points."""
+    points = resample_crops(inside, points_per_grasp, rng) if points_per_grasp > 0 else None
+    return stored_codes(codes, grid_shape, canonical), points
+
+
+def stored_codes(codes: np.ndarray, grid_shape: tuple[int, int, int], canonical: bool) -> np.ndarray:
+    """``codes`` as a dataset stores them and a network reads them: canonical when the voxel spec asks."""
+    return canonical_codes(codes, grid_shape) if canonical else codes
 
 
 def bytewise_smaller(codes: np.ndarray, twins: np.ndarray) -> np.ndarray:

@@ -9,8 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.mesh import resample_crops
-from onepiece_dist.core.voxel import canonical_codes, crop_regions, unpack_codes
+from onepiece_dist.core.voxel import crop_regions, network_inputs, unpack_codes
 from onepiece_dist.errors import CheckpointRejected, CloudRejected
 from onepiece_dist.specs.job import GripperSpec, VoxelSpec
 
@@ -54,13 +53,13 @@ class Crops:
 
 def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.random.Generator) -> Crops:
     """Each pose's crop of ``cloud`` (m, 3), exactly as a job's extraction cuts its training crops: the closing
-    region's points in the gripper frame (core.voxel.crop_regions), resampled to P (core.mesh.resample_crops),
-    and the voxel code (canonical when the training's was)."""
+    region's points in the gripper frame (core.voxel.crop_regions) and the network's inputs from them
+    (core.voxel.network_inputs: the voxel code, canonical when the training's was, and P resampled points)."""
     grid = record.grid_shape()
     codes, counts, inside = crop_regions(cloud, poses, grid, record.voxel.resolution, keep_points=True)
-    if record.voxel.canonical:
-        codes = canonical_codes(codes, grid)
-    return Crops(codes, counts, resample_crops(inside or [], max(record.points_per_grasp, 1), rng))
+    codes, points = network_inputs(codes, inside or [], grid, record.voxel.canonical,
+                                   max(record.points_per_grasp, 1), rng)
+    return Crops(codes, counts, points)
 
 
 class GraspScorer:

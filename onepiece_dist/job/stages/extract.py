@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.closure import binary_label, closure_arrays
-from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, resample_crops, sample_surface
+from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume, sample_surface
 from onepiece_dist.core.sampling import GraspCandidates, object_rng, sample_candidates
-from onepiece_dist.core.voxel import canonical_codes, crop_regions
+from onepiece_dist.core.voxel import crop_regions, network_inputs, stored_codes
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.job.results import ObjectPartMeta, ObjectResult, part_key
 from onepiece_dist.objects import ObjectRef, load_object
@@ -92,14 +92,14 @@ def extract_arrays(spec: JobSpec, mesh: TriangleMesh, collision_dir: Path,
         keep &= static_counts > 0
         inside = seen
     grasps = {name: value[keep] for name, value in grasps.items()}
-    codes, static = codes[keep], static[keep]
-    if spec.voxel.canonical:
-        codes, static = canonical_codes(codes, grid), canonical_codes(static, grid)
+    kept = [inside[i] for i in np.flatnonzero(keep)]
+    codes, crop_points = network_inputs(codes[keep], kept, grid, spec.voxel.canonical, spec.sim.points_per_grasp, rng)
+    static = stored_codes(static[keep], grid, spec.voxel.canonical)
     arrays = grasp_arrays({**grasps, "code": codes, "candidate_code": static})
     if given:  # which of the file's grasps each kept one is (the rest did not hold: our label says fail)
         arrays["source_row"] = grasp_arrays({"source_row": np.flatnonzero(held)[keep]})["source_row"]
-    if spec.sim.points_per_grasp:
-        arrays["points"] = resample_crops([inside[i] for i in np.flatnonzero(keep)], spec.sim.points_per_grasp, rng)
+    if crop_points is not None:
+        arrays["points"] = crop_points
     if spec.closure.enabled:
         arrays.update(closure_labelled(spec, mesh.vertices, mesh.faces, grasps["pose"], arrays.get("success")))
     if views is not None:

@@ -19,9 +19,8 @@ import numpy as np
 
 from onepiece_dist.core.clip import pieces_mesh
 from onepiece_dist.core.frames import compose_poses, perturb_pose
-from onepiece_dist.core.mesh import resample_points
 from onepiece_dist.core.sampling import object_rng
-from onepiece_dist.core.voxel import crop_codes, crop_regions
+from onepiece_dist.core.voxel import crop_codes, crop_regions, network_inputs, stored_codes
 from onepiece_dist.job.made_once import shard_once
 from onepiece_dist.job.patches import Patches, read_patches
 from onepiece_dist.job.results import LabelTask, ShardResult
@@ -170,7 +169,8 @@ def _collect(rows, k, placement, points, poses, batch, spec, rng) -> None:
     for name in ("width", "shift", "quality", "slip", "success"):
         rows[name].append(getattr(batch, name)[ok])
     codes, _, inside = crop_regions(points, settled, grid, res, keep_points=True)
+    canonical = spec.voxel.canonical
+    codes, crops = network_inputs(codes, inside, grid, canonical, max(spec.sim.points_per_grasp, 1), rng)
     rows["code"].append(codes)
-    rows["candidate_code"].append(crop_codes(points, poses[ok], grid, res)[0])
-    count = max(spec.sim.points_per_grasp, 1)
-    rows["points"].append(np.stack([resample_points(found, count, rng) for found in inside]))
+    rows["candidate_code"].append(stored_codes(crop_codes(points, poses[ok], grid, res)[0], grid, canonical))
+    rows["points"].append(crops)
