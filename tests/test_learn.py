@@ -67,13 +67,13 @@ def test_missing_labels_give_a_clear_error(labelled):
 def test_training_lowers_the_loss_and_checkpoints_reload_identically(labelled, tmp_path, model):
     spec = TrainSpec(model=model, epochs=6, batch_size=16, learning_rate=3e-3, patience=6)
     result = train_model(labelled, spec, tmp_path / "ckpt", seed=0)
-    losses = [m["train_loss"] for m in result.metrics]
+    losses = [m.train_loss for m in result.metrics]
     assert losses[-1] < losses[0]
     ds = GraspDataset(labelled)
     first, second = predict(load_model(result.best_checkpoint), ds), predict(load_model(result.best_checkpoint), ds)
     assert np.array_equal(first, second) and np.all((first >= 0) & (first <= 1))
     resumed = train_model(labelled, spec.model_copy(update={"epochs": 7}), tmp_path / "ckpt", seed=0)
-    assert [m["epoch"] for m in resumed.metrics] == list(range(len(resumed.metrics)))
+    assert [m.epoch for m in resumed.metrics] == list(range(len(resumed.metrics)))
     assert len(resumed.metrics) in (len(result.metrics), len(result.metrics) + 1)
 
 
@@ -178,7 +178,7 @@ def test_weighting_by_code_count_weighs_each_patch_by_the_grasps_it_stands_for(l
     assert patch_weights(labelled, "assembled/grasps", "none") is None
     plain = train_model(labelled, spec.model_copy(update={"weight_by_count": False}), tmp_path / "a", seed=0)
     weighted = train_model(labelled, spec, tmp_path / "b", seed=0)
-    assert plain.metrics[0]["train_loss"] != weighted.metrics[0]["train_loss"]
+    assert plain.metrics[0].train_loss != weighted.metrics[0].train_loss
 
 
 def test_a_code_only_dataset_is_read_without_points(tmp_path):
@@ -218,4 +218,4 @@ def test_a_bf16_step_trains_and_checkpoints_load_on_the_cpu(synthetic, tmp_path)
     result = train_model(synthetic, spec, tmp_path / "ckpt", seed=0)
     checkpoint = load_checkpoint(result.best_checkpoint)
     assert all(t.device.type == "cpu" for t in checkpoint["state_dict"].values())
-    assert np.isfinite(result.metrics[-1]["train_loss"]) and load_model(result.best_checkpoint) is not None
+    assert np.isfinite(result.metrics[-1].train_loss) and load_model(result.best_checkpoint) is not None

@@ -25,7 +25,7 @@ def test_training_on_the_gpu_learns_and_leaves_a_checkpoint_that_loads_on_the_cp
                      learning_rate=3e-3)
     assert resolve_device("auto").type == "cuda"
     result = train_model(dataset, spec, tmp_path / "ckpt", seed=0)
-    assert result.device == "cuda" and np.isfinite(result.metrics[-1]["train_loss"])
+    assert result.device == "cuda" and np.isfinite(result.metrics[-1].train_loss)
     checkpoint = load_checkpoint(result.best_checkpoint)
     assert all(t.device.type == "cpu" for t in checkpoint["state_dict"].values())
     model_cpu = load_model(result.best_checkpoint)
@@ -38,4 +38,4 @@ def test_training_on_the_gpu_learns_and_leaves_a_checkpoint_that_loads_on_the_cp
 def test_pointnet_learns_the_synthetic_rule_on_the_gpu(dataset, tmp_path):
     spec = TrainSpec(model="pointnet", epochs=8, batch_size=128, device="cuda", learning_rate=3e-3, patience=8)
     result = train_model(dataset, spec, tmp_path / "ckpt", seed=0)
-    assert result.metrics[-1]["val_accuracy"] > 0.8
+    assert result.metrics[-1].val_accuracy > 0.8

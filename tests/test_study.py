@@ -442,6 +442,7 @@ def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the
 @pytest.mark.slow
 def test_the_adaptive_arm_stops_by_its_rule(tiny_study):
     """U stops after `patience` rounds without a validation AP gain above the margin, or at its round limit."""
+    from onepiece_dist.learn.metrics import CurvePoint, Validation
     from onepiece_dist.learn.train import StepResult
     from onepiece_dist.study.adaptive import adaptive_rows
 
@@ -457,8 +458,9 @@ def test_the_adaptive_arm_stops_by_its_rule(tiny_study):
     def fake(aps):
         def train_one(run):
             trained.append(run.rows)
+            point = CurvePoint(1, Validation(0.5, 0.5, aps[len(trained) - 1], 0.5))
             return StepResult(scores=np.random.default_rng(len(trained)).random(n).astype(np.float32),
-                              curve=[{"step": 1, "val_ap": aps[len(trained) - 1]}], best_step=1, train_seconds=0.0,
+                              curve=(point,), best_step=1, train_seconds=0.0,
                               train_grasps=len(run.rows), validation_grasps=0, device="cpu")
         return train_one
 

@@ -56,7 +56,7 @@ def training_summary(status) -> dict:
     return {"spec": str(TRAIN_SPEC.relative_to(ROOT)), "candidates": status.progress.grasps,
             "labels": labels.labelled_grasps if labels else None,
             "label_success_rate": labels.success_rate if labels else None,
-            "validation_ap": training.final.get("val_ap") if training else None,
+            "validation_ap": training.final.val_ap if training and training.final else None,
             "epochs": training.epochs if training else None}
 
 

@@ -114,8 +114,9 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
              + ", ".join(f"{r.validation_ap:.3f} ({r.labels} labels)" for r in rounds))
     if status.training:
         t = status.training
+        accuracy, ap = (t.final.val_accuracy, t.final.val_ap) if t.final else (0.0, 0.0)
         _err(f"trained {t.model} for {t.epochs} epochs: on its own validation split (held-back grasps of the "
-             f"train data) accuracy {t.final.get('val_accuracy', 0):.2f}, AP {t.final.get('val_ap', 0):.2f}")
+             f"train data) accuracy {accuracy:.2f}, AP {ap:.2f}")
     if status.evaluation:
         e = status.evaluation
         _err(f"held-out: {e.objects} unseen objects, {e.grasps} candidates (positive rate {e.positive_rate:.2f}): "

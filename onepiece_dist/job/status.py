@@ -8,7 +8,9 @@ import time
 from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from onepiece_dist.learn.metrics import EpochMetrics
 
 JobState = Literal["pending", "running", "succeeded", "failed", "cancelled"]
 STATUS_SUFFIX = ".status.json"
@@ -125,7 +127,12 @@ class TrainingReport(_Report):
     stopped_early: bool
     checkpoint: str
     device: str
-    final: dict[str, float | int] = Field(description="Metrics of the last epoch.")
+    final: EpochMetrics | None = Field(description="Metrics of the last epoch (None: no epoch ran).")
+
+    @field_validator("final", mode="before")
+    @classmethod
+    def _no_epoch(cls, value):
+        return None if value == {} else value  # written as {} before the metrics were typed
 
 
 class EvaluationReport(_Report):

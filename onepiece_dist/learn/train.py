@@ -14,6 +14,7 @@ from torch.utils.data import DataLoader
 
 from onepiece_dist.errors import CheckpointRejected
 from onepiece_dist.learn.dataset import MODEL_INPUTS, ChunkBatchSampler, GraspDataset, collate
+from onepiece_dist.learn.metrics import CurvePoint, EpochMetrics, Validation
 from onepiece_dist.learn.models import MODELS
 from onepiece_dist.specs.job import JobSpec, TrainSpec
 from onepiece_dist.stats.ranking import average_precision
@@ -23,7 +24,7 @@ LAST, BEST = "last.pt", "best.pt"
 
 @dataclass(frozen=True)
 class TrainResult:
-    metrics: list[dict]
+    metrics: tuple[EpochMetrics, ...]
     best_checkpoint: Path
     stopped_early: bool
     device: str
@@ -107,13 +108,13 @@ def predict(model: torch.nn.Module, dataset: GraspDataset, batch_size: int = 256
     return np.concatenate(out) if out else np.zeros(0)
 
 
-def evaluate(model: torch.nn.Module, dataset: GraspDataset) -> dict:
+def evaluate(model: torch.nn.Module, dataset: GraspDataset) -> Validation:
     labels = dataset.labels().astype(np.float32)
     scores = predict(model, dataset).astype(np.float32)
     loss = torch.nn.functional.binary_cross_entropy(torch.from_numpy(scores).clamp(1e-6, 1 - 1e-6),
                                                     torch.from_numpy(labels)).item() if len(labels) else 0.0
-    return {"loss": loss, "accuracy": float(np.mean((scores > 0.5) == (labels > 0.5))) if len(labels) else 0.0,
-            "ap": average_precision(scores, labels), "positives": float(labels.mean()) if len(labels) else 0.0}
+    return Validation(loss, float(np.mean((scores > 0.5) == (labels > 0.5))) if len(labels) else 0.0,
+                      average_precision(scores, labels), float(labels.mean()) if len(labels) else 0.0)
 
 
 def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir: str | os.PathLike,
@@ -139,13 +140,17 @@ def train_model(dataset_path: str | os.PathLike, spec: TrainSpec, checkpoint_dir
     step = TrainStep(model, optimiser, device, spec.precision, patch_weights(dataset_path, group, weighting))
     for epoch in range(state["epoch"], spec.epochs):
         train_loss = _train_epoch(step, loader)
-        metrics = {"epoch": epoch, "train_loss": train_loss, **{f"val_{k}": v for k, v in
-                                                                 evaluate(model, val_set).items()}}
-        state["metrics"].append(metrics)
+        metrics = EpochMetrics.after(epoch, train_loss, evaluate(model, val_set))
+        state["metrics"].append(metrics.to_json())  # plain values: a checkpoint loads with weights_only
         state = _after_epoch(folder, spec, model, optimiser, state, metrics, crop)
         if state["bad_epochs"] >= spec.patience:
-            return TrainResult(state["metrics"], folder / BEST, True, device.type)
-    return TrainResult(state["metrics"], folder / BEST, False, device.type)
+            return _result(state, folder, True, device)
+    return _result(state, folder, False, device)
+
+
+def _result(state: dict, folder: Path, stopped_early: bool, device: torch.device) -> TrainResult:
+    metrics = tuple(EpochMetrics.from_json(m) for m in state["metrics"])
+    return TrainResult(metrics, folder / BEST, stopped_early, device.type)
 
 
 def patch_weights(dataset_path, group: str, weighting: str) -> torch.Tensor | None:
@@ -208,11 +213,11 @@ def _resume(folder: Path, model, optimiser) -> dict:
     return state
 
 
-def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, metrics: dict,
+def _after_epoch(folder: Path, spec: TrainSpec, model, optimiser, state: dict, metrics: EpochMetrics,
                  crop: dict | None = None) -> dict:
-    improved = metrics["val_loss"] < state["best_loss"]
-    state = {**state, "epoch": metrics["epoch"] + 1, "bad_epochs": 0 if improved else state["bad_epochs"] + 1,
-             "best_loss": min(state["best_loss"], metrics["val_loss"])}
+    improved = metrics.val_loss < state["best_loss"]
+    state = {**state, "epoch": metrics.epoch + 1, "bad_epochs": 0 if improved else state["bad_epochs"] + 1,
+             "best_loss": min(state["best_loss"], metrics.val_loss)}
     weights = {name: tensor.detach().cpu() for name, tensor in model.state_dict().items()}  # loads anywhere
     checkpoint = {"model": spec.model, "state_dict": weights, "optimiser": optimiser.state_dict(),
                   "rng": torch.get_rng_state(), **state, **({"crop": crop} if crop else {})}
@@ -258,15 +263,30 @@ class StepRun:
 @dataclass(frozen=True)
 class StepResult:
     scores: np.ndarray  # (n,) float32 success probability of every held-out grasp, in dataset order
-    curve: list[dict]  # {"step", "val_loss", "val_accuracy", "val_ap", "val_positives"} at each evaluation
+    curve: tuple[CurvePoint, ...]  # each evaluation of the validation split
     best_step: int
     train_seconds: float
     train_grasps: int
     validation_grasps: int
     device: str
 
+    def to_json(self) -> dict:
+        """Every field but the scores, plain values (a study's run store writes it beside them)."""
+        return {"curve": [point.to_json() for point in self.curve], "best_step": self.best_step,
+                "train_seconds": self.train_seconds, "train_grasps": self.train_grasps,
+                "validation_grasps": self.validation_grasps, "device": self.device}
+
+    @classmethod
+    def from_json(cls, scores: np.ndarray, values: dict) -> StepResult:
+        curve = tuple(CurvePoint.from_json(point) for point in values["curve"])
+        return cls(scores, curve, **{k: v for k, v in values.items() if k != "curve"})
+
     def best_validation_loss(self) -> float:
-        return round(min(point["val_loss"] for point in self.curve), 5)
+        return round(min(point.validation.loss for point in self.curve), 5)
+
+    def best_point(self) -> CurvePoint:
+        """The evaluation whose checkpoint was kept (the lowest validation loss)."""
+        return next(point for point in self.curve if point.step == self.best_step)
 
 
 IN_MEMORY_BYTES = 2**31  # a train set's arrays up to this size are held in memory while it trains
@@ -302,15 +322,15 @@ def fit_steps(run: StepRun) -> StepResult:
         step(collate(train.batch(np.sort(rng.choice(len(train), min(run.batch_size, len(train)), replace=False)))))
         if k % every == 0 or k == run.steps:
             metrics = evaluate(model, val)
-            curve.append({"step": k, **{f"val_{key}": round(value, 4) for key, value in metrics.items()}})
-            if metrics["loss"] < best:
-                best, best_state = metrics["loss"], {n: t.detach().clone() for n, t in model.state_dict().items()}
+            curve.append(CurvePoint(k, metrics.rounded(4)))
+            if metrics.loss < best:
+                best, best_state = metrics.loss, {n: t.detach().clone() for n, t in model.state_dict().items()}
     seconds = time.perf_counter() - start
     model.load_state_dict(best_state)
     if run.save_to is not None:
         save_weights(run.model, best_state, Path(run.save_to), crop=dataset_crop(run.path))
     scores = predict(model, GraspDataset(run.heldout_path, "grasps", inputs=inputs, labelled=run.heldout_labelled))
-    return StepResult(scores.astype(np.float32), curve, min(curve, key=lambda c: c["val_loss"])["step"],
+    return StepResult(scores.astype(np.float32), tuple(curve), min(curve, key=lambda c: c.validation.loss).step,
                       round(seconds, 1), len(train), len(val), device.type)
 
 

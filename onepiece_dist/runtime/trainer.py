@@ -33,12 +33,12 @@ class Trainer:
         from onepiece_dist.store.dataset import write_group
 
         result = train_model(spec.output, spec.train, checkpoint_dir(spec), seed=spec.seed, crop=crop_record(spec))
-        keys = [k for k in result.metrics[0] if k != "epoch"] if result.metrics else []
-        arrays = {k: np.array([m[k] for m in result.metrics], dtype=np.float32) for k in keys}
+        rows = [m.to_json() for m in result.metrics]
+        keys = [k for k in rows[0] if k != "epoch"] if rows else []
+        arrays = {k: np.array([row[k] for row in rows], dtype=np.float32) for k in keys}
         report = TrainingReport(model=spec.train.model, data=spec.train.data, epochs=len(result.metrics),
                                 stopped_early=result.stopped_early, checkpoint=str(result.best_checkpoint),
-                                device=result.device,
-                                final=result.metrics[-1] if result.metrics else {})
+                                device=result.device, final=result.metrics[-1] if result.metrics else None)
         write_group(spec.output, "train", arrays, {"training": report.model_dump(mode="json")})
         return report
 

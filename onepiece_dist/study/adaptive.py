@@ -38,7 +38,7 @@ TrainOne = Callable[[StepRun], StepResult]
 
 def validation_ap(result: StepResult) -> float:
     """The validation AP at the checkpoint the run kept."""
-    return float(next(point for point in result.curve if point["step"] == result.best_step).get("val_ap", 0.0))
+    return float(result.best_point().validation.ap)
 
 
 def adaptive_rows(spec: StudySpec, a_output: str, learning_rate: float, train_one: TrainOne

@@ -97,9 +97,8 @@ class RunStore:
         meta, scores = self.folder / f"{key}.json", self.folder / f"{key}.npy"
         if not (meta.is_file() and scores.is_file()):
             return None
-        fields = json.loads(meta.read_text())
         self.reused += 1
-        return StepResult(scores=np.load(scores, allow_pickle=False), **fields)
+        return StepResult.from_json(np.load(scores, allow_pickle=False), json.loads(meta.read_text()))
 
     def train(self, runs: list[StepRun], trainers: Trainers) -> list[StepResult]:
         """Each run's result: read back when stored, else trained by ``trainers`` and stored as it finishes."""
@@ -113,8 +112,7 @@ class RunStore:
         key = self.key(run)
         np.save(self.folder / f"{key}.npy.tmp.npy", result.scores, allow_pickle=False)
         Path(self.folder / f"{key}.npy.tmp.npy").replace(self.folder / f"{key}.npy")
-        fields = {k: v for k, v in dataclasses.asdict(result).items() if k != "scores"}
-        (self.folder / f"{key}.json").write_text(json.dumps(fields))
+        (self.folder / f"{key}.json").write_text(json.dumps(result.to_json()))
 
 
 def train_arms(jobs: list[ArmRun], rates: Sequence[float], store: RunStore, trainers: Trainers

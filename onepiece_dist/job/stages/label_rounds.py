@@ -138,9 +138,8 @@ def train_round(spec: JobSpec, plan: RoundsPlan, parts: PartStore, number: int, 
                       device=spec.train.device, validation_groups=tuple(int(o) for o in plan.validation_objects),
                       warm_start=warm_start, save_to=str(checkpoint), heldout_labelled=False)
         result = train(run)
-        point = next(p for p in result.curve if p["step"] == result.best_step)
         weights = {f"{WEIGHT}{name}": array for name, array in checkpoint_arrays(checkpoint).items()}
-        parts.write(key, {"scores": result.scores, **weights}, {"validation_ap": float(point.get("val_ap", 0.0)),
+        parts.write(key, {"scores": result.scores, **weights}, {"validation_ap": result.best_point().validation.ap,
                                                                 "best_step": result.best_step,
                                                                 "train_seconds": result.train_seconds})
     meta = parts.read_meta(key)
