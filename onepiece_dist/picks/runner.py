@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.job.stages.evaluate import SEPARABLE  # the one range: a guess's rate outside it ranks nothing
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan.scorer import GraspScorer
@@ -26,6 +25,7 @@ from onepiece_dist.runtime.ray_env import connect
 from onepiece_dist.runtime.registry import RegistryClient
 from onepiece_dist.specs.plan import PickSpec
 from onepiece_dist.stats.intervals import bootstrap_interval
+from onepiece_dist.stats.ranking import SEPARABLE, can_separate
 
 REPORT_FILE = "picks.json"
 
@@ -106,9 +106,8 @@ def _verdict(spec: PickSpec, summaries: list[MethodSummary], objects: int) -> tu
     if "random" not in spec.methods:
         return None, "without the random method the benchmark cannot say whether it separates a network from a guess"
     rate = next(s.first_attempt for s in summaries if s.method == "random")
-    low, high = SEPARABLE
-    if rate > high or rate < low:
-        side = "succeeds" if rate > high else "fails"
+    if not can_separate(rate):
+        side = "succeeds" if rate > SEPARABLE[1] else "fails"
         return False, (f"a random collision-free grasp {side} at {rate:.0%} of first attempts: these picks cannot "
                        "separate a network from a guess (make them harder: more label trials, other objects)")
     return True, f"a random collision-free grasp picks {rate:.0%} at the first attempt: the picks can separate"

@@ -17,9 +17,9 @@ import numpy as np
 
 from onepiece_dist.learn.train import StepResult
 from onepiece_dist.picks.networks import run_network_picks
-from onepiece_dist.picks.runner import SEPARABLE
 from onepiece_dist.specs.plan import PICK_SIM, PickSpec
 from onepiece_dist.stats.intervals import bootstrap_interval
+from onepiece_dist.stats.ranking import can_separate
 from onepiece_dist.study.result import Arm, ArmPicks, Measure, PicksJudgement
 from onepiece_dist.study.spec import StudySpec
 from onepiece_dist.study.training import ArmRun, weights_at
@@ -63,7 +63,7 @@ def judge_by_picks(spec: StudySpec, folder: Path, trained: list[tuple[ArmRun, St
     inside = {name: m.mean >= a.interval[0] for name, m in per_arm.items()}
     cost = {arm.name: arm.cost.core_seconds for arm in arms}
     cheapest = min((name for name in per_arm if inside[name]), key=lambda name: cost.get(name, float("inf")))
-    separable = bool(SEPARABLE[0] <= random.mean <= SEPARABLE[1])
+    separable = can_separate(random.mean)
     versus = {n: compare(per_object[n], per_object[f"R ~{n}"], spec) for n in per_arm
               if n.startswith("B ") and f"R ~{n}" in per_arm}
     return PicksJudgement(objects=len(ok), views=spec.picks.views,

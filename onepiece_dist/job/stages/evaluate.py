@@ -12,9 +12,7 @@ import numpy as np
 from onepiece_dist.job.status import EvaluationReport, JobStatus
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.stats.intervals import bootstrap_interval
-from onepiece_dist.stats.ranking import average_precision
-
-SEPARABLE = (0.1, 0.9)  # held-out positive rates outside this range leave a ranking nothing to separate
+from onepiece_dist.stats.ranking import SEPARABLE, average_precision, can_separate
 
 
 def heldout_sim(spec: JobSpec):
@@ -47,9 +45,8 @@ def protocol_of(spec: JobSpec) -> str:
 
 def verdict(positive_rate: float, top1: float, random_choice: float) -> tuple[bool, str]:
     """Whether held-out candidates with this positive rate can separate a network from a guess, and why."""
-    low, high = SEPARABLE
-    if positive_rate > high or positive_rate < low:
-        side = "succeed" if positive_rate > high else "fail"
+    if not can_separate(positive_rate):
+        side = "succeed" if positive_rate > SEPARABLE[1] else "fail"
         return False, (f"{positive_rate:.0%} of the held-out candidates {side}: this evaluation cannot separate a "
                        f"network from a guess (top-1 {top1:.2f} against random {random_choice:.2f} says nothing); "
                        "raise evaluate.label_trials or use harder objects")
