@@ -99,3 +99,43 @@ def draw_curve(curve: dict | None, picks: dict | None) -> None:
     PICTURE.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(PICTURE, metadata={"Software": None})
     plt.close(fig)
+
+
+RANKING_WORDS = {
+    "network": "the network's score (the product)",
+    "jittered": "the mean score of the candidate and 8 copies at the label's pose noise (the 16 best scored again)",
+    "jittered_x2": "the same at twice the label's pose noise",
+}
+
+
+def rankings_section(rankings: dict) -> list[str]:
+    """Rankings of the shipped network's scores tried as choosers (results/pick_rankings.json): chosen on the
+    selection set, judged on the household set; kept only where both rise."""
+    sets = {s["name"]: s for s in rankings["sets"]}
+    chosen, judged = sets["selection"], sets["household"]
+
+    def cell(result: dict, name: str) -> str:
+        r = result["rankings"][name]
+        return f"{_pct(r['first_attempt'])} [{_pct(r['interval'][0])}, {_pct(r['interval'][1])}]"
+
+    names = list(chosen["rankings"])
+    rows = [f"| `{n}`: {RANKING_WORDS.get(n, _prior_words(n))} | {cell(chosen, n)} | {cell(judged, n)} |"
+            for n in names]
+    base = chosen["rankings"]["network"]["first_attempt"], judged["rankings"]["network"]["first_attempt"]
+    best = max(names[1:], key=lambda n: chosen["rankings"][n]["first_attempt"])
+    rises = (chosen["rankings"][best]["first_attempt"] > base[0], judged["rankings"][best]["first_attempt"] > base[1])
+    verdict = (f"The best on the selection set, `{best}`, "
+               f"{'rises' if rises[0] else 'does not rise'} there and "
+               f"{'rises' if rises[1] else 'does not rise'} on the household set: "
+               f"{'kept' if all(rises) else 'not kept; the product ranks by the network score alone'}.")
+    return ["## Rankings tried: `.venv/bin/python -m benchmarks.experiments.pick_rankings`", "",
+            f"The shipped network's scores ranked other ways, first attempt only; each ranking chosen on "
+            f"{chosen['views']} views of {chosen['loaded']} procedural objects the network never saw "
+            f"(`{chosen['objects']}`), judged on the {judged['views']} household views.", "",
+            "| ranking | selection first attempt [95% CI] | household first attempt [95% CI] |",
+            "| --- | --- | --- |", *rows, "", verdict]
+
+
+def _prior_words(name: str) -> str:
+    weight = name.removeprefix("top_prior_")
+    return f"the score plus {weight} x how straight down the approach points (a top-down prior)"

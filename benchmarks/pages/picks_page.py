@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from benchmarks.pages.committed import load
-from benchmarks.pages.pick_curve_section import curve_section
+from benchmarks.pages.pick_curve_section import curve_section, rankings_section
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "picks.md"
@@ -163,6 +163,9 @@ def render_picks_page() -> str:
     curve = load("pick_curve")
     if curve is not None:
         lines += [*curve_section(curve, picks), ""]
+    rankings = load("pick_rankings")
+    if rankings is not None:
+        lines += [*rankings_section(rankings), ""]
     if plan is not None:
         lines += [*latency_section(plan), ""]
     return "\n".join(lines)
