@@ -103,3 +103,29 @@ def test_a_study_ceiling_is_measured_where_the_study_drew_enough_and_places_the_
     assert many.measured_ap is not None and many.measured_interval[0] <= many.measured_ap <= many.measured_interval[1]
     assert many.ceiling == many.measured_ap and many.share_of_way(many.measured_ap) == pytest.approx(1.0)
     assert few.measured_ap is None and few.ceiling == few.fitted_ap
+
+
+def test_an_arms_ensemble_and_its_single_networks_are_reported_apart():
+    """Two networks whose errors cancel: their averaged scores rank the draws better than either alone, and the
+    ceiling keeps both figures (issue 58: single networks and ensembles apart)."""
+    from onepiece_dist.learn.metrics import CurvePoint, Validation
+    from onepiece_dist.learn.train import StepResult
+    from onepiece_dist.stats.ceiling import ap_against_draws
+    from onepiece_dist.study.runner import ceiling_of
+    from onepiece_dist.study.training import ArmRun
+
+    rng = np.random.default_rng(3)
+    odds = rng.random(200)
+    draws = rng.random((200, 8)) < odds[:, None]
+    error = rng.normal(0, 0.5, 200)
+    seeds = [odds + error, odds - error]
+
+    def result(scores):
+        return StepResult(scores, (CurvePoint(1, Validation(0.5, 0.5, 0.5, 0.5)),), 1, 0.0, 0, 0, "cpu")
+
+    trained = [(ArmRun("A", seed, 1e-3, None), result(s)) for seed, s in enumerate(seeds)]  # run: not read
+    ceiling = ceiling_of(np.arange(200), draws, trained)
+    alone = [ap_against_draws(s, draws) for s in seeds]
+    assert ceiling.single_ap["A"] == pytest.approx(np.mean(alone), abs=1e-4)
+    assert ceiling.arm_ap["A"] == pytest.approx(ap_against_draws(odds, draws), abs=1e-4)
+    assert ceiling.arm_ap["A"] > ceiling.single_ap["A"] + 0.02

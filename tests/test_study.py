@@ -214,10 +214,12 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
     assert ceiling.draws == 3 and ceiling.grasps == result.heldout.grasps <= 256  # every held-out candidate here
     assert ceiling.positive_rate <= ceiling.ceiling_ap <= 1 and 0.5 <= ceiling.agreement <= 1
     assert 0 <= ceiling.fitted_ap <= 1 and set(ceiling.arm_ap) == {arm.name for arm in result.arms}
+    assert set(ceiling.single_ap) == set(ceiling.arm_ap) and all(0 <= ap <= 1 for ap in ceiling.single_ap.values())
     assert json.loads((folder / "ceiling.json").read_text())["rows"]  # the draws are kept: a rerun reuses them
     page = (folder / "study.md").read_text().splitlines()
     assert page[2].startswith("**Judged by picks.**")
     assert any("of the way from the floor to the ceiling" in line for line in page[:12])
+    assert any("Its networks one at a time" in line for line in page)
     assert "## Judged by picks and by candidates" in page
     k = result.lookup  # the study's own code as a lookup, no network
     assert list(k.ranked) == ["A", "B", "R", "S"] and k.ranked["A"].labels == a.cost.labelled_grasps

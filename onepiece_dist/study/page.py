@@ -114,7 +114,17 @@ def ceiling_lines(result: StudyResult) -> list[str]:
             f"{c.ceiling:.3f} ({how}; the draws alone show at least {c.ceiling_ap:.3f}). On the same executions "
             f"A's networks reach AP {c.arm_ap[a]:.3f}: "
             f"**{way(a)} of the way from the floor to the ceiling**; "
-            + ", ".join(f"{name} {way(name)}" for name in c.arm_ap if name != a) + "."] + measured_lines(c)
+            + ", ".join(f"{name} {way(name)}" for name in c.arm_ap if name != a) + "."] + single_lines(c, a) \
+        + measured_lines(c)
+
+
+def single_lines(c, a: str) -> list[str]:
+    """Single networks apart from the seed ensembles the line above scores (issue 58)."""
+    if not c.single_ap:
+        return []
+    return ["", f"These APs score each arm's seeds averaged (an ensemble). Its networks one at a time (the mean of "
+            f"each seed's own AP): A {c.single_ap[a]:.3f} against {c.arm_ap[a]:.3f} for the ensemble; "
+            + ", ".join(f"{name} {ap:.3f}" for name, ap in c.single_ap.items() if name != a) + "."]
 
 
 def measured_lines(c) -> list[str]:

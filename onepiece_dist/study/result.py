@@ -203,7 +203,10 @@ class Ceiling(Frozen):
     agreement: float
     ceiling_ap: float = Field(description="Leave-one-out: at least this.")
     fitted_ap: float = Field(description="The ceiling: ranking by the odds, their spread fitted to the draws.")
-    arm_ap: dict[str, float] = Field(default_factory=dict, description="Each arm's AP against the executions.")
+    arm_ap: dict[str, float] = Field(default_factory=dict, description="Each arm's AP against the executions, its "
+                                     "seeds' scores averaged (an ensemble of its networks).")
+    single_ap: dict[str, float] = Field(default_factory=dict, description="Each arm's single networks: the mean "
+                                        "over its seeds of each network's own AP against the executions.")
     measured_ap: float | None = Field(None, description="With 8 draws or more: the ceiling measured (the odds' "
                                       "distribution the draws' counts make most likely; stats.measured_ceiling).")
     measured_interval: tuple[float, float] | None = Field(None, description="Its 95% interval (grasps resampled).")

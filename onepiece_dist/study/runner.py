@@ -232,17 +232,20 @@ def label_draws_of(spec: StudySpec, jobs: StudyJobs, folder: Path, say: Say) -> 
 
 
 def ceiling_of(rows: np.ndarray, draws: np.ndarray, trained: list[tuple[ArmRun, StepResult]]) -> Ceiling:
-    """The label's ceiling from the draws, and each arm's seed-averaged scores against the same executions."""
+    """The label's ceiling from the draws, and each arm's networks against the same executions: their averaged
+    scores (an ensemble) and each network alone."""
     scores: dict[str, list[np.ndarray]] = {}
     for job, result in trained:
         scores.setdefault(job.arm, []).append(result.scores[rows])
     arm_ap = {arm: round(ap_against_draws(np.mean(found, axis=0), draws), 4) for arm, found in scores.items()}
+    single_ap = {arm: round(float(np.mean([ap_against_draws(one, draws) for one in found])), 4)
+                 for arm, found in scores.items()}
     measured = {}
     if draws.shape[1] >= MEASURED_DRAWS:
         m = measured_ceiling(draws)
         measured = {"measured_ap": round(m.ap, 4), "measured_interval": (round(m.low, 4), round(m.high, 4)),
                     "moment_range": tuple(round(x, 4) for x in m.moment_range)}
-    return Ceiling(**dataclasses.asdict(label_ceiling(draws)), arm_ap=arm_ap, **measured)
+    return Ceiling(**dataclasses.asdict(label_ceiling(draws)), arm_ap=arm_ap, single_ap=single_ap, **measured)
 
 
 def check_jobs(records: dict[str, JobRecord]) -> None:
