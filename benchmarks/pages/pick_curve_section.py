@@ -136,6 +136,21 @@ def rankings_section(rankings: dict) -> list[str]:
             "| --- | --- | --- |", *rows, "", verdict]
 
 
+def pool_size_lines(pool: dict) -> list[str]:
+    """More candidates per view for the network to rank (results/pick_pool_size.json)."""
+    points = sorted(pool["points"], key=lambda p: (p["set"] != "selection", p["candidates"]))
+    rows = [f"| {p['set']} | {p['candidates']} | {_pct(p['first_attempt'])} [{_pct(p['interval'][0])}, "
+            f"{_pct(p['interval'][1])}] |" for p in points]
+    default = {p["set"]: p["first_attempt"] for p in points if p["candidates"] == min(q["candidates"] for q in points)}
+    rises = [p for p in points if p["candidates"] > min(q["candidates"] for q in points)
+             and p["first_attempt"] > default[p["set"]]]
+    verdict = ("More candidates raise the first attempt on " + ", ".join(sorted({p['set'] for p in rises}))
+               if rises else "More candidates raise the first attempt on neither set: the default stays")
+    return ["More candidates per view for the network to rank (`.venv/bin/python -m "
+            "benchmarks.experiments.pick_pool_size`; the network alone):", "",
+            "| set | candidates per view | first attempt [95% CI] |", "| --- | --- | --- |", *rows, "", verdict + "."]
+
+
 def _prior_words(name: str) -> str:
     weight = name.removeprefix("top_prior_")
     return f"the score plus {weight} x how straight down the approach points (a top-down prior)"

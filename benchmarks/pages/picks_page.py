@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from benchmarks.pages.committed import load
-from benchmarks.pages.pick_curve_section import curve_section, rankings_section
+from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "picks.md"
@@ -147,7 +147,8 @@ def render_picks_page() -> str:
     picks, plan = load("picks"), load("plan")
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
-             "benchmarks/results/picks.json and plan.json: do not edit by hand. -->", ""]
+             "benchmarks/results/picks.json, pick_curve.json, pick_rankings.json, pick_pool_size.json and plan.json: "
+             "do not edit by hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -166,6 +167,9 @@ def render_picks_page() -> str:
     rankings = load("pick_rankings")
     if rankings is not None:
         lines += [*rankings_section(rankings), ""]
+    pool = load("pick_pool_size")
+    if pool is not None:
+        lines += [*pool_size_lines(pool), ""]
     if plan is not None:
         lines += [*latency_section(plan), ""]
     return "\n".join(lines)
