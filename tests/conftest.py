@@ -35,6 +35,36 @@ def record_figure(request):
     return record
 
 
+@pytest.fixture(scope="session")
+def in_process_digest(tmp_path_factory):
+    """``in_process_digest(spec)``: the content digest (training left out) of ``spec`` run in process, computed
+    once per suite run. xdist's workers share it through a file in the run's temporary folder, under a lock, so
+    tests on two workers that compare with the same in-process run (the pinned job on six objects: the unpinned
+    process's, the older-CPU cluster node's) run it once between them."""
+    base = tmp_path_factory.getbasetemp()
+    folder = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base  # this run's, never an earlier run's
+    known_file = folder / "in_process_digests.json"
+
+    def digest(spec) -> str:
+        from onepiece_dist.runtime.local import run_local
+        from onepiece_dist.store.dataset import content_digest
+
+        key = spec.model_dump_json(exclude={"output"})
+        lock = os.open(folder, os.O_RDONLY)
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # the other worker waits for the run instead of making its own
+            known = json.loads(known_file.read_text()) if known_file.exists() else {}
+            if key not in known:
+                run_local(spec)
+                known[key] = content_digest(spec.output, training=False)
+                known_file.write_text(json.dumps(known))
+            return known[key]
+        finally:
+            os.close(lock)  # releases the lock
+
+    return digest
+
+
 def pytest_sessionfinish(session):
     """Merge this process's figures into the file, under a lock: each xdist worker records its own tests'."""
     figures = session.config.recorded_figures

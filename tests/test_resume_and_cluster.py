@@ -15,12 +15,12 @@ import pytest
 
 from onepiece_dist.api import Client, read_status
 from onepiece_dist.job.status import status_path
-from onepiece_dist.runtime.local import run_local
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
 from tests.factories import TINY_STUDY as TINY
 from tests.factories import comparable_study as comparable
+from tests.test_libm import DIFFERS_BY_BUILD
 
 ROOT = Path(__file__).resolve().parents[1]
 ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
@@ -251,7 +251,8 @@ OLDEST_CPU = {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_
 @pytest.mark.slow
 @pytest.mark.sim
 @pytest.mark.skipif(platform.machine() != "x86_64", reason="the older CPU paths forced on one node are x86-64 ones")
-def test_a_job_whose_nodes_take_other_cpu_paths_gives_the_in_process_dataset(local_cluster, tmp_path, record_figure):
+def test_a_job_whose_nodes_take_other_cpu_paths_gives_the_in_process_dataset(local_cluster, tmp_path, record_figure,
+                                                                             in_process_digest):
     """A third worker node started with an older CPU's BLAS kernel, numpy SIMD level, glibc variants and one
     thread, beside two nodes on this CPU's own: the job, every stage to label, holds the same content as in
     process (Ray's workers inherit their node's environment)."""
@@ -265,7 +266,6 @@ def test_a_job_whose_nodes_take_other_cpu_paths_gives_the_in_process_dataset(loc
     assert all(older.environ().get(k) == v for k, v in OLDEST_CPU.items())
     older_id = next(arg.split("=", 1)[1] for arg in older.cmdline() if arg.startswith("--node_id="))
     spec = pinned_spec(tmp_path / "local.zarr").model_copy(update={"objects": PINNED_ON_CLUSTER})
-    run_local(spec)
     spec_file, out = tmp_path / "job.json", tmp_path / "cluster.zarr"
     spec_file.write_text(spec.model_dump_json(exclude={"output"}))
     submitted = onepiece("submit", str(spec_file), "--address", local_cluster, "--out", str(out), "--wait", "--json",
@@ -275,12 +275,12 @@ def test_a_job_whose_nodes_take_other_cpu_paths_gives_the_in_process_dataset(loc
     nodes = final["nodes"]
     assert final["state"] == "succeeded", final
     assert older_id in nodes, (older_id, nodes)  # the older-CPU node extracted some of the objects
-    assert content_digest(out, training=False) == content_digest(spec.output, training=False)
+    assert content_digest(out, training=False) == in_process_digest(spec)
     record_figure(f"{len(set(nodes))} worker nodes extracted, one with {', '.join(OLDEST_CPU)}: the same "
                   f"content digest as in process ({content_digest(out, training=False)[:12]})")
 
 
-PINNED_ON_CLUSTER = "pybullet:named[3:4]+pybullet:random_urdfs[0:5]"  # enough objects for every node to get one
+PINNED_ON_CLUSTER = DIFFERS_BY_BUILD  # enough objects for every node to get one; the same in-process run as libm's
 
 
 def gcs_processes(port: int) -> list[psutil.Process]:
