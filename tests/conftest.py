@@ -1,4 +1,5 @@
 import fcntl
+import hashlib
 import json
 import os
 import platform
@@ -33,36 +34,6 @@ def record_figure(request):
                                                     "machine": f"{platform.machine()}, {os.cpu_count()} cores"}
 
     return record
-
-
-@pytest.fixture(scope="session")
-def in_process_digest(tmp_path_factory):
-    """``in_process_digest(spec)``: the content digest (training left out) of ``spec`` run in process, computed
-    once per suite run. xdist's workers share it through a file in the run's temporary folder, under a lock, so
-    tests on two workers that compare with the same in-process run (the pinned job on six objects: the unpinned
-    process's, the older-CPU cluster node's) run it once between them."""
-    base = tmp_path_factory.getbasetemp()
-    folder = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base  # this run's, never an earlier run's
-    known_file = folder / "in_process_digests.json"
-
-    def digest(spec) -> str:
-        from onepiece_dist.runtime.local import run_local
-        from onepiece_dist.store.dataset import content_digest
-
-        key = spec.model_dump_json(exclude={"output"})
-        lock = os.open(folder, os.O_RDONLY)
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX)  # the other worker waits for the run instead of making its own
-            known = json.loads(known_file.read_text()) if known_file.exists() else {}
-            if key not in known:
-                run_local(spec)
-                known[key] = content_digest(spec.output, training=False)
-                known_file.write_text(json.dumps(known))
-            return known[key]
-        finally:
-            os.close(lock)  # releases the lock
-
-    return digest
 
 
 def pytest_sessionfinish(session):
@@ -150,19 +121,28 @@ def spec_factory(tmp_path):
 
 @pytest.fixture(scope="session")
 def fault_free(tmp_path_factory):
-    """``fault_free(spec)``: the folder of ``spec``'s dataset run in-process, without faults, once per test session
-    for each spec (its output left out); the reference that the faulted runs of that spec must equal."""
+    """``fault_free(spec)``: the folder of ``spec``'s dataset run in-process, without faults, once per suite run for
+    each spec (its output left out); the reference that the faulted runs of that spec must equal. xdist's workers
+    share it: the datasets lie in the run's temporary folder, each made under a lock of its own, so a worker that
+    asks for one another worker is making waits for it instead of making it again (a test only reads it)."""
     from onepiece_dist.runtime.local import run_local
 
-    made: dict[str, str] = {}
+    base = tmp_path_factory.getbasetemp()
+    shared = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "fault-free"  # this run's only
+    shared.mkdir(parents=True, exist_ok=True)
 
     def reference(spec) -> str:
-        key = spec.model_dump_json(exclude={"output"})
-        if key not in made:
-            output = tmp_path_factory.mktemp("fault-free") / "reference.zarr"
-            run_local(spec.model_copy(update={"output": str(output)}))
-            made[key] = str(output)
-        return made[key]
+        name = hashlib.blake2b(spec.model_dump_json(exclude={"output"}).encode(), digest_size=10).hexdigest()
+        output, done = shared / f"{name}.zarr", shared / f"{name}.done"
+        lock = os.open(shared / f"{name}.lock", os.O_CREAT | os.O_RDWR)
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not done.exists():
+                run_local(spec.model_copy(update={"output": str(output)}))
+                done.touch()
+            return str(output)
+        finally:
+            os.close(lock)  # releases the lock
 
     return reference
 
