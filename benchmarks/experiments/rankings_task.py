@@ -5,14 +5,13 @@ each ranking of the shipped network's scores ranks the view's candidates, its fi
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 
 from onepiece_dist.core.cloud.grasps import dot3
 from onepiece_dist.core.frames import perturb_poses
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, process_scorer
-from onepiece_dist.picks.views import Executions, index_of, observe_view
+from onepiece_dist.picks.views import Executions, index_of, observe_view, simulated_object
 from onepiece_dist.plan.planner import Proposals, gravity, rank, with_context
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.specs.plan import PickSpec
@@ -50,17 +49,12 @@ def _jittered(proposals: Proposals, scorer: GraspScorer, spec: PickSpec, scores:
 def rank_object(spec: PickSpec, ref, index: int) -> ObjectPicks:
     """Every view of one object: each ranking's first choice executed."""
     from onepiece_dist.errors import MeshRejected
-    from onepiece_dist.objects import load_object
-    from onepiece_dist.sim.collision import load_simulated
-    from onepiece_dist.sim.pick import pick_world
 
     start, scorer = time.perf_counter(), process_scorer(spec)
     try:
-        loaded = load_object(ref, spec.object_job(scorer.gripper, scorer.record.voxel))
+        world, loaded = simulated_object(spec, scorer.record, ref)
     except MeshRejected as err:
         return ObjectPicks(index, ref.name, "rejected", reason=err.reason)
-    world = pick_world(scorer.gripper)
-    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
     views = tuple(_view(spec, scorer, world, loaded.mesh, view) for view in range(spec.views))
     return ObjectPicks(index, ref.name, "ok", views, seconds=time.perf_counter() - start)
 

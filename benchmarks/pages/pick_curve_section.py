@@ -141,9 +141,9 @@ def pool_size_lines(pool: dict) -> list[str]:
     points = sorted(pool["points"], key=lambda p: (p["set"] != "selection", p["candidates"]))
     rows = [f"| {p['set']} | {p['candidates']} | {_pct(p['first_attempt'])} [{_pct(p['interval'][0])}, "
             f"{_pct(p['interval'][1])}] |" for p in points]
-    default = {p["set"]: p["first_attempt"] for p in points if p["candidates"] == min(q["candidates"] for q in points)}
-    rises = [p for p in points if p["candidates"] > min(q["candidates"] for q in points)
-             and p["first_attempt"] > default[p["set"]]]
+    smallest = min(p["candidates"] for p in points)
+    default = {p["set"]: p["first_attempt"] for p in points if p["candidates"] == smallest}
+    rises = [p for p in points if p["candidates"] > smallest and p["first_attempt"] > default[p["set"]]]
     verdict = ("More candidates raise the first attempt on " + ", ".join(sorted({p['set'] for p in rises}))
                if rises else "More candidates raise the first attempt on neither set: the default stays")
     return ["More candidates per view for the network to rank (`.venv/bin/python -m "

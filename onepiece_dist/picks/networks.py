@@ -18,12 +18,11 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.objects import ObjectRef, load_object, resolve_source
-from onepiece_dist.picks.views import Executions, index_of, observe_view
+from onepiece_dist.objects import ObjectRef, resolve_source
+from onepiece_dist.picks.views import Executions, index_of, observe_view, simulated_object
 from onepiece_dist.plan.planner import rank
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.runtime.pinned_child import PinnedSimulation
-from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickSpec
 
 
@@ -45,18 +44,14 @@ def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: Object
     """Every view of one object, every network's first choice executed (a bad object: a rejected result)."""
     import torch
 
-    from onepiece_dist.sim.pick import pick_world
-
     torch.set_num_threads(1)
     start = time.perf_counter()
     scorers = [GraspScorer(path, spec.gripper, device="cpu") for path in checkpoints]
     record = scorers[0].record
     try:
-        loaded = load_object(ref, spec.object_job(record.gripper, record.voxel))
+        world, loaded = simulated_object(spec, record, ref)
     except MeshRejected as err:
         return NetworkPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    world = pick_world(record.gripper)
-    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
     views = [_view(spec, scorers, world, loaded.mesh, view) for view in range(spec.views)]
     return NetworkPicks(index, ref.name, "ok", tuple(v[0] for v in views), tuple(v[1] for v in views),
                         seconds=time.perf_counter() - start)

@@ -22,13 +22,12 @@ from onepiece_dist.core.grasp_context import WORLD_DOWN
 from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import sample_candidates
 from onepiece_dist.errors import MeshRejected
-from onepiece_dist.objects import ObjectRef, load_object
-from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view
+from onepiece_dist.objects import ObjectRef
+from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view, simulated_object
 from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.planner import PlanCounts, PlannedGrasp, Proposals, gravity, rank, with_context
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
-from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickSpec
 
 
@@ -86,16 +85,12 @@ def process_scorer(spec: PickSpec) -> GraspScorer:
 
 def pick_object(spec: PickSpec, ref: ObjectRef, index: int) -> ObjectPicks:
     """Every view of one object; a bad object becomes a rejected result, never an exception."""
-    from onepiece_dist.sim.pick import pick_world
-
     start = time.perf_counter()
     scorer = process_scorer(spec)
     try:
-        loaded = load_object(ref, spec.object_job(scorer.gripper, scorer.record.voxel))
+        world, loaded = simulated_object(spec, scorer.record, ref)
     except MeshRejected as err:
         return ObjectPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    world = pick_world(scorer.gripper)
-    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
     views = tuple(_pick_view(spec, scorer, world, loaded.mesh, view) for view in range(spec.views))
     return ObjectPicks(index, ref.name, "ok", views, seconds=time.perf_counter() - start)
 

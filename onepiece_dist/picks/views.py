@@ -6,13 +6,16 @@ of its own, so a candidate's outcome never depends on who chose it or in what or
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from onepiece_dist.core.sampling import object_rng
+from onepiece_dist.objects import load_object
 from onepiece_dist.plan.observation import MIN_POINTS, Observation
 from onepiece_dist.plan.planner import Proposals, propose
 from onepiece_dist.plan.scorer import CropRecord
+from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickSpec
 
 # the pools a candidate is drawn from, each with a stream of generators of its own
@@ -33,6 +36,17 @@ class PickView:
     cloud: np.ndarray
     proposals: Proposals | None
     rng: np.random.Generator
+
+
+def simulated_object(spec: PickSpec, record: CropRecord, ref):
+    """``ref`` loaded as ``spec`` asks for ``record``'s gripper and voxel grid, and a pick world holding it as a
+    simulated body: (world, loaded object). A bad object raises MeshRejected (each flow makes it a result)."""
+    from onepiece_dist.sim.pick import pick_world
+
+    loaded = load_object(ref, spec.object_job(record.gripper, record.voxel))
+    world = pick_world(record.gripper)
+    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+    return world, loaded
 
 
 def observe_view(spec: PickSpec, record: CropRecord, world, mesh, view: int) -> PickView:
