@@ -5,13 +5,17 @@ which of a view's candidates goes first, so each is judged by the first attempt 
 - ``jittered``: each of the network's 16 best candidates scored again at 8 copies perturbed by the label's own pose
   noise (sim.pose_noise, sim.rotation_noise; twice that for ``jittered_x2``) and ranked by the mean: a grasp whose
   neighbours also hold (VGN smooths its quality volume for the same reason);
-- ``top_prior_W``: the score plus W times how straight down the approach points (the top-down heuristic's prior).
+- ``top_prior_W``: the score plus W times how straight down the approach points (the top-down heuristic's prior);
+- ``ensemble_2``, ``ensemble_4``: the mean score of the shipped network and other networks of the learning curve
+  (``data/pick_curve``, written by ``python -m benchmarks.experiments.pick_curve``): a seed and design ensemble;
+- ``flipped``: the mean score of the candidate and of the same grasp turned half a turn about its approach (the
+  network is trained with such turns, so a test-time average of the two), ``ensemble_4_flipped`` both together.
 
 Chosen on a selection set of procedural objects the network never saw (``SELECTION``, 60 objects), judged on the
 household set. Every candidate's execution has its own generator (picks.views.Executions): a candidate chosen by
 two rankings is one outcome.
 
-    .venv/bin/python -m benchmarks.experiments.pick_rankings        # about 10 minutes on 2 cores
+    .venv/bin/python -m benchmarks.experiments.pick_rankings        # about 15 minutes on 2 cores
 """
 
 from __future__ import annotations

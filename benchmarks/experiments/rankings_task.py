@@ -5,6 +5,7 @@ each ranking of the shipped network's scores ranks the view's candidates, its fi
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -16,8 +17,12 @@ from onepiece_dist.plan.planner import Proposals, gravity, rank, with_context
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.specs.plan import PickSpec
 
-RANKINGS = ("network", "jittered", "jittered_x2", "top_prior_0.05", "top_prior_0.1", "top_prior_0.2")
+RANKINGS = ("network", "jittered", "jittered_x2", "top_prior_0.05", "top_prior_0.1", "top_prior_0.2", "ensemble_2",
+            "ensemble_4", "flipped", "ensemble_4_flipped")
 JITTERS, JITTERED = 8, 16  # copies per candidate; the network's best candidates scored again
+CURVE = Path(__file__).resolve().parents[2] / "data" / "pick_curve"  # pick_curve's networks (not committed)
+ENSEMBLES = {"ensemble_2": ("context_81152",),  # the shipped network's score averaged with these curve points'
+             "ensemble_4": ("context_81152", "context_121858", "context_wide_40960")}
 
 
 def ranked_scores(name: str, proposals: Proposals, scorer: GraspScorer, spec: PickSpec, scores: np.ndarray,
@@ -28,7 +33,40 @@ def ranked_scores(name: str, proposals: Proposals, scorer: GraspScorer, spec: Pi
         return np.round(scores + float(name.removeprefix("top_prior_")) * along, 6)
     if name.startswith("jittered"):
         return _jittered(proposals, scorer, spec, scores, rng, 2.0 if name.endswith("x2") else 1.0)
+    if name in ENSEMBLES:
+        members = [_member(point, spec).score(proposals.crops, spec.plan.batch_size) for point in ENSEMBLES[name]]
+        return np.round(np.mean([scores, *members], axis=0), 6)
+    if name == "flipped":
+        return np.round((scores + _flipped_scores(proposals, scorer, spec, rng)) / 2, 6)
+    if name == "ensemble_4_flipped":
+        networks = [scorer, *(_member(point, spec) for point in ENSEMBLES["ensemble_4"])]
+        turned = np.mean([_flipped_scores(proposals, n, spec, rng) for n in networks], axis=0)
+        return np.round((ranked_scores("ensemble_4", proposals, scorer, spec, scores, rng) + turned) / 2, 6)
     return scores
+
+
+def _flipped_scores(proposals: Proposals, scorer: GraspScorer, spec: PickSpec, rng: np.random.Generator) -> np.ndarray:
+    """(n,) the scores of each candidate turned half a turn about its approach: the same grasp of a symmetric
+    gripper, which the network sees mirrored across its closing and height axes."""
+    turned = proposals.poses.copy()
+    turned[:, :3, 1:3] *= -1.0
+    crops = cut_crops(proposals.object_points, turned, scorer.record, rng)
+    crops = with_context(crops, turned, proposals.object_points, gravity(proposals.plane),
+                         scorer.gripper.closing_depth)
+    return np.where(crops.counts >= spec.plan.min_points, scorer.score(crops, spec.plan.batch_size), 0.0)
+
+
+_MEMBERS: dict[str, GraspScorer] = {}
+
+
+def _member(point: str, spec: PickSpec) -> GraspScorer:
+    """The network of the learning curve's ``point`` (benchmarks/experiments/pick_curve.py writes it), loaded once."""
+    if point not in _MEMBERS:
+        path = CURVE / point / "best.pt"
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: run python -m benchmarks.experiments.pick_curve first")
+        _MEMBERS[point] = GraspScorer(path, spec.gripper, device="cpu")
+    return _MEMBERS[point]
 
 
 def _jittered(proposals: Proposals, scorer: GraspScorer, spec: PickSpec, scores: np.ndarray,

@@ -105,6 +105,10 @@ RANKING_WORDS = {
     "network": "the network's score (the product)",
     "jittered": "the mean score of the candidate and 8 copies at the label's pose noise (the 16 best scored again)",
     "jittered_x2": "the same at twice the label's pose noise",
+    "ensemble_2": "the mean score of the shipped network and the curve's `context` network at 81152 labels",
+    "ensemble_4": "the mean score of those two, `context` at 121858 labels and `context_wide` at 40960",
+    "flipped": "the mean score of the candidate and of the same grasp turned half a turn about its approach",
+    "ensemble_4_flipped": "the mean of `ensemble_4` and of its four networks' scores of the turned grasps",
 }
 
 
