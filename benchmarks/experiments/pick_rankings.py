@@ -20,8 +20,10 @@ two rankings is one outcome.
 
 from __future__ import annotations
 
+import argparse
 import json
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -38,25 +40,35 @@ CHECKPOINT = ROOT / "onepiece_dist" / "plan" / "networks" / "pick_view.pt"
 SELECTION = "pybullet:random_urdfs[600:660]"
 
 
-def judge(name: str, objects: str) -> dict:
+def judge(name: str, objects: str, rankings: tuple[str, ...] = RANKINGS) -> dict:
     spec = PickSpec(objects=objects, checkpoint=str(CHECKPOINT), output=str(ROOT / "data" / "pick_rankings" / name),
                     views=8, attempts=1, pictures=0, methods=("network",))
     start = time.perf_counter()
-    done = [r for r in run_each_in_process(rank_object, spec, resolve_source(objects)) if r.status == "ok"]
-    rankings = {}
-    for ranking in RANKINGS:
+    task = partial(rank_object, rankings=rankings)
+    done = [r for r in run_each_in_process(task, spec, resolve_source(objects)) if r.status == "ok"]
+    rates_of = {}
+    for ranking in rankings:
         rates = np.array([object_rate(r, ranking, None) for r in done])
-        rankings[ranking] = {"first_attempt": round(float(rates.mean()), 4),
+        rates_of[ranking] = {"first_attempt": round(float(rates.mean()), 4),
                              "interval": [round(v, 4) for v in bootstrap_interval(rates, seed=spec.seed)],
                              "failures": first_failures(done, ranking)}
     return {"name": name, "objects": objects, "loaded": len(done), "views": sum(len(r.views) for r in done),
-            "rankings": rankings, "seconds": round(time.perf_counter() - start, 1)}
+            "rankings": rates_of, "seconds": round(time.perf_counter() - start, 1)}
 
 
 def main() -> None:
     from benchmarks.experiments.household import household_objects
 
-    sets = [judge("selection", SELECTION), judge("household", str(household_objects()))]
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rankings", default=",".join(RANKINGS),
+                        help="these rankings only, merged into the committed results (each has its own draws)")
+    rankings = tuple(parser.parse_args().rankings.split(","))
+    sets = [judge("selection", SELECTION, rankings), judge("household", str(household_objects()), rankings)]
+    if RESULTS.is_file() and set(rankings) != set(RANKINGS):
+        old = {s["name"]: s for s in json.loads(RESULTS.read_text())["sets"]}
+        sets = [{**s, "rankings": {n: {**old[s["name"]]["rankings"], **s["rankings"]}[n] for n in RANKINGS
+                                   if n in old[s["name"]]["rankings"] or n in s["rankings"]},
+                 "seconds": old[s["name"]]["seconds"]} for s in sets]
     RESULTS.write_text(json.dumps({"checkpoint": str(CHECKPOINT.relative_to(ROOT)), "jitters": JITTERS,
                                    "jittered": JITTERED, "sets": sets}, indent=1) + "\n")
     for s in sets:

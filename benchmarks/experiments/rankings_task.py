@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.cloud.grasps import dot3
+from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import perturb_poses
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, process_scorer
 from onepiece_dist.picks.views import Executions, index_of, observe_view, simulated_object
@@ -18,7 +19,12 @@ from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.specs.plan import PickSpec
 
 RANKINGS = ("network", "jittered", "jittered_x2", "top_prior_0.05", "top_prior_0.1", "top_prior_0.2", "ensemble_2",
-            "ensemble_4", "flipped", "ensemble_4_flipped")
+            "ensemble_4", "flipped", "ensemble_4_flipped", "with_top_down", "top_down_vetted", "view_input_base",
+            "view_input")
+# networks of benchmarks/experiments/pick_view_input.py, each on its own: the camera's direction as an input or not
+VIEW_INPUT = {"view_input_base": "view_input_base", "view_input": "view_input"}
+WITH_TOP_DOWN = ("with_top_down", "top_down_vetted")  # choose among the view's pool and the top-down grasps
+VETO = 0.5  # top_down_vetted: the first top-down grasp the network scores at least this
 JITTERS, JITTERED = 8, 16  # copies per candidate; the network's best candidates scored again
 CURVE = Path(__file__).resolve().parents[2] / "data" / "pick_curve"  # pick_curve's networks (not committed)
 ENSEMBLES = {"ensemble_2": ("context_81152",),  # the shipped network's score averaged with these curve points'
@@ -84,8 +90,39 @@ def _jittered(proposals: Proposals, scorer: GraspScorer, spec: PickSpec, scores:
     return np.round(out, 6)
 
 
-def rank_object(spec: PickSpec, ref, index: int) -> ObjectPicks:
-    """Every view of one object: each ranking's first choice executed."""
+def _with_top_down(name: str, proposals: Proposals, scorer: GraspScorer, spec: PickSpec, scores: np.ndarray,
+                   rng: np.random.Generator) -> tuple[str, int, np.ndarray]:
+    """(pool, index, pose) chosen among the view's candidates and the three top-down grasps, each scored by the
+    network: ``with_top_down`` the best score of both pools; ``top_down_vetted`` the first top-down grasp scored at
+    least VETO, else the network's choice."""
+    down = gravity(proposals.plane)
+    poses = top_down_grasps(proposals.object_points, down, scorer.gripper)
+    crops = with_context(cut_crops(proposals.object_points, poses, scorer.record, rng), poses,
+                         proposals.object_points, down, scorer.gripper.closing_depth)
+    extra = np.where(crops.counts >= spec.plan.min_points, scorer.score(crops, spec.plan.batch_size), 0.0)
+    best = int(np.argmax(scores))
+    if name == "top_down_vetted":
+        vetted = np.flatnonzero(extra >= VETO)
+        return ("top_down", int(vetted[0]), poses[vetted[0]]) if len(vetted) else ("view", best, proposals.poses[best])
+    if len(extra) and extra.max() > scores[best]:
+        return "top_down", int(np.argmax(extra)), poses[int(np.argmax(extra))]
+    return "view", best, proposals.poses[best]
+
+
+def _view_input(name: str, proposals: Proposals, spec: PickSpec, eye: np.ndarray) -> tuple[str, int, np.ndarray]:
+    """(pool, index, pose): the best of the view's candidates by network VIEW_INPUT[name], which reads the camera's
+    direction where its context has room for it."""
+    network = _member(VIEW_INPUT[name], spec)
+    crops = proposals.crops
+    if network.model.context == 9:
+        crops = with_context(crops, proposals.poses, proposals.object_points, gravity(proposals.plane),
+                             network.gripper.closing_depth, eye)
+    best = int(np.argmax(network.score(crops, spec.plan.batch_size)))
+    return "view", best, proposals.poses[best]
+
+
+def rank_object(spec: PickSpec, ref, index: int, rankings: tuple[str, ...] = RANKINGS) -> ObjectPicks:
+    """Every view of one object: each of ``rankings``' first choice executed."""
     from onepiece_dist.errors import MeshRejected
 
     start, scorer = time.perf_counter(), process_scorer(spec)
@@ -93,21 +130,29 @@ def rank_object(spec: PickSpec, ref, index: int) -> ObjectPicks:
         world, loaded = simulated_object(spec, scorer.record, ref)
     except MeshRejected as err:
         return ObjectPicks(index, ref.name, "rejected", reason=err.reason)
-    views = tuple(_view(spec, scorer, world, loaded.mesh, view) for view in range(spec.views))
+    views = tuple(_view(spec, scorer, world, loaded.mesh, view, rankings) for view in range(spec.views))
     return ObjectPicks(index, ref.name, "ok", views, seconds=time.perf_counter() - start)
 
 
-def _view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> ViewPicks:
+def _view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int, rankings: tuple[str, ...]) -> ViewPicks:
     seen = observe_view(spec, scorer.record, world, mesh, view)
     proposals = seen.proposals
     if proposals is None or len(proposals.poses) == 0:
-        return ViewPicks(view, seen.distance, seen.elevation_deg, len(seen.cloud), 0, {r: () for r in RANKINGS},
-                         {r: () for r in RANKINGS})
+        return ViewPicks(view, seen.distance, seen.elevation_deg, len(seen.cloud), 0, {r: () for r in rankings},
+                         {r: () for r in rankings})
     executions = Executions(spec, world, mesh, seen.resting, view)
     scores = scorer.score(proposals.crops, spec.plan.batch_size)
     attempts, failures = {}, {}
-    for k, name in enumerate(RANKINGS):
-        rng = np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, 7, k])
+    for name in rankings:
+        rng = np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, 7, RANKINGS.index(name)])
+        if name in VIEW_INPUT:
+            outcome = executions.run(*_view_input(name, proposals, spec, seen.eye))
+            attempts[name], failures[name] = (outcome.success,), (outcome.failure,)
+            continue
+        if name in WITH_TOP_DOWN:
+            outcome = executions.run(*_with_top_down(name, proposals, scorer, spec, scores, rng))
+            attempts[name], failures[name] = (outcome.success,), (outcome.failure,)
+            continue
         best = rank(proposals, ranked_scores(name, proposals, scorer, spec, scores, rng), scorer.record, spec.plan,
                     keep=1)
         outcome = executions.run("view", index_of(proposals.poses, best[0].pose), best[0].pose)

@@ -109,6 +109,11 @@ RANKING_WORDS = {
     "ensemble_4": "the mean score of those two, `context` at 121858 labels and `context_wide` at 40960",
     "flipped": "the mean score of the candidate and of the same grasp turned half a turn about its approach",
     "ensemble_4_flipped": "the mean of `ensemble_4` and of its four networks' scores of the turned grasps",
+    "with_top_down": "the network's best of the view's candidates and the three top-down grasps (all scored by it)",
+    "top_down_vetted": "the first top-down grasp the network scores at least 0.5, else the network's choice",
+    "view_input_base": "a network fitted on the first label batch's views whose cameras were found again "
+                       "(`pick_view_input`), the stored context",
+    "view_input": "the same labels and fit, with the direction to the camera in the gripper frame as an input",
 }
 
 
