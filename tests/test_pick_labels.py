@@ -36,6 +36,31 @@ def test_the_context_says_where_down_is_and_where_the_object_lies_in_the_gripper
     assert abs(context[1, 0]) < 1e-6 and np.isclose(abs(context[1, 2]), 1)  # from the side: across it
     assert np.allclose(context[0, 3:], [0.2 - 0.02, 0, 0], atol=1e-6)  # the centre lies ahead, beyond the bite
     assert np.allclose(object_centre(np.array([[0, 0, 0], [1.0, 2, 4], [0.5, 0.5, 0.5]])), [0.5, 1, 2])
+    seen = grasp_context(np.concatenate([above, side]), np.zeros(3), np.array([0, 0, -1.0]), 0.04,
+                         eye=np.array([0.0, 0, 1.0]))  # a camera straight above the object
+    assert seen.shape == (2, 9) and np.array_equal(seen[:, :6], context)
+    assert np.allclose(seen[0, 6:], [-1, 0, 0], atol=1e-6)  # from above: the camera behind the palm
+    up_and_ahead = np.array([0.18, 0, 1.0]) / np.hypot(0.18, 1.0)  # a side grasp: the camera above, a little ahead
+    assert np.allclose(np.abs(seen[1, 6:]), up_and_ahead, atol=1e-6) and seen[1, 6] > 0
+
+
+def test_a_half_turn_about_the_approach_turns_every_context_vector_with_the_crop():
+    from onepiece_dist.learn.pick_train import HALF_TURN
+    from onepiece_dist.learn.pick_train import _batch as training_batch
+    from onepiece_dist.store.pick_labels import PickLabels
+
+    rng = np.random.default_rng(3)
+    rows = 4
+    labels = PickLabels(points=rng.normal(size=(rows, 8, 3)).astype(np.float16), context=rng.normal(
+        size=(rows, 9)).astype(np.float32), success=np.ones(rows, bool), held=np.ones(rows, np.int8),
+        failure=np.zeros(rows, np.int8), view=np.zeros(rows, np.int16), pose=np.tile(np.eye(4), (rows, 1, 1)),
+        object=np.zeros(rows, np.int32), attrs={})
+    turn = np.array([True, False, True, False])
+    batch = training_batch(labels, np.arange(rows), turn)
+    flips = np.tile(HALF_TURN, 3)
+    assert np.array_equal(batch["context"].numpy()[turn], labels.context[turn] * flips)
+    assert np.array_equal(batch["context"].numpy()[~turn], labels.context[~turn])
+    assert np.array_equal(batch["points"].numpy()[turn], labels.points[turn].astype(np.float32) * HALF_TURN)
 
 
 def test_the_top_down_baseline_picks_a_box_on_the_table(box_on_table):  # noqa: F811

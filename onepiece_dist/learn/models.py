@@ -6,8 +6,9 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-# gravity is a unit vector; offsets in m, scaled so that 10 cm is 1
-CONTEXT_SCALE = torch.tensor([1.0, 1.0, 1.0, 10.0, 10.0, 10.0])
+# gravity is a unit vector; offsets in m, scaled so that 10 cm is 1; the camera's direction (where the planner
+# gives it) a unit vector
+CONTEXT_SCALE = torch.tensor([1.0, 1.0, 1.0, 10.0, 10.0, 10.0, 1.0, 1.0, 1.0])
 
 
 class PointNetGrasp(nn.Module):
@@ -33,7 +34,7 @@ class PointNetGrasp(nn.Module):
         x = batch["points"].transpose(1, 2) * 25.0  # metres -> roughly unit scale for a 4 cm region
         pooled = self.features(x).max(dim=2).values
         if self.context:
-            context = batch["context"] * CONTEXT_SCALE.to(pooled.device)
+            context = batch["context"] * CONTEXT_SCALE[: self.context].to(pooled.device)
             pooled = torch.cat([pooled, self.context_features(context)], dim=1)
         return self.head(pooled).squeeze(1)
 
@@ -64,11 +65,19 @@ def WidePointNetWithContext() -> PointNetGrasp:  # noqa: N802
     return PointNetGrasp(width=64, context=6)
 
 
+def PointNetWithView() -> PointNetGrasp:  # noqa: N802
+    """The context PointNet that also reads the direction to the camera in the gripper frame (core.grasp_context):
+    which side of the crop was seen and which lies in the unknown, occluded space."""
+    return PointNetGrasp(width=32, context=9)
+
+
 def SmallPointNet() -> PointNetGrasp:  # noqa: N802
     """The same PointNet on the crop alone (the context's ablation)."""
     return PointNetGrasp(width=32)
 
 
 MODELS = {"pointnet": PointNetGrasp, "voxel": VoxelCNN, "pointnet_context": PointNetWithContext,
-          "pointnet_context_wide": WidePointNetWithContext, "pointnet_small": SmallPointNet}
-CONTEXT_MODELS = frozenset({"pointnet_context", "pointnet_context_wide"})  # models that read batch["context"]
+          "pointnet_context_wide": WidePointNetWithContext, "pointnet_small": SmallPointNet,
+          "pointnet_context_view": PointNetWithView}
+# models that read batch["context"]
+CONTEXT_MODELS = frozenset({"pointnet_context", "pointnet_context_wide", "pointnet_context_view"})

@@ -83,8 +83,7 @@ def _batch(labels: PickLabels, rows: np.ndarray, turn: np.ndarray | None = None,
     context = labels.context[rows].astype(np.float32)
     if turn is not None and turn.any():
         points[turn] *= HALF_TURN
-        context[turn, :3] *= HALF_TURN
-        context[turn, 3:] *= HALF_TURN
+        context[turn] *= np.tile(HALF_TURN, context.shape[1] // 3)  # each of its 3-vectors
     return {"points": torch.from_numpy(points), "context": torch.from_numpy(context)}
 
 

@@ -160,10 +160,10 @@ def gravity(plane: SupportPlane | None) -> np.ndarray:
 
 
 def with_context(crops: Crops, poses: np.ndarray, points: np.ndarray, down: np.ndarray,
-                 closing_depth: float) -> Crops:
+                 closing_depth: float, eye: np.ndarray | None = None) -> Crops:
     """``crops`` of ``poses`` with each grasp's context: ``down`` and the centre of the object's ``points``, seen
-    from the gripper (core.grasp_context)."""
-    return dataclasses.replace(crops, context=grasp_context(poses, object_centre(points), down, closing_depth))
+    from the gripper (core.grasp_context); with ``eye``, the direction to the camera too."""
+    return dataclasses.replace(crops, context=grasp_context(poses, object_centre(points), down, closing_depth, eye))
 
 
 def _thin(points: np.ndarray, cell: float) -> np.ndarray:
