@@ -20,9 +20,9 @@ from onepiece_dist.specs.plan import PickSpec
 
 RANKINGS = ("network", "jittered", "jittered_x2", "top_prior_0.05", "top_prior_0.1", "top_prior_0.2", "ensemble_2",
             "ensemble_4", "flipped", "ensemble_4_flipped", "with_top_down", "top_down_vetted", "view_input_base",
-            "view_input")
+            "view_input", "view_input_base_seed1")
 # networks of benchmarks/experiments/pick_view_input.py, each on its own: the camera's direction as an input or not
-VIEW_INPUT = {"view_input_base": "view_input_base", "view_input": "view_input"}
+VIEW_INPUT = {name: name for name in ("view_input_base", "view_input", "view_input_base_seed1")}
 WITH_TOP_DOWN = ("with_top_down", "top_down_vetted")  # choose among the view's pool and the top-down grasps
 VETO = 0.5  # top_down_vetted: the first top-down grasp the network scores at least this
 JITTERS, JITTERED = 8, 16  # copies per candidate; the network's best candidates scored again

@@ -114,6 +114,8 @@ RANKING_WORDS = {
     "view_input_base": "a network fitted on the first label batch's views whose cameras were found again "
                        "(`pick_view_input`), the stored context",
     "view_input": "the same labels and fit, with the direction to the camera in the gripper frame as an input",
+    "view_input_base_seed1": "`view_input_base` fitted again with another seed (validation objects, initial "
+                             "weights, batches)",
 }
 
 
@@ -138,11 +140,32 @@ def rankings_section(rankings: dict) -> list[str]:
                f"{'rises' if rises[1] else 'does not rise'} on the household set: "
                f"{'kept' if all(rises) else 'not kept; the product ranks by the network score alone'}.")
     return ["## Rankings tried: `.venv/bin/python -m benchmarks.experiments.pick_rankings`", "",
-            f"The shipped network's scores ranked other ways, first attempt only; each ranking chosen on "
+            f"The shipped network's scores ranked other ways, other networks' scores and a pool with the top-down "
+            f"grasps, first attempt only; each ranking chosen on "
             f"{chosen['views']} views of {chosen['loaded']} procedural objects the network never saw "
             f"(`{chosen['objects']}`), judged on the {judged['views']} household views.", "",
             "| ranking | selection first attempt [95% CI] | household first attempt [95% CI] |",
-            "| --- | --- | --- |", *rows, "", verdict]
+            "| --- | --- | --- |", *rows, "", verdict, *_view_input_lines(chosen, judged)]
+
+
+def _view_input_lines(chosen: dict, judged: dict) -> list[str]:
+    """The camera's direction as an input, against the same fit without it and, where measured, the spread of
+    that fit by its seed alone (nothing when the networks were not judged)."""
+    names = ("view_input", "view_input_base", "view_input_base_seed1")
+    if not set(names) <= set(chosen["rankings"]):
+        return []
+    sets = (("selection", chosen), ("household", judged))
+    rate = {(n, label): 100 * result["rankings"][n]["first_attempt"] for label, result in sets for n in names}
+    gains = {label: rate["view_input", label] - rate["view_input_base", label] for label, _ in sets}
+    spread = {label: abs(rate["view_input_base_seed1", label] - rate["view_input_base", label]) for label, _ in sets}
+    within = [label for label, _ in sets if gains[label] <= spread[label]]
+    verdict = ("kept" if not within else "not kept: the gain is within the seed's spread on the "
+               + " and ".join(f"{label} set" for label in within))
+    words = " on the selection set, ".join(f"{gains[label]:+.1f} points" for label, _ in sets)
+    moves = " and ".join(f"{spread[label]:.1f}" for label, _ in sets)
+    return ["", f"The direction to the camera as an input (`view_input` against the same labels and fit without it, "
+            f"`view_input_base`): {words} on the household set; `view_input_base` fitted again with another seed "
+            f"moves by {moves} points on the same sets: {verdict}."]
 
 
 def pool_size_lines(pool: dict) -> list[str]:
