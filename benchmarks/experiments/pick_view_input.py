@@ -3,12 +3,13 @@ crop of one depth view holds only the side the camera saw: the direction to the 
 which side of the closing region was seen and which lies in occluded, unknown space (where a finger may close on
 nothing or meet what was not seen).
 
-Two networks fitted on the same rows of the first batch of pick labels (data/pick_labels, the learning curve's),
-the same design (``context_balanced``) and seed: ``view_input_base`` on the stored context (gravity, object
-offset), ``view_input`` on that and the direction to the camera (``pointnet_context_view``). Each label's camera is
-found again by settling its object and drawing its view's camera as the labelling did; a view whose candidates do
-not come out again exactly (the pick world's history moved its settle: 67 of 2,560 views) is left out of all.
-Judged by benchmarks/experiments/pick_rankings.py (rankings ``view_input_base`` and ``view_input``).
+Networks fitted on the same rows of the first batch of pick labels (data/pick_labels, the learning curve's), the
+same design (``context_balanced``) and seed: ``view_input_base`` on the stored context (gravity, object offset),
+``view_input`` on that and the direction to the camera (``pointnet_context_view``); and ``view_input_base`` again
+with seed 1, the spread of one design by its seed alone. Each label's camera is found again by settling its object
+and drawing its view's camera as the labelling did; a view whose candidates do not come out again exactly (the
+pick world's history moved its settle: 67 of 2,560 views) is left out of all. Judged by
+benchmarks/experiments/pick_rankings.py (rankings ``view_input_base``, ``view_input``, ``view_input_base_seed1``).
 
     .venv/bin/python -m benchmarks.experiments.pick_view_input eyes   # the cameras (about 10 min, one core)
     .venv/bin/python -m benchmarks.experiments.pick_view_input fit view_input_base   # about 8 min each, one core
