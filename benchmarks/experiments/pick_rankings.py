@@ -56,6 +56,12 @@ def judge(name: str, objects: str, rankings: tuple[str, ...] = RANKINGS) -> dict
             "rankings": rates_of, "seconds": round(time.perf_counter() - start, 1)}
 
 
+def _merged(old: dict, new: dict) -> dict:
+    """``old`` rankings' results with ``new`` ones replacing or added, in RANKINGS' order."""
+    both = {**old, **new}
+    return {name: both[name] for name in RANKINGS if name in both}
+
+
 def main() -> None:
     from benchmarks.experiments.household import household_objects
 
@@ -66,8 +72,7 @@ def main() -> None:
     sets = [judge("selection", SELECTION, rankings), judge("household", str(household_objects()), rankings)]
     if RESULTS.is_file() and set(rankings) != set(RANKINGS):
         old = {s["name"]: s for s in json.loads(RESULTS.read_text())["sets"]}
-        sets = [{**s, "rankings": {n: {**old[s["name"]]["rankings"], **s["rankings"]}[n] for n in RANKINGS
-                                   if n in old[s["name"]]["rankings"] or n in s["rankings"]},
+        sets = [{**s, "rankings": _merged(old[s["name"]]["rankings"], s["rankings"]),
                  "seconds": old[s["name"]]["seconds"]} for s in sets]
     RESULTS.write_text(json.dumps({"checkpoint": str(CHECKPOINT.relative_to(ROOT)), "jitters": JITTERS,
                                    "jittered": JITTERED, "sets": sets}, indent=1) + "\n")

@@ -30,7 +30,7 @@ import numpy as np
 
 from benchmarks.experiments.pick_curve import OUT, ROOT
 from benchmarks.experiments.view_input_task import LABELS, object_eyes
-from onepiece_dist.core.grasp_context import transposed_rotation
+from onepiece_dist.core.grasp_context import CONTEXT_SIZE, grasp_context
 
 EYES = ROOT / "data" / "pick_view_input" / "eyes.npy"  # rows: object, view, eye x, y, z, matched
 MODELS = {"view_input_base": "pointnet_context", "view_input": "pointnet_context_view"}
@@ -60,10 +60,7 @@ def labels_with_view(eye_rows: np.ndarray):
     labels = labels.subset(kept)
     eye = np.array([table[int(k)][:3] for k in key[kept]])
     depth = float(labels.attrs["spec"]["gripper"]["closing_depth"])
-    rot = labels.pose[:, :3, :3]
-    towards = eye - (labels.pose[:, :3, 3] + labels.pose[:, :3, 0] * depth / 2)
-    towards /= np.sqrt(np.sum(towards * towards, axis=1))[:, None]
-    seen = transposed_rotation(rot, towards).astype(np.float32)
+    seen = grasp_context(labels.pose, np.zeros(3), np.zeros(3), depth, eye)[:, CONTEXT_SIZE:]  # the camera's part
     return dataclasses.replace(labels, context=np.concatenate([labels.context, seen], axis=1))
 
 
@@ -110,7 +107,7 @@ def main() -> None:
     parser.add_argument("name", nargs="?", choices=tuple(MODELS))
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    print({"eyes": eyes, "summary": summary}[args.step]() if args.step != "fit" else fit(args.name, args.seed))
+    print(fit(args.name, args.seed) if args.step == "fit" else {"eyes": eyes, "summary": summary}[args.step]())
 
 
 if __name__ == "__main__":

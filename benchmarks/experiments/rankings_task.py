@@ -22,7 +22,7 @@ RANKINGS = ("network", "jittered", "jittered_x2", "top_prior_0.05", "top_prior_0
             "ensemble_4", "flipped", "ensemble_4_flipped", "with_top_down", "top_down_vetted", "view_input_base",
             "view_input", "view_input_base_seed1")
 # networks of benchmarks/experiments/pick_view_input.py, each on its own: the camera's direction as an input or not
-VIEW_INPUT = {name: name for name in ("view_input_base", "view_input", "view_input_base_seed1")}
+VIEW_INPUT = ("view_input_base", "view_input", "view_input_base_seed1")
 WITH_TOP_DOWN = ("with_top_down", "top_down_vetted")  # choose among the view's pool and the top-down grasps
 VETO = 0.5  # top_down_vetted: the first top-down grasp the network scores at least this
 JITTERS, JITTERED = 8, 16  # copies per candidate; the network's best candidates scored again
@@ -51,15 +51,21 @@ def ranked_scores(name: str, proposals: Proposals, scorer: GraspScorer, spec: Pi
     return scores
 
 
+def _scores_at(poses: np.ndarray, proposals: Proposals, scorer: GraspScorer, spec: PickSpec,
+               rng: np.random.Generator) -> np.ndarray:
+    """(k,) ``scorer``'s scores of grasps at other ``poses`` on the view's object points, cut and given their
+    context as the planner does; 0 where a crop holds fewer than ``spec.plan.min_points`` points."""
+    crops = with_context(cut_crops(proposals.object_points, poses, scorer.record, rng), poses,
+                         proposals.object_points, gravity(proposals.plane), scorer.gripper.closing_depth)
+    return np.where(crops.counts >= spec.plan.min_points, scorer.score(crops, spec.plan.batch_size), 0.0)
+
+
 def _flipped_scores(proposals: Proposals, scorer: GraspScorer, spec: PickSpec, rng: np.random.Generator) -> np.ndarray:
     """(n,) the scores of each candidate turned half a turn about its approach: the same grasp of a symmetric
     gripper, which the network sees mirrored across its closing and height axes."""
     turned = proposals.poses.copy()
     turned[:, :3, 1:3] *= -1.0
-    crops = cut_crops(proposals.object_points, turned, scorer.record, rng)
-    crops = with_context(crops, turned, proposals.object_points, gravity(proposals.plane),
-                         scorer.gripper.closing_depth)
-    return np.where(crops.counts >= spec.plan.min_points, scorer.score(crops, spec.plan.batch_size), 0.0)
+    return _scores_at(turned, proposals, scorer, spec, rng)
 
 
 _MEMBERS: dict[str, GraspScorer] = {}
@@ -80,10 +86,7 @@ def _jittered(proposals: Proposals, scorer: GraspScorer, spec: PickSpec, scores:
     best = np.argsort(-scores, kind="stable")[:JITTERED]
     copies = perturb_poses(np.repeat(proposals.poses[best], JITTERS, axis=0), rng, spec.sim.pose_noise * scale,
                            spec.sim.rotation_noise * scale)
-    crops = cut_crops(proposals.object_points, copies, scorer.record, rng)
-    crops = with_context(crops, copies, proposals.object_points, gravity(proposals.plane),
-                         scorer.gripper.closing_depth)
-    again = np.where(crops.counts >= spec.plan.min_points, scorer.score(crops, spec.plan.batch_size), 0.0)
+    again = _scores_at(copies, proposals, scorer, spec, rng)
     mean = np.concatenate([scores[best, None], again.reshape(len(best), JITTERS)], axis=1).mean(axis=1)
     out = np.full(len(scores), -1.0)
     out[best] = mean
@@ -95,11 +98,8 @@ def _with_top_down(name: str, proposals: Proposals, scorer: GraspScorer, spec: P
     """(pool, index, pose) chosen among the view's candidates and the three top-down grasps, each scored by the
     network: ``with_top_down`` the best score of both pools; ``top_down_vetted`` the first top-down grasp scored at
     least VETO, else the network's choice."""
-    down = gravity(proposals.plane)
-    poses = top_down_grasps(proposals.object_points, down, scorer.gripper)
-    crops = with_context(cut_crops(proposals.object_points, poses, scorer.record, rng), poses,
-                         proposals.object_points, down, scorer.gripper.closing_depth)
-    extra = np.where(crops.counts >= spec.plan.min_points, scorer.score(crops, spec.plan.batch_size), 0.0)
+    poses = top_down_grasps(proposals.object_points, gravity(proposals.plane), scorer.gripper)
+    extra = _scores_at(poses, proposals, scorer, spec, rng)
     best = int(np.argmax(scores))
     if name == "top_down_vetted":
         vetted = np.flatnonzero(extra >= VETO)
@@ -110,15 +110,27 @@ def _with_top_down(name: str, proposals: Proposals, scorer: GraspScorer, spec: P
 
 
 def _view_input(name: str, proposals: Proposals, spec: PickSpec, eye: np.ndarray) -> tuple[str, int, np.ndarray]:
-    """(pool, index, pose): the best of the view's candidates by network VIEW_INPUT[name], which reads the camera's
-    direction where its context has room for it."""
-    network = _member(VIEW_INPUT[name], spec)
+    """(pool, index, pose): the best of the view's candidates by the network ``name`` (VIEW_INPUT), which reads the
+    camera's direction where its context has room for it."""
+    network = _member(name, spec)
     crops = proposals.crops
     if network.model.context == 9:
         crops = with_context(crops, proposals.poses, proposals.object_points, gravity(proposals.plane),
                              network.gripper.closing_depth, eye)
     best = int(np.argmax(network.score(crops, spec.plan.batch_size)))
     return "view", best, proposals.poses[best]
+
+
+def _choice(name: str, proposals: Proposals, scorer: GraspScorer, spec: PickSpec, scores: np.ndarray,
+            rng: np.random.Generator, eye: np.ndarray) -> tuple[str, int, np.ndarray]:
+    """(pool, index, pose) of ranking ``name``'s first choice on the view."""
+    if name in VIEW_INPUT:
+        return _view_input(name, proposals, spec, eye)
+    if name in WITH_TOP_DOWN:
+        return _with_top_down(name, proposals, scorer, spec, scores, rng)
+    best = rank(proposals, ranked_scores(name, proposals, scorer, spec, scores, rng), scorer.record, spec.plan,
+                keep=1)[0]
+    return "view", index_of(proposals.poses, best.pose), best.pose
 
 
 def rank_object(spec: PickSpec, ref, index: int, rankings: tuple[str, ...] = RANKINGS) -> ObjectPicks:
@@ -145,17 +157,7 @@ def _view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int, rankings:
     attempts, failures = {}, {}
     for name in rankings:
         rng = np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, 7, RANKINGS.index(name)])
-        if name in VIEW_INPUT:
-            outcome = executions.run(*_view_input(name, proposals, spec, seen.eye))
-            attempts[name], failures[name] = (outcome.success,), (outcome.failure,)
-            continue
-        if name in WITH_TOP_DOWN:
-            outcome = executions.run(*_with_top_down(name, proposals, scorer, spec, scores, rng))
-            attempts[name], failures[name] = (outcome.success,), (outcome.failure,)
-            continue
-        best = rank(proposals, ranked_scores(name, proposals, scorer, spec, scores, rng), scorer.record, spec.plan,
-                    keep=1)
-        outcome = executions.run("view", index_of(proposals.poses, best[0].pose), best[0].pose)
+        outcome = executions.run(*_choice(name, proposals, scorer, spec, scores, rng, seen.eye))
         attempts[name], failures[name] = (outcome.success,), (outcome.failure,)
     return ViewPicks(view, seen.distance, seen.elevation_deg, len(seen.cloud), len(proposals.poses), attempts,
                      failures)

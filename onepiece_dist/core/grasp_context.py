@@ -26,8 +26,8 @@ def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closi
                   eye: np.ndarray | None = None) -> np.ndarray:
     """(n, 6) float32 context of ``poses`` (n, 4, 4) gripper-to-cloud: ``down`` (3,) unit gravity and ``centre`` (3,)
     the observed object's centre, both in the cloud's frame, seen from each gripper frame. With the camera's
-    position ``eye`` (3,): (n, 9), then the unit direction from the closing region's centre to the camera, in the
-    gripper frame (which side of the crop was seen, which lies in occluded space)."""
+    position ``eye`` (3,), or each grasp's (n, 3): (n, 9), then the unit direction from the closing region's centre
+    to the camera, in the gripper frame (which side of the crop was seen, which lies in occluded space)."""
     poses = np.asarray(poses, dtype=np.float64)
     width = CONTEXT_SIZE + (3 if eye is not None else 0)
     if len(poses) == 0:
@@ -38,7 +38,7 @@ def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closi
     offset = transposed_rotation(rot, np.asarray(centre, dtype=np.float64)[None] - closing_centre)
     parts = [gravity, offset]
     if eye is not None:
-        towards = np.asarray(eye, dtype=np.float64)[None] - closing_centre
+        towards = np.asarray(eye, dtype=np.float64) - closing_centre
         length = np.sqrt(towards[:, 0] * towards[:, 0] + towards[:, 1] * towards[:, 1] + towards[:, 2] * towards[:, 2])
         parts.append(transposed_rotation(rot, towards / np.maximum(length, 1e-12)[:, None]))
     return np.concatenate(parts, axis=1).astype(np.float32)
