@@ -3,6 +3,8 @@ every round kept in the dataset, and a job killed mid-round that resumes at that
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -53,13 +55,16 @@ def stop_by_rule(record: dict, plan: dict, labels: int) -> str | None:
 
 @pytest.mark.sim
 @pytest.mark.slow
-def test_an_adaptive_job_stops_by_its_rule_and_keeps_every_round_in_the_dataset(tmp_path):
+def test_an_adaptive_job_stops_by_its_rule_and_keeps_every_round_in_the_dataset(tmp_path, fault_free):
+    """Read on the suite's one in-process run of the adaptive spec (``fault_free``), which the job killed mid-round
+    and the job on Ray are compared with: its dataset and the status it saved."""
+    from onepiece_dist.api import read_status
     from onepiece_dist.learn.dataset import GraspDataset
     from onepiece_dist.learn.train import load_round_model, predict
-    from onepiece_dist.runtime.local import run_local
 
-    status = run_local(adaptive_spec(tmp_path, "a"))
-    ds = open_dataset(tmp_path / "a.zarr")
+    output = Path(fault_free(adaptive_spec(tmp_path, "a")))
+    status = read_status(output)
+    ds = open_dataset(output)
     record = ds.attrs["adaptive"]
     assert record == status.adaptive.model_dump(mode="json") | {"model": "pointnet"}
     assert record["stopped"] == stop_by_rule(record, ADAPTIVE, len(ds["labelled/grasps/row"]))
@@ -83,15 +88,15 @@ def test_an_adaptive_job_stops_by_its_rule_and_keeps_every_round_in_the_dataset(
         doubt = np.abs(scores[k - 1] - 0.5)
         assert not np.isin(owner[new], list(held)).any()
         assert len(others) == 0 or doubt[new].max() <= doubt[others].min()
-    candidates = GraspDataset(tmp_path / "a.zarr", "grasps", inputs=("points",), labelled=False)
+    candidates = GraspDataset(output, "grasps", inputs=("points",), labelled=False)
     for entry in record["rounds"]:  # the round's network, read from the dataset, gave the round's scores
-        assert np.allclose(predict(load_round_model(tmp_path / "a.zarr", entry["round"]), candidates),
+        assert np.allclose(predict(load_round_model(output, entry["round"]), candidates),
                            scores[entry["round"]], atol=1e-6)
     assert status.training is not None and status.training.data == "budget"
     from onepiece_dist.store.dataset import DatasetReader, delivered_groups
 
-    assert delivered_groups(tmp_path / "a.zarr") == ["labelled", "objects", "train"]  # the rounds are records
-    assert DatasetReader(tmp_path / "a.zarr").summary()["adaptive"]["stopped"] == record["stopped"]  # inspect
+    assert delivered_groups(output) == ["labelled", "objects", "train"]  # the rounds are records
+    assert DatasetReader(output).summary()["adaptive"]["stopped"] == record["stopped"]  # inspect
 
 
 @pytest.mark.sim

@@ -16,7 +16,7 @@ and glibc setting: the antipodal sampler took its candidates' centres and widths
 whose kernel Embree picks for the CPU by itself. Ray hits are now computed again in float64 (``core.raycast``),
 the pins were written again, and the job runs under every CPU setting this machine offers (CPU_SETTINGS): BLAS
 kernels, numpy's CPU features, glibc's hwcaps, one and two threads on one CPU and two. ``--write`` writes the pins
-only when every setting gives the same ones.
+only when every setting gives the same ones; the test runs the older CPU's three paths at once (cpu_settings).
 """
 
 from __future__ import annotations
@@ -84,15 +84,19 @@ def cpu_flags() -> set[str]:
 def cpu_settings() -> dict[str, dict[str, str]]:
     """{name: environment} of the CPU paths this machine can be made to take besides its own, each set in a fresh
     process before numpy, OpenBLAS, glibc's libm, open3d and pybullet load. "one CPU" also pins the process to one
-    core, so Embree's and TBB's thread pools have one thread."""
-    settings = {"one thread, one CPU": {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", ONE_CPU: "1"},
-                "two threads": {"OPENBLAS_NUM_THREADS": "2", "OMP_NUM_THREADS": "2"}}
+    core, so Embree's and TBB's thread pools have one thread. "two threads" is left out where this process has two
+    cores: there it is the default, which the first test runs. An older x86-64 CPU takes all three of its paths at
+    once (OpenBLAS's SSE kernel, numpy without AVX2 or AVX-512, glibc without AVX, AVX2 or FMA), so they are set
+    together, as on the older-CPU node of tests/test_resume_and_cluster.py; where that setting fails, `--write`
+    names which of them moved the pins (OLDER_CPU_PATHS, one at a time)."""
+    settings = {"one thread, one CPU": {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", ONE_CPU: "1"}}
+    if len(os.sched_getaffinity(0)) != 2:
+        settings["two threads"] = {"OPENBLAS_NUM_THREADS": "2", "OMP_NUM_THREADS": "2"}
     if platform.machine() != "x86_64":
         return settings
     flags = cpu_flags()
-    settings.update({"OpenBLAS SSE kernel": {"OPENBLAS_CORETYPE": "Prescott"},
-                     "numpy without AVX2 or AVX-512": {"NPY_DISABLE_CPU_FEATURES": "X86_V3"},
-                     "glibc without AVX, AVX2, FMA": {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX"}})
+    settings["an older CPU: SSE BLAS, numpy and glibc without AVX"] = {
+        key: value for path in OLDER_CPU_PATHS.values() for key, value in path.items()}
     if "avx512f" in flags:
         settings["OpenBLAS AVX-512 kernel"] = {"OPENBLAS_CORETYPE": "SkylakeX"}
     if "avx2" in flags:
@@ -100,6 +104,9 @@ def cpu_settings() -> dict[str, dict[str, str]]:
     return settings
 
 
+OLDER_CPU_PATHS = {"OpenBLAS SSE kernel": {"OPENBLAS_CORETYPE": "Prescott"},
+                   "numpy without AVX2 or AVX-512": {"NPY_DISABLE_CPU_FEATURES": "X86_V3"},
+                   "glibc without AVX, AVX2, FMA": {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX"}}
 ONE_CPU = "ONEPIECE_TEST_ONE_CPU"  # read by this file's --print only, to pin itself to one core
 
 
@@ -121,6 +128,11 @@ def test_the_pins_hold_under_every_cpu_setting(setting):
     assert {name: found[name] for name in PINNED_ARRAYS if expected[name] != found[name]} == {}
 
 
+def every_setting() -> dict[str, dict[str, str]]:
+    """The settings the test runs, and the older CPU's paths one at a time (for ``--write``)."""
+    return {**cpu_settings(), **(OLDER_CPU_PATHS if platform.machine() == "x86_64" else {})}
+
+
 if __name__ == "__main__" and sys.argv[1:] == ["--print"]:
     import tempfile
 
@@ -135,7 +147,7 @@ if __name__ == "__main__" and sys.argv[1:] == ["--write"]:
     with tempfile.TemporaryDirectory() as scratch:
         pins = run_pinned_job(Path(scratch))
     differ = {name: sorted(k for k in pins if pins[k] != found[k])
-              for name, found in ((name, pins_under(env)) for name, env in cpu_settings().items())}
+              for name, found in ((name, pins_under(env)) for name, env in every_setting().items())}
     if any(differ.values()):
         sys.exit(f"not written: the pins depend on the CPU path: {differ}")
     spec = pinned_spec(Path("pinned.zarr")).model_dump(mode="json", exclude={"output"})

@@ -296,6 +296,12 @@ def worker_node_raylet(agent_port: int) -> psutil.Process:
     raise AssertionError(f"no raylet with agent port {agent_port}")
 
 
+ON_CLUSTER = {**TINY, "budgets": [], "training": {**TINY["training"], "seeds": 1, "learning_rates": [1e-3]}}
+"""The tiny study with one seed, one learning rate and no random arm of its own: each of its three jobs and three
+training runs is still placed on the cluster's nodes (the tiny study's eight runs and probes cost about 40
+CPU-seconds more here)."""
+
+
 @pytest.mark.cluster
 @pytest.mark.slow
 def test_a_study_on_the_local_multi_node_cluster_gives_the_in_process_result(local_cluster, tmp_path,
@@ -306,7 +312,7 @@ def test_a_study_on_the_local_multi_node_cluster_gives_the_in_process_result(loc
     from onepiece_dist.study.spec import StudySpec
 
     study = tmp_path / "tiny.json"
-    study.write_text(json.dumps(TINY))
+    study.write_text(json.dumps(ON_CLUSTER))
     ran = onepiece("study", "run", str(study), "--address", "127.0.0.1:6390", "--out", str(tmp_path / "cluster"),
                    "--json", cwd=tmp_path, timeout=600)
     assert ran.returncode == 0, ran.stderr[-3000:]
@@ -315,7 +321,7 @@ def test_a_study_on_the_local_multi_node_cluster_gives_the_in_process_result(loc
     nodes = {node for name in ("heldout", "A", "B-r0") for node in
              read_status(tmp_path / "cluster" / "jobs" / f"{name}.zarr").nodes}
     assert len(nodes) >= 2, nodes  # the worker nodes shared the extraction (an earlier test may add a third)
-    here = run_study(StudySpec(**TINY), tmp_path / "here", Where(in_process=True))
+    here = run_study(StudySpec(**ON_CLUSTER), tmp_path / "here", Where(in_process=True))
     assert comparable(on_cluster) == comparable(json.loads(here.model_dump_json()))
     record_figure(f"study on 2 worker nodes in {on_cluster['wall_seconds']:.0f} s: {len(on_cluster['arms'])} arms, "
                   "the in-process figures")
