@@ -31,3 +31,45 @@ def test_coacd_cuts_an_l_into_convex_arms_that_fill_it_and_repeats_itself(tmp_pa
     cached = sorted(path.name for path in (tmp_path / "a").iterdir())
     assert cached == [f"{mesh.content_id}-coacd0.05.obj"]
     assert JobSpec(sim={"collision": "coacd"}).sim.collision == "coacd"
+
+
+ONE_SHOT_VHACD = """
+import sys, pybullet as p
+p.connect(p.DIRECT)
+p.vhacd(sys.argv[1], sys.argv[2], sys.argv[3], resolution=int(sys.argv[4]), maxNumVerticesPerCH=32)
+"""
+
+
+def test_the_vhacd_child_serves_every_object_as_a_child_of_its_own_would_and_outlives_a_crash(tmp_path):
+    """One VHACD child serves a process's objects (sim.collision.VhacdChild): each object's pieces are the bytes a
+    fresh child per object (the way before) writes, and a child killed between objects (as a crash on a mesh
+    ends it) is replaced at the next object, which gets its pieces."""
+    import os
+    import subprocess
+    import sys
+
+    from onepiece_dist.core.mesh import cylinder_mesh, sphere_mesh
+    from onepiece_dist.objects.meshio import write_obj
+    from onepiece_dist.sim import collision
+
+    meshes = [l_shape(), sphere_mesh(0.03), cylinder_mesh(0.02, 0.08)]
+    for k, mesh in enumerate(meshes):
+        if k == 2:
+            collision._VHACD._child.kill()  # the child dies between two objects
+        pieces = convex_pieces(mesh, tmp_path / "served", "vhacd")
+        source = tmp_path / f"{k}.obj"
+        write_obj(mesh.vertices, mesh.faces, source)
+        subprocess.run([sys.executable, "-c", ONE_SHOT_VHACD, str(source), str(tmp_path / f"{k}.vhacd.obj"),
+                        os.devnull, "50000"], capture_output=True, check=True)
+        served = tmp_path / "served" / f"{mesh.content_id}-vhacd50000.obj"
+        assert len(pieces) >= 1 and served.read_bytes() == (tmp_path / f"{k}.vhacd.obj").read_bytes()
+    assert sorted(p.suffix for p in (tmp_path / "served").iterdir()) == [".obj"] * 3  # no source or part left
+
+
+def test_a_vhacd_child_past_its_time_is_ended_and_the_object_gets_no_pieces_from_it(tmp_path, monkeypatch):
+    from onepiece_dist.sim import collision
+
+    monkeypatch.setattr(collision, "_VHACD_SCRIPT", "import sys, time\nfor line in sys.stdin:\n    time.sleep(60)")
+    child = collision.VhacdChild()
+    assert child.run(tmp_path / "in.obj", tmp_path / "out.obj", 50_000, timeout=1.0) is False
+    assert child._child is None and not (tmp_path / "out.obj").exists()

@@ -3,15 +3,21 @@ cached as an OBJ of convex pieces; the plain convex hull only when asked (with a
 
 Two decompositions: pybullet's VHACD (the default) and CoACD (collision-aware, Wei et al. 2022; the registry
 package ``coacd``, extra ``decompose``), which cuts along concave features instead of voxelizing. Both run in a
-child process: they crash on some meshes, and a crash there must not take the worker down.
+child process: they crash on some meshes, and a crash there must not take the worker down. VHACD's child serves a
+process's every object (:class:`VhacdChild`: starting Python and pybullet again for each cost as much as VHACD
+itself on the objects of a job); a crash or a timeout ends it, and the next object starts another.
 docs/decomposition.md measures them side by side (benchmarks/experiments/decomposition.py).
 """
 
 from __future__ import annotations
 
+import atexit
+import json
 import os
+import select
 import subprocess
 import sys
+import threading
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,10 +30,18 @@ from onepiece_dist.objects.meshio import parse_obj, write_obj
 if TYPE_CHECKING:
     from onepiece_dist.objects import LoadedObject
 
+# One request per line (a JSON list: SOURCE, TMP, LOG, RESOLUTION), one reply line each, on the stdout the child
+# kept for replies: VHACD prints its progress to file descriptor 1, which the child points at /dev/null.
 _VHACD_SCRIPT = """
-import sys, pybullet as p
+import json, os, sys, pybullet as p
+replies = os.fdopen(os.dup(1), "w")
+os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
 p.connect(p.DIRECT)
-p.vhacd(sys.argv[1], sys.argv[2], sys.argv[3], resolution=int(sys.argv[4]), maxNumVerticesPerCH=32)
+for line in sys.stdin:
+    source, out, log, resolution = json.loads(line)
+    p.vhacd(source, out, log, resolution=int(resolution), maxNumVerticesPerCH=32)
+    replies.write("done\\n")
+    replies.flush()
 """
 # CoACD in one thread with a fixed seed: its pieces are the same on every run (threads would race its search).
 _COACD_SCRIPT = """
@@ -83,8 +97,75 @@ def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
 
 def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) -> None:
     source = cache_dir / f"{mesh.content_id}.{os.getpid()}.src.obj"
+    tmp_out = out.with_suffix(f".{os.getpid()}.part")
     write_obj(mesh.vertices, mesh.faces, source)
-    _run_child(_VHACD_SCRIPT, source, out, (os.devnull, str(resolution)), timeout=120)
+    try:
+        if _VHACD.run(source, tmp_out, resolution, timeout=120) and tmp_out.is_file() and tmp_out.stat().st_size:
+            os.replace(tmp_out, out)
+    finally:
+        for path in (source, tmp_out):
+            path.unlink(missing_ok=True)
+
+
+class VhacdChild:
+    """One VHACD child process per process (started at the first object, after a fork again), serving objects
+    one at a time; it ends when this process does (its stdin closes)."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._child: subprocess.Popen | None = None
+        self._owner = 0
+        atexit.register(self.close)
+
+    def run(self, source: Path, out: Path, resolution: int, timeout: float) -> bool:
+        """Decompose ``source`` into ``out``; False when the child crashed on it (twice: a child that died before
+        it, killed from outside, is replaced once) or ran past ``timeout`` (ended)."""
+        with self._lock:
+            for _ in range(2):
+                answered = self._ask(source, out, resolution, timeout)
+                if answered is not None:
+                    return answered
+            return False
+
+    def _ask(self, source: Path, out: Path, resolution: int, timeout: float) -> bool | None:
+        """True: done; False: past ``timeout``; None: the child died (it is ended either way)."""
+        child = self._started()
+        try:
+            child.stdin.write(json.dumps([str(source), str(out), os.devnull, resolution]) + "\n")
+            child.stdin.flush()
+            line = child.stdout.readline() if select.select([child.stdout], [], [], timeout)[0] else None
+        except OSError:  # BrokenPipeError: it was gone before the request
+            line = ""
+        if line == "done\n":
+            return True
+        self._end()
+        return None if line is not None else False
+
+    def _started(self) -> subprocess.Popen:
+        if self._child is None or self._owner != os.getpid() or self._child.poll() is not None:
+            self._child = subprocess.Popen([sys.executable, "-c", _VHACD_SCRIPT], stdin=subprocess.PIPE,
+                                           stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+            self._owner = os.getpid()
+        return self._child
+
+    def close(self) -> None:
+        """End the child: its input closes and it leaves its loop (killed if it does not within seconds)."""
+        child = self._child
+        if child is not None and self._owner == os.getpid() and child.poll() is None:
+            child.stdin.close()
+            try:
+                child.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self._end()
+
+    def _end(self) -> None:
+        if self._child is not None and self._owner == os.getpid():
+            self._child.kill()
+            self._child.wait()
+        self._child = None
+
+
+_VHACD = VhacdChild()
 
 
 def _run_coacd(mesh: TriangleMesh, cache_dir: Path, out: Path, threshold: float) -> None:
