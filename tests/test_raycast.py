@@ -89,3 +89,25 @@ def test_hits_agree_with_embree_to_its_float32_precision_on_a_real_mesh():
     both = np.isfinite(t) & np.isfinite(hits.t)
     assert both.mean() > 0.95 and np.array_equal(np.isfinite(t), np.isfinite(hits.t))
     assert np.abs(t[both] - hits.t[both]).max() < 1e-5
+
+
+def test_open3d_is_imported_without_plotly_and_still_casts_and_its_plotly_calls_say_why_not():
+    """core.raycast.import_open3d: a worker that samples grasps loads open3d without plotly and dash (half of its
+    import time), Embree's ray casts work there, and open3d's plotly drawing says how to have it."""
+    import subprocess
+    import sys
+
+    probe = ("import sys, numpy as np\n"
+             "from onepiece_dist.core.mesh import box_mesh\n"
+             "from onepiece_dist.core.raycast import cast_rays, import_open3d\n"
+             "box = box_mesh((0.1, 0.1, 0.1))\n"
+             "hits = cast_rays(box.vertices, box.faces, np.zeros((1, 3)), np.array([[1.0, 0, 0]]))\n"
+             "assert abs(hits.t[0] - 0.05) < 1e-12, hits.t\n"
+             "assert not {'plotly', 'dash'} & set(sys.modules), sorted({'plotly', 'dash'} & set(sys.modules))\n"
+             "try:\n"
+             "    import_open3d().visualization.draw_plotly([])\n"
+             "except RuntimeError as err:\n"
+             "    print(err)\n")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "import open3d before onepiece_dist" in out.stdout

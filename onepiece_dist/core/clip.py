@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from onepiece_dist.core.mesh import merge_meshes
+from onepiece_dist.core.raycast import import_open3d
 
 EPS = 1e-12
 MISS = 1e-9  # a piece whose bounds lie further than this outside the box is cut away whole, without cutting
@@ -110,7 +111,7 @@ def _inside_extremes(points: np.ndarray, margin: float = 1e-12) -> np.ndarray:
 def hull_mesh(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Triangle mesh of the convex hull of (k, 3) points: vertices (n, 3) float64, faces (f, 3) int64 wound
     outward (open3d's qhull, imported where used)."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.array(points, dtype=np.float64)))
     hull, _ = cloud.compute_convex_hull(joggle_inputs=False)

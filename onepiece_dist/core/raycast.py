@@ -13,10 +13,14 @@ one fixed order (Moller-Trumbore) against that triangle and every triangle shari
 nearest hit wins, ties to the lowest face index. Embree's distance and normal never leave this module. Left to
 Embree: whether a ray hits at all (a ray that grazes a silhouette) and surfaces that touch without sharing a
 vertex, where another kernel may name a triangle outside the ring.
+
+Every module of the package imports open3d through :func:`import_open3d`, without its plotly front end.
 """
 
 from __future__ import annotations
 
+import sys
+import types
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,7 +46,7 @@ def cast_rays(vertices: np.ndarray, faces: np.ndarray, origins: np.ndarray, dire
 
 def embree_faces(vertices: np.ndarray, faces: np.ndarray, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """(k,) int64 the triangle open3d's ray casting (Embree, float32) reports for each ray, -1 for a miss."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(vertices, dtype=np.float32)),
@@ -51,6 +55,38 @@ def embree_faces(vertices: np.ndarray, faces: np.ndarray, origins: np.ndarray, d
     hit = scene.cast_rays(o3d.core.Tensor(rays))
     found = hit["primitive_ids"].numpy().astype(np.int64)
     return np.where(np.isfinite(hit["t_hit"].numpy()), found, -1)
+
+
+PLOTLY_FRONT_END = "open3d.visualization.draw_plotly"
+
+
+def import_open3d() -> types.ModuleType:
+    """open3d, imported without its plotly front end where this process has not imported open3d yet. open3d's
+    ``__init__`` imports ``open3d.visualization.draw_plotly``, which imports plotly and dash: half of open3d's
+    import (about 0.45 of 1 CPU-second), paid by every worker process that samples grasps, for drawing nothing
+    here uses. Its functions, in such a process, raise and say how to have them."""
+    if "open3d" not in sys.modules and PLOTLY_FRONT_END not in sys.modules:
+        sys.modules[PLOTLY_FRONT_END] = _without_plotly()
+    import open3d
+
+    return open3d
+
+
+def _without_plotly() -> types.ModuleType:
+    front_end = types.ModuleType(PLOTLY_FRONT_END)
+
+    def missing(name: str):
+        if name.startswith("_"):  # __file__, __path__ and the like: a module without them, as Python expects
+            raise AttributeError(name)
+
+        def unavailable(*args, **kwargs):
+            raise RuntimeError(f"open3d.visualization.{name} is not loaded in this process: onepiece_dist imports "
+                               "open3d without its plotly front end; import open3d before onepiece_dist to use it")
+
+        return unavailable
+
+    front_end.__getattr__ = missing
+    return front_end
 
 
 def exact_hits(vertices: np.ndarray, faces: np.ndarray, origins: np.ndarray, directions: np.ndarray,

@@ -13,7 +13,7 @@ import numpy as np
 from onepiece_dist.core.frames import compose_rotations, gripper_frame_batches, perpendicular, pose_from_axes
 from onepiece_dist.core.mesh import TriangleMesh
 from onepiece_dist.core.portable import sin_cos
-from onepiece_dist.core.raycast import cast_rays
+from onepiece_dist.core.raycast import cast_rays, import_open3d
 from onepiece_dist.specs.job import GripperSpec, SamplerSpec
 
 _RAY_START = 1e-5
@@ -109,7 +109,7 @@ def _normal_poses(points, normals, count, gripper, sampler, rng):
 def estimate_normals(points: np.ndarray, query: np.ndarray, neighbours: int = 16) -> np.ndarray:
     """Unit normals at ``query`` (k, 3) from PCA of their nearest ``points`` (m, 3), pointing away from the
     centroid. -> (k, 3) float64"""
-    import open3d as o3d
+    o3d = import_open3d()
 
     tree = o3d.geometry.KDTreeFlann(o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points)))
     idx = np.array([np.asarray(tree.search_knn_vector_3d(q, neighbours)[1]) for q in query])

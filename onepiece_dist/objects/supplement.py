@@ -19,6 +19,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from onepiece_dist.core.mesh import TriangleMesh, make_mesh, min_width, sample_surface
+from onepiece_dist.core.raycast import import_open3d
 from onepiece_dist.core.repair import fan_fill
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_mesh_bytes, write_obj
@@ -133,7 +134,7 @@ def _is_mesh(path: Path) -> bool:
 
 
 def _read_point_cloud(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
-    import open3d as o3d
+    o3d = import_open3d()
 
     cloud = o3d.io.read_point_cloud(str(path), format=_o3d_format(path))
     points = np.asarray(cloud.points, dtype=np.float64)
@@ -167,7 +168,7 @@ def scan_units(points: np.ndarray, spec: SupplementSpec) -> tuple[str, float]:
 def remove_outliers(points: np.ndarray, normals: np.ndarray | None,
                     spec: SupplementSpec) -> tuple[np.ndarray, np.ndarray | None, int]:
     """Statistical outlier removal; returns the kept points, their normals and how many were removed."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     if len(points) <= spec.outlier_neighbours:
         return points, normals, 0
@@ -195,7 +196,7 @@ def check_not_degenerate(points: np.ndarray, source: str, spec: SupplementSpec) 
 
 def estimate_normals(points: np.ndarray) -> np.ndarray:
     """(n, 3) unit normals, oriented consistently over the surface and outward (away from the interior)."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     spacing = mean_spacing(points)
@@ -210,7 +211,7 @@ def consistent_signs(points: np.ndarray, normals: np.ndarray, spacing: float) ->
     tangent-plane propagation (k = 15), on a copy of the points (n, 3) moved by a seeded ORIENT_JITTER x
     ``spacing``. On exactly coplanar points (a CAD model's samples, a synthetic scan) open3d builds its graph
     about 30 times slower (isl-org/Open3D#6482; 28 s against 0.9 s for 20,000 points of a box)."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     moved = points + np.random.default_rng(0).normal(0.0, ORIENT_JITTER * spacing, points.shape)
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(moved))
@@ -222,7 +223,7 @@ def consistent_signs(points: np.ndarray, normals: np.ndarray, spacing: float) ->
 def reconstruct(points: np.ndarray, normals: np.ndarray, source: str,
                 spec: SupplementSpec) -> tuple[np.ndarray, np.ndarray, bool]:
     """Watertight triangle mesh of an oriented point cloud: vertices (V, 3), faces (F, 3), holes filled?"""
-    import open3d as o3d
+    o3d = import_open3d()
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     cloud.normals = o3d.utility.Vector3dVector(normals)
@@ -241,7 +242,7 @@ def reconstruct(points: np.ndarray, normals: np.ndarray, source: str,
 
 
 def _poisson(cloud, spec: SupplementSpec):
-    import open3d as o3d
+    o3d = import_open3d()
 
     # one thread: its threads add in an order that changes from run to run, and so did the mesh (issue 50)
     mesh, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(cloud, depth=spec.poisson_depth, n_threads=1)
@@ -254,7 +255,7 @@ def _poisson(cloud, spec: SupplementSpec):
 
 
 def _ball_pivoting(cloud):
-    import open3d as o3d
+    o3d = import_open3d()
 
     spacing = mean_spacing(np.asarray(cloud.points))
     radii = o3d.utility.DoubleVector([3 * spacing, 6 * spacing, 12 * spacing])
@@ -278,7 +279,7 @@ def _fill_holes(mesh):
     """Close each boundary loop with a fan of triangles around the loop's centroid (open3d's own
     ``fill_holes`` in 0.18-0.20 now and then writes garbage vertex positions). Non-manifold boundaries stay
     open and the watertight check refuses them."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.triangles)
     new_vertices, new_faces = fan_fill(vertices, faces)
@@ -321,7 +322,7 @@ def _inside_bounds(smaller, mesh, slack: float = 0.01) -> bool:
 
 def mean_spacing(points: np.ndarray) -> float:
     """Mean distance from each point (n, 3) to its nearest neighbour."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     return float(np.mean(cloud.compute_nearest_neighbor_distance()))
@@ -336,7 +337,7 @@ def drop_stray_points(points: np.ndarray, mesh: TriangleMesh, spec: SupplementSp
 
 def point_mesh_distances(points: np.ndarray, mesh: TriangleMesh) -> np.ndarray:
     """(n,) unsigned distance from each point to the mesh surface (open3d raycasting scene)."""
-    import open3d as o3d
+    o3d = import_open3d()
 
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))
@@ -345,7 +346,7 @@ def point_mesh_distances(points: np.ndarray, mesh: TriangleMesh) -> np.ndarray:
 
 def hausdorff(points: np.ndarray, mesh: TriangleMesh, samples: int = 20000) -> tuple[float, float]:
     """Symmetric Hausdorff distance between points (n, 3) and a mesh, and the mean point-to-mesh distance."""
-    import open3d as o3d
+    o3d = import_open3d()
 
 
     to_mesh = point_mesh_distances(points, mesh)

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.frames import matrix_from_quat, transform_points
+from onepiece_dist.core.raycast import import_open3d
 from onepiece_dist.errors import CloudRejected
 from onepiece_dist.plan.observation import Observation, check_cloud, depth_to_cloud
 
@@ -87,7 +88,7 @@ def read_depth(path: str | Path, depth_scale: float | None = None) -> np.ndarray
         raise CloudRejected(f"{path}: no such file")
     suffix = path.suffix.lower()
     if suffix == ".png":
-        import open3d as o3d
+        o3d = import_open3d()
 
         raw = np.asarray(o3d.io.read_image(str(path)))
         if raw.ndim != 2 or raw.dtype != np.uint16:

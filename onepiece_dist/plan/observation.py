@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.frames import transform_points
+from onepiece_dist.core.raycast import import_open3d
 from onepiece_dist.errors import CloudRejected
 
 MIN_POINTS = 50  # fewer observed points hold no grasp worth planning
@@ -68,7 +69,7 @@ def read_cloud(path: str | Path, viewpoint: np.ndarray | None = None) -> Observa
         except ValueError as err:
             raise CloudRejected(f"{path}: not a plain numeric .npy array ({err})") from None
     else:
-        import open3d as o3d
+        o3d = import_open3d()
 
         points = np.asarray(o3d.io.read_point_cloud(str(path), remove_nan_points=False,
                                                     remove_infinite_points=False).points)
