@@ -33,13 +33,6 @@ def test_coacd_cuts_an_l_into_convex_arms_that_fill_it_and_repeats_itself(tmp_pa
     assert JobSpec(sim={"collision": "coacd"}).sim.collision == "coacd"
 
 
-ONE_SHOT_VHACD = """
-import sys, pybullet as p
-p.connect(p.DIRECT)
-p.vhacd(sys.argv[1], sys.argv[2], sys.argv[3], resolution=int(sys.argv[4]), maxNumVerticesPerCH=32)
-"""
-
-
 def test_the_vhacd_child_serves_every_object_as_a_child_of_its_own_would_and_outlives_a_crash(tmp_path):
     """One VHACD child serves a process's objects (sim.collision.VhacdChild): each object's pieces are the bytes a
     fresh child per object (the way before) writes, and a child killed between objects (as a crash on a mesh
@@ -48,6 +41,7 @@ def test_the_vhacd_child_serves_every_object_as_a_child_of_its_own_would_and_out
     import subprocess
     import sys
 
+    from benchmarks.speed.bench_worker_start import FRESH_CHILD
     from onepiece_dist.core.mesh import cylinder_mesh, sphere_mesh
     from onepiece_dist.objects.meshio import write_obj
     from onepiece_dist.sim import collision
@@ -59,7 +53,7 @@ def test_the_vhacd_child_serves_every_object_as_a_child_of_its_own_would_and_out
         pieces = convex_pieces(mesh, tmp_path / "served", "vhacd")
         source = tmp_path / f"{k}.obj"
         write_obj(mesh.vertices, mesh.faces, source)
-        subprocess.run([sys.executable, "-c", ONE_SHOT_VHACD, str(source), str(tmp_path / f"{k}.vhacd.obj"),
+        subprocess.run([sys.executable, "-c", FRESH_CHILD, str(source), str(tmp_path / f"{k}.vhacd.obj"),
                         os.devnull, "50000"], capture_output=True, check=True)
         served = tmp_path / "served" / f"{mesh.content_id}-vhacd50000.obj"
         assert len(pieces) >= 1 and served.read_bytes() == (tmp_path / f"{k}.vhacd.obj").read_bytes()

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.cloud.grasps import dot3
+
 CONTEXT_SIZE = 6
 WORLD_DOWN = np.array([0.0, 0.0, -1.0])
 
@@ -39,7 +41,7 @@ def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closi
     parts = [gravity, offset]
     if eye is not None:
         towards = np.asarray(eye, dtype=np.float64) - closing_centre
-        length = np.sqrt(towards[:, 0] * towards[:, 0] + towards[:, 1] * towards[:, 1] + towards[:, 2] * towards[:, 2])
+        length = np.sqrt(dot3(towards, towards))
         parts.append(transposed_rotation(rot, towards / np.maximum(length, 1e-12)[:, None]))
     return np.concatenate(parts, axis=1).astype(np.float32)
 

@@ -19,6 +19,7 @@ import subprocess
 import sys
 import threading
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -30,7 +31,7 @@ from onepiece_dist.objects.meshio import parse_obj, write_obj
 if TYPE_CHECKING:
     from onepiece_dist.objects import LoadedObject
 
-# One request per line (a JSON list: SOURCE, TMP, LOG, RESOLUTION), one reply line each, on the stdout the child
+# One request per line (a JSON list: SOURCE, TMP, RESOLUTION), one reply line each, on the stdout the child
 # kept for replies: VHACD prints its progress to file descriptor 1, which the child points at /dev/null.
 _VHACD_SCRIPT = """
 import json, os, sys, pybullet as p
@@ -38,8 +39,8 @@ replies = os.fdopen(os.dup(1), "w")
 os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
 p.connect(p.DIRECT)
 for line in sys.stdin:
-    source, out, log, resolution = json.loads(line)
-    p.vhacd(source, out, log, resolution=int(resolution), maxNumVerticesPerCH=32)
+    source, out, resolution = json.loads(line)
+    p.vhacd(source, out, os.devnull, resolution=resolution, maxNumVerticesPerCH=32)
     replies.write("done\\n")
     replies.flush()
 """
@@ -97,14 +98,8 @@ def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
 
 def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) -> None:
     source = cache_dir / f"{mesh.content_id}.{os.getpid()}.src.obj"
-    tmp_out = out.with_suffix(f".{os.getpid()}.part")
     write_obj(mesh.vertices, mesh.faces, source)
-    try:
-        if _VHACD.run(source, tmp_out, resolution, timeout=120) and tmp_out.is_file() and tmp_out.stat().st_size:
-            os.replace(tmp_out, out)
-    finally:
-        for path in (source, tmp_out):
-            path.unlink(missing_ok=True)
+    _into_place(source, out, lambda tmp_out: _VHACD.run(source, tmp_out, resolution, timeout=120))
 
 
 class VhacdChild:
@@ -131,7 +126,7 @@ class VhacdChild:
         """True: done; False: past ``timeout``; None: the child died (it is ended either way)."""
         child = self._started()
         try:
-            child.stdin.write(json.dumps([str(source), str(out), os.devnull, resolution]) + "\n")
+            child.stdin.write(json.dumps([str(source), str(out), resolution]) + "\n")
             child.stdin.flush()
             line = child.stdout.readline() if select.select([child.stdout], [], [], timeout)[0] else None
         except OSError:  # BrokenPipeError: it was gone before the request
@@ -175,16 +170,26 @@ def _run_coacd(mesh: TriangleMesh, cache_dir: Path, out: Path, threshold: float)
 
 
 def _run_child(script: str, source: Path, out: Path, args: tuple[str, ...], timeout: float) -> None:
-    """``script SOURCE TMP ARGS...`` in a child Python; its output moved to ``out`` when it wrote one (a crash or
-    a timeout leaves none); the source and any partial output removed."""
+    """``script SOURCE TMP ARGS...`` in a child Python of its own (see :func:`_into_place`)."""
+    def run(tmp_out: Path) -> bool:
+        try:
+            subprocess.run([sys.executable, "-c", script, str(source), str(tmp_out), *args], capture_output=True,
+                           timeout=timeout, check=False)
+        except subprocess.TimeoutExpired:
+            return False
+        return True
+
+    _into_place(source, out, run)
+
+
+def _into_place(source: Path, out: Path, decompose: Callable[[Path], bool]) -> None:
+    """``decompose(tmp)`` writes a decomposition of ``source`` to a temporary beside ``out`` and says whether it
+    finished; moved to ``out`` when it did and wrote one (a crash or a timeout leaves none); the source and any
+    partial output removed."""
     tmp_out = out.with_suffix(f".{os.getpid()}.part")
     try:
-        subprocess.run([sys.executable, "-c", script, str(source), str(tmp_out), *args], capture_output=True,
-                       timeout=timeout, check=False)
-        if tmp_out.is_file() and tmp_out.stat().st_size > 0:
+        if decompose(tmp_out) and tmp_out.is_file() and tmp_out.stat().st_size > 0:
             os.replace(tmp_out, out)
-    except subprocess.TimeoutExpired:
-        pass
     finally:
         for path in (source, tmp_out):
             path.unlink(missing_ok=True)
