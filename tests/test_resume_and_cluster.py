@@ -88,6 +88,31 @@ def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, f
                   "0 orphan daemons, 0 temporaries, identical codes")
 
 
+@pytest.mark.ray
+@pytest.mark.slow
+def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_path, record_figure):
+    out = tmp_path / "lost.zarr"
+    slow = ["--objects", "primitives[0:8]", "--grasps", "400", "--stages", "ingest,extract,dedup"]  # ~10 s of work
+    job = subprocess.Popen([*ONEPIECE, "run", *slow, "--out", str(out)], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for(lambda: objects_done(out) >= 1, 180, "the first object")
+        agents = [p for p in psutil.Process(job.pid).children(recursive=True)
+                  if "agent.py" in " ".join(p.cmdline()) and "dashboard" in " ".join(p.cmdline())]
+        assert agents, "no dashboard agent under the embedded Ray"
+        for agent in agents:
+            agent.kill()  # the raylet exits with its agent, as when a node dies
+        stdout, stderr = job.communicate(timeout=180)
+    finally:
+        if job.poll() is None:
+            job.kill()
+    assert job.returncode == 1, stderr[-2000:]
+    assert f"onepiece resume {out}" in stderr and "lost the Ray runtime" in stderr
+    assert "Traceback" not in stderr, stderr[-3000:]
+    assert [line for line in stderr.splitlines() if "onepiece resume" in line][0].startswith("job failed: ")
+    record_figure(f"one line, exit {job.returncode}, no traceback")
+
+
 def cluster_exposed_sockets() -> list:
     """Listening sockets of Ray processes (raylet, GCS, agents, workers) that are not on loopback."""
     ray_pids = {p.pid for p in psutil.process_iter(["name", "cmdline"])
@@ -108,7 +133,8 @@ def port_taken(port: int) -> bool:
 
 @pytest.fixture(scope="module")
 def local_cluster():
-    """One local multi-node cluster for the module's tests, in file order; the node-removal test comes last. It
+    """One local multi-node cluster for the module's tests, in file order: the node with an older CPU's paths joins
+    late (the study and the picks train and run on the two nodes of this CPU), the node-removal test comes last. It
     starts while an embedded Ray runs on the machine, as a user's `onepiece run` may: the cluster must not need the
     agent port that Ray gives every embedded Ray (its head's Jobs API had no agent and refused every job)."""
     script = ROOT / "cluster" / "local_cluster.sh"
@@ -144,8 +170,9 @@ def test_a_job_on_the_local_multi_node_cluster_is_followed_from_another_folder(l
     out, elsewhere, job = tmp_path / "cluster.zarr", tmp_path / "elsewhere", "cluster-follow"
     elsewhere.mkdir()
     address = ["--address", local_cluster]
-    spec = elsewhere / "job.yaml"  # every stage; the voxel network (PointNet's 10 epochs cost ~30 s on one CPU)
-    spec.write_text("train:\n  model: voxel\n  epochs: 2\n")
+    spec = elsewhere / "job.yaml"  # every stage; the voxel network (PointNet's 10 epochs cost ~30 s on one CPU) and
+    spec.write_text("train:\n  model: voxel\n  epochs: 2\n"  # held-out primitives (4 random_urdfs: 12 of 30 s)
+                    "evaluate:\n  objects: primitives[4:6]\n  grasps_per_object: 16\n")
     submitted = onepiece("submit", str(spec), *address, "--objects", "primitives[0:4]", "--grasps", "16", "--out",
                          str(out), "--job-id", job, "--wait", "--timeout", "300", cwd=elsewhere, background=True)
     wait_for(lambda: _stage_in_file(out), 180, "the job's first stage in its status file")  # no client per poll
@@ -252,46 +279,6 @@ def test_stopping_one_local_cluster_leaves_another_running(local_cluster, record
     record_figure(f"{stopped.stderr.strip().splitlines()[-1]}; the module's cluster still answers")
 
 
-OLDEST_CPU = {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3",
-              "GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-
-
-@pytest.mark.cluster
-@pytest.mark.slow
-@pytest.mark.sim
-@pytest.mark.skipif(platform.machine() != "x86_64", reason="the older CPU paths forced on one node are x86-64 ones")
-def test_a_job_whose_nodes_take_other_cpu_paths_gives_the_in_process_dataset(local_cluster, tmp_path, record_figure,
-                                                                             fault_free):
-    """A third worker node started with an older CPU's BLAS kernel, numpy SIMD level, glibc variants and one
-    thread, beside two nodes on this CPU's own: the job, every stage to label, holds the same content as in
-    process (Ray's workers inherit their node's environment)."""
-    from tests.test_pinned_job import pinned_spec
-
-    script = ROOT / "cluster" / "local_cluster.sh"
-    added = subprocess.run([str(script), "add", "3"], capture_output=True, text=True, timeout=240,
-                           env={**os.environ, **OLDEST_CPU})
-    assert added.returncode == 0, added.stderr[-3000:]
-    older = worker_node_raylet(AGENT_PORT + 3)
-    assert all(older.environ().get(k) == v for k, v in OLDEST_CPU.items())
-    older_id = next(arg.split("=", 1)[1] for arg in older.cmdline() if arg.startswith("--node_id="))
-    spec = pinned_spec(tmp_path / "local.zarr").model_copy(update={"objects": PINNED_ON_CLUSTER})
-    spec_file, out = tmp_path / "job.json", tmp_path / "cluster.zarr"
-    spec_file.write_text(spec.model_dump_json(exclude={"output"}))
-    submitted = onepiece("submit", str(spec_file), "--address", local_cluster, "--out", str(out), "--wait", "--json",
-                         "--timeout", "400", cwd=tmp_path, timeout=460)
-    assert submitted.returncode == 0, submitted.stderr[-3000:]
-    final = json.loads(submitted.stdout)
-    nodes = final["nodes"]
-    assert final["state"] == "succeeded", final
-    assert older_id in nodes, (older_id, nodes)  # the older-CPU node extracted some of the objects
-    assert content_digest(out, training=False) == content_digest(fault_free(spec), training=False)
-    record_figure(f"{len(set(nodes))} worker nodes extracted, one with {', '.join(OLDEST_CPU)}: the same "
-                  f"content digest as in process ({content_digest(out, training=False)[:12]})")
-
-
-PINNED_ON_CLUSTER = DIFFERS_BY_BUILD  # enough objects for every node to get one; the same in-process run as libm's
-
-
 def gcs_processes(port: int) -> list[psutil.Process]:
     return [p for p in psutil.process_iter(["name", "cmdline"]) if p.info["name"] == "gcs_server"
             and f"--gcs_server_port={port}" in (p.info["cmdline"] or [])]
@@ -372,6 +359,46 @@ def _pick_spec_file(folder: Path) -> Path:
     return path
 
 
+OLDEST_CPU = {"OPENBLAS_CORETYPE": "Prescott", "NPY_DISABLE_CPU_FEATURES": "X86_V3",
+              "GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+
+
+@pytest.mark.cluster
+@pytest.mark.slow
+@pytest.mark.sim
+@pytest.mark.skipif(platform.machine() != "x86_64", reason="the older CPU paths forced on one node are x86-64 ones")
+def test_a_job_whose_nodes_take_other_cpu_paths_gives_the_in_process_dataset(local_cluster, tmp_path, record_figure,
+                                                                             fault_free):
+    """A third worker node started with an older CPU's BLAS kernel, numpy SIMD level, glibc variants and one
+    thread, beside two nodes on this CPU's own: the job, every stage to label, holds the same content as in
+    process (Ray's workers inherit their node's environment)."""
+    from tests.test_pinned_job import pinned_spec
+
+    script = ROOT / "cluster" / "local_cluster.sh"
+    added = subprocess.run([str(script), "add", "3"], capture_output=True, text=True, timeout=240,
+                           env={**os.environ, **OLDEST_CPU})
+    assert added.returncode == 0, added.stderr[-3000:]
+    older = worker_node_raylet(AGENT_PORT + 3)
+    assert all(older.environ().get(k) == v for k, v in OLDEST_CPU.items())
+    older_id = next(arg.split("=", 1)[1] for arg in older.cmdline() if arg.startswith("--node_id="))
+    spec = pinned_spec(tmp_path / "local.zarr").model_copy(update={"objects": PINNED_ON_CLUSTER})
+    spec_file, out = tmp_path / "job.json", tmp_path / "cluster.zarr"
+    spec_file.write_text(spec.model_dump_json(exclude={"output"}))
+    submitted = onepiece("submit", str(spec_file), "--address", local_cluster, "--out", str(out), "--wait", "--json",
+                         "--timeout", "400", cwd=tmp_path, timeout=460)
+    assert submitted.returncode == 0, submitted.stderr[-3000:]
+    final = json.loads(submitted.stdout)
+    nodes = final["nodes"]
+    assert final["state"] == "succeeded", final
+    assert older_id in nodes, (older_id, nodes)  # the older-CPU node extracted some of the objects
+    assert content_digest(out, training=False) == content_digest(fault_free(spec), training=False)
+    record_figure(f"{len(set(nodes))} worker nodes extracted, one with {', '.join(OLDEST_CPU)}: the same "
+                  f"content digest as in process ({content_digest(out, training=False)[:12]})")
+
+
+PINNED_ON_CLUSTER = DIFFERS_BY_BUILD  # enough objects for every node to get one; the same in-process run as libm's
+
+
 @pytest.mark.cluster
 @pytest.mark.slow
 def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, fault_free, record_figure):
@@ -392,28 +419,3 @@ def test_removing_a_worker_node_mid_job_still_succeeds(local_cluster, tmp_path, 
         assert np.array_equal(open_dataset(out)[name], open_dataset(fault_free(SMALL_SPEC))[name]), name
     record_figure(f"raylet of 1 of 2 worker nodes SIGKILLed after {done_at_kill} of 8 objects; job succeeded, "
                   f"{status['retries']} re-runs, identical codes")
-
-
-@pytest.mark.ray
-@pytest.mark.slow
-def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_path, record_figure):
-    out = tmp_path / "lost.zarr"
-    slow = ["--objects", "primitives[0:8]", "--grasps", "400", "--stages", "ingest,extract,dedup"]  # ~10 s of work
-    job = subprocess.Popen([*ONEPIECE, "run", *slow, "--out", str(out)], stdout=subprocess.PIPE,
-                           stderr=subprocess.PIPE, text=True)
-    try:
-        wait_for(lambda: objects_done(out) >= 1, 180, "the first object")
-        agents = [p for p in psutil.Process(job.pid).children(recursive=True)
-                  if "agent.py" in " ".join(p.cmdline()) and "dashboard" in " ".join(p.cmdline())]
-        assert agents, "no dashboard agent under the embedded Ray"
-        for agent in agents:
-            agent.kill()  # the raylet exits with its agent, as when a node dies
-        stdout, stderr = job.communicate(timeout=180)
-    finally:
-        if job.poll() is None:
-            job.kill()
-    assert job.returncode == 1, stderr[-2000:]
-    assert f"onepiece resume {out}" in stderr and "lost the Ray runtime" in stderr
-    assert "Traceback" not in stderr, stderr[-3000:]
-    assert [line for line in stderr.splitlines() if "onepiece resume" in line][0].startswith("job failed: ")
-    record_figure(f"one line, exit {job.returncode}, no traceback")
