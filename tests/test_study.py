@@ -427,6 +427,22 @@ def test_the_committed_key_study_extended_with_u_reused_the_key_studys_work_and_
     assert "Target for U" in (tmp_path / "study.md").read_text()
 
 
+def test_the_picks_table_says_how_the_held_out_candidates_were_made():
+    """Issue 58: the committed picks study proposes its candidates on views; its page said the full mesh."""
+    from onepiece_dist.study.page import picks_table
+    from onepiece_dist.study.result import StudyResult
+
+    result = StudyResult.model_validate_json((ROOT / "docs" / "studies" / "picks" / "study.json").read_text())
+    assert result.spec.views and result.spec.view_sampling == "view"
+
+    def table(**spec: object) -> str:
+        return "\n".join(picks_table(result.model_copy(update={"spec": result.spec.model_copy(update=spec)})))
+
+    assert "proposed on each held-out view's cloud" in table() and "mesh" not in table()
+    assert "each cropped from its nearest view" in table(view_sampling="mesh")
+    assert "candidates sampled on the full mesh" in table(views=0)
+
+
 def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
     from onepiece_dist.stats.selection import first_rows, least_sure
 

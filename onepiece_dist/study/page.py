@@ -88,8 +88,8 @@ def picks_table(result: StudyResult) -> list[str]:
     held = {arm.name: arm for arm in result.arms}
     return ["## Judged by picks and by candidates", "",
             "Pick success: each seed's network plans on the camera's cloud and its first choice is executed by the "
-            "label protocol (the pick benchmark, docs/picks.md); candidates: held-out top-1 and AP among candidates "
-            "sampled on the full mesh.", "",
+            f"label protocol (the pick benchmark, docs/picks.md); candidates: held-out top-1 and AP among "
+            f"{candidate_words(result.spec)}.", "",
             "| arm | pick success (first attempt) | inside A (picks) | held-out top-1 | held-out AP | inside A "
             "(candidates) |", "| --- | --- | --- | --- | --- | --- |",
             *(f"| {arm.name} | {measure(arm.first_attempt, True)} | {'yes' if arm.within_a else 'no'} | "
@@ -157,6 +157,14 @@ def trials_words(s) -> str:
     trials = f"{s.label_trials} label trials per grasp ({s.success}, lifting the {s.load})"
     return trials if s.label == "physics" else (f"train labels by force closure (fc_mu <= {s.good_mu:g}), held-out "
                                                 f"labels by {trials}")
+
+
+def candidate_words(s) -> str:
+    """How the held-out candidates were made: as every job of the study makes its candidates."""
+    if not s.views:
+        return "candidates sampled on the full mesh"
+    return ("candidates proposed on each held-out view's cloud, as the planner proposes them" if s.view_sampling ==
+            "view" else "candidates sampled on the mesh, each cropped from its nearest view")
 
 
 def crop_words(s) -> str:
