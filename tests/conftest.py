@@ -51,17 +51,6 @@ def pytest_sessionfinish(session):
             os.close(folder)  # releases the lock
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist's own (one worker per core)
-def pytest_xdist_auto_num_workers(config):
-    """``-n auto``: one xdist worker more than the cores this process may use. The Ray group's worker leaves a
-    core idle much of the time (Ray starting, jobs waiting on actors); the other workers, at a lower priority,
-    fill it (2 cores: 598 s and 1.3% idle with 3 workers, 713 s with 2; the busy CPU-seconds the same). Where
-    PYTEST_XDIST_AUTO_NUM_WORKERS is set, xdist reads it."""
-    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
-        return None
-    return len(os.sched_getaffinity(0)) + 1 if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1) + 1
-
-
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config, items):
     """Tests that start Ray (marked ray or cluster) run one at a time, on one worker, as they would alone: run
@@ -88,7 +77,7 @@ def autogroups_on() -> bool:
 def pytest_runtest_protocol(item, nextitem):
     """Under xdist, a test outside the Ray group runs at a lower CPU priority than the Ray group. The Ray group runs
     its tests one at a time on one worker and is the suite's critical path, and it leaves a core idle much of the
-    time (Ray starting, jobs waiting on actors): the other workers' tests fill that idle time instead of taking
+    time (Ray starting, jobs waiting on actors): the other worker's tests fill that idle time instead of taking
     half of both cores. Where this user may raise the priority again after the test (root); else nothing changes."""
     lower = (os.environ.get("PYTEST_XDIST_WORKER") and not item.get_closest_marker("xdist_group")
              and os.geteuid() == 0 and _priority_of_own(BESIDE_RAY_NICENESS))

@@ -5,7 +5,7 @@ import os
 
 import pytest
 
-from tests.conftest import AUTOGROUP, autogroups_on, pytest_xdist_auto_num_workers, starts_ray
+from tests.conftest import AUTOGROUP, autogroups_on, starts_ray
 
 
 def test_every_test_that_starts_ray_is_in_the_one_ray_group(request):
@@ -24,10 +24,3 @@ def test_a_test_beside_the_ray_group_runs_in_its_own_session_at_a_lower_priority
         assert os.getsid(0) == os.getpid() and AUTOGROUP.read_text().split()[-1] == "10"
     else:
         assert os.getpriority(os.PRIO_PROCESS, 0) == 10
-
-
-def test_auto_gives_one_worker_more_than_the_cores_unless_xdist_is_told(monkeypatch):
-    monkeypatch.delenv("PYTEST_XDIST_AUTO_NUM_WORKERS", raising=False)
-    assert pytest_xdist_auto_num_workers(None) == len(os.sched_getaffinity(0)) + 1
-    monkeypatch.setenv("PYTEST_XDIST_AUTO_NUM_WORKERS", "5")
-    assert pytest_xdist_auto_num_workers(None) is None  # xdist's own hook reads it
