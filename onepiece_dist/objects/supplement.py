@@ -348,7 +348,6 @@ def hausdorff(points: np.ndarray, mesh: TriangleMesh, samples: int = 20000) -> t
     """Symmetric Hausdorff distance between points (n, 3) and a mesh, and the mean point-to-mesh distance."""
     o3d = import_open3d()
 
-
     to_mesh = point_mesh_distances(points, mesh)
     surface, _ = sample_surface(mesh, samples, np.random.default_rng(0))
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
