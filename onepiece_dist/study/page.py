@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from onepiece_dist.study.levels import levels_lines
 from onepiece_dist.study.markdown import pct, pyplot
 from onepiece_dist.study.result import Arm, Measure, StudyResult
 
@@ -256,7 +257,7 @@ def arm_row(arm: Arm) -> str:
 
 def render_page(result: StudyResult, plot: str | None = None) -> str:
     s, h = result.spec, result.heldout
-    lines = [f"# Study {result.digest}", "", *picks_lines(result), *verdict(result), ""]
+    lines = [f"# Study {result.digest}", "", *picks_lines(result), *levels_lines(result), *verdict(result), ""]
     if plot:
         lines += [f"![held-out top-1 and AP against labelled grasps]({plot})", ""]
     lines += ["## Arms", "",
