@@ -150,3 +150,19 @@ def test_every_page_in_the_catalogue_is_the_rendering_of_the_committed_results()
     assert len(marked) >= 15
     assert marked - {page.path for page in listed} == set(), "a rendered page missing from the catalogue"
 
+
+
+def test_a_design_replaces_the_shipped_network_only_beyond_one_designs_spread_over_seeds():
+    from benchmarks.experiments.ship_network import best_point
+
+    def point(design: str, labels: int, rate: float) -> dict:
+        return {"design": design, "labels": labels, "options": {"model": "pointnet_context"},
+                "picks": {"methods": {"network": {"first_attempt": rate}}}}
+
+    curve = {"points": [point("shipped", 8000, 0.90), point("shipped", 80000, 0.836),
+                        point("challenger", 80000, 0.844), point("wide", 40000, 0.80)]}
+    assert best_point(curve)["design"] == "challenger"  # nothing shipped yet: the best largest point
+    assert best_point(curve, "shipped", spread=0.031)["labels"] == 80000  # +0.8 points: within the spread
+    assert best_point(curve, "shipped", spread=0.031)["design"] == "shipped"
+    curve["points"].append(point("better", 80000, 0.90))
+    assert best_point(curve, "shipped", spread=0.031)["design"] == "better"  # +6.4 points: beyond it

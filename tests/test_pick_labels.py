@@ -170,6 +170,9 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
             "points_per_grasp": spec.points_per_grasp}
     result = train_on_pick_labels(labels, tmp_path, crop, PickTrainOptions(epochs=2, validation=0.34))
     assert len(result.epochs) == 2 and result.checkpoint.is_file()
+    ranked = train_on_pick_labels(labels, tmp_path / "listwise", crop,
+                                  PickTrainOptions(epochs=1, validation=0.34, ranking=1.0))
+    assert len(ranked.epochs) == 1 and np.isfinite(ranked.epochs[0].train_loss)
     torch.load(result.checkpoint, weights_only=True)
     scorer = GraspScorer(result.checkpoint, GripperSpec(), device="cpu")
     n = 5
@@ -178,6 +181,33 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
     assert scores.shape == (n,) and np.all((scores >= 0) & (scores <= 1))
     with pytest.raises(CloudRejected, match="context"):
         scorer.score(Crops(with_context.codes, with_context.counts, with_context.points))
+
+
+def test_the_listwise_term_is_small_only_where_each_views_successes_score_above_its_failures():
+    from onepiece_dist.learn.pick_train import listwise_loss
+
+    target = torch.tensor([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0])
+    keys = np.array([7, 7, 7, 8, 8, 9, 9])  # view 8 all successes, view 9 all failures: nothing to rank there
+    right = listwise_loss(torch.tensor([4.0, -4.0, -4.0, 0.0, 0.0, 0.0, 0.0]), target, keys)
+    wrong = listwise_loss(torch.tensor([-4.0, 4.0, 4.0, 0.0, 0.0, 0.0, 0.0]), target, keys)
+    assert 0 < right.item() < 0.01 and wrong.item() > 8
+    assert listwise_loss(torch.zeros(7), target, keys).item() == pytest.approx(np.log(3))  # view 7 alone: 1 of 3
+    logits = torch.zeros(4, requires_grad=True)
+    listwise_loss(logits, torch.tensor([0.0, 0.0, 1.0, 1.0]), np.array([5, 5, 6, 6])).backward()
+    assert torch.count_nonzero(logits.grad) == 0  # no view with both outcomes: no push
+
+
+def test_listwise_batches_hold_each_views_rows_together_in_a_seeded_order(pick_labels):
+    from onepiece_dist.learn.pick_train import _view_keys, _view_order
+
+    _, labels = pick_labels
+    rows = np.arange(len(labels))
+    order = _view_order(labels, rows, np.random.default_rng(3))
+    assert sorted(order) == list(rows)
+    keys = _view_keys(labels, order)
+    runs = np.flatnonzero(np.diff(keys)) + 1
+    assert len(runs) + 1 == len(np.unique(keys))  # each view's rows in one run
+    assert np.array_equal(order, _view_order(labels, rows, np.random.default_rng(3)))
 
 
 def test_the_default_jobs_verdict_says_whether_the_network_is_above_a_guess_with_an_interval():

@@ -37,6 +37,7 @@ DESIGNS = {  # name -> PickTrainOptions fields
     "context_balanced": {"model": "pointnet_context", "balanced": True},
     "context_share": {"model": "pointnet_context", "target": "share"},
     "context_wide": {"model": "pointnet_context_wide"},
+    "context_listwise": {"model": "pointnet_context", "ranking": 1.0},
 }
 
 

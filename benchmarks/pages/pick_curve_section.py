@@ -14,6 +14,8 @@ DESIGN_WORDS = {
     "context_balanced": "crop + context, balanced batches",
     "context_share": "crop + context, target: the share of trials that held",
     "context_wide": "crop + context, PointNet at width 64 (four times the compute of width 32)",
+    "context_listwise": "crop + context, every-trial target plus a listwise term pushing each view's successes "
+                        "above its failures (batches of whole views)",
 }
 FLAT = ("random", "analytic", "top_down", "oracle")
 
@@ -45,7 +47,9 @@ def curve_section(curve: dict, picks: dict | None) -> list[str]:
              "first batch; validation: 10% of the objects), judged by first-attempt picks on the household set "
              "(network chooser alone, the same views as above). Core-seconds: the labels' share of the labelling "
              "plus the fit. The household views that judge these points are those of the benchmark above: the "
-             "shipped design was chosen on them (the largest point of each design, the best of those).", "",
+             "shipped design was chosen on them (the largest point of each design, the best of those; a design "
+             "whose largest network picks within one design's spread over seeds of the shipped one (Rankings "
+             "tried, below) does not replace it: benchmarks/experiments/ship_network.py).", "",
              "![pick learning curve](picks/curve.png)", "",
              "| design | labels | core-seconds | val AP | val view top-1 | household first attempt [95% CI] |",
              "| --- | --- | --- | --- | --- | --- |", *rows, "", "Designs tried:", ""]

@@ -27,13 +27,16 @@ HALF_TURN = np.array([1.0, -1.0, -1.0], np.float32)  # (u, v, t) -> (u, -v, -t)
 @dataclass(frozen=True)
 class PickTrainOptions:
     """How to fit: the model, the target (every trial held, or the share of trials that held), whether batches
-    are balanced (as many successes as failures drawn), epochs, patience, batch size, the points of each crop the
+    are balanced (as many successes as failures drawn), the weight of a listwise ranking term (each batch then
+    holds whole views, and each view's successes are pushed above its failures: what the planner's first choice
+    needs), epochs, patience, batch size, the points of each crop the
     network sees (a seeded subset of the stored ones; a planner then resamples its crops to as many), learning
     rate, the share of objects held out for validation, the seed."""
 
     model: str = "pointnet_context"
     target: str = "every_trial"  # or "share"
     balanced: bool = False
+    ranking: float = 0.0  # weight of the per-view listwise term (0: every candidate on its own)
     epochs: int = 30
     patience: int = 5
     batch_size: int = 256
@@ -150,7 +153,8 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
 def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: PickTrainOptions, trials: int,
            rng: np.random.Generator) -> float:
     model.train()
-    order = _balanced_order(labels, rows, rng) if options.balanced else rng.permutation(rows)
+    order = (_view_order(labels, rows, rng) if options.ranking else
+             _balanced_order(labels, rows, rng) if options.balanced else rng.permutation(rows))
     losses = []
     for start in range(0, len(order) - 1, options.batch_size):
         chunk = order[start:start + options.batch_size]
@@ -161,12 +165,41 @@ def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: Pick
         if options.model not in CONTEXT_MODELS:
             batch.pop("context")
         target = torch.from_numpy(targets(labels, chunk, options.target, trials))
-        loss = torch.nn.functional.binary_cross_entropy_with_logits(model(batch), target)
+        logits = model(batch)
+        loss = torch.nn.functional.binary_cross_entropy_with_logits(logits, target)
+        if options.ranking:
+            loss = loss + options.ranking * listwise_loss(logits, target, _view_keys(labels, chunk))
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()
         losses.append(loss.item())
     return float(np.mean(losses)) if losses else 0.0
+
+
+def _view_keys(labels: PickLabels, rows: np.ndarray) -> np.ndarray:
+    return labels.object[rows].astype(np.int64) * 100_000 + labels.view[rows]
+
+
+def _view_order(labels: PickLabels, rows: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """``rows`` with each view's rows together (in a seeded order) and the views in a seeded order."""
+    keys = _view_keys(labels, rows)
+    views, group = np.unique(keys, return_inverse=True)
+    rank = rng.permutation(len(views))[group]
+    return rows[np.lexsort((rng.random(len(rows)), rank))]
+
+
+def listwise_loss(logits: torch.Tensor, target: torch.Tensor, keys: np.ndarray) -> torch.Tensor:
+    """Mean over the views in ``keys`` that hold a success and a failure of -log(softmax mass on the successes):
+    it is small only where the view's successes score above its failures."""
+    terms = []
+    for key in np.unique(keys):
+        mine = torch.from_numpy(np.flatnonzero(keys == key))
+        good = target[mine] > 0.5
+        if good.all() or not good.any():
+            continue
+        scores = logits[mine]
+        terms.append(torch.logsumexp(scores, 0) - torch.logsumexp(scores[good], 0))
+    return torch.stack(terms).mean() if terms else logits.sum() * 0.0
 
 
 def _balanced_order(labels: PickLabels, rows: np.ndarray, rng: np.random.Generator) -> np.ndarray:
