@@ -97,7 +97,7 @@ def test_killing_a_worker_while_it_labels_a_budget_gives_the_fault_free_dataset(
     deadline = time.monotonic() + 120
     while not list(Path(spec.parts_folder()).glob("label-*.zarr")) and time.monotonic() < deadline:
         time.sleep(0.05)  # until a shard is labelled: the workers are busy with the next ones
-    ray_session.kill(ray_session.get_actor(f"label-{default_job_id(spec)}-0", namespace="onepiece"), no_restart=False)
+    ray_session.kill(ray_session.get_actor(f"sim-{default_job_id(spec)}-0", namespace="onepiece"), no_restart=False)
     final = handle.wait(timeout=300)
     assert final.state == "succeeded" and final.retries >= 1
     assert content_digest(spec.output, training=False) == content_digest(fault_free(spec), training=False)

@@ -91,7 +91,7 @@ def test_killing_a_worker_while_it_labels_gives_the_fault_free_labels(ray_sessio
     deadline = time.monotonic() + 120
     while not list(Path(spec.parts_folder()).glob("label-*.zarr")) and time.monotonic() < deadline:
         time.sleep(0.05)  # until the workers have labelled a shard: both are busy with the next ones
-    ray.kill(ray.get_actor(f"label-{job_id}-0", namespace="onepiece"), no_restart=False)
+    ray.kill(ray.get_actor(f"sim-{job_id}-0", namespace="onepiece"), no_restart=False)
     final = handle.wait(timeout=300)
     assert final.state == "succeeded", handle.error
     assert final.retries >= 1 and final.labels.labelled_grasps > 0
@@ -191,7 +191,7 @@ def test_repeated_worker_kills_in_one_job_give_the_fault_free_dataset(ray_sessio
         if done >= 8:
             break
         killed_at = time.monotonic()
-        ray.kill(ray.get_actor(f"extract-{job_id}-{kill % 2}", namespace="onepiece"), no_restart=False)
+        ray.kill(ray.get_actor(f"sim-{job_id}-{kill % 2}", namespace="onepiece"), no_restart=False)
         while client.status(job_id).progress.objects_done <= done and time.monotonic() < killed_at + 120:
             time.sleep(0.05)
         recoveries.append(time.monotonic() - killed_at)

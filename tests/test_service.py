@@ -85,7 +85,7 @@ def test_killing_a_worker_mid_job_gives_the_fault_free_dataset(ray_session, spec
     handle = client.submit(spec)
     objects_done_at_least(client, job_id, 1)
     started = time.monotonic()
-    ray.kill(ray.get_actor(f"extract-{job_id}-0", namespace="onepiece"), no_restart=False)
+    ray.kill(ray.get_actor(f"sim-{job_id}-0", namespace="onepiece"), no_restart=False)
     final = handle.wait(timeout=300)
     done_s = time.monotonic() - started
     assert final.state == "succeeded" and final.retries >= 1 and done_s < 120

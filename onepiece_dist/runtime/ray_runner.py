@@ -123,8 +123,9 @@ def run_on_ray(spec: JobSpec, job_id: str, workers: int | None = None, progress:
 
 
 class RayRuntime(Runtime):
-    """The job's stages on Ray: a pool of :class:`SimWorker` actors per stage (started ahead by ``prepare``), the
-    central actor and the trainer behind their clients, progress published to the registry."""
+    """The job's stages on Ray: one pool of :class:`SimWorker` actors that every simulation stage uses in turn
+    (released when a trainer or another job needs their CPUs), the central actor and the trainer behind their
+    clients, progress published to the registry."""
 
     def __init__(self, spec: JobSpec, job_id: str, registry: RegistryClient, status: JobStatus,
                  workers: int | None = None, progress: ProgressFn | None = None):
@@ -133,7 +134,8 @@ class RayRuntime(Runtime):
         self.central = WriterClient.start(spec, job_id)
         self.trainers: list[TrainerClient] = []  # killed before evaluation's labelling, and at the end
         self.crashes = crash_folder(spec.parts_folder(), job_id)
-        self.prepared: dict[str, list] = {}  # stage -> its worker actors, started ahead
+        self.pool: list = []  # the job's simulation workers, alive from the first stage that needs them
+        self.started = 0  # workers started so far: each one's name is new
 
     def report(self, status: JobStatus) -> None:
         status.save(self.spec.output)
@@ -145,29 +147,34 @@ class RayRuntime(Runtime):
         if self.progress:
             self.progress(status)
 
-    def _start_workers(self, stage: str, count: int) -> list:
-        return [restartable_actor(SimWorker, f"{stage}-{self.job_id}-{k}", num_cpus=1, scheduling_strategy="SPREAD")
-                .remote(self.spec, central_name(self.job_id), str(self.crashes)) for k in range(count)]
+    def _workers(self, count: int) -> list:
+        """``count`` of the job's simulation workers: those alive (started by an earlier stage) first, then new
+        ones; any others stay alive, idle, for the next stage. Every stage (extract, patch, label) uses them: a
+        worker's start-up (a process, its imports, pybullet) is paid once per job, not once per stage."""
+        while len(self.pool) < count:
+            self.pool.append(restartable_actor(SimWorker, f"sim-{self.job_id}-{self.started}", num_cpus=1,
+                                               scheduling_strategy="SPREAD")
+                             .remote(self.spec, central_name(self.job_id), str(self.crashes)))
+            self.started += 1
+        return self.pool[:count]
 
-    def prepare(self, stage: str) -> None:
-        self.prepared[stage] = self._start_workers(stage, worker_count(self.workers, None))
-
-    def _on_pool(self, stage: str, items: list, on_result: Callable, quarantined: Callable) -> list:
-        """``items`` through ``SimWorker.<stage>`` on the stage's workers, killed after (their CPUs go to the next
-        stage and the trainer)."""
+    def release_workers(self) -> None:
+        """The simulation workers killed: their CPUs go to the trainer or another job."""
         import ray
 
-        wanted = worker_count(self.workers, len(items))
-        actors = self.prepared.pop(stage, [])
-        for actor in actors[wanted:]:
-            ray.kill(actor)
-        actors = actors[:wanted] or self._start_workers(stage, wanted)
-        try:
-            return WorkerPool(actors, self.registry, self.status, on_result, stage, quarantined,
-                              self.crashes).run(items)
-        finally:
-            for actor in actors:
+        for actor in self.pool:
+            with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
                 ray.kill(actor)
+        self.pool = []
+
+    def prepare(self, stage: str) -> None:
+        self._workers(max(len(self.pool), worker_count(self.workers, None)))
+
+    def _on_pool(self, stage: str, items: list, on_result: Callable, quarantined: Callable) -> list:
+        """``items`` through ``SimWorker.<stage>`` on the job's workers (kept for the next stage)."""
+        actors = self._workers(worker_count(self.workers, len(items)))
+        return WorkerPool(actors, self.registry, self.status, on_result, stage, quarantined,
+                          self.crashes).run(items)
 
     def extract(self, refs: list[ObjectRef], on_result: Callable[[ObjectResult], None]) -> list[ObjectResult]:
         return self._on_pool("extract", refs, on_result, quarantined_object)
@@ -179,10 +186,12 @@ class RayRuntime(Runtime):
         return self._on_pool("patch", tasks, lambda result: None, quarantined_shard)
 
     def train(self, spec: JobSpec) -> TrainingReport:
+        self.release_workers()
         self.trainers.append(TrainerClient.start(spec, self.job_id))
         return self.trainers[-1].fit(spec)
 
     def fit_round(self, run: StepRun) -> StepResult:
+        self.release_workers()  # the round's trainer gets their CPUs; the next round starts them again
         trainer = TrainerClient.start_named(f"trainer-{self.job_id}-round", self.spec.train.device)
         try:
             return trainer.fit_steps(run)
@@ -190,10 +199,12 @@ class RayRuntime(Runtime):
             trainer.kill()  # its CPU goes back to the next round's label workers
 
     def label_heldout(self, heldout: JobSpec) -> JobStatus:
+        self.release_workers()
         self._kill_trainers()  # the labelling workers get the trainer's CPU
         return run_on_ray(heldout, f"{self.job_id}-evaluate", workers=self.workers)
 
     def score(self, job: JobSpec, dataset: str, objects: int) -> EvaluationReport:
+        self.release_workers()
         self.trainers.append(TrainerClient.start(job, f"{self.job_id}-evaluate"))
         return self.trainers[-1].score(job, dataset, objects)
 
@@ -205,14 +216,10 @@ class RayRuntime(Runtime):
 
     def close(self) -> None:
         """Every actor this job started, killed; its crash records removed."""
-        import ray
-
         for client in [self.central, *self.trainers]:
             with contextlib.suppress(Exception):  # a runtime that is gone has nothing left to kill
                 client.kill()
-        for actor in [a for started in self.prepared.values() for a in started]:  # for a stage that never ran
-            with contextlib.suppress(Exception):
-                ray.kill(actor)
+        self.release_workers()
         shutil.rmtree(self.crashes, ignore_errors=True)
 
 
