@@ -218,7 +218,9 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
     assert json.loads((folder / "ceiling.json").read_text())["rows"]  # the draws are kept: a rerun reuses them
     page = (folder / "study.md").read_text().splitlines()
     assert page[2].startswith("**Judged by picks.**")
-    assert any("of the way from the floor to the ceiling" in line for line in page[:12])
+    answer = page[:page.index("## Arms")]
+    assert any("of the way from the floor to the ceiling" in line for line in answer)
+    assert any(line.startswith("**Labels to reach a pick level**") for line in answer)
     assert any("Its networks one at a time" in line for line in page)
     assert "## Judged by picks and by candidates" in page
     k = result.lookup  # the study's own code as a lookup, no network
@@ -227,7 +229,7 @@ def test_a_small_study_holds_every_arm_validates_against_its_schema_and_renders_
     assert k.ranked["A"].coverage == pytest.approx(k.coverage, abs=1e-4)
     assert result.decision.cheapest in {arm.name for arm in result.arms if arm.within_a}
     page = (folder / "study.md").read_text()
-    first = page.splitlines()[2:8]  # the picks' judgement, then the candidates'
+    first = page.split("## Arms")[0].splitlines()  # the picks' judgement, the levels, then the candidates'
     assert any(line.startswith("**Answer.**") for line in first) and f"{100 * a.heldout.top1.mean:.1f}%" in page
     assert "## The code as a lookup (no network)" in page and f"{k.ranked['B'].ap:.3f}" in page
     (folder / "study.md").unlink()
