@@ -37,7 +37,7 @@ from onepiece_dist.errors import (
 from onepiece_dist.job.pipeline import ProgressFn
 from onepiece_dist.job.relabel import RelabelReport, relabel_report, relabel_spec
 from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, protocol_of, score_heldout
-from onepiece_dist.job.status import STATUS_SUFFIX, EvaluationReport, JobStatus, status_path
+from onepiece_dist.job.status import STATUS_SUFFIX, EvaluationReport, JobStatus, status_path, without_status_lines
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.plan.robot import RobotPlan
@@ -211,7 +211,7 @@ class Client:
         job_id, note = self._free_job_id(job_id)
         if note.endswith("still active"):
             return JobHandle(self, job_id, spec.output, note=note)
-        entrypoint = (f"python -m onepiece_dist.cli run --address auto --job-id {shlex.quote(job_id)} "
+        entrypoint = (f"python -m onepiece_dist.cli run --address auto --job-id {shlex.quote(job_id)} --final-status "
                       f"--spec-json {shlex.quote(spec.model_dump_json())}")
         self.jobs_api().submit_job(entrypoint=entrypoint, submission_id=job_id, runtime_env=runtime_env,
                                    metadata={"output": spec.output})
@@ -238,8 +238,8 @@ class Client:
                 return None
             raise
 
-    def _existing_state(self, job_id: str) -> str:
-        """:meth:`_ray_state`, raising JobNotFound when the cluster has no such job."""
+    def state(self, job_id: str) -> str:
+        """The job's state by the cluster's Jobs API (no registry read); JobNotFound when it has no such job."""
         state = self._ray_state(job_id)
         if state is None:
             raise JobNotFound(f"no job {job_id} on the cluster at {self.address}")
@@ -290,7 +290,10 @@ class Client:
             if found is None and output and status_path(output).is_file():
                 found = read_status(output)
             return found or JobStatus(job_id=job_id, state="pending", output=output or "")
-        ray_state = self._existing_state(job_id)
+        ray_state = self.state(job_id)
+        final = JobStatus.from_log(self.jobs_api().get_job_logs(job_id)) if ray_state == "succeeded" else None
+        if final is not None:  # the driver's last report, in its log (``run --final-status``): no Ray job to read
+            return final
         reported = self.cluster_info()["jobs"].get(job_id)
         info = self.jobs_api().get_job_info(job_id)
         status = (JobStatus.model_validate(reported) if reported
@@ -306,7 +309,7 @@ class Client:
         """Block until the cluster's job ends (polling the Jobs API); its final status. TimeoutError after
         ``timeout`` s, JobNotFound when there is no such job."""
         deadline = None if timeout is None else time.monotonic() + timeout
-        while (state := self._existing_state(job_id)) not in TERMINAL:
+        while (state := self.state(job_id)) not in TERMINAL:
             if deadline is not None and time.monotonic() > deadline:
                 raise TimeoutError(f"job {job_id} still {state} after {timeout} s")
             time.sleep(poll)
@@ -324,7 +327,7 @@ class Client:
             if registry is None or not registry.request_cancel(job_id):
                 raise JobNotFound(f"no job {job_id} in this process's Ray")
             return "running"
-        state = self._existing_state(job_id)
+        state = self.state(job_id)
         if state not in TERMINAL:
             self.jobs_api().stop_job(job_id)
         return state
@@ -346,7 +349,7 @@ class Client:
         return rows
 
     def logs(self, job_id: str) -> str:
-        return self.jobs_api().get_job_logs(job_id)
+        return without_status_lines(self.jobs_api().get_job_logs(job_id))
 
     def follow_logs(self, job_id: str) -> Iterator[str]:
         """The job's driver log as it grows, until the job ends."""
@@ -362,7 +365,7 @@ class Client:
         thread.start()
         while thread.is_alive() or queue:
             while queue:
-                yield queue.pop(0)
+                yield without_status_lines(queue.pop(0))
             thread.join(0.2)
 
 

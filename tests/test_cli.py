@@ -191,3 +191,22 @@ def test_a_failed_evaluation_exits_1_without_a_traceback(monkeypatch, tmp_path):
     result = runner.invoke(app, ["evaluate", str(tmp_path / "best.pt"), "--objects", "primitives[0:1]"])
     assert result.exit_code == 1 and "evaluation failed" in result.output
     assert result.exception is None or isinstance(result.exception, SystemExit)
+
+
+def test_a_submitted_drivers_log_ends_with_its_final_status_that_a_client_reads_and_a_user_never_sees(tmp_path):
+    """`run --final-status` (what `submit` runs on a cluster) logs the job's final status, so a client reads a job
+    that ended from its driver's log instead of starting a Ray job to ask the registry (api.Client.status)."""
+    from onepiece_dist.api import read_status
+    from onepiece_dist.job.status import JobStatus, without_status_lines
+
+    out = tmp_path / "f.zarr"
+    result = subprocess.run([sys.executable, "-m", "onepiece_dist.cli", "run", "--objects", "primitives[0:1]",
+                             "--grasps", "4", "--stages", "ingest,extract,dedup", "--out", str(out), "--in-process",
+                             "--final-status"], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr[-2000:]
+    log = result.stderr + result.stdout  # the Jobs API's log holds both
+    logged = JobStatus.from_log(log)
+    assert logged is not None and logged.state == "succeeded" and logged == read_status(out)
+    shown = without_status_lines(log)
+    assert logged.log_line() not in shown and shown.count("\n") == log.count("\n") - 1
+    assert JobStatus.from_log(shown) is None  # a log without one: the client asks the registry instead

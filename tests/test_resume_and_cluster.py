@@ -14,7 +14,7 @@ import psutil
 import pytest
 
 from onepiece_dist.api import Client, read_status
-from onepiece_dist.job.status import status_path
+from onepiece_dist.job.status import JobStatus, status_path
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore, open_dataset
 from onepiece_dist.store.dataset import content_digest
@@ -166,7 +166,7 @@ def onepiece(*args: str, cwd: Path, timeout: float = 180, background: bool = Fal
 @pytest.mark.cluster
 @pytest.mark.slow
 def test_a_job_on_the_local_multi_node_cluster_is_followed_from_another_folder(local_cluster, tmp_path,
-                                                                               record_figure):
+                                                                               record_figure, monkeypatch):
     out, elsewhere, job = tmp_path / "cluster.zarr", tmp_path / "elsewhere", "cluster-follow"
     elsewhere.mkdir()
     address = ["--address", local_cluster]
@@ -187,6 +187,10 @@ def test_a_job_on_the_local_multi_node_cluster_is_followed_from_another_folder(l
                       for command in (("status", job), ("list",)))  # two clients at once
     final = json.loads(shown.communicate(timeout=120)[0])
     assert final["state"] == "succeeded" and final["progress"]["objects_done"] == 4 and len(final["nodes"]) >= 2
+    client = Client(local_cluster)  # the job ended: its status is its driver's last log line, the registry's record
+    assert JobStatus.model_validate(final) == JobStatus.model_validate(client.cluster_info()["jobs"][job])
+    monkeypatch.setattr(Client, "cluster_info", lambda *a, **k: pytest.fail("asked the registry with a Ray job"))
+    assert client.status(job) == JobStatus.model_validate(final)
     listed = {row["job_id"]: row for row in json.loads(listing.communicate(timeout=120)[0])}
     assert listed[job]["state"] == "succeeded" and listed[job]["objects_done"] == 4
     assert open_dataset(out).summary()["objects"] == 4

@@ -140,7 +140,7 @@ def logs(
     if not follow:
         typer.echo(cluster_call(lambda c: c.logs(job), address), nl=False)
         return
-    cluster_call(lambda c: c.status(job), address)  # no such job: exit 2 before following nothing
+    cluster_call(lambda c: c.state(job), address)  # no such job: exit 2 before following nothing
 
     def follow(client) -> None:
         for chunk in client.follow_logs(job):

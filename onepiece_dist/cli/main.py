@@ -73,6 +73,7 @@ def run(
     job_id: JobId = None,
     workers: Annotated[int | None, typer.Option(help="Extraction workers (default: the cluster's CPUs).")] = None,
     spec_json: Annotated[str | None, typer.Option(hidden=True, help="The whole spec as JSON (used by submit).")] = None,
+    final_status: Annotated[bool, typer.Option(hidden=True, help="Log the final status (submit).")] = False,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the final status as JSON on stdout.")] = False,
     units: Annotated[str | None, typer.Option(help="Units of the object files: m, cm or mm (default: m).")] = None,
@@ -81,10 +82,11 @@ def run(
     """Run a job end to end (embedded Ray on 127.0.0.1 unless --address) and print the dataset path."""
     overrides = {**spec_overrides(objects, out, grasps, seed, stages), "units": units, "scale": scale}
     spec = spec_or_exit(spec_file, overrides, spec_json)
-    _run_and_report(spec, address, job_id, workers, in_process, as_json)
+    _run_and_report(spec, address, job_id, workers, in_process, as_json, final_status)
 
 
-def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = False) -> None:
+def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = False,
+                    final_status: bool = False) -> None:
     from onepiece_dist.api import run_job
 
     if address and address.startswith(("http://", "https://")):
@@ -123,6 +125,8 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
              f"top-1 success {e.top1:.2f}{_interval(e.top1_interval)} against random choice {e.random_choice:.2f}"
              f"{_interval(e.random_choice_interval)}, AP {e.ap:.2f} against {e.positive_rate:.2f} for random scores")
         _err(f"held-out protocol: {e.protocol}; {e.verdict}")
+    if final_status:  # what a client reads of a job that ended, without a Ray job of its own (api.Client.status)
+        _err(status.log_line())
     typer.echo(status.model_dump_json() if as_json else status.output)
 
 

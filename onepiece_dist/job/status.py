@@ -200,3 +200,24 @@ class JobStatus(BaseModel):
     @classmethod
     def load(cls, output: str | os.PathLike) -> JobStatus:
         return cls.model_validate(json.loads(status_path(output).read_text()))
+
+    def log_line(self) -> str:
+        """This status as the last line a submitted driver logs (``run --final-status``), for clients that read
+        the log of a job that ended instead of asking the cluster's registry (api.Client.status)."""
+        return FINAL_STATUS_MARK + self.model_dump_json()
+
+    @classmethod
+    def from_log(cls, log: str) -> JobStatus | None:
+        """The last status a driver logged with :meth:`log_line`; None where it logged none."""
+        lines = [line for line in log.splitlines() if line.startswith(FINAL_STATUS_MARK)]
+        return cls.model_validate_json(lines[-1][len(FINAL_STATUS_MARK):]) if lines else None
+
+
+FINAL_STATUS_MARK = "ONEPIECE_FINAL_STATUS "
+
+
+def without_status_lines(log: str) -> str:
+    """A driver's log as a user reads it: without its final-status line (a record for clients)."""
+    if FINAL_STATUS_MARK not in log:
+        return log
+    return "".join(line for line in log.splitlines(keepends=True) if not line.startswith(FINAL_STATUS_MARK))
