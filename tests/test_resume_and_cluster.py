@@ -92,7 +92,7 @@ def test_resume_after_the_driver_was_killed_reuses_committed_objects(tmp_path, f
 @pytest.mark.slow
 def test_losing_the_ray_runtime_ends_with_one_line_that_says_how_to_resume(tmp_path, record_figure):
     out = tmp_path / "lost.zarr"
-    slow = ["--objects", "primitives[0:8]", "--grasps", "400", "--stages", "ingest,extract,dedup"]  # ~10 s of work
+    slow = ["--objects", "primitives[0:8]", "--grasps", "1000", "--stages", "ingest,extract,dedup"]  # ~20 s of work
     job = subprocess.Popen([*ONEPIECE, "run", *slow, "--out", str(out)], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
     try:
