@@ -29,9 +29,9 @@ class PickTrainOptions:
     """How to fit: the model, the target (every trial held, or the share of trials that held), whether batches
     are balanced (as many successes as failures drawn), the weight of a listwise ranking term (each batch then
     holds whole views, and each view's successes are pushed above its failures: what the planner's first choice
-    needs), epochs, patience, batch size, the points of each crop the
-    network sees (a seeded subset of the stored ones; a planner then resamples its crops to as many), learning
-    rate, the share of objects held out for validation, the seed."""
+    needs), epochs, patience, batch size, the points of each crop the network sees (a seeded subset of the stored
+    ones; a planner then resamples its crops to as many), learning rate, the share of objects held out for
+    validation, the seed."""
 
     model: str = "pointnet_context"
     target: str = "every_trial"  # or "share"
