@@ -139,14 +139,16 @@ def rejudged(point: dict) -> dict:
 
 
 def _write(path: Path, all_labels, points: list[dict]) -> None:
+    """The results, with the labels described as the most batches written so far (a run on fewer batches keeps
+    that description: its points say how many batches they drew from)."""
+    labels = {"spec": all_labels.attrs["spec"], "specs": all_labels.attrs.get("specs"), "rows": len(all_labels),
+              "success_rate": float(all_labels.success.mean()), "core_seconds": all_labels.attrs["core_seconds"],
+              "objects": sum(o["status"] == "ok" for o in all_labels.attrs["objects"])}
+    kept = json.loads(path.read_text())["labels"] if path.is_file() else None
+    if kept is not None and kept["rows"] > labels["rows"]:
+        labels = kept
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_curve", "date": date.today().isoformat(),
-           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
-           "labels": {"spec": all_labels.attrs["spec"], "specs": all_labels.attrs.get("specs"),
-                      "rows": len(all_labels),
-                      "success_rate": float(all_labels.success.mean()),
-                      "core_seconds": all_labels.attrs["core_seconds"],
-                      "objects": sum(o["status"] == "ok" for o in all_labels.attrs["objects"])},
-           "points": points}
+           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "labels": labels, "points": points}
     path.write_text(json.dumps(out, indent=1) + "\n")
 
 
