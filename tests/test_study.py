@@ -547,7 +547,7 @@ def test_the_committed_picks_study_answers_by_picks_and_against_the_label_ceilin
     assert page == (committed / "study.md").read_text()
     spec = result.spec
     assert spec == load_study_spec(ROOT / "examples" / "studies" / "picks.yaml", {"heldout": spec.heldout})
-    assert "household" in spec.heldout and result.heldout.objects == 32 and result.train_objects >= 60
+    assert "household" in spec.heldout and result.heldout.objects >= 32 and result.train_objects >= 60
     first = page.splitlines()[2]
     assert first.startswith("**Judged by picks.**") and f"is **{result.picks.cheapest}**" in first
     assert result.picks.cheapest == "A" or "points)" in first  # by how much
