@@ -39,8 +39,8 @@ def seed_spread() -> float:
     """How far one design's network fitted again with another seed moves on the household views
     (results/pick_rankings.json: view_input_base against view_input_base_seed1); 0 where not measured."""
     path = HERE / "results" / "pick_rankings.json"
-    rankings = next((s["rankings"] for s in json.loads(path.read_text())["sets"] if s["name"] == "household"), {}) \
-        if path.is_file() else {}
+    sets = json.loads(path.read_text())["sets"] if path.is_file() else []
+    rankings = next((s["rankings"] for s in sets if s["name"] == "household"), {})
     if not {"view_input_base", "view_input_base_seed1"} <= set(rankings):
         return 0.0
     return abs(rankings["view_input_base_seed1"]["first_attempt"] - rankings["view_input_base"]["first_attempt"])

@@ -14,6 +14,7 @@ from onepiece_dist.learn.metrics import EpochMetrics
 
 JobState = Literal["pending", "running", "succeeded", "failed", "cancelled"]
 STATUS_SUFFIX = ".status.json"
+FINAL_STATUS_MARK = "ONEPIECE_FINAL_STATUS "  # a submitted driver's last log line: JobStatus.log_line
 
 
 def status_path(output: str | os.PathLike) -> Path:
@@ -211,9 +212,6 @@ class JobStatus(BaseModel):
         """The last status a driver logged with :meth:`log_line`; None where it logged none."""
         lines = [line for line in log.splitlines() if line.startswith(FINAL_STATUS_MARK)]
         return cls.model_validate_json(lines[-1][len(FINAL_STATUS_MARK):]) if lines else None
-
-
-FINAL_STATUS_MARK = "ONEPIECE_FINAL_STATUS "
 
 
 def without_status_lines(log: str) -> str:

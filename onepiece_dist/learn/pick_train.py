@@ -110,7 +110,7 @@ def score_rows(model: torch.nn.Module, labels: PickLabels, rows: np.ndarray, poi
 
 def view_top1(labels: PickLabels, rows: np.ndarray, scores: np.ndarray) -> float:
     """Share of the views (object, view) among ``rows`` whose best-scored row picked."""
-    keys = labels.object[rows].astype(np.int64) * 100_000 + labels.view[rows]
+    keys = _view_keys(labels, rows)
     hits = []
     for key in np.unique(keys):
         mine = np.flatnonzero(keys == key)

@@ -168,7 +168,7 @@ class RayRuntime(Runtime):
         self.pool = []
 
     def prepare(self, stage: str) -> None:
-        self._workers(max(len(self.pool), worker_count(self.workers, None)))
+        self._workers(worker_count(self.workers, None))
 
     def _on_pool(self, stage: str, items: list, on_result: Callable, quarantined: Callable) -> list:
         """``items`` through ``SimWorker.<stage>`` on the job's workers (kept for the next stage)."""

@@ -59,10 +59,14 @@ def plan_curves(result: StudyResult) -> dict[str, list[PlanPoint]]:
     return {plan: sorted(points, key=lambda p: (p.labels, p.core_seconds)) for plan, points in curves.items()}
 
 
+def a_rate(result: StudyResult) -> float:
+    """A's mean first-attempt pick rate, as the levels use it."""
+    return round(next(arm for arm in result.picks.arms if arm.name == "A").first_attempt.mean, 4)
+
+
 def levels_asked(result: StudyResult) -> list[float]:
     """LEVELS and A's own mean pick rate, in order."""
-    a = next(arm for arm in result.picks.arms if arm.name == "A")
-    return sorted({*LEVELS, round(a.first_attempt.mean, 4)})
+    return sorted({*LEVELS, a_rate(result)})
 
 
 def reach(plan: str, points: list[PlanPoint], level: float) -> LevelReach:
@@ -96,7 +100,7 @@ def levels_lines(result: StudyResult) -> list[str]:
     if not readings:
         return []
     plans = list(dict.fromkeys(r.plan for r in readings))
-    a = round(next(arm for arm in result.picks.arms if arm.name == "A").first_attempt.mean, 4)
+    a = a_rate(result)
     rows = {}
     for r in readings:
         rows.setdefault(r.level, {})[r.plan] = cell(r)
