@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import torch
 
+from onepiece_dist.core.cloud.swept_space import space_size
 from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.grasp_context import grasp_context, object_centre
 from onepiece_dist.core.mesh import box_mesh
@@ -52,9 +53,9 @@ def test_a_half_turn_about_the_approach_turns_every_context_vector_with_the_crop
     rng = np.random.default_rng(3)
     rows = 4
     labels = PickLabels(points=rng.normal(size=(rows, 8, 3)).astype(np.float16), context=rng.normal(
-        size=(rows, 9)).astype(np.float32), success=np.ones(rows, bool), held=np.ones(rows, np.int8),
-        failure=np.zeros(rows, np.int8), view=np.zeros(rows, np.int16), pose=np.tile(np.eye(4), (rows, 1, 1)),
-        object=np.zeros(rows, np.int32), attrs={})
+        size=(rows, 9)).astype(np.float32), space=np.zeros((rows, 0), np.float16), success=np.ones(rows, bool),
+        held=np.ones(rows, np.int8), failure=np.zeros(rows, np.int8), view=np.zeros(rows, np.int16),
+        pose=np.tile(np.eye(4), (rows, 1, 1)), object=np.zeros(rows, np.int32), attrs={})
     turn = np.array([True, False, True, False])
     batch = training_batch(labels, np.arange(rows), turn)
     flips = np.tile(HALF_TURN, 3)
@@ -124,11 +125,12 @@ def pick_labels(tmp_path_factory):
 
 @pytest.mark.slow
 def test_a_planned_crop_and_context_are_the_stored_labels_of_the_same_pose_and_view(pick_labels):
-    """The planner's crop of the view's cloud at a stored pose holds every stored point, and its context is the
-    stored context."""
+    """The planner's crop of the view's cloud at a stored pose holds every stored point, and its context and the
+    hand's swept space are the stored ones."""
     from onepiece_dist.objects import load_object, resolve_source
     from onepiece_dist.picks.pick_labels import crop_record
     from onepiece_dist.picks.views import observe_view
+    from onepiece_dist.plan.planner import with_space
     from onepiece_dist.sim.collision import load_simulated
     from onepiece_dist.sim.pick import PickWorld
 
@@ -149,6 +151,9 @@ def test_a_planned_crop_and_context_are_the_stored_labels_of_the_same_pose_and_v
     down = -seen.proposals.plane.normal
     assert np.array_equal(grasp_context(poses, object_centre(objects), down, spec.gripper.closing_depth),
                           labels.context[rows])
+    planned_space = with_space(seen.proposals.crops, poses, seen.cloud, seen.eye, spec.gripper).space
+    assert np.array_equal(planned_space.astype(np.float16), labels.space[rows])
+    assert labels.space.shape[1] == space_size() and (labels.space[rows] > -1).any()
     record = crop_record(spec)
     _, counts, inside = crop_regions(objects, poses, record.grid_shape(), spec.voxel.resolution, keep_points=True)
     for k, row in enumerate(rows):
@@ -181,6 +186,14 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
     assert scores.shape == (n,) and np.all((scores >= 0) & (scores <= 1))
     with pytest.raises(CloudRejected, match="context"):
         scorer.score(Crops(with_context.codes, with_context.counts, with_context.points))
+    spaced = train_on_pick_labels(labels, tmp_path / "space", crop,
+                                  PickTrainOptions(model="pointnet_context_space", epochs=1, validation=0.34))
+    space_scorer = GraspScorer(spaced.checkpoint, GripperSpec(), device="cpu")
+    full = Crops(with_context.codes, with_context.counts, with_context.points, with_context.context,
+                 labels.space[:n].astype(np.float32))
+    assert space_scorer.score(full).shape == (n,)
+    with pytest.raises(CloudRejected, match="swept space"):
+        space_scorer.score(with_context)
 
 
 def test_the_listwise_term_is_small_only_where_each_views_successes_score_above_its_failures():

@@ -38,6 +38,7 @@ DESIGNS = {  # name -> PickTrainOptions fields
     "context_share": {"model": "pointnet_context", "target": "share"},
     "context_wide": {"model": "pointnet_context_wide"},
     "context_listwise": {"model": "pointnet_context", "ranking": 1.0},
+    "context_space": {"model": "pointnet_context_space", "balanced": True},
 }
 
 

@@ -14,11 +14,12 @@ CONTEXT_SCALE = torch.tensor([1.0, 1.0, 1.0, 10.0, 10.0, 10.0, 1.0, 1.0, 1.0])
 class PointNetGrasp(nn.Module):
     """PointNet classifier: shared per-point MLP (conv1d), max pooling, MLP head. points (n, P, 3) -> (n,).
     With ``context`` > 0 the head also reads ``batch["context"]`` (n, context): the grasp's gravity direction and
-    object-centre offset in the gripper frame (core.grasp_context), through a small MLP of its own."""
+    object-centre offset in the gripper frame (core.grasp_context), through a small MLP of its own; with ``space`` > 0
+    also ``batch["space"]`` (n, space): the hand's swept space as the camera saw it (core.cloud.swept_space)."""
 
-    def __init__(self, width: int = 64, context: int = 0):
+    def __init__(self, width: int = 64, context: int = 0, space: int = 0):
         super().__init__()
-        self.context = context
+        self.context, self.space = context, space
         self.features = nn.Sequential(
             nn.Conv1d(3, width, 1), nn.BatchNorm1d(width), nn.ReLU(),
             nn.Conv1d(width, 2 * width, 1), nn.BatchNorm1d(2 * width), nn.ReLU(),
@@ -27,6 +28,10 @@ class PointNetGrasp(nn.Module):
         if context:
             self.context_features = nn.Sequential(nn.Linear(context, extra), nn.ReLU(), nn.Linear(extra, extra),
                                                   nn.ReLU())
+        if space:
+            self.space_features = nn.Sequential(nn.Linear(space, 2 * width), nn.ReLU(), nn.Linear(2 * width, width),
+                                                nn.ReLU())
+            extra += width
         self.head = nn.Sequential(nn.Linear(4 * width + extra, 2 * width), nn.ReLU(), nn.Dropout(0.3),
                                   nn.Linear(2 * width, 1))
 
@@ -36,6 +41,8 @@ class PointNetGrasp(nn.Module):
         if self.context:
             context = batch["context"] * CONTEXT_SCALE[: self.context].to(pooled.device)
             pooled = torch.cat([pooled, self.context_features(context)], dim=1)
+        if self.space:
+            pooled = torch.cat([pooled, self.space_features(batch["space"])], dim=1)
         return self.head(pooled).squeeze(1)
 
 
@@ -71,6 +78,14 @@ def PointNetWithView() -> PointNetGrasp:  # noqa: N802
     return PointNetGrasp(width=32, context=9)
 
 
+def PointNetWithSpace() -> PointNetGrasp:  # noqa: N802
+    """The context PointNet that also reads the hand's swept space as the camera saw it (free, on the surface,
+    behind it: core.cloud.swept_space) on a grid around the fingers and palm."""
+    from onepiece_dist.core.cloud.swept_space import space_size
+
+    return PointNetGrasp(width=32, context=6, space=space_size())
+
+
 def SmallPointNet() -> PointNetGrasp:  # noqa: N802
     """The same PointNet on the crop alone (the context's ablation)."""
     return PointNetGrasp(width=32)
@@ -78,6 +93,8 @@ def SmallPointNet() -> PointNetGrasp:  # noqa: N802
 
 MODELS = {"pointnet": PointNetGrasp, "voxel": VoxelCNN, "pointnet_context": PointNetWithContext,
           "pointnet_context_wide": WidePointNetWithContext, "pointnet_small": SmallPointNet,
-          "pointnet_context_view": PointNetWithView}
-# models that read batch["context"]
-CONTEXT_MODELS = frozenset({"pointnet_context", "pointnet_context_wide", "pointnet_context_view"})
+          "pointnet_context_view": PointNetWithView, "pointnet_context_space": PointNetWithSpace}
+# models that read batch["context"]; batch["space"]
+CONTEXT_MODELS = frozenset({"pointnet_context", "pointnet_context_wide", "pointnet_context_view",
+                            "pointnet_context_space"})
+SPACE_MODELS = frozenset({"pointnet_context_space"})

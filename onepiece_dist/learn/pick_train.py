@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
+from onepiece_dist.core.cloud.swept_space import turned_half
+from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS, SPACE_MODELS
 from onepiece_dist.stats.ranking import average_precision
 from onepiece_dist.store.pick_labels import PickLabels
 
@@ -84,10 +85,14 @@ def _batch(labels: PickLabels, rows: np.ndarray, turn: np.ndarray | None = None,
     if points_seen is not None:
         points = points[:, points_seen]
     context = labels.context[rows].astype(np.float32)
+    space = labels.space[rows].astype(np.float32)
     if turn is not None and turn.any():
         points[turn] *= HALF_TURN
         context[turn] *= np.tile(HALF_TURN, context.shape[1] // 3)  # each of its 3-vectors
-    return {"points": torch.from_numpy(points), "context": torch.from_numpy(context)}
+        if space.shape[1]:
+            space[turn] = turned_half(space[turn])
+    return {"points": torch.from_numpy(points), "context": torch.from_numpy(context),
+            "space": torch.from_numpy(space)}
 
 
 def targets(labels: PickLabels, rows: np.ndarray, target: str, trials: int) -> np.ndarray:
@@ -125,6 +130,9 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
     torch.manual_seed(options.seed)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if options.model in SPACE_MODELS and labels.space.shape[1] == 0:
+        raise ValueError(f"model {options.model!r} reads the hand's swept space, and these pick labels carry none "
+                         "(made before labels kept it): make them again with run_pick_labels")
     train, val = split_by_object(labels, options.validation, options.seed)
     model = MODELS[options.model]()
     optimiser = torch.optim.Adam(model.parameters(), lr=options.learning_rate)
@@ -164,6 +172,8 @@ def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: Pick
         batch = _batch(labels, chunk, rng.random(len(chunk)) < 0.5, seen)
         if options.model not in CONTEXT_MODELS:
             batch.pop("context")
+        if options.model not in SPACE_MODELS:
+            batch.pop("space")
         target = torch.from_numpy(targets(labels, chunk, options.target, trials))
         logits = model(batch)
         loss = torch.nn.functional.binary_cross_entropy_with_logits(logits, target)

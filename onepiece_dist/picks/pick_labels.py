@@ -1,6 +1,7 @@
 """Labels made where the network is used (issue 55, docs/picks.md): each training object settled on the table and
 seen as the pick benchmark sees it (picks.views), a seeded subset of the planner's candidates on each view executed
-by the pick protocol; each label keeps the candidate's crop, its context, whether it picked and why not.
+by the pick protocol; each label keeps the candidate's crop, its context, the hand's swept space as the camera
+saw it, whether it picked and why not.
 
 One task per object, in this process or on the job's Ray worker pool; the labels go to ``pick_labels.zarr``
 (store.pick_labels) in object order, whatever order the workers finish in.
@@ -61,6 +62,7 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
     outcomes = [executions.run("view", i, proposals.poses[i]) for i in chosen]
     return {"points": proposals.crops.points[chosen].astype(np.float16),
             "context": proposals.crops.context[chosen].astype(np.float32),
+            "space": proposals.crops.space[chosen].astype(np.float16),
             "success": np.array([o.success for o in outcomes], bool),
             "held": np.array([o.held for o in outcomes], np.int8),
             "failure": np.array([FAILURE_CODES.index(o.failure) for o in outcomes], np.int8),

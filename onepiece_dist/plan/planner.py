@@ -19,12 +19,14 @@ from onepiece_dist.core.cloud.grasps import (
     voxel_downsample,
 )
 from onepiece_dist.core.cloud.support_check import support_plane
+from onepiece_dist.core.cloud.swept_space import DepthRays, hand_grid, swept_space
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.hand_frames import to_panda
 from onepiece_dist.errors import CloudRejected
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
+from onepiece_dist.specs.job import GripperSpec
 from onepiece_dist.specs.plan import PlanSpec
 
 THIN_ABOVE, THIN_CELL = 300_000, 0.0015  # points; m (a 320 px view at 0.65 m: about 1.7 mm a pixel)
@@ -150,6 +152,8 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     sampled = time.perf_counter()
     crops, keep = cut_crops(objects, found.poses, record, rng).holding(spec.min_points)
     crops = with_context(crops, found.poses[keep], objects, gravity(plane), gripper.closing_depth)
+    if observation.viewpoint is not None:
+        crops = with_space(crops, found.poses[keep], points, observation.viewpoint, gripper)
     return Proposals(found.poses[keep], crops, objects, plane, _counts(found, int(np.sum(~keep))),
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint)
 
@@ -164,6 +168,14 @@ def with_context(crops: Crops, poses: np.ndarray, points: np.ndarray, down: np.n
     """``crops`` of ``poses`` with each grasp's context: ``down`` and the centre of the object's ``points``, seen
     from the gripper (core.grasp_context); with ``eye``, the direction to the camera too."""
     return dataclasses.replace(crops, context=grasp_context(poses, object_centre(points), down, closing_depth, eye))
+
+
+def with_space(crops: Crops, poses: np.ndarray, points: np.ndarray, eye: np.ndarray, gripper: GripperSpec) -> Crops:
+    """``crops`` of ``poses`` with the hand's swept space as the camera at ``eye`` saw the cloud ``points`` (every
+    observed point, the table's too: core.cloud.swept_space)."""
+    grid = hand_grid(gripper.palm_depth, gripper.closing_depth, gripper.max_opening / 2 + gripper.finger_thickness,
+                     max(gripper.finger_height, gripper.closing_height) / 2)
+    return dataclasses.replace(crops, space=swept_space(DepthRays.of(points, eye), poses, grid))
 
 
 def _thin(points: np.ndarray, cell: float) -> np.ndarray:

@@ -33,12 +33,14 @@ class CropRecord:
 @dataclass(frozen=True)
 class Crops:
     """Crops of n poses: codes (n, B) uint8, counts (n,) int64 observed points inside, points (n, P, 3) float16,
-    and where the planner knows it, each grasp's context (n, 6) float32 (core.grasp_context)."""
+    and where the planner knows it, each grasp's context (n, 6) float32 (core.grasp_context) and, where it knows
+    the camera's position, the hand's swept space as the camera saw it (n, G) float32 (core.cloud.swept_space)."""
 
     codes: np.ndarray
     counts: np.ndarray
     points: np.ndarray
     context: np.ndarray | None = None
+    space: np.ndarray | None = None
 
     def holding(self, min_points: int) -> tuple[Crops, np.ndarray]:
         """The crops with at least ``min_points`` observed points inside, and (n,) bool which they were."""
@@ -48,7 +50,8 @@ class Crops:
     def subset(self, which: np.ndarray) -> Crops:
         """The crops ``which`` (a bool mask or indices) selects."""
         context = None if self.context is None else self.context[which]
-        return Crops(self.codes[which], self.counts[which], self.points[which], context)
+        space = None if self.space is None else self.space[which]
+        return Crops(self.codes[which], self.counts[which], self.points[which], context, space)
 
 
 def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.random.Generator) -> Crops:
@@ -67,7 +70,7 @@ class GraspScorer:
     another is refused (its crops would mean other shapes)."""
 
     def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto"):
-        from onepiece_dist.learn.models import CONTEXT_MODELS
+        from onepiece_dist.learn.models import CONTEXT_MODELS, SPACE_MODELS
         from onepiece_dist.learn.train import read_network, resolve_device
 
         self.path = str(checkpoint)
@@ -75,6 +78,7 @@ class GraspScorer:
         self.record = _crop_record(saved, gripper)
         self.device = resolve_device(device)
         self.reads_context = saved.model in CONTEXT_MODELS
+        self.reads_space = saved.model in SPACE_MODELS
         self.model = saved.build().to(self.device)
 
     @property
@@ -99,17 +103,26 @@ class GraspScorer:
                     batch = {"points": torch.from_numpy(crops.points[start:stop].astype(np.float32)).to(self.device)}
                 if self.reads_context:
                     batch["context"] = torch.from_numpy(self._context(crops)[start:stop]).to(self.device)
+                if self.reads_space:
+                    batch["space"] = torch.from_numpy(self._space(crops)[start:stop]).to(self.device)
                 scores.append(torch.sigmoid(self.model(batch)).float().cpu().numpy())
         # rounded: the last bits of a sum depend on the CPU's kernels and threads, and must not reorder near ties
         return np.round(np.concatenate(scores).astype(np.float64), SCORE_DECIMALS) if scores else np.zeros(0)
 
 
     def _context(self, crops: Crops) -> np.ndarray:
-        if crops.context is None:
-            raise CloudRejected(f"{self.path}: this network reads each grasp's context (gravity and the object's "
-                                "centre in the gripper frame), and these crops carry none: plan them with "
-                                "plan.propose, which computes it")
-        return np.ascontiguousarray(crops.context, dtype=np.float32)
+        return self._input(crops.context, "each grasp's context (gravity and the object's centre in the gripper "
+                           "frame)", "plan them with plan.propose, which computes it")
+
+    def _space(self, crops: Crops) -> np.ndarray:
+        return self._input(crops.space, "the hand's swept space as the camera saw it", "give the camera's position "
+                           "(--viewpoint, or a depth image with its pose) and plan them with plan.propose, which "
+                           "computes it")
+
+    def _input(self, values: np.ndarray | None, what: str, fix: str) -> np.ndarray:
+        if values is None:
+            raise CloudRejected(f"{self.path}: this network reads {what}, and these crops carry none: {fix}")
+        return np.ascontiguousarray(values, dtype=np.float32)
 
 
 def _crop_record(saved, gripper: GripperSpec | None) -> CropRecord:
