@@ -60,6 +60,13 @@ def test_the_grid_turned_half_a_turn_is_the_turned_grasps_space():
     assert np.array_equal(turned_half(swept_space(rays, poses, grid)), swept_space(rays, turned, grid))
 
 
+def test_the_networks_said_to_read_the_space_exist_and_read_it():
+    from onepiece_dist.core.cloud.swept_space import SPACE_MODELS
+    from onepiece_dist.learn.models import MODELS
+
+    assert SPACE_MODELS and all(MODELS[name]().space == space_size() for name in SPACE_MODELS)
+
+
 def test_the_values_do_not_depend_on_the_clouds_point_order():
     cloud = wall(20_000, seed=2)
     grid = hand_grid(0.02, 0.04, 0.05, 0.01)

@@ -6,6 +6,8 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from onepiece_dist.core.cloud.swept_space import space_size
+
 # gravity is a unit vector; offsets in m, scaled so that 10 cm is 1; the camera's direction (where the planner
 # gives it) a unit vector
 CONTEXT_SCALE = torch.tensor([1.0, 1.0, 1.0, 10.0, 10.0, 10.0, 1.0, 1.0, 1.0])
@@ -81,8 +83,6 @@ def PointNetWithView() -> PointNetGrasp:  # noqa: N802
 def PointNetWithSpace() -> PointNetGrasp:  # noqa: N802
     """The context PointNet that also reads the hand's swept space as the camera saw it (free, on the surface,
     behind it: core.cloud.swept_space) on a grid around the fingers and palm."""
-    from onepiece_dist.core.cloud.swept_space import space_size
-
     return PointNetGrasp(width=32, context=6, space=space_size())
 
 
@@ -94,7 +94,6 @@ def SmallPointNet() -> PointNetGrasp:  # noqa: N802
 MODELS = {"pointnet": PointNetGrasp, "voxel": VoxelCNN, "pointnet_context": PointNetWithContext,
           "pointnet_context_wide": WidePointNetWithContext, "pointnet_small": SmallPointNet,
           "pointnet_context_view": PointNetWithView, "pointnet_context_space": PointNetWithSpace}
-# models that read batch["context"]; batch["space"]
+# models that read batch["context"]
 CONTEXT_MODELS = frozenset({"pointnet_context", "pointnet_context_wide", "pointnet_context_view",
                             "pointnet_context_space"})
-SPACE_MODELS = frozenset({"pointnet_context_space"})

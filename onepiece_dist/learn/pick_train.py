@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from onepiece_dist.core.cloud.swept_space import turned_half
-from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS, SPACE_MODELS
+from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, turned_half
+from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
 from onepiece_dist.stats.ranking import average_precision
 from onepiece_dist.store.pick_labels import PickLabels
 

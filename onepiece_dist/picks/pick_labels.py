@@ -29,7 +29,8 @@ from onepiece_dist.store.pick_labels import FAILURE_CODES, LabelledObject, write
 
 
 def crop_record(spec: PickLabelSpec) -> CropRecord:
-    return CropRecord(spec.gripper, spec.voxel, spec.points_per_grasp, "pointnet_context")
+    """The crop of a network that reads everything a label keeps (crop, context and swept space)."""
+    return CropRecord(spec.gripper, spec.voxel, spec.points_per_grasp, "pointnet_context_space")
 
 
 def label_object(spec: PickLabelSpec, ref: ObjectRef, index: int) -> LabelledObject:

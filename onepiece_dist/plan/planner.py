@@ -19,7 +19,7 @@ from onepiece_dist.core.cloud.grasps import (
     voxel_downsample,
 )
 from onepiece_dist.core.cloud.support_check import support_plane
-from onepiece_dist.core.cloud.swept_space import DepthRays, hand_grid, swept_space
+from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, DepthRays, hand_grid, swept_space
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.hand_frames import to_panda
@@ -152,7 +152,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     sampled = time.perf_counter()
     crops, keep = cut_crops(objects, found.poses, record, rng).holding(spec.min_points)
     crops = with_context(crops, found.poses[keep], objects, gravity(plane), gripper.closing_depth)
-    if observation.viewpoint is not None:
+    if observation.viewpoint is not None and record.model in SPACE_MODELS:  # 10-20 ms a view: only when read
         crops = with_space(crops, found.poses[keep], points, observation.viewpoint, gripper)
     return Proposals(found.poses[keep], crops, objects, plane, _counts(found, int(np.sum(~keep))),
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from onepiece_dist.core.cloud.swept_space import SPACE_MODELS
 from onepiece_dist.core.voxel import crop_regions, network_inputs, unpack_codes
 from onepiece_dist.errors import CheckpointRejected, CloudRejected
 from onepiece_dist.specs.job import GripperSpec, VoxelSpec
@@ -70,7 +71,7 @@ class GraspScorer:
     another is refused (its crops would mean other shapes)."""
 
     def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto"):
-        from onepiece_dist.learn.models import CONTEXT_MODELS, SPACE_MODELS
+        from onepiece_dist.learn.models import CONTEXT_MODELS
         from onepiece_dist.learn.train import read_network, resolve_device
 
         self.path = str(checkpoint)
