@@ -194,6 +194,25 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
     assert space_scorer.score(full).shape == (n,)
     with pytest.raises(CloudRejected, match="swept space"):
         space_scorer.score(with_context)
+    on_policy(spec, labels, result.checkpoint)
+
+
+def on_policy(spec: PickLabelSpec, labels, checkpoint: Path) -> None:
+    """With a checkpoint, a view's labelled candidates are the network's best-scored first, the rest at random."""
+    from onepiece_dist.picks.pick_labels import _chosen
+    from onepiece_dist.plan.scorer import Crops
+
+    n = 20
+    crops = Crops(np.zeros((n, 1), np.uint8), np.full(n, 300), labels.points[:n], labels.context[:n],
+                  labels.space[:n].astype(np.float32))
+    scores = GraspScorer(checkpoint, GripperSpec(), device="cpu").score(
+        Crops(crops.codes, crops.counts, crops.points[:, :128], crops.context))
+    asked = spec.model_copy(update={"checkpoint": str(checkpoint), "per_view": 8, "top_share": 0.5})
+    chosen = _chosen(asked, crops, np.random.default_rng(0))
+    assert len(chosen) == 8 and len(set(chosen)) == 8 and np.all(np.diff(chosen) > 0)
+    assert set(np.argsort(-scores, kind="stable")[:4]) <= set(chosen)
+    again = _chosen(asked, crops, np.random.default_rng(1))
+    assert set(again) != set(chosen)  # the other half is drawn at random
 
 
 def test_the_listwise_term_is_small_only_where_each_views_successes_score_above_its_failures():

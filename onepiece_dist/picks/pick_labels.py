@@ -9,6 +9,8 @@ One task per object, in this process or on the job's Ray worker pool; the labels
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import hashlib
 import time
 from pathlib import Path
@@ -19,7 +21,7 @@ from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.picks.runner import PoolStatus, run_each_in_process
 from onepiece_dist.picks.views import Executions, observe_view
-from onepiece_dist.plan.scorer import CropRecord
+from onepiece_dist.plan.scorer import CropRecord, GraspScorer
 from onepiece_dist.runtime.actors import restartable_actor
 from onepiece_dist.runtime.ray_env import connect
 from onepiece_dist.runtime.registry import RegistryClient
@@ -57,8 +59,7 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
     proposals = seen.proposals
     if proposals is None or len(proposals.poses) == 0:
         return None
-    count = len(proposals.poses)
-    chosen = np.sort(seen.rng.permutation(count)[: spec.per_view])
+    chosen = _chosen(spec, proposals.crops, seen.rng)
     executions = Executions(spec, world, mesh, seen.resting, view)
     outcomes = [executions.run("view", i, proposals.poses[i]) for i in chosen]
     return {"points": proposals.crops.points[chosen].astype(np.float16),
@@ -69,6 +70,25 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
             "failure": np.array([FAILURE_CODES.index(o.failure) for o in outcomes], np.int8),
             "view": np.full(len(chosen), view, np.int16),
             "pose": proposals.poses[chosen].astype(np.float64)}
+
+
+def _chosen(spec: PickLabelSpec, crops, rng: np.random.Generator) -> np.ndarray:
+    """Which candidates of a view to execute, in index order: a seeded random subset of ``per_view``; with a
+    checkpoint, its ``top_share`` best-scored first, the rest at random among the others."""
+    count = len(crops.counts)
+    if spec.checkpoint is None:
+        return np.sort(rng.permutation(count)[: spec.per_view])
+    scorer = _scorer(spec.checkpoint, spec.gripper)
+    seen = crops.points[:, : scorer.record.points_per_grasp]  # stored in random order: the first P as it trained
+    scores = scorer.score(dataclasses.replace(crops, points=seen))
+    top = np.lexsort((np.arange(count), -scores))[: int(round(spec.top_share * spec.per_view))]
+    rest = np.setdiff1d(np.arange(count), top)
+    return np.sort(np.concatenate([top, rest[rng.permutation(len(rest))[: spec.per_view - len(top)]]]))
+
+
+@functools.lru_cache(maxsize=2)
+def _scorer(checkpoint: str, gripper) -> GraspScorer:
+    return GraspScorer(checkpoint, gripper, device="cpu")
 
 
 class PickLabelWorker:

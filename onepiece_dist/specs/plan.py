@@ -131,6 +131,11 @@ class PickLabelSpec(Frozen):
     output: str = Field("onepiece-out/pick_labels", description="Folder of the labels (pick_labels.zarr).")
     views: int = Field(8, ge=1, le=256, description="Camera poses per object.")
     per_view: int = Field(64, ge=1, le=10_000, description="Candidates executed per view (a seeded subset).")
+    checkpoint: str | None = Field(None, description="A network whose best-scored candidates of each view are "
+                                   "executed first (its own first choices, right or wrong: on-policy labels); the "
+                                   "rest of per_view at random. None: all at random.")
+    top_share: float = Field(0.5, ge=0, le=1, description="With a checkpoint: the share of per_view taken from the "
+                             "network's best-scored candidates.")
     seed: int = Field(0, ge=0, lt=2**63, description="Seed of the drops, cameras, planning and executions.")
     gripper: GripperSpec = GripperSpec()
     voxel: VoxelSpec = VoxelSpec()
