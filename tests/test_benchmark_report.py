@@ -166,3 +166,26 @@ def test_a_design_replaces_the_shipped_network_only_beyond_one_designs_spread_ov
     assert best_point(curve, "shipped", spread=0.031)["design"] == "shipped"
     curve["points"].append(point("better", 80000, 0.90))
     assert best_point(curve, "shipped", spread=0.031)["design"] == "better"  # +6.4 points: beyond it
+
+
+def test_the_swept_space_is_kept_only_where_its_gain_over_seeds_exceeds_their_spread():
+    from benchmarks.pages.pick_trials_section import paired, verdict
+
+    def point(design: str, seed: int, rate: float, labels: int = 8000) -> dict:
+        return {"design": design, "labels": labels, "seed": seed,
+                "picks": {"methods": {"network": {"first_attempt": rate}}}}
+
+    space = {"points": [point("context_balanced", 0, 0.82), point("context_space", 0, 0.84),
+                        point("context_balanced", 1, 0.78), point("context_space", 1, 0.81),
+                        point("context_space", 2, 0.99)]}  # seed 2 has no pair: left out
+    pairs = paired(space)[8000]
+    assert sorted(pairs) == [0, 1]
+    gain, spread, kept = verdict(pairs)
+    assert round(gain, 3) == 0.025 and round(spread, 3) == 0.04 and not kept  # +2.5 points, seeds move 4
+    space["points"] += [point("context_balanced", 2, 0.80), point("context_space", 2, 0.99)]
+    gain, spread, kept = verdict(paired(space)[8000])
+    assert not kept  # the far seed widens the spread too
+    steady = {"points": [point(d, s, r) for d, s, r in (("context_balanced", 0, 0.80), ("context_balanced", 1, 0.81),
+                                                         ("context_space", 0, 0.88), ("context_space", 1, 0.89))]}
+    assert verdict(paired(steady)[8000])[2]  # +8 points against a spread of 1: kept
+    assert not verdict({0: {"context_balanced": 0.5, "context_space": 0.9}})[2]  # one seed decides nothing

@@ -73,7 +73,7 @@ def labels(batches: int = 1):
     return joined
 
 
-def fit(all_labels, size: int, design: str, seed: int = 0) -> dict:
+def fit(all_labels, size: int, design: str, seed: int = 0, folder: Path | None = None) -> dict:
     from onepiece_dist.learn.pick_train import PickTrainOptions, train_on_pick_labels
 
     rows = np.sort(np.random.default_rng([seed, size]).permutation(len(all_labels))[:size])
@@ -82,7 +82,7 @@ def fit(all_labels, size: int, design: str, seed: int = 0) -> dict:
     crop = {"gripper": spec["gripper"], "voxel": spec["voxel"], "points_per_grasp": spec["points_per_grasp"],
             "source": "pick_labels"}
     options = replace(PickTrainOptions(seed=seed), **DESIGNS[design])
-    result = train_on_pick_labels(subset, OUT / f"{design}_{size}", crop, options)
+    result = train_on_pick_labels(subset, folder or OUT / f"{design}_{size}", crop, options)
     label_seconds = all_labels.attrs["core_seconds"] * len(rows) / len(all_labels)
     return {"design": design, "labels": len(rows), "options": asdict(options),
             "checkpoint": str(result.checkpoint.relative_to(ROOT)), "fit_seconds": round(result.seconds, 1),

@@ -16,9 +16,6 @@ DESIGN_WORDS = {
     "context_wide": "crop + context, PointNet at width 64 (four times the compute of width 32)",
     "context_listwise": "crop + context, every-trial target plus a listwise term pushing each view's successes "
                         "above its failures (batches of whole views)",
-    "context_space": "crop + context + the hand's swept space as the camera saw it (free, on the surface, behind "
-                     "it or unseen, on a 6 x 10 x 3 grid of 1 cm cells around the fingers and palm: "
-                     "core/cloud/swept_space.py), balanced batches",
 }
 FLAT = ("random", "analytic", "top_down", "oracle")
 

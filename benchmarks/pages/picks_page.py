@@ -8,6 +8,7 @@ from pathlib import Path
 
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
+from benchmarks.pages.pick_trials_section import on_policy_section, space_section
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "picks.md"
@@ -147,8 +148,8 @@ def render_picks_page() -> str:
     picks, plan = load("picks"), load("plan")
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
-             "benchmarks/results/picks.json, pick_curve.json, pick_rankings.json, pick_pool_size.json and plan.json: "
-             "do not edit by hand. -->", ""]
+             "benchmarks/results/picks.json, pick_curve.json, pick_space.json, pick_on_policy.json, "
+             "pick_rankings.json, pick_pool_size.json and plan.json: do not edit by hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -164,6 +165,12 @@ def render_picks_page() -> str:
     curve = load("pick_curve")
     if curve is not None:
         lines += [*curve_section(curve, picks), ""]
+    space = load("pick_space")
+    if space is not None:
+        lines += [*space_section(space), ""]
+    on_policy = load("pick_on_policy")
+    if on_policy is not None:
+        lines += [*on_policy_section(on_policy), ""]
     rankings = load("pick_rankings")
     if rankings is not None:
         lines += [*rankings_section(rankings), ""]

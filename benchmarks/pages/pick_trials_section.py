@@ -1,0 +1,97 @@
+"""Design trials on docs/picks.md made on labels of today's pick world: the swept space (results/pick_space.json,
+benchmarks/experiments/pick_space.py: the shipped design and the one that also reads the hand's swept space, fitted
+on the same labels seed for seed, and whether the difference lies beyond the spread of a design's own seeds), and
+labels on policy (results/pick_on_policy.json, benchmarks/experiments/pick_on_policy.py)."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+
+BASE, TRIED = "context_balanced", "context_space"
+
+
+def _first(point: dict) -> float:
+    return point["picks"]["methods"]["network"]["first_attempt"]
+
+
+def paired(space: dict) -> dict[int, dict[int, dict[str, float]]]:
+    """size -> seed -> design -> first attempt, for the sizes and seeds where both designs were fitted."""
+    found: dict[int, dict[int, dict[str, float]]] = defaultdict(lambda: defaultdict(dict))
+    for p in space["points"]:
+        found[p["labels"]][p["seed"]][p["design"]] = _first(p)
+    return {size: {seed: pair for seed, pair in seeds.items() if {BASE, TRIED} <= set(pair)}
+            for size, seeds in sorted(found.items())}
+
+
+def verdict(pairs: dict[int, dict[str, float]]) -> tuple[float, float, bool]:
+    """(mean gain over seeds, the larger spread of either design over its seeds, kept): kept only where the gain
+    exceeds that spread."""
+    gains = [pair[TRIED] - pair[BASE] for pair in pairs.values()]
+    spread = max((max(p[d] for p in pairs.values()) - min(p[d] for p in pairs.values()) for d in (BASE, TRIED)),
+                 default=0.0)
+    gain = sum(gains) / len(gains) if gains else 0.0
+    return gain, spread, bool(gains) and len(pairs) > 1 and gain > spread
+
+
+def space_section(space: dict) -> list[str]:
+    labels = space["labels"]
+    lines = [f"## The hand's swept space: `{space['command']}`", "",
+             f"{space['date']}, {space['machine']}. What lies around the fingers as the camera saw it (issue 55): a "
+             "6 x 10 x 3 grid of 1 cm cells over the fingers and palm, each read against the view's depth (free, "
+             "on the surface, behind it or unseen: core/cloud/swept_space.py), beside the crop and its context. "
+             f"The first label batch made again with today's pick world ({labels['rows']} labels, success rate "
+             f"{labels['success_rate']:.2f}; the curve's points above were fitted on labels an earlier pick world "
+             f"made), `{BASE}` (the shipped design) and `{TRIED}` fitted on the same subset at each seed (a seed "
+             "draws the subset, the validation objects and the initial weights), household first attempt:", "",
+             f"| labels | seed | {BASE} | {TRIED} | difference |", "| --- | --- | --- | --- | --- |"]
+    rows, words = [], []
+    for size, pairs in paired(space).items():
+        for seed, pair in sorted(pairs.items()):
+            rows.append(f"| {size} | {seed} | {100 * pair[BASE]:.1f}% | {100 * pair[TRIED]:.1f}% | "
+                        f"{100 * (pair[TRIED] - pair[BASE]):+.1f} |")
+        gain, spread, kept = verdict(pairs)
+        words.append(f"at {size} labels the swept space gives {100 * gain:+.1f} points at one seed: undecided"
+                     if len(pairs) == 1 else
+                     f"at {size} labels the swept space gives {100 * gain:+.1f} points over {len(pairs)} seeds, "
+                     f"against a spread of {100 * spread:.1f} points over seeds: {'kept' if kept else 'not kept'}")
+    return [*lines, *rows, "", "; ".join(words).capitalize() + ".", "", base_spread_line(space)]
+
+
+def base_spread_line(space: dict) -> str:
+    """What the shipped design alone gives over seeds, at the size where it moves most."""
+    by_size = {size: sorted(pair[BASE] for pair in pairs.values()) for size, pairs in paired(space).items()}
+    size, rates = max(by_size.items(), key=lambda item: (item[1][-1] - item[1][0], item[0]))
+    return (f"The shipped design alone, at {size} labels, picks {' and '.join(f'{100 * r:.1f}%' for r in rates)} "
+            f"of the household views at {len(rates)} seeds: a network's figure on these views moves by "
+            f"{100 * (rates[-1] - rates[0]):.1f} points with its seed, so a seed is never chosen on them.")
+
+
+def on_policy_section(result: dict) -> list[str]:
+    """The on-policy trial (results/pick_on_policy.json): the same design on the first batch joined with the second
+    batch's views labelled at random or half from the first batch's network's best-scored."""
+    policy = result["policy"]
+    found = {(p["second_batch"], p["seed"]): p for p in result["points"]}
+    seeds = sorted({seed for _, seed in found})
+    rows = [f"| {seed} | {name.replace('_', '-')} | {found[(name, seed)]['labels']} | "
+            f"{found[(name, seed)]['second_success_rate']:.2f} | {100 * _first(found[(name, seed)]):.1f}% "
+            f"[{_interval(found[(name, seed)])}] |"
+            for seed in seeds for name in ("random", "on_policy") if (name, seed) in found]
+    pairs = [(_first(found[("on_policy", s)]), _first(found[("random", s)])) for s in seeds
+             if ("on_policy", s) in found and ("random", s) in found]
+    gain = sum(a - b for a, b in pairs) / len(pairs) if pairs else 0.0
+    words = (f"On-policy labels give {100 * gain:+.1f} points over random labels of the same size ({len(pairs)} "
+             f"seed{'s' if len(pairs) != 1 else ''}); a design is kept only beyond one design's spread over seeds "
+             "(the swept-space trial above measures it on these labels)" if pairs else "No pair fitted yet")
+    return [f"## Labels on policy: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. The second label batch's objects and views labelled twice: "
+            f"16 random candidates a view, or {100 * policy['top_share']:.0f}% of them the best-scored by "
+            f"`{policy['checkpoint']}` ({policy['design']} on the first batch's {policy['labels']} labels: it picks "
+            f"{100 * policy['first_attempt']:.1f}% of the household views) and the rest at random; `{BASE}` fitted "
+            "on the first batch joined with each (the same size), household first attempt:", "",
+            "| seed | second batch | labels | its success rate | household first attempt [95% CI] |",
+            "| --- | --- | --- | --- | --- |", *rows, "", words + "."]
+
+
+def _interval(point: dict) -> str:
+    low, high = point["picks"]["methods"]["network"]["interval"]
+    return f"{100 * low:.0f}%, {100 * high:.0f}%"
