@@ -189,3 +189,20 @@ def test_the_swept_space_is_kept_only_where_its_gain_over_seeds_exceeds_their_sp
                                                          ("context_space", 0, 0.88), ("context_space", 1, 0.89))]}
     assert verdict(paired(steady)[8000])[2]  # +8 points against a spread of 1: kept
     assert not verdict({0: {"context_balanced": 0.5, "context_space": 0.9}})[2]  # one seed decides nothing
+
+
+def test_labels_on_policy_are_kept_only_over_seeds_and_beyond_the_shipped_designs_spread():
+    from benchmarks.pages.pick_trials_section import on_policy_section
+
+    def point(batch: str, seed: int, rate: float) -> dict:
+        return {"second_batch": batch, "seed": seed, "labels": 100, "second_success_rate": 0.3,
+                "picks": {"methods": {"network": {"first_attempt": rate, "interval": [rate - 0.1, rate + 0.1]}}}}
+
+    result = {"command": "c", "date": "d", "machine": "m", "points": [point("random", 0, 0.80),
+                                                                    point("on_policy", 0, 0.90)],
+              "policy": {"checkpoint": "x.pt", "design": "context_balanced", "labels": 50, "first_attempt": 0.8,
+                         "top_share": 0.5}}
+    assert on_policy_section(result, 0.047)[-1].endswith("one seed: undecided.")
+    result["points"] += [point("random", 1, 0.84), point("on_policy", 1, 0.86)]
+    assert on_policy_section(result, 0.047)[-1].endswith(": kept.")  # +6 points over two seeds, spread 4.7
+    assert on_policy_section(result, 0.07)[-1].endswith(": not kept.")

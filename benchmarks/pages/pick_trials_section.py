@@ -57,18 +57,24 @@ def space_section(space: dict) -> list[str]:
     return [*lines, *rows, "", "; ".join(words).capitalize() + ".", "", base_spread_line(space)]
 
 
+def base_spread(space: dict) -> tuple[int, list[float]]:
+    """(labels, sorted rates over seeds) of the shipped design alone, at the size where it moves most."""
+    by_size = {size: sorted(pair[BASE] for pair in pairs.values()) for size, pairs in paired(space).items()}
+    return max(by_size.items(), key=lambda item: (item[1][-1] - item[1][0], item[0]))
+
+
 def base_spread_line(space: dict) -> str:
     """What the shipped design alone gives over seeds, at the size where it moves most."""
-    by_size = {size: sorted(pair[BASE] for pair in pairs.values()) for size, pairs in paired(space).items()}
-    size, rates = max(by_size.items(), key=lambda item: (item[1][-1] - item[1][0], item[0]))
+    size, rates = base_spread(space)
     return (f"The shipped design alone, at {size} labels, picks {' and '.join(f'{100 * r:.1f}%' for r in rates)} "
             f"of the household views at {len(rates)} seeds: a network's figure on these views moves by "
             f"{100 * (rates[-1] - rates[0]):.1f} points with its seed, so a seed is never chosen on them.")
 
 
-def on_policy_section(result: dict) -> list[str]:
+def on_policy_section(result: dict, spread: float) -> list[str]:
     """The on-policy trial (results/pick_on_policy.json): the same design on the first batch joined with the second
-    batch's views labelled at random or half from the first batch's network's best-scored."""
+    batch's views labelled at random or half from the first batch's network's best-scored; kept only where the mean
+    gain over two seeds or more exceeds ``spread`` (the shipped design's own spread over seeds)."""
     policy = result["policy"]
     found = {(p["second_batch"], p["seed"]): p for p in result["points"]}
     seeds = sorted({seed for _, seed in found})
@@ -79,9 +85,10 @@ def on_policy_section(result: dict) -> list[str]:
     pairs = [(_first(found[("on_policy", s)]), _first(found[("random", s)])) for s in seeds
              if ("on_policy", s) in found and ("random", s) in found]
     gain = sum(a - b for a, b in pairs) / len(pairs) if pairs else 0.0
-    words = (f"On-policy labels give {100 * gain:+.1f} points over random labels of the same size ({len(pairs)} "
-             f"seed{'s' if len(pairs) != 1 else ''}); a design is kept only beyond one design's spread over seeds "
-             "(the swept-space trial above measures it on these labels)" if pairs else "No pair fitted yet")
+    verdict = ("one seed: undecided" if len(pairs) == 1 else "kept" if gain > spread else "not kept")
+    words = (f"On-policy labels give {100 * gain:+.1f} points over random labels of the same size at {len(pairs)} "
+             f"seed{'s' if len(pairs) != 1 else ''}, against the shipped design's own spread of {100 * spread:.1f} "
+             f"points over seeds on these labels (above): {verdict}" if pairs else "No pair fitted yet")
     return [f"## Labels on policy: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. The second label batch's objects and views labelled twice: "
             f"16 random candidates a view, or {100 * policy['top_share']:.0f}% of them the best-scored by "

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
-from benchmarks.pages.pick_trials_section import on_policy_section, space_section
+from benchmarks.pages.pick_trials_section import base_spread, on_policy_section, space_section
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "picks.md"
@@ -170,7 +170,8 @@ def render_picks_page() -> str:
         lines += [*space_section(space), ""]
     on_policy = load("pick_on_policy")
     if on_policy is not None:
-        lines += [*on_policy_section(on_policy), ""]
+        rates = base_spread(space)[1] if space is not None else [0.0]
+        lines += [*on_policy_section(on_policy, rates[-1] - rates[0]), ""]
     rankings = load("pick_rankings")
     if rankings is not None:
         lines += [*rankings_section(rankings), ""]

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-SPACE_CELLS = (6, 10, 3)  # along u (approach), v (closing), t: 1 cm cells for the Panda-sized default gripper
+SPACE_CELLS = (6, 10, 3)  # along u (approach), v (closing), t: 1 x 1 x 0.7 cm cells for the default gripper
 TRUNCATION = 0.02  # m: depths further than this from the observed surface read as fully free or unknown
 RAY_CELL = 0.005  # the rays' spacing (tangent of the angle): 3-4 mm at 0.6-0.8 m, twice a 320 px view's pixel
 _OFFSET = 1 << 20  # ray indices are shifted by this to pack (x, y) into one non-negative key
