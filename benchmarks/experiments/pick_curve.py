@@ -57,20 +57,25 @@ def label_spec(objects: str, folder: str):
 def labels(batches: int = 1):
     """The pick labels of the first ``batches`` batches (each made here unless it already is, for the same
     spec), joined."""
+    joined = None
+    for objects, folder, shapes, seed in BATCHES[:batches]:
+        batch = labelled(label_spec(objects, folder), shapes, seed)
+        joined = batch if joined is None else joined.joined(batch)
+    return joined
+
+
+def labelled(spec, shapes: str, seed: int):
+    """The pick labels of ``spec`` (made here unless its folder holds labels of the same spec), its training shapes
+    (``data/<shapes>``, seeded) made first."""
     from benchmarks.experiments.training_shapes import training_shapes
     from onepiece_dist.picks.pick_labels import run_pick_labels
     from onepiece_dist.store.pick_labels import read_pick_labels
 
-    joined = None
-    for objects, folder, shapes, seed in BATCHES[:batches]:
-        spec = label_spec(objects, folder)
-        path = ROOT / "data" / folder / "pick_labels.zarr"
-        if not (path.exists() and read_pick_labels(path).attrs["spec"] == spec.model_dump(mode="json")):
-            training_shapes(ROOT / "data" / shapes, 160, seed)
-            run_pick_labels(spec)
-        batch = read_pick_labels(path)
-        joined = batch if joined is None else joined.joined(batch)
-    return joined
+    path = ROOT / spec.output / "pick_labels.zarr"
+    if not (path.exists() and read_pick_labels(path).attrs["spec"] == spec.model_dump(mode="json")):
+        training_shapes(ROOT / "data" / shapes, 160, seed)
+        run_pick_labels(spec)
+    return read_pick_labels(path)
 
 
 def fit(all_labels, size: int, design: str, seed: int = 0, folder: Path | None = None) -> dict:

@@ -16,7 +16,7 @@ import json
 import platform
 from datetime import date
 
-from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, ROOT, fit, label_spec, labels, picks
+from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, ROOT, fit, label_spec, labelled, labels, picks
 
 RESULTS = HERE / "results" / "pick_on_policy.json"
 POLICY = ("context_balanced", 40960, 0)  # the first batch's network that chooses (pick_space's point)
@@ -25,19 +25,11 @@ TOP_SHARE = 0.5
 
 def second_batch(policy: str | None):
     """The second batch's objects and views labelled at random, or with ``policy`` choosing half of each view's."""
-    from benchmarks.experiments.training_shapes import training_shapes
-    from onepiece_dist.picks.pick_labels import run_pick_labels
-    from onepiece_dist.store.pick_labels import read_pick_labels
-
     objects, folder, shapes, seed = BATCHES[1]
     spec = label_spec(objects, folder + ("_policy" if policy else ""))
     if policy:
         spec = spec.model_copy(update={"checkpoint": policy, "top_share": TOP_SHARE})
-    path = ROOT / spec.output / "pick_labels.zarr"
-    if not (path.exists() and read_pick_labels(path).attrs["spec"] == spec.model_dump(mode="json")):
-        training_shapes(ROOT / "data" / shapes, 160, seed)
-        run_pick_labels(spec)
-    return read_pick_labels(path)
+    return labelled(spec, shapes, seed)
 
 
 def main() -> None:
