@@ -102,3 +102,33 @@ def on_policy_section(result: dict, spread: float) -> list[str]:
 def _interval(point: dict) -> str:
     low, high = point["picks"]["methods"]["network"]["interval"]
     return f"{100 * low:.0f}%, {100 * high:.0f}%"
+
+
+def unseen_section(unseen: dict, picks: dict | None) -> list[str]:
+    """The curve's networks on the unseen set beside their household figures (results/pick_unseen.json)."""
+    networks = unseen["networks"]
+    rows = [f"| `{name}` | {n['what']} | {_pct(n['household'])} | {_pct(n['unseen']['first_attempt'])} "
+            f"[{_pct(n['unseen']['interval'][0])}, {_pct(n['unseen']['interval'][1])}] |"
+            for name, n in networks.items()]
+    household = [n["household"] for n in networks.values() if n["household"] is not None]
+    rates = [n["unseen"]["first_attempt"] for n in networks.values()]
+    set_ = next((s for s in (picks or {}).get("sets", []) if s["name"] == "unseen"), None)
+    others = ""
+    if set_ is not None:
+        rate = {m["method"]: m["first_attempt"] for m in set_["methods"]}
+        others = (f" On the same views top-down picks {_pct(rate['top_down'])} and the oracle over the view's "
+                  f"candidates {_pct(rate['oracle'])}.")
+    return [f"## On objects nothing was chosen on: `{unseen['command']}`", "",
+            f"{unseen['date']}. Every design, ranking and seed above was chosen on the household set's views; the "
+            "unseen set (12 more household meshes, none of them the household set's) judges the networks the curve "
+            "and the trials made, the network alone, first attempt. Nothing is chosen on it.", "",
+            "| network | what | household first attempt | unseen first attempt [95% CI] |", "| --- | --- | --- | --- |",
+            *rows, "",
+            f"The {len(rates)} networks of the shipped design pick {_pct(min(household))}-{_pct(max(household))} of "
+            f"the household views and {_pct(min(rates))}-{_pct(max(rates))} of the unseen ones: their seeds and "
+            "label plans move them less than the objects do, and a figure on the household set alone overstates "
+            f"what the design picks of objects it was not chosen on.{others}"]
+
+
+def _pct(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.1f}%"

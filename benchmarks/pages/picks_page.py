@@ -10,7 +10,7 @@ import numpy as np
 
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
-from benchmarks.pages.pick_trials_section import base_spread, on_policy_section, space_section
+from benchmarks.pages.pick_trials_section import base_spread, on_policy_section, space_section, unseen_section
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "picks.md"
@@ -174,7 +174,7 @@ def render_picks_page() -> str:
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
              "benchmarks/results/picks.json, pick_curve.json, pick_space.json, pick_on_policy.json, "
-             "pick_rankings.json, pick_pool_size.json and plan.json: do not edit by hand. -->", ""]
+             "pick_rankings.json, pick_pool_size.json, pick_unseen.json and plan.json: do not edit by hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -187,6 +187,9 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
+    unseen = load("pick_unseen")
+    if unseen is not None:
+        lines += [*unseen_section(unseen, picks), ""]
     curve = load("pick_curve")
     if curve is not None:
         lines += [*curve_section(curve, picks), ""]

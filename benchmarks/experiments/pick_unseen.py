@@ -1,0 +1,79 @@
+"""The pick curve's networks judged on the unseen household set (docs/picks.md, "On objects nothing was chosen
+on"): every design, ranking and seed of docs/picks.md was chosen on the household set's 128 views, so a network's
+figure there is biased upwards by the choice. The unseen set (benchmarks/experiments/household.py, UNSEEN) judges
+the networks the curve and the trials made, the network alone, first attempt; nothing is chosen on it: the shipped
+network stays whatever these figures say, and they are reported beside their household figures.
+
+    .venv/bin/python -m benchmarks.experiments.pick_unseen [--networks NAME,...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from datetime import date
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parents[1]
+ROOT = HERE.parent
+RESULTS = HERE / "results" / "pick_unseen.json"
+OUT = ROOT / "data" / "pick_unseen"
+# name: (checkpoint, what it is, where its household figure is committed)
+NETWORKS = {
+    "shipped": ("onepiece_dist/plan/networks/pick_view.pt",
+                "the shipped network: context_balanced, 81,152 labels of the earlier pick world, seed 0",
+                "picks.json"),
+    "random_s0": ("data/pick_curve/on_policy/random_s0/best.pt",
+                  "context_balanced, 81,152 labels (both batches made again, random), seed 0", "pick_on_policy.json"),
+    "random_s1": ("data/pick_curve/on_policy/random_s1/best.pt",
+                  "context_balanced, the same labels, seed 1", "pick_on_policy.json"),
+    "on_policy_s0": ("data/pick_curve/on_policy/on_policy_s0/best.pt",
+                     "context_balanced, 81,152 labels, the second batch on policy, seed 0", "pick_on_policy.json"),
+    "on_policy_s1": ("data/pick_curve/on_policy/on_policy_s1/best.pt",
+                     "context_balanced, the same labels, seed 1", "pick_on_policy.json"),
+}
+
+
+def judge(name: str, checkpoint: str) -> dict:
+    from benchmarks.experiments.household import UNSEEN, household_objects
+    from onepiece_dist.picks.runner import run_picks
+    from onepiece_dist.specs.plan import PickSpec
+
+    spec = PickSpec(objects=str(household_objects(objects=UNSEEN)), checkpoint=str(ROOT / checkpoint),
+                    output=str(OUT / name), views=8, attempts=3, pictures=0, methods=("network",))
+    start = time.perf_counter()
+    network = run_picks(spec).method("network")
+    return {"first_attempt": network.first_attempt, "interval": list(network.first_attempt_interval),
+            "views": network.views, "failures": network.first_failures,
+            "seconds": round(time.perf_counter() - start, 1)}
+
+
+def household_figure(name: str) -> float | None:
+    """The network's committed first-attempt rate on the household set."""
+    checkpoint, _, source = NETWORKS[name]
+    committed = json.loads((HERE / "results" / source).read_text())
+    if source == "picks.json":
+        household = next(s for s in committed["sets"] if s["name"] == "household")
+        return next(m["first_attempt"] for m in household["methods"] if m["method"] == "network")
+    point = next((p for p in committed["points"] if p["checkpoint"] == checkpoint), None)
+    return point["picks"]["methods"]["network"]["first_attempt"] if point else None
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--networks", default=",".join(NETWORKS))
+    names = [n for n in parser.parse_args().networks.split(",") if n]
+    done = json.loads(RESULTS.read_text())["networks"] if RESULTS.is_file() else {}
+    for name in names:
+        checkpoint, what, _ = NETWORKS[name]
+        done[name] = {"checkpoint": checkpoint, "what": what, "household": household_figure(name),
+                      "unseen": judge(name, checkpoint)}
+        print(name, done[name]["household"], done[name]["unseen"]["first_attempt"], flush=True)
+    out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_unseen", "date": date.today().isoformat(),
+           "networks": {n: done[n] for n in NETWORKS if n in done}}
+    RESULTS.write_text(json.dumps(out, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
