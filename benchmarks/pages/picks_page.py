@@ -10,7 +10,13 @@ import numpy as np
 
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
-from benchmarks.pages.pick_trials_section import base_spread, on_policy_section, space_section, unseen_section
+from benchmarks.pages.pick_trials_section import (
+    base_spread,
+    on_policy_section,
+    space_section,
+    unseen_section,
+    vessels_section,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "picks.md"
@@ -111,9 +117,14 @@ def pool_line(result: dict) -> str:
     executed = sum(v["pool_executed"] for v in views)
     picked = sum(v["pool_picked"] for v in views)
     holding = sum(v["pool_picked"] > 0 for v in views)
-    return (f"The oracle executed all {executed} candidates of {len(views)} views: {_pct(picked / executed)} of "
+    line = (f"The oracle executed all {executed} candidates of {len(views)} views: {_pct(picked / executed)} of "
             f"them pick, and {holding} of the {len(views)} views ({_pct(holding / len(views))}) hold at least one "
             "that picks: the pool's ceiling.")
+    if all("top_down" in v["attempts"] for v in views):
+        either = sum(v["pool_picked"] > 0 or v["attempts"]["top_down"][:1] == [True] for v in views)
+        line += (f" With the top-down grasp added to the pool, {either} of the {len(views)} "
+                 f"({_pct(either / len(views))}).")
+    return line
 
 
 def method_table(result: dict) -> list[str]:
@@ -174,7 +185,8 @@ def render_picks_page() -> str:
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
              "benchmarks/results/picks.json, pick_curve.json, pick_space.json, pick_on_policy.json, "
-             "pick_rankings.json, pick_pool_size.json, pick_unseen.json and plan.json: do not edit by hand. -->", ""]
+             "pick_vessels.json, pick_rankings.json, pick_pool_size.json, pick_unseen.json and plan.json: do not "
+             "edit by hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -200,6 +212,10 @@ def render_picks_page() -> str:
     if on_policy is not None:
         rates = base_spread(space)[1] if space is not None else [0.0]
         lines += [*on_policy_section(on_policy, rates[-1] - rates[0]), ""]
+    vessels = load("pick_vessels")
+    if vessels is not None:
+        rates = base_spread(space)[1] if space is not None else [0.0]
+        lines += [*vessels_section(vessels, rates[-1] - rates[0]), ""]
     rankings = load("pick_rankings")
     if rankings is not None:
         lines += [*rankings_section(rankings), ""]
