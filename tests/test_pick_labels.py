@@ -5,6 +5,7 @@ candidates on the table, and a network fitted on them that the planner loads."""
 from __future__ import annotations
 
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -208,11 +209,17 @@ def on_policy(spec: PickLabelSpec, labels, checkpoint: Path) -> None:
     scores = GraspScorer(checkpoint, GripperSpec(), device="cpu").score(
         Crops(crops.codes, crops.counts, crops.points[:, :128], crops.context))
     asked = spec.model_copy(update={"checkpoint": str(checkpoint), "per_view": 8, "top_share": 0.5})
-    chosen = _chosen(asked, crops, np.random.default_rng(0))
+    proposals = SimpleNamespace(crops=crops, top_down=0)
+    chosen = _chosen(asked, proposals, np.random.default_rng(0))
     assert len(chosen) == 8 and len(set(chosen)) == 8 and np.all(np.diff(chosen) > 0)
     assert set(np.argsort(-scores, kind="stable")[:4]) <= set(chosen)
-    again = _chosen(asked, crops, np.random.default_rng(1))
+    again = _chosen(asked, proposals, np.random.default_rng(1))
     assert set(again) != set(chosen)  # the other half is drawn at random
+    top_down = _chosen(spec.model_copy(update={"per_view": 8}), SimpleNamespace(crops=crops, top_down=3),
+                       np.random.default_rng(0))
+    assert len(top_down) == 8 and {17, 18, 19} <= set(top_down)  # the top-down grasps, always, in place of three
+    with pytest.raises(ValueError, match="give one"):
+        PickLabelSpec(checkpoint=str(checkpoint), plan={"top_down": True})
 
 
 def test_the_listwise_term_is_small_only_where_each_views_successes_score_above_its_failures():

@@ -294,3 +294,23 @@ def test_the_label_stage_cuts_its_crops_as_the_planner_does_canonical_codes_incl
     raw = cut_crops(points, poses, CropRecord(spec.gripper, spec.voxel.model_copy(update={"canonical": False}), 32,
                                               "pointnet"), np.random.default_rng(5))
     assert not np.array_equal(raw.codes, planned.codes)  # the turn matters for some of these crops
+
+
+def test_the_top_down_grasps_join_the_pool_only_when_asked_and_the_rest_is_unchanged():
+    from onepiece_dist.core.cloud.top_down import top_down_grasps
+    from onepiece_dist.plan.planner import gravity, propose
+    from onepiece_dist.plan.scorer import CropRecord
+
+    seen = seen_cloud(box_mesh((0.03, 0.05, 0.02)), eye=(0.3, 0.1, 0.4))
+    observation = Observation(np.vstack([seen.points, _floor(-0.0101)]), seen.viewpoint, "box on a floor")
+    spec = JobSpec()
+    record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, "pointnet_context")
+    plain = propose(observation, record, PlanSpec(), np.random.default_rng(0))
+    added = propose(observation, record, PlanSpec(top_down=True), np.random.default_rng(0))
+    assert plain.top_down == 0 and added.top_down == 3
+    n = len(plain.poses)
+    assert len(added.poses) == n + 3 and np.array_equal(added.poses[:n], plain.poses)
+    expected = top_down_grasps(added.object_points, gravity(added.plane), record.gripper)
+    assert np.allclose(added.poses[n:], expected)
+    assert added.counts.candidates == plain.counts.candidates + 3 and added.counts.sampled == plain.counts.sampled + 3
+    assert np.allclose(added.poses[n:, :3, 0] @ gravity(added.plane), 1)  # each approaches along gravity

@@ -165,3 +165,37 @@ def _sizes(points: list[dict]) -> str:
     if not points:
         return "not fitted yet"
     return f"{points[0]['labels']} labels in all, against {points[0]['base']['labels']}"
+
+
+def top_down_section(result: dict, spread: float) -> list[str]:
+    """The top-down trial (results/pick_top_down.json): the base network on the product's pool and on the pool
+    with the top-down grasps, and a network whose labels executed them, seed for seed; kept only where the mean
+    gain on the household set over two seeds or more exceeds ``spread``; the unseen set's figures never chosen on."""
+    points = sorted(result["points"], key=lambda p: p["seed"])
+
+    def cells(p: dict, where: str) -> list[float]:
+        return [p["base"][where], p["base"]["with_pool"][where]["first_attempt"],
+                p["with_pool"][where]["first_attempt"]]
+
+    rows = [f"| {p['seed']} | " + " | ".join(_pct(v) for v in cells(p, "household") + cells(p, "unseen")) + " |"
+            for p in points]
+    gains = {where: [cells(p, where)[2] - cells(p, where)[0] for p in points] for where in ("household", "unseen")}
+    pool = {where: [cells(p, where)[1] - cells(p, where)[0] for p in points] for where in ("household", "unseen")}
+    gain = sum(gains["household"]) / max(len(points), 1)
+    verdict = ("one seed: undecided" if len(points) == 1 else "kept" if gain > spread else "not kept")
+    mean = {k: {w: sum(v) / max(len(v), 1) for w, v in d.items()} for k, d in (("labels", gains), ("pool", pool))}
+    return [f"## Top-down grasps in the pool and in the labels: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. The oracle above says the view's pool lacks what the top-down "
+            "baseline finds (flat packages). With `plan.top_down` the planner also proposes the three top-down "
+            "grasps, cropped and checked as the sampled ones, and pick labels always execute them in place of three "
+            f"random candidates. The first batch labelled again so ({result['labels']} labels, success rate "
+            f"{result['success_rate']:.2f}) joined with the curve's second batch; `{BASE}` fitted on it seed for seed "
+            "against the base (the random points of the on-policy trial), first attempt; base: the product's pool, "
+            "+ pool: with the top-down grasps, + labels: the network fitted on the labels that executed them:", "",
+            "| seed | household, base | + pool | + pool, + labels | unseen, base | + pool | + pool, + labels |",
+            "| --- | --- | --- | --- | --- | --- | --- |", *rows, "",
+            f"On the household set, where designs are chosen, the top-down grasps in pool and labels give "
+            f"{100 * gain:+.1f} points over {len(points)} seed{'s' if len(points) != 1 else ''} "
+            f"({100 * mean['pool']['household']:+.1f} from the pool alone), against the shipped design's spread of "
+            f"{100 * spread:.1f} points over seeds: {verdict}. On the unseen set, where nothing is chosen, "
+            f"{100 * mean['labels']['unseen']:+.1f} points ({100 * mean['pool']['unseen']:+.1f} from the pool alone)."]

@@ -14,6 +14,7 @@ from benchmarks.pages.pick_trials_section import (
     base_spread,
     on_policy_section,
     space_section,
+    top_down_section,
     unseen_section,
     vessels_section,
 )
@@ -180,13 +181,16 @@ def _dense_line(plan: dict) -> str:
             f"**{'met' if seconds <= target else 'not met'}**). ")
 
 
+SECTIONS = ("pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down",
+            "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
+
+
 def render_picks_page() -> str:
     picks, plan = load("picks"), load("plan")
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
-             "benchmarks/results/picks.json, pick_curve.json, pick_space.json, pick_on_policy.json, "
-             "pick_vessels.json, pick_rankings.json, pick_pool_size.json, pick_unseen.json and plan.json: do not "
-             "edit by hand. -->", ""]
+             f"benchmarks/results/picks.json, {', '.join(f'{name}.json' for name in SECTIONS)} and plan.json: do "
+             "not edit by hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -199,29 +203,18 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    unseen = load("pick_unseen")
-    if unseen is not None:
-        lines += [*unseen_section(unseen, picks), ""]
-    curve = load("pick_curve")
-    if curve is not None:
-        lines += [*curve_section(curve, picks), ""]
     space = load("pick_space")
-    if space is not None:
-        lines += [*space_section(space), ""]
-    on_policy = load("pick_on_policy")
-    if on_policy is not None:
-        rates = base_spread(space)[1] if space is not None else [0.0]
-        lines += [*on_policy_section(on_policy, rates[-1] - rates[0]), ""]
-    vessels = load("pick_vessels")
-    if vessels is not None:
-        rates = base_spread(space)[1] if space is not None else [0.0]
-        lines += [*vessels_section(vessels, rates[-1] - rates[0]), ""]
-    rankings = load("pick_rankings")
-    if rankings is not None:
-        lines += [*rankings_section(rankings), ""]
-    pool = load("pick_pool_size")
-    if pool is not None:
-        lines += [*pool_size_lines(pool), ""]
+    rates = base_spread(space)[1] if space is not None else [0.0]
+    spread = rates[-1] - rates[0]  # the shipped design's own spread over seeds: what a trial must beat
+    render = {"pick_unseen": lambda r: unseen_section(r, picks), "pick_curve": lambda r: curve_section(r, picks),
+              "pick_space": space_section, "pick_on_policy": lambda r: on_policy_section(r, spread),
+              "pick_vessels": lambda r: vessels_section(r, spread),
+              "pick_top_down": lambda r: top_down_section(r, spread), "pick_rankings": rankings_section,
+              "pick_pool_size": pool_size_lines}
+    for name in SECTIONS:
+        result = load(name)
+        if result is not None:
+            lines += [*render[name](result), ""]
     if plan is not None:
         lines += [*latency_section(plan), ""]
     return "\n".join(lines)

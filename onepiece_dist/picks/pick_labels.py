@@ -59,7 +59,7 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
     proposals = seen.proposals
     if proposals is None or len(proposals.poses) == 0:
         return None
-    chosen = _chosen(spec, proposals.crops, seen.rng)
+    chosen = _chosen(spec, proposals, seen.rng)
     executions = Executions(spec, world, mesh, seen.resting, view)
     outcomes = [executions.run("view", i, proposals.poses[i]) for i in chosen]
     return {"points": proposals.crops.points[chosen].astype(np.float16),
@@ -72,10 +72,16 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
             "pose": proposals.poses[chosen].astype(np.float64)}
 
 
-def _chosen(spec: PickLabelSpec, crops, rng: np.random.Generator) -> np.ndarray:
+def _chosen(spec: PickLabelSpec, proposals, rng: np.random.Generator) -> np.ndarray:
     """Which candidates of a view to execute, in index order: a seeded random subset of ``per_view``; with a
-    checkpoint, its ``top_share`` best-scored first, the rest at random among the others."""
-    count = len(crops.counts)
+    checkpoint, its ``top_share`` best-scored first, the rest at random among the others. The top-down grasps
+    (plan.top_down) are always among them, in place of as many random ones."""
+    crops, count = proposals.crops, len(proposals.crops.counts)
+    if proposals.top_down:
+        sampled = count - proposals.top_down
+        forced = np.arange(sampled, count)
+        rest = rng.permutation(sampled)[: max(spec.per_view - len(forced), 0)]
+        return np.sort(np.concatenate([rest, forced]))
     if spec.checkpoint is None:
         return np.sort(rng.permutation(count)[: spec.per_view])
     scorer = _scorer(spec.checkpoint, spec.gripper)

@@ -20,6 +20,7 @@ from onepiece_dist.core.cloud.grasps import (
 )
 from onepiece_dist.core.cloud.support_check import support_plane
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, DepthRays, hand_grid, swept_space
+from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.hand_frames import to_panda
@@ -95,6 +96,7 @@ class Proposals:
     counts: PlanCounts
     seconds: dict[str, float] = field(default_factory=dict)
     viewpoint: np.ndarray | None = None
+    top_down: int = 0  # the last this many proposals are top-down grasps (PlanSpec.top_down)
 
 
 @dataclass(frozen=True)
@@ -150,12 +152,16 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,
                                 spec.orientations)
     sampled = time.perf_counter()
-    crops, keep = cut_crops(objects, found.poses, record, rng).holding(spec.min_points)
-    crops = with_context(crops, found.poses[keep], objects, gravity(plane), gripper.closing_depth)
+    added = top_down_grasps(objects, gravity(plane), gripper) if spec.top_down else np.zeros((0, 4, 4))
+    poses = np.concatenate([found.poses, added]) if len(added) else found.poses
+    crops, keep = cut_crops(objects, poses, record, rng).holding(spec.min_points)
+    crops = with_context(crops, poses[keep], objects, gravity(plane), gripper.closing_depth)
     if observation.viewpoint is not None and record.model in SPACE_MODELS:  # 10-20 ms a view: only when read
-        crops = with_space(crops, found.poses[keep], points, observation.viewpoint, gripper)
-    return Proposals(found.poses[keep], crops, objects, plane, _counts(found, int(np.sum(~keep))),
-                     {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint)
+        crops = with_space(crops, poses[keep], points, observation.viewpoint, gripper)
+    counts = _counts(found, int(np.sum(~keep)), len(added))
+    return Proposals(poses[keep], crops, objects, plane, counts,
+                     {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint,
+                     int(np.sum(keep[len(found.poses):])))
 
 
 def gravity(plane: SupportPlane | None) -> np.ndarray:
@@ -182,8 +188,9 @@ def _thin(points: np.ndarray, cell: float) -> np.ndarray:
     return points[voxel_downsample(points, cell)] if cell > 0 and len(points) else points
 
 
-def _counts(found: CloudCandidates, empty: int) -> PlanCounts:
-    return PlanCounts(found.sampled, found.collided, found.below_plane, empty, len(found.poses) - empty)
+def _counts(found: CloudCandidates, empty: int, added: int = 0) -> PlanCounts:
+    return PlanCounts(found.sampled + added, found.collided, found.below_plane, empty,
+                      len(found.poses) + added - empty)
 
 
 def rank(proposals: Proposals, scores: np.ndarray, record: CropRecord, spec: PlanSpec,
