@@ -222,3 +222,26 @@ def test_labels_on_policy_are_kept_only_over_seeds_and_beyond_the_shipped_design
     result["points"] += [point("random", 1, 0.84), point("on_policy", 1, 0.86)]
     assert on_policy_section(result, 0.047)[-1].endswith(": kept.")  # +6 points over two seeds, spread 4.7
     assert on_policy_section(result, 0.07)[-1].endswith(": not kept.")
+
+
+def test_a_trial_on_household_objects_is_kept_by_the_household_set_alone_never_the_unseen():
+    from benchmarks.pages.pick_trials_section import top_down_section, vessels_section
+
+    def top_down(seed: int, base: float, tried: float, unseen: float) -> dict:
+        judged = {"household": {"first_attempt": tried}, "unseen": {"first_attempt": unseen}}
+        return {"seed": seed, "labels": 100, "with_pool": judged,
+                "base": {"household": base, "unseen": 0.5, "labels": 100, "with_pool": judged}}
+
+    result = {"command": "c", "date": "d", "machine": "m", "labels": 100, "success_rate": 0.3,
+              "points": [top_down(0, 0.80, 0.86, 0.5)]}
+    assert ": one seed: undecided." in top_down_section(result, 0.047)[-1]
+    result["points"].append(top_down(1, 0.84, 0.90, 0.5))
+    assert ": kept." in top_down_section(result, 0.047)[-1]  # +6 over two seeds, spread 4.7
+    result["points"] = [top_down(0, 0.80, 0.82, 0.9), top_down(1, 0.84, 0.86, 0.9)]
+    words = top_down_section(result, 0.047)[-1]
+    assert ": not kept." in words and "+40.0 points" in words  # the unseen set's +40 decides nothing
+    vessels = {"command": "c", "date": "d", "machine": "m", "batch": "b", "labels": 100, "success_rate": 0.3,
+               "points": [{"seed": s, "labels": 200, "picks": {"methods": {"network": {"first_attempt": 0.8}}},
+                           "unseen": {"first_attempt": 0.9}, "base": {"household": 0.8, "unseen": 0.5,
+                                                                       "labels": 200}} for s in (0, 1)]}
+    assert ": not kept." in vessels_section(vessels, 0.047)[-1]

@@ -190,12 +190,14 @@ def top_down_section(result: dict, spread: float) -> list[str]:
             "grasps, cropped and checked as the sampled ones, and pick labels always execute them in place of three "
             f"random candidates. The first batch labelled again so ({result['labels']} labels, success rate "
             f"{result['success_rate']:.2f}) joined with the curve's second batch; `{BASE}` fitted on it seed for seed "
-            "against the base (the random points of the on-policy trial), first attempt; base: the product's pool, "
+            "against the base (the random points of the on-policy trial, further seeds fitted on the same labels), "
+            "first attempt; base: the product's pool, "
             "+ pool: with the top-down grasps, + labels: the network fitted on the labels that executed them:", "",
             "| seed | household, base | + pool | + pool, + labels | unseen, base | + pool | + pool, + labels |",
             "| --- | --- | --- | --- | --- | --- | --- |", *rows, "",
             f"On the household set, where designs are chosen, the top-down grasps in pool and labels give "
             f"{100 * gain:+.1f} points over {len(points)} seed{'s' if len(points) != 1 else ''} "
-            f"({100 * mean['pool']['household']:+.1f} from the pool alone), against the shipped design's spread of "
+            f"({100 * mean['pool']['household']:+.1f} from the pool alone; above the base at "
+            f"{sum(g > 0 for g in gains['household'])} of {len(points)} seeds), against the shipped design's spread of "
             f"{100 * spread:.1f} points over seeds: {verdict}. On the unseen set, where nothing is chosen, "
             f"{100 * mean['labels']['unseen']:+.1f} points ({100 * mean['pool']['unseen']:+.1f} from the pool alone)."]
