@@ -102,7 +102,6 @@ UNSEEN = (
         ("moka_pot_body", _LB2, "yellow_moka_pot", "moka_pot_body.obj"))),
     _libero("libero_mug", _LB4, "custom_objects", "libero_mug", "libero_mug.obj"),
 )
-SETS = {"household": OBJECTS, "unseen": UNSEEN}
 
 
 class HouseholdUnavailable(RuntimeError):

@@ -16,15 +16,13 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import time
 from datetime import date
 
-from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, ROOT, fit, label_spec, labelled, labels
+from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, fit, label_spec, labelled
 from benchmarks.experiments.pick_on_policy import second_batch
+from benchmarks.experiments.pick_unseen import DESIGN, base_point, judge
 
 RESULTS = HERE / "results" / "pick_top_down.json"
-BASE = "data/pick_curve/on_policy/random_s{seed}/best.pt"  # the first batch and the curve's second, random
-DESIGN = "context_balanced"
 
 
 def top_down_batch():
@@ -34,43 +32,13 @@ def top_down_batch():
     return labelled(spec, shapes, seed)
 
 
-def judge(name: str, checkpoint: str, objects: str, top_down: bool) -> dict:
-    from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.specs.plan import PickSpec, PlanSpec
-
-    spec = PickSpec(objects=objects, checkpoint=str(ROOT / checkpoint), output=str(OUT / "top_down" / name),
-                    views=8, attempts=3, pictures=0, methods=("network",), plan=PlanSpec(top_down=top_down))
-    start = time.perf_counter()
-    network = run_picks(spec).method("network")
-    return {"first_attempt": network.first_attempt, "interval": list(network.first_attempt_interval),
-            "failures": network.first_failures, "seconds": round(time.perf_counter() - start, 1)}
-
-
 def judged(name: str, checkpoint: str) -> dict:
     """household and unseen first attempts of ``checkpoint`` planning with the top-down grasps in its pool."""
-    from benchmarks.experiments.household import UNSEEN, household_objects
+    from benchmarks.experiments.household import household_objects
 
-    return {"household": judge(f"{name}_household", checkpoint, str(household_objects()), True),
-            "unseen": judge(f"{name}_unseen", checkpoint, str(household_objects(objects=UNSEEN)), True)}
-
-
-def base_point(seed: int, committed: dict, unseen: dict) -> dict:
-    """The base network at ``seed`` (the first batch and the curve's second, random): the on-policy trial's random
-    point and its unseen figure where committed, else fitted and judged here (the product's pool)."""
-    from benchmarks.experiments.household import UNSEEN, household_objects
-
-    if seed in committed:
-        return {"checkpoint": BASE.format(seed=seed), "labels": committed[seed]["labels"],
-                "household": committed[seed]["picks"]["methods"]["network"]["first_attempt"],
-                "unseen": unseen[f"random_s{seed}"]["unseen"]["first_attempt"]}
-    joined = labels(1).joined(second_batch(None))
-    fitted = fit(joined, len(joined), DESIGN, seed, ROOT / BASE.format(seed=seed).rsplit("/", 1)[0])
-    name = f"random_s{seed}_product"
-    return {"checkpoint": fitted["checkpoint"], "labels": fitted["labels"],
-            "household": judge(f"{name}_household", fitted["checkpoint"], str(household_objects()), False)[
-                "first_attempt"],
-            "unseen": judge(f"{name}_unseen", fitted["checkpoint"], str(household_objects(objects=UNSEEN)), False)[
-                "first_attempt"]}
+    out = OUT / "top_down"
+    return {"household": judge(f"{name}_household", checkpoint, str(household_objects()), True, out),
+            "unseen": judge(f"{name}_unseen", checkpoint, None, True, out)}
 
 
 def main() -> None:
@@ -79,14 +47,11 @@ def main() -> None:
     args = parser.parse_args()
     first = top_down_batch()
     joined = first.joined(second_batch(None))
-    unseen = json.loads((HERE / "results" / "pick_unseen.json").read_text())["networks"]
-    committed = {p["seed"]: p for p in json.loads((HERE / "results" / "pick_on_policy.json").read_text())["points"]
-                 if p["second_batch"] == "random"}
     points = json.loads(RESULTS.read_text())["points"] if RESULTS.is_file() else []
     for seed in (int(s) for s in args.seeds.split(",")):
         if any(p["seed"] == seed for p in points):
             continue
-        base = base_point(seed, committed, unseen)
+        base = base_point(seed)
         point = fit(joined, len(joined), DESIGN, seed, OUT / f"top_down/top_down_s{seed}")
         point.update(seed=seed, with_pool=judged(f"top_down_s{seed}", point["checkpoint"]),
                      base={**base, "with_pool": judged(f"random_s{seed}", base["checkpoint"])})

@@ -35,18 +35,49 @@ NETWORKS = {
 }
 
 
-def judge(name: str, checkpoint: str) -> dict:
+BASE = "data/pick_curve/on_policy/random_s{seed}/best.pt"  # the first batch and the curve's second, random
+DESIGN = "context_balanced"
+
+
+def judge(name: str, checkpoint: str, objects: str | None = None, top_down: bool = False,
+          out: Path = OUT) -> dict:
+    """``checkpoint``'s network alone on ``objects`` (default: the unseen set), first attempt; ``top_down``: the
+    top-down grasps in its pool (PlanSpec.top_down)."""
     from benchmarks.experiments.household import UNSEEN, household_objects
     from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.specs.plan import PickSpec
+    from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
-    spec = PickSpec(objects=str(household_objects(objects=UNSEEN)), checkpoint=str(ROOT / checkpoint),
-                    output=str(OUT / name), views=8, attempts=3, pictures=0, methods=("network",))
+    spec = PickSpec(objects=objects or str(household_objects(objects=UNSEEN)), checkpoint=str(ROOT / checkpoint),
+                    output=str(out / name), views=8, attempts=3, pictures=0, methods=("network",),
+                    plan=PlanSpec(top_down=top_down))
     start = time.perf_counter()
     network = run_picks(spec).method("network")
     return {"first_attempt": network.first_attempt, "interval": list(network.first_attempt_interval),
             "views": network.views, "failures": network.first_failures,
             "seconds": round(time.perf_counter() - start, 1)}
+
+
+def base_point(seed: int) -> dict:
+    """The trials' base network at ``seed`` (DESIGN on the first batch and the curve's second, random): the
+    on-policy trial's random point and its unseen figure where committed, else fitted and judged here."""
+    from benchmarks.experiments.household import household_objects
+    from benchmarks.experiments.pick_curve import fit, labels
+    from benchmarks.experiments.pick_on_policy import second_batch
+
+    committed = {p["seed"]: p for p in json.loads((HERE / "results" / "pick_on_policy.json").read_text())["points"]
+                 if p["second_batch"] == "random"}
+    if seed in committed:
+        unseen = json.loads(RESULTS.read_text())["networks"][f"random_s{seed}"]["unseen"]
+        return {"checkpoint": BASE.format(seed=seed), "labels": committed[seed]["labels"],
+                "household": committed[seed]["picks"]["methods"]["network"]["first_attempt"],
+                "unseen": unseen["first_attempt"]}
+    joined = labels(1).joined(second_batch(None))
+    fitted = fit(joined, len(joined), DESIGN, seed, ROOT / BASE.format(seed=seed).rsplit("/", 1)[0])
+    name, out = f"random_s{seed}_product", ROOT / "data" / "pick_curve" / "top_down"
+    return {"checkpoint": fitted["checkpoint"], "labels": fitted["labels"],
+            "household": judge(f"{name}_household", fitted["checkpoint"], str(household_objects()), out=out)[
+                "first_attempt"],
+            "unseen": judge(f"{name}_unseen", fitted["checkpoint"], out=out)["first_attempt"]}
 
 
 def household_figure(name: str) -> float | None:

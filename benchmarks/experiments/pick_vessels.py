@@ -20,13 +20,11 @@ import platform
 from datetime import date
 
 from benchmarks.experiments.pick_curve import HERE, OUT, fit, label_spec, labelled, labels, picks
-from benchmarks.experiments.pick_unseen import judge
+from benchmarks.experiments.pick_unseen import DESIGN, base_point, judge
 from benchmarks.experiments.training_shapes import vessel_shapes
 
 RESULTS = HERE / "results" / "pick_vessels.json"
 BATCH = ("pybullet:random_urdfs[320:480]+data/vessels", "pick_labels_vessels", "vessels", 2)
-BASE = "data/pick_curve/on_policy/random_s{seed}/best.pt"  # the first batch and the curve's second, random
-DESIGN = "context_balanced"
 
 
 def vessel_batch():
@@ -40,9 +38,6 @@ def main() -> None:
     args = parser.parse_args()
     first, second = labels(1), vessel_batch()
     joined = first.joined(second)
-    base = {p["seed"]: p for p in json.loads((HERE / "results" / "pick_on_policy.json").read_text())["points"]
-            if p["second_batch"] == "random"}
-    unseen = json.loads((HERE / "results" / "pick_unseen.json").read_text())["networks"]
     points = json.loads(RESULTS.read_text())["points"] if RESULTS.is_file() else []
     for seed in (int(s) for s in args.seeds.split(",")):
         if any(p["seed"] == seed for p in points):
@@ -51,9 +46,7 @@ def main() -> None:
         point.update(seed=seed, second_success_rate=float(second.success.mean()),
                      picks=picks(point["checkpoint"], 8, name=f"vessels/vessels_s{seed}"),
                      unseen=judge(f"vessels_s{seed}", point["checkpoint"]),
-                     base={"checkpoint": BASE.format(seed=seed), "labels": base[seed]["labels"],
-                           "household": base[seed]["picks"]["methods"]["network"]["first_attempt"],
-                           "unseen": unseen[f"random_s{seed}"]["unseen"]["first_attempt"]})
+                     base=base_point(seed))
         points.append(point)
         print(seed, point["picks"]["methods"]["network"]["first_attempt"], point["unseen"]["first_attempt"],
               flush=True)
