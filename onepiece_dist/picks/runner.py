@@ -156,7 +156,10 @@ class PickWorker:
             self.crash_log.starting("pick", index)
         from onepiece_dist.runtime.ray_runner import node_id
 
-        return dataclasses.replace(pick_object(self.spec, ref, index), node=node_id())
+        picked = pick_object(self.spec, ref, index)
+        if self.crash_log is not None:
+            self.crash_log.finished()
+        return dataclasses.replace(picked, node=node_id())
 
 
 @dataclass

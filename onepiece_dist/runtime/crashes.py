@@ -2,12 +2,12 @@
 
 Each worker process points Python's ``faulthandler`` at a file of its own in the job's crash folder (inside the
 parts folder, so shared by every node) and, before each item, rewrites the file's first line with the item it
-starts (``"<method> <index>"``). A fatal signal raised in the process (a segfault in the simulator, an abort, a bus
-error) makes ``faulthandler`` append "Fatal Python error" to that file before the process dies. A SIGKILL (an
-operator, a chaos run, a node going away) leaves nothing. The pool counts the two apart (a kill by Ray's memory
-monitor, reported as such, counts as the item's crash): an item is quarantined after MAX_CRASHES crashes while it
-ran alone; deaths without a record are retried up to MAX_UNEXPLAINED times, a bound for a job that something
-outside keeps killing, not a judgement on the item.
+starts (``"<method> <index>"``), and after it with ``idle``. A fatal signal raised in the process (a segfault in
+the simulator, an abort, a bus error) makes ``faulthandler`` append "Fatal Python error" to that file before the
+process dies. A SIGKILL (an operator, a chaos run, a node going away) leaves nothing. The pool counts the two
+apart (a kill by Ray's memory monitor, reported as such, counts as the item's crash): an item is quarantined after
+MAX_CRASHES crashes while it ran alone; deaths without a record are retried up to MAX_UNEXPLAINED times, a bound
+for a job that something outside keeps killing, not a judgement on the item.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import IO
 
 FATAL = "Fatal Python error"
+IDLE = "idle"  # the record of a process between items
 
 
 def crash_folder(parts_folder: str | os.PathLike, job_id: str) -> Path:
@@ -40,6 +41,14 @@ class CrashLog:
         self.file.seek(0)
         self.file.truncate()
         self.file.write(f"{method} {index}\n")
+        self.file.flush()
+
+    def finished(self) -> None:
+        """Record that the item this process started has ended (the record then names no item: a process killed
+        now was killed between items)."""
+        self.file.seek(0)
+        self.file.truncate()
+        self.file.write(f"{IDLE}\n")
         self.file.flush()
 
 

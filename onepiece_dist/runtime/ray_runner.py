@@ -60,15 +60,23 @@ class SimWorker:
         if self.crash_log is not None:
             self.crash_log.starting(method, index)
 
+    def finished(self) -> None:
+        if self.crash_log is not None:
+            self.crash_log.finished()
+
     def label(self, task: LabelTask, index: int) -> ShardResult:
         """Label one shard of the one object into its part."""
         self.starting("label", index)
-        return dataclasses.replace(label_shard(self.spec, task, index, self.parts), node=node_id())
+        result = label_shard(self.spec, task, index, self.parts)
+        self.finished()
+        return dataclasses.replace(result, node=node_id())
 
     def patch(self, task: PatchTask, index: int) -> ShardResult:
         """Cut one shard of the one object's patches into its part."""
         self.starting("patch", index)
-        return dataclasses.replace(build_patch_shard(self.spec, task, index, self.parts), node=node_id())
+        result = build_patch_shard(self.spec, task, index, self.parts)
+        self.finished()
+        return dataclasses.replace(result, node=node_id())
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
         """Extract one object; its codes go to the central actor (named ``central``), once. When that message
@@ -78,6 +86,7 @@ class SimWorker:
         central = WriterClient.find(self.central) if self.central and result.status == "ok" else None
         if central is not None:
             central.send_codes(index, result.part_key, self.parts.read_array(result.part_key, "code"))
+        self.finished()
         return dataclasses.replace(result, node=node_id())
 
 
