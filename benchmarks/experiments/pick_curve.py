@@ -79,15 +79,20 @@ def labelled(spec, shapes: str, seed: int, make=None):
 
 
 def fit(all_labels, size: int, design: str, seed: int = 0, folder: Path | None = None) -> dict:
+    rows = np.sort(np.random.default_rng([seed, size]).permutation(len(all_labels))[:size])
+    return fit_rows(all_labels, rows, design, seed, folder or OUT / f"{design}_{size}")
+
+
+def fit_rows(all_labels, rows: np.ndarray, design: str, seed: int, folder: Path) -> dict:
+    """A network of ``design`` fitted at ``seed`` on the labels' ``rows``, kept in ``folder``: its record."""
     from onepiece_dist.learn.pick_train import PickTrainOptions, train_on_pick_labels
 
-    rows = np.sort(np.random.default_rng([seed, size]).permutation(len(all_labels))[:size])
     subset = all_labels.subset(rows)
     spec = all_labels.attrs["spec"]
     crop = {"gripper": spec["gripper"], "voxel": spec["voxel"], "points_per_grasp": spec["points_per_grasp"],
             "source": "pick_labels"}
     options = replace(PickTrainOptions(seed=seed), **DESIGNS[design])
-    result = train_on_pick_labels(subset, folder or OUT / f"{design}_{size}", crop, options)
+    result = train_on_pick_labels(subset, folder, crop, options)
     label_seconds = all_labels.attrs["core_seconds"] * len(rows) / len(all_labels)
     return {"design": design, "labels": len(rows), "options": asdict(options),
             "checkpoint": str(result.checkpoint.relative_to(ROOT)), "fit_seconds": round(result.seconds, 1),

@@ -31,9 +31,11 @@ from benchmarks.pages import (
     trials_page,
 )
 from benchmarks.pages.pick_curve_section import draw_curve
+from onepiece_dist.study.pick_study import page as pick_page
 
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "benchmarks" / "results"
+PICK_STUDY = "docs/studies/pick_labels"  # the study on pick labels (issue 58): its study.json, its page
 
 
 @dataclass(frozen=True)
@@ -63,6 +65,9 @@ def pages() -> list[Page]:
         Page("docs/finite_set.md", lambda: finite_set_page.page_text(result("finite_set"))),
         Page("docs/one_object_storage.md", lambda: one_object_storage_page.page_text(result("one_object_storage"))),
     ]
+    if (ROOT / PICK_STUDY / "study.json").is_file():
+        listed.append(Page(f"{PICK_STUDY}/study.md",
+                           lambda: pick_page.page_text(pick_page.read_result(ROOT / PICK_STUDY))))
     for name in ("paper_experiment", "paper_experiment_grasp_load"):
         listed.append(Page(f"docs/{name}.md", lambda name=name: experiment_page.page_text(result(name), RESULTS)))
     for path in sorted(RESULTS.glob("key_study*.json")):

@@ -64,9 +64,9 @@ def a_rate(result: StudyResult) -> float:
     return round(next(arm for arm in result.picks.arms if arm.name == "A").first_attempt.mean, 4)
 
 
-def levels_asked(result: StudyResult) -> list[float]:
-    """LEVELS and A's own mean pick rate, in order."""
-    return sorted({*LEVELS, a_rate(result)})
+def curve_readings(curves: dict[str, list[PlanPoint]], a: float) -> list[LevelReach]:
+    """Every plan's reading at LEVELS and at A's mean pick rate ``a`` (level by level)."""
+    return [reach(plan, points, level) for level in sorted({*LEVELS, a}) for plan, points in curves.items()]
 
 
 def reach(plan: str, points: list[PlanPoint], level: float) -> LevelReach:
@@ -81,9 +81,7 @@ def reach(plan: str, points: list[PlanPoint], level: float) -> LevelReach:
 
 def level_readings(result: StudyResult) -> list[LevelReach]:
     curves = plan_curves(result)
-    if not curves:
-        return []
-    return [reach(plan, points, level) for level in levels_asked(result) for plan, points in curves.items()]
+    return curve_readings(curves, a_rate(result)) if curves else []
 
 
 def cell(r: LevelReach) -> str:
@@ -97,10 +95,12 @@ def cell(r: LevelReach) -> str:
 def levels_lines(result: StudyResult) -> list[str]:
     """The table of the first lines: one row per level, one column per plan."""
     readings = level_readings(result)
-    if not readings:
-        return []
+    return levels_table(readings, a_rate(result)) if readings else []
+
+
+def levels_table(readings: list[LevelReach], a: float) -> list[str]:
+    """``readings`` as a table: one row per level (``a``: A's own), one column per plan."""
     plans = list(dict.fromkeys(r.plan for r in readings))
-    a = a_rate(result)
     rows = {}
     for r in readings:
         rows.setdefault(r.level, {})[r.plan] = cell(r)

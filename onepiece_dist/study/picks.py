@@ -74,16 +74,24 @@ def judge_by_picks(spec: StudySpec, folder: Path, trained: list[tuple[ArmRun, St
 
 
 def compare(arm: np.ndarray, other: np.ndarray, spec: StudySpec) -> str:
+    return paired_verdict(arm, other, spec.seed, spec.targets.bootstrap_draws, spec.targets.confidence)
+
+
+def paired_verdict(arm: np.ndarray, other: np.ndarray, seed: int, draws: int, confidence: float) -> str:
     """``arm`` against ``other`` (per-object rates of the same objects): 'beats' when the interval of their paired
     difference lies above zero, 'loses' when below, else 'ties' (equal means are a tie, never a win)."""
-    low, high = bootstrap_interval(arm - other, spec.seed, spec.targets.bootstrap_draws, spec.targets.confidence)
+    low, high = bootstrap_interval(arm - other, seed, draws, confidence)
     return "beats" if low > 0 else "loses" if high < 0 else "ties"
 
 
 def _measure(rates: np.ndarray, spec: StudySpec) -> Measure:
+    return rates_measure(rates, spec.seed, spec.targets.bootstrap_draws, spec.targets.confidence)
+
+
+def rates_measure(rates: np.ndarray, seed: int, draws: int, confidence: float) -> Measure:
     """``rates`` (objects, seeds): the mean, the spread over seeds, the interval over objects."""
     per_object = rates.mean(axis=1)
-    interval = bootstrap_interval(per_object, spec.seed, spec.targets.bootstrap_draws, spec.targets.confidence)
+    interval = bootstrap_interval(per_object, seed, draws, confidence)
     return Measure(mean=round(float(per_object.mean()), 4), std=round(float(rates.mean(axis=0).std()), 4),
                    interval=(round(interval[0], 4), round(interval[1], 4)))
 

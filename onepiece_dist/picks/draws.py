@@ -1,0 +1,98 @@
+"""The pick label drawn again (issue 58: the ceiling measured, not fitted): on each view of each held-out object,
+seen exactly as the pick benchmark sees it (picks.views), a seeded sample of the planner's candidates, each
+executed many times by the pick protocol, and each network's score of it.
+
+Draw 0 is the candidate's own execution (the generator every chooser meets, picks.views.Executions); draw d > 0
+draws its perturbations from a generator of its own ([content id, seed, view, pool, candidate, DRAWS, d]), so
+draws do not depend on the sample, its order or how many draws were asked.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.errors import MeshRejected
+from onepiece_dist.objects import ObjectRef, resolve_source
+from onepiece_dist.picks.views import POOLS, Executions, observe_view, simulated_object
+from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.runtime.pinned_child import PinnedSimulation
+from onepiece_dist.specs.plan import PickSpec
+
+DRAWS = 5858  # the stream of the fresh draws
+
+
+@dataclass(frozen=True)
+class CandidateDraws:
+    """One object's sampled candidates: per candidate its ``view`` and ``candidate`` index among the view's
+    proposals, its ``draws`` (each a fresh execution: picked or not) and each network's ``scores``; ``status``
+    'ok' or 'rejected' with ``reason``."""
+
+    index: int
+    name: str
+    status: str
+    views: tuple[int, ...] = ()
+    candidates: tuple[int, ...] = ()
+    draws: tuple[tuple[bool, ...], ...] = ()
+    scores: tuple[tuple[float, ...], ...] = ()
+    reason: str = ""
+    seconds: float = 0.0
+
+
+def draw_candidates(spec: PickSpec, checkpoints: tuple[str, ...], per_view: int, draws: int, ref: ObjectRef,
+                    index: int) -> CandidateDraws:
+    """Every view of one object: ``per_view`` seeded candidates, each executed ``draws`` times and scored by
+    every network (a bad object: a rejected result)."""
+    import torch
+
+    torch.set_num_threads(1)
+    start = time.perf_counter()
+    scorers = [GraspScorer(path, spec.gripper, device="cpu") for path in checkpoints]
+    try:
+        world, loaded = simulated_object(spec, scorers[0].record, ref)
+    except MeshRejected as err:
+        return CandidateDraws(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
+    rows = [row for view in range(spec.views) for row in _view(spec, scorers, world, loaded.mesh, view, per_view,
+                                                               draws)]
+    return CandidateDraws(index, ref.name, "ok", tuple(r[0] for r in rows), tuple(r[1] for r in rows),
+                          tuple(r[2] for r in rows), tuple(r[3] for r in rows), seconds=time.perf_counter() - start)
+
+
+def _view(spec: PickSpec, scorers: list[GraspScorer], world, mesh, view: int, per_view: int, draws: int) -> list:
+    from onepiece_dist.sim.pick import execute_pick
+
+    seen = observe_view(spec, scorers[0].record, world, mesh, view)
+    proposals = seen.proposals
+    if proposals is None or len(proposals.poses) == 0:
+        return []
+    count = len(proposals.poses)
+    chosen = np.sort(np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, DRAWS])
+                     .permutation(count)[:per_view])
+    scores = np.stack([scorer.score(proposals.crops, spec.plan.batch_size) for scorer in scorers], axis=1)
+    executions = Executions(spec, world, mesh, seen.resting, view)
+    rows = []
+    for candidate in chosen:
+        pose = proposals.poses[candidate]
+        outcomes = [executions.run("view", int(candidate), pose).success]
+        for d in range(1, draws):
+            rng = np.random.default_rng([*executions.seed, POOLS["view"], int(candidate), DRAWS, d])
+            outcomes.append(execute_pick(world, pose, seen.resting, executions.noise, rng).success)
+        rows.append((view, int(candidate), tuple(bool(o) for o in outcomes),
+                     tuple(float(s) for s in scores[candidate])))
+    return rows
+
+
+def run_candidate_draws(spec: PickSpec, checkpoints: tuple[str, ...], per_view: int, draws: int
+                        ) -> list[CandidateDraws]:
+    """Every object of ``spec.objects``, one at a time in a pinned simulation process (runtime.pinned_child)."""
+    Path(spec.output).mkdir(parents=True, exist_ok=True)
+    simulate, results = PinnedSimulation(), []
+    try:
+        for index, ref in enumerate(resolve_source(spec.objects)):
+            results.append(simulate(draw_candidates, spec, checkpoints, per_view, draws, ref, index))
+    finally:
+        simulate.close()
+    return results
