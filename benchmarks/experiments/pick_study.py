@@ -5,7 +5,7 @@ on the pick curve's labels (both batches: 81,152 candidates executed by the pick
 objects); every network picks the household views at the first attempt (picks.networks: the same views and
 candidates for all); the label's ceiling is measured on held-out candidates executed again and again.
 
-    .venv/bin/python -m benchmarks.experiments.pick_study [--seeds 0,1] [--fits-only]
+    .venv/bin/python -m benchmarks.experiments.pick_study [--seeds 0,1,2] [--fits-only]
 
 Steps are kept under data/pick_study (a run again fits, picks or draws only what it had not), the result goes to
 docs/studies/pick_labels/study.json and its page is rendered beside it (study.pick_study.page).
@@ -65,7 +65,7 @@ def fitted(all_labels, arm, seed: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seeds", default="0,1")
+    parser.add_argument("--seeds", default="0,1,2")
     parser.add_argument("--fits-only", action="store_true")
     args = parser.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]

@@ -3,8 +3,10 @@ the table and seen once per view exactly as the pick benchmark does (picks.objec
 proposed once per view, and every network's top-ranked candidate executed by the label protocol.
 
 Every network meets the same views and the same candidates; a candidate's execution draws its perturbations from
-a generator of its own ([content id, seed, view, candidate]), so its outcome does not depend on which network chose
-it or in what order: one execution per distinct chosen candidate serves every network that chose it. A random
+a generator of its own ([content id, seed, view, candidate]), so its perturbations do not depend on which network
+chose it or in what order: one execution per distinct chosen candidate serves every network that chose it (the
+same networks give the same bytes; other networks, other earlier executions, can move a rare outcome:
+sim.pick.execute_pick). A random
 collision-free candidate per view (seeded) gives the guess's rate, to say whether the picks can separate a network
 from a guess.
 """

@@ -1,7 +1,8 @@
 """One view of the pick benchmark, written once for every flow that picks (the benchmark's choosers, many
 networks' picks, the pick-labelled training set): the object dropped on the table and settled, a seeded camera,
 its cloud, the planner's candidates; and the executions of candidates, each by the pick protocol with a generator
-of its own, so a candidate's outcome never depends on who chose it or in what order."""
+of its own, so a candidate's outcome depends on neither who chose it nor its draws' order (what the world
+executed before it still moves a rare outcome: sim.pick.execute_pick)."""
 
 from __future__ import annotations
 

@@ -161,7 +161,10 @@ def execute_pick(world: PickWorld, grasp: np.ndarray, resting: np.ndarray, noise
     the nominal trial and ``noise.trials - 1`` perturbed ones (pose and friction noise), each from the object at
     rest; with ``noise.every_trial`` the pick succeeds when every trial held (it stops at the first that fails),
     else when the nominal one held. Each trial starts from a new body of the object (Bullet keeps contact caches
-    on a body), so an outcome never depends on what the world executed before it."""
+    on a body). Bullet still keeps a little across trials (the gripper's and the table's bodies, body ids that
+    grow with each new body), so what the world executed before can move a rare outcome: in the pick study
+    (docs/studies/pick_labels), judging 24 networks instead of 16 on the same views changed 1 of 96 outcomes of
+    the same random candidates. The same executions in the same order give the same bytes."""
     held, failure = 0, ""
     base_friction = world.spec.friction
     for trial in range(noise.trials):
