@@ -55,8 +55,9 @@ def fitted(all_labels, arm, seed: int) -> dict:
     key = {"rows": hashlib.sha256(arm.rows.tobytes()).hexdigest()[:16], "design": DESIGN, "seed": seed,
            "labels": all_labels.attrs.get("specs")}
     record = folder / "fit.json"
-    if record.is_file() and json.loads(record.read_text())["key"] == key:
-        return json.loads(record.read_text())["fit"]
+    kept = json.loads(record.read_text()) if record.is_file() else {}
+    if kept.get("key") == key:
+        return kept["fit"]
     fit = fit_rows(all_labels, arm.rows, DESIGN, seed, folder)
     record.write_text(json.dumps({"key": key, "fit": fit}, indent=1) + "\n")
     print(f"fit {arm.name} s{seed}: {arm.labels} labels, {fit['fit_seconds']} s", flush=True)

@@ -79,8 +79,8 @@ def judged(all_labels, arms, seeds: list[int], fits: dict) -> dict:
 
     checkpoints = [fits[(arm.name, seed)]["checkpoint"] for arm in arms for seed in seeds]
     column = {(arm.name, seed): k for k, (arm, seed) in enumerate((a, s) for a in arms for s in seeds)}
-    sets, picks, versus = [], {}, {}
-    for name, (objects, what, chosen) in held_out_sets().items():
+    sets, picks, versus, held_out = [], {}, {}, held_out_sets()
+    for name, (objects, what, chosen) in held_out.items():
         ok = [r for r in set_picks(name, objects, checkpoints) if r["status"] == "ok"]
         picked = np.array([r["picked"] for r in ok], dtype=float)  # objects x views x networks
         guess = np.array([r["random"] for r in ok], dtype=float).mean(axis=1)
@@ -98,7 +98,7 @@ def judged(all_labels, arms, seeds: list[int], fits: dict) -> dict:
                                                  np.array(picks[f"R ~{arm.name}"][name]["per_object"]),
                                                  STUDY_SEED, BOOTSTRAP, CONFIDENCE)
                         for arm in arms if arm.kind == "B"}
-    ceiling, aps = measured(held_out_sets()["household"][0], checkpoints, arms, seeds, column)
+    ceiling, aps = measured(held_out["household"][0], checkpoints, arms, seeds, column)
     per_label = all_labels.attrs["core_seconds"] / len(all_labels)
     return {"design": {"name": DESIGN, **fits[(arms[0].name, seeds[0])]["options"], "seed": None},
             "labels": {"rows": len(all_labels), "objects": len(np.unique(all_labels.object)),

@@ -2,13 +2,14 @@
 seen exactly as the pick benchmark sees it (picks.views), a seeded sample of the planner's candidates, each
 executed many times by the pick protocol, and each network's score of it.
 
-Draw 0 is the candidate's own execution (the generator every chooser meets, picks.views.Executions); draw d > 0
-draws its perturbations from a generator of its own ([content id, seed, view, pool, candidate, DRAWS, d]), so
-draws do not depend on the sample, its order or how many draws were asked.
+Draw 0 is the candidate's own execution (the generator every chooser meets, picks.views.Executions.run); draw d > 0
+is Executions.again's, from a generator of its own, so draws do not depend on the sample, its order or how many
+draws were asked.
 """
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,12 +18,13 @@ import numpy as np
 
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, resolve_source
-from onepiece_dist.picks.views import POOLS, Executions, observe_view, simulated_object
+from onepiece_dist.picks.networks import scored_world
+from onepiece_dist.picks.runner import run_each_in_process
+from onepiece_dist.picks.views import Executions, observe_view
 from onepiece_dist.plan.scorer import GraspScorer
-from onepiece_dist.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.specs.plan import PickSpec
 
-DRAWS = 5858  # the stream of the fresh draws
+SAMPLE = 5858  # the stream of each view's sampled candidates
 
 
 @dataclass(frozen=True)
@@ -42,17 +44,13 @@ class CandidateDraws:
     seconds: float = 0.0
 
 
-def draw_candidates(spec: PickSpec, checkpoints: tuple[str, ...], per_view: int, draws: int, ref: ObjectRef,
-                    index: int) -> CandidateDraws:
+def draw_candidates(spec: PickSpec, ref: ObjectRef, index: int, checkpoints: tuple[str, ...], per_view: int,
+                    draws: int) -> CandidateDraws:
     """Every view of one object: ``per_view`` seeded candidates, each executed ``draws`` times and scored by
     every network (a bad object: a rejected result)."""
-    import torch
-
-    torch.set_num_threads(1)
     start = time.perf_counter()
-    scorers = [GraspScorer(path, spec.gripper, device="cpu") for path in checkpoints]
     try:
-        world, loaded = simulated_object(spec, scorers[0].record, ref)
+        scorers, world, loaded = scored_world(spec, checkpoints, ref)
     except MeshRejected as err:
         return CandidateDraws(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
     rows = [row for view in range(spec.views) for row in _view(spec, scorers, world, loaded.mesh, view, per_view,
@@ -62,37 +60,27 @@ def draw_candidates(spec: PickSpec, checkpoints: tuple[str, ...], per_view: int,
 
 
 def _view(spec: PickSpec, scorers: list[GraspScorer], world, mesh, view: int, per_view: int, draws: int) -> list:
-    from onepiece_dist.sim.pick import execute_pick
-
     seen = observe_view(spec, scorers[0].record, world, mesh, view)
     proposals = seen.proposals
     if proposals is None or len(proposals.poses) == 0:
         return []
     count = len(proposals.poses)
-    chosen = np.sort(np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, DRAWS])
+    chosen = np.sort(np.random.default_rng([int(mesh.content_id[:16], 16), spec.seed, view, SAMPLE])
                      .permutation(count)[:per_view])
     scores = np.stack([scorer.score(proposals.crops, spec.plan.batch_size) for scorer in scorers], axis=1)
     executions = Executions(spec, world, mesh, seen.resting, view)
     rows = []
-    for candidate in chosen:
+    for candidate in (int(c) for c in chosen):
         pose = proposals.poses[candidate]
-        outcomes = [executions.run("view", int(candidate), pose).success]
-        for d in range(1, draws):
-            rng = np.random.default_rng([*executions.seed, POOLS["view"], int(candidate), DRAWS, d])
-            outcomes.append(execute_pick(world, pose, seen.resting, executions.noise, rng).success)
-        rows.append((view, int(candidate), tuple(bool(o) for o in outcomes),
-                     tuple(float(s) for s in scores[candidate])))
+        outcomes = [executions.run("view", candidate, pose).success]
+        outcomes += [executions.again("view", candidate, pose, d).success for d in range(1, draws)]
+        rows.append((view, candidate, tuple(bool(o) for o in outcomes), tuple(float(s) for s in scores[candidate])))
     return rows
 
 
 def run_candidate_draws(spec: PickSpec, checkpoints: tuple[str, ...], per_view: int, draws: int
                         ) -> list[CandidateDraws]:
-    """Every object of ``spec.objects``, one at a time in a pinned simulation process (runtime.pinned_child)."""
+    """Every object of ``spec.objects``, one at a time in a pinned simulation process (picks.runner)."""
     Path(spec.output).mkdir(parents=True, exist_ok=True)
-    simulate, results = PinnedSimulation(), []
-    try:
-        for index, ref in enumerate(resolve_source(spec.objects)):
-            results.append(simulate(draw_candidates, spec, checkpoints, per_view, draws, ref, index))
-    finally:
-        simulate.close()
-    return results
+    task = functools.partial(draw_candidates, checkpoints=checkpoints, per_view=per_view, draws=draws)
+    return run_each_in_process(task, spec, resolve_source(spec.objects))

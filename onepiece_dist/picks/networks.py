@@ -42,16 +42,21 @@ class NetworkPicks:
     seconds: float = 0.0
 
 
-def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: ObjectRef, index: int) -> NetworkPicks:
-    """Every view of one object, every network's first choice executed (a bad object: a rejected result)."""
+def scored_world(spec: PickSpec, checkpoints: tuple[str, ...], ref: ObjectRef):
+    """One scorer per network (on a CPU thread of its own) and the pick world holding ``ref``: (scorers, world,
+    loaded object); a bad object raises MeshRejected."""
     import torch
 
     torch.set_num_threads(1)
-    start = time.perf_counter()
     scorers = [GraspScorer(path, spec.gripper, device="cpu") for path in checkpoints]
-    record = scorers[0].record
+    return (scorers, *simulated_object(spec, scorers[0].record, ref))
+
+
+def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: ObjectRef, index: int) -> NetworkPicks:
+    """Every view of one object, every network's first choice executed (a bad object: a rejected result)."""
+    start = time.perf_counter()
     try:
-        world, loaded = simulated_object(spec, record, ref)
+        scorers, world, loaded = scored_world(spec, checkpoints, ref)
     except MeshRejected as err:
         return NetworkPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
     views = [_view(spec, scorers, world, loaded.mesh, view) for view in range(spec.views)]

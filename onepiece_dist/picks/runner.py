@@ -19,7 +19,7 @@ from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.runtime.actors import restartable_actor
-from onepiece_dist.runtime.crashes import CrashLog, crash_folder
+from onepiece_dist.runtime.crashes import CrashLog, crash_folder, running
 from onepiece_dist.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.runtime.ray_env import connect
 from onepiece_dist.runtime.registry import RegistryClient
@@ -152,13 +152,10 @@ class PickWorker:
         self.crash_log = CrashLog(crashes) if crashes else None
 
     def pick(self, ref: ObjectRef, index: int) -> ObjectPicks:
-        if self.crash_log is not None:
-            self.crash_log.starting("pick", index)
         from onepiece_dist.runtime.ray_runner import node_id
 
-        picked = pick_object(self.spec, ref, index)
-        if self.crash_log is not None:
-            self.crash_log.finished()
+        with running(self.crash_log, "pick", index):
+            picked = pick_object(self.spec, ref, index)
         return dataclasses.replace(picked, node=node_id())
 
 

@@ -21,6 +21,7 @@ from onepiece_dist.specs.plan import PickSpec
 
 # the pools a candidate is drawn from, each with a stream of generators of its own
 POOLS = {"view": 0, "mesh": 1, "top_down": 2}
+AGAIN = 5858  # the stream of a candidate's fresh executions (Executions.again)
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,14 @@ class Executions:
             rng = np.random.default_rng([*self.seed, POOLS[pool], int(index)])
             self.done[key] = execute_pick(self.world, pose, self.resting, self.noise, rng)
         return self.done[key]
+
+    def again(self, pool: str, index: int, pose: np.ndarray, draw: int):
+        """Candidate ``index`` of ``pool`` executed once more, its ``draw``-th fresh execution (draw >= 1; draw 0
+        is ``run``'s), with a generator of its own ([object, seed, view, pool, index, AGAIN, draw]); not kept."""
+        from onepiece_dist.sim.pick import execute_pick
+
+        rng = np.random.default_rng([*self.seed, POOLS[pool], int(index), AGAIN, int(draw)])
+        return execute_pick(self.world, pose, self.resting, self.noise, rng)
 
 
 def index_of(poses: np.ndarray, pose: np.ndarray) -> int:

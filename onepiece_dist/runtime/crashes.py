@@ -15,6 +15,8 @@ from __future__ import annotations
 import faulthandler
 import os
 import socket
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import IO
 
@@ -38,18 +40,29 @@ class CrashLog:
 
     def starting(self, method: str, index: int) -> None:
         """Record the item this process starts, before it starts."""
-        self.file.seek(0)
-        self.file.truncate()
-        self.file.write(f"{method} {index}\n")
-        self.file.flush()
+        self._record(f"{method} {index}")
 
     def finished(self) -> None:
         """Record that the item this process started has ended (the record then names no item: a process killed
         now was killed between items)."""
+        self._record(IDLE)
+
+    def _record(self, line: str) -> None:
         self.file.seek(0)
         self.file.truncate()
-        self.file.write(f"{IDLE}\n")
+        self.file.write(f"{line}\n")
         self.file.flush()
+
+
+@contextmanager
+def running(log: CrashLog | None, method: str, index: int) -> Iterator[None]:
+    """``log`` names item ``index`` of ``method`` while the block runs, and no item once it has ended (no log:
+    nothing recorded)."""
+    if log is not None:
+        log.starting(method, index)
+    yield
+    if log is not None:
+        log.finished()
 
 
 def crashed_on(folder: str | os.PathLike, method: str, index: int) -> bool:

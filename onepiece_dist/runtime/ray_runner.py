@@ -29,7 +29,7 @@ from onepiece_dist.job.stages.patch_shards import build_patch_shard
 from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.objects import ObjectRef
 from onepiece_dist.runtime.actors import restartable_actor
-from onepiece_dist.runtime.crashes import CrashLog, crash_folder, crashed_on
+from onepiece_dist.runtime.crashes import CrashLog, crash_folder, crashed_on, running
 from onepiece_dist.runtime.registry import RegistryClient
 from onepiece_dist.runtime.trainer import TrainerClient
 from onepiece_dist.runtime.writer import WriterClient, central_name
@@ -60,33 +60,26 @@ class SimWorker:
         if self.crash_log is not None:
             self.crash_log.starting(method, index)
 
-    def finished(self) -> None:
-        if self.crash_log is not None:
-            self.crash_log.finished()
-
     def label(self, task: LabelTask, index: int) -> ShardResult:
         """Label one shard of the one object into its part."""
-        self.starting("label", index)
-        result = label_shard(self.spec, task, index, self.parts)
-        self.finished()
+        with running(self.crash_log, "label", index):
+            result = label_shard(self.spec, task, index, self.parts)
         return dataclasses.replace(result, node=node_id())
 
     def patch(self, task: PatchTask, index: int) -> ShardResult:
         """Cut one shard of the one object's patches into its part."""
-        self.starting("patch", index)
-        result = build_patch_shard(self.spec, task, index, self.parts)
-        self.finished()
+        with running(self.crash_log, "patch", index):
+            result = build_patch_shard(self.spec, task, index, self.parts)
         return dataclasses.replace(result, node=node_id())
 
     def extract(self, ref: ObjectRef, index: int) -> ObjectResult:
         """Extract one object; its codes go to the central actor (named ``central``), once. When that message
         is lost (the actor restarting), the central actor's commit reads them from the part instead."""
-        self.starting("extract", index)
-        result = extract_object(self.spec, ref, index, self.parts)
-        central = WriterClient.find(self.central) if self.central and result.status == "ok" else None
-        if central is not None:
-            central.send_codes(index, result.part_key, self.parts.read_array(result.part_key, "code"))
-        self.finished()
+        with running(self.crash_log, "extract", index):
+            result = extract_object(self.spec, ref, index, self.parts)
+            central = WriterClient.find(self.central) if self.central and result.status == "ok" else None
+            if central is not None:
+                central.send_codes(index, result.part_key, self.parts.read_array(result.part_key, "code"))
         return dataclasses.replace(result, node=node_id())
 
 
