@@ -184,64 +184,99 @@ def test_a_design_replaces_the_shipped_network_only_beyond_one_designs_spread_ov
     assert best_point(curve, "shipped", spread=0.031)["design"] == "better"  # +6.4 points: beyond it
 
 
-def test_the_swept_space_is_kept_only_where_its_gain_over_seeds_exceeds_their_spread():
-    from benchmarks.pages.pick_trials_section import paired, verdict
+def views_picked(counts: list[int]) -> dict[str, int]:
+    """Per-object first picks (of 8 views) of objects o0, o1, ..."""
+    return {f"o{k}": c for k, c in enumerate(counts)}
 
-    def point(design: str, seed: int, rate: float, labels: int = 8000) -> dict:
+
+STEADY = [6, 7, 5, 8, 6, 4, 7, 6]
+
+
+def test_a_trial_is_kept_only_where_its_paired_interval_over_objects_lies_above_zero():
+    from onepiece_dist.stats.intervals import paired_gain
+
+    lifted = [min(c + 1, 8) for c in STEADY]  # one view more on nearly every object
+    kept = paired_gain([views_picked(lifted)] * 2, [views_picked(STEADY)] * 2, 8)
+    assert kept.verdict == "kept" and kept.seeds == 2 and kept.interval[0] > 0
+    assert kept.gain == round(sum(a - b for a, b in zip(lifted, STEADY, strict=True)) / 8 / 8, 4)
+    assert paired_gain([views_picked(lifted)], [views_picked(STEADY)], 8).verdict == "one seed: undecided"
+    same = paired_gain([views_picked(STEADY)] * 3, [views_picked(STEADY)] * 3, 8)
+    assert same.verdict == "not kept" and same.gain == 0 and same.interval == (0.0, 0.0)
+    one_object = [views_picked([8, *STEADY[1:]])] * 2  # +2 views on one object alone: the objects do not agree
+    assert paired_gain(one_object, [views_picked(STEADY)] * 2, 8).verdict == "not kept"
+    assert paired_gain([views_picked(STEADY)], [], 8).verdict == "not compared"
+
+
+def test_the_swept_space_is_judged_seed_for_seed_by_the_paired_rule():
+    from benchmarks.pages.pick_trials_section import paired, space_section, verdict
+
+    def point(design: str, seed: int, counts: list[int], labels: int = 8000) -> dict:
         return {"design": design, "labels": labels, "seed": seed,
-                "picks": {"methods": {"network": {"first_attempt": rate}}}}
+                "picks": {"methods": {"network": {"first_attempt": sum(counts) / 64}},
+                          "per_object": {"network": views_picked(counts)}}}
 
-    space = {"points": [point("context_balanced", 0, 0.82), point("context_space", 0, 0.84),
-                        point("context_balanced", 1, 0.78), point("context_space", 1, 0.81),
-                        point("context_space", 2, 0.99)]}  # seed 2 has no pair: left out
-    pairs = paired(space)[8000]
-    assert sorted(pairs) == [0, 1]
-    gain, spread, kept = verdict(pairs)
-    assert round(gain, 3) == 0.025 and round(spread, 3) == 0.04 and not kept  # +2.5 points, seeds move 4
-    space["points"] += [point("context_balanced", 2, 0.80), point("context_space", 2, 0.99)]
-    gain, spread, kept = verdict(paired(space)[8000])
-    assert not kept  # the far seed widens the spread too
-    steady = {"points": [point(d, s, r) for d, s, r in (("context_balanced", 0, 0.80), ("context_balanced", 1, 0.81),
-                                                         ("context_space", 0, 0.88), ("context_space", 1, 0.89))]}
-    assert verdict(paired(steady)[8000])[2]  # +8 points against a spread of 1: kept
-    assert not verdict({0: {"context_balanced": 0.5, "context_space": 0.9}})[2]  # one seed decides nothing
+    lifted = [min(c + 1, 8) for c in STEADY]
+    space = {"command": "c", "date": "d", "machine": "m", "labels": {"rows": 8000, "success_rate": 0.2},
+             "points": [point("context_balanced", 0, STEADY), point("context_space", 0, lifted),
+                        point("context_space", 2, lifted)]}  # seed 2 has no pair: left out
+    assert sorted(paired(space)[8000]) == [0]
+    assert verdict(paired(space)[8000]).verdict == "one seed: undecided"
+    space["points"] += [point("context_balanced", 1, STEADY), point("context_space", 1, lifted)]
+    assert verdict(paired(space)[8000]).verdict == "kept"
+    space["points"] = [point(d, s, STEADY) for d in ("context_balanced", "context_space") for s in (0, 1)]
+    assert ": not kept;" in space_section(space)[-3]
 
 
-def test_labels_on_policy_are_kept_only_over_seeds_and_beyond_the_shipped_designs_spread():
+def test_labels_on_policy_are_kept_only_over_seeds_and_where_the_objects_agree():
     from benchmarks.pages.pick_trials_section import on_policy_section
 
-    def point(batch: str, seed: int, rate: float) -> dict:
+    def point(batch: str, seed: int, counts: list[int]) -> dict:
+        rate = sum(counts) / 64
         return {"second_batch": batch, "seed": seed, "labels": 100, "second_success_rate": 0.3,
-                "picks": {"methods": {"network": {"first_attempt": rate, "interval": [rate - 0.1, rate + 0.1]}}}}
+                "picks": {"methods": {"network": {"first_attempt": rate, "interval": [rate - 0.1, rate + 0.1]}},
+                          "per_object": {"network": views_picked(counts)}}}
 
-    result = {"command": "c", "date": "d", "machine": "m", "points": [point("random", 0, 0.80),
-                                                                    point("on_policy", 0, 0.90)],
+    lifted = [min(c + 1, 8) for c in STEADY]
+    result = {"command": "c", "date": "d", "machine": "m", "points": [point("random", 0, STEADY),
+                                                                    point("on_policy", 0, lifted)],
               "policy": {"checkpoint": "x.pt", "design": "context_balanced", "labels": 50, "first_attempt": 0.8,
                          "top_share": 0.5}}
-    assert on_policy_section(result, 0.047)[-1].endswith("one seed: undecided.")
-    result["points"] += [point("random", 1, 0.84), point("on_policy", 1, 0.86)]
-    assert on_policy_section(result, 0.047)[-1].endswith(": kept.")  # +6 points over two seeds, spread 4.7
-    assert on_policy_section(result, 0.07)[-1].endswith(": not kept.")
+    assert ": one seed: undecided;" in on_policy_section(result)[-1]
+    result["points"] += [point("random", 1, STEADY), point("on_policy", 1, lifted)]
+    assert ": kept;" in on_policy_section(result)[-1]
+    result["points"][3] = point("on_policy", 1, [8, *STEADY[1:]])
+    result["points"][1] = point("on_policy", 0, [8, *STEADY[1:]])
+    assert ": not kept;" in on_policy_section(result)[-1]
 
 
 def test_a_trial_on_household_objects_is_kept_by_the_household_set_alone_never_the_unseen():
     from benchmarks.pages.pick_trials_section import top_down_section, vessels_section
 
-    def top_down(seed: int, base: float, tried: float, unseen: float) -> dict:
-        judged = {"household": {"first_attempt": tried}, "unseen": {"first_attempt": unseen}}
+    lifted = [min(c + 1, 8) for c in STEADY]
+
+    def top_down(seed: int, base: list[int], tried: list[int], unseen: list[int]) -> dict:
+        judged = {"household": {"first_attempt": sum(tried) / 64, "per_object": views_picked(tried)},
+                  "unseen": {"first_attempt": sum(unseen) / 64, "per_object": views_picked(unseen)}}
         return {"seed": seed, "labels": 100, "with_pool": judged,
-                "base": {"household": base, "unseen": 0.5, "labels": 100, "with_pool": judged}}
+                "base": {"household": sum(base) / 64, "unseen": sum(STEADY) / 64, "labels": 100, "with_pool": judged,
+                         "per_object": {"household": views_picked(base), "unseen": views_picked(STEADY)}}}
 
     result = {"command": "c", "date": "d", "machine": "m", "labels": 100, "success_rate": 0.3,
-              "points": [top_down(0, 0.80, 0.86, 0.5)]}
-    assert ": one seed: undecided." in top_down_section(result, 0.047)[-1]
-    result["points"].append(top_down(1, 0.84, 0.90, 0.5))
-    assert ": kept." in top_down_section(result, 0.047)[-1]  # +6 over two seeds, spread 4.7
-    result["points"] = [top_down(0, 0.80, 0.82, 0.9), top_down(1, 0.84, 0.86, 0.9)]
-    words = top_down_section(result, 0.047)[-1]
-    assert ": not kept." in words and "+40.0 points" in words  # the unseen set's +40 decides nothing
+              "points": [top_down(0, STEADY, lifted, STEADY)]}
+    assert ": one seed: undecided" in top_down_section(result)[-1]
+    result["points"].append(top_down(1, STEADY, lifted, STEADY))
+    assert "]): kept" in top_down_section(result)[-1]
+    result["points"] = [top_down(s, STEADY, STEADY, [8] * 8) for s in (0, 1)]
+    words = top_down_section(result)[-1]
+    assert "]): not kept" in words and "nothing is chosen, +" in words  # the unseen gain decides nothing
     vessels = {"command": "c", "date": "d", "machine": "m", "batch": "b", "labels": 100, "success_rate": 0.3,
-               "points": [{"seed": s, "labels": 200, "picks": {"methods": {"network": {"first_attempt": 0.8}}},
-                           "unseen": {"first_attempt": 0.9}, "base": {"household": 0.8, "unseen": 0.5,
-                                                                       "labels": 200}} for s in (0, 1)]}
-    assert ": not kept." in vessels_section(vessels, 0.047)[-1]
+               "points": [{"seed": s, "labels": 200,
+                           "picks": {"methods": {"network": {"first_attempt": 0.8}},
+                                     "per_object": {"network": views_picked(STEADY)}},
+                           "unseen": {"first_attempt": 0.9, "per_object": views_picked([8] * 8)},
+                           "base": {"household": 0.8, "unseen": 0.5, "labels": 200,
+                                    "per_object": {"household": views_picked(STEADY), "unseen": views_picked(STEADY)}}}
+                          for s in (0, 1)]}
+    assert ": not kept;" in vessels_section(vessels)[-1]
+
+

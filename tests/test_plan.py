@@ -182,6 +182,11 @@ def test_onepiece_grasp_writes_json_and_a_picture_and_refuses_bad_input(tmp_path
     assert (out / "grasps.png").read_bytes()[:4] == b"\x89PNG"
     poses = np.array([g["pose"] for g in written["grasps"]])
     assert not collides(np.vstack([seen.points, _floor(-0.03)]), poses, GripperSpec()).any()
+    plain = runner.invoke(app, ["grasp", str(cloud), "--checkpoint", str(checkpoint), "--out", str(tmp_path / "plain"),
+                                "--viewpoint", ",".join(map(str, seen.viewpoint)), "--no-top-down"])
+    assert plain.exit_code == 0, plain.output
+    sampled = json.loads((tmp_path / "plain" / "grasps.json").read_text())["counts"]["sampled"]
+    assert written["counts"]["sampled"] == sampled + 3  # the top-down grasps join by default
     np.save(cloud, seen.points * 1000)  # millimetres
     refused = runner.invoke(app, ["grasp", str(cloud), "--checkpoint", str(checkpoint), "--out", str(out)])
     assert refused.exit_code == 2 and "scale by 0.001" in refused.output
@@ -296,7 +301,7 @@ def test_the_label_stage_cuts_its_crops_as_the_planner_does_canonical_codes_incl
     assert not np.array_equal(raw.codes, planned.codes)  # the turn matters for some of these crops
 
 
-def test_the_top_down_grasps_join_the_pool_only_when_asked_and_the_rest_is_unchanged():
+def test_the_top_down_grasps_join_the_pool_by_default_and_the_rest_is_unchanged():
     from onepiece_dist.core.cloud.top_down import top_down_grasps
     from onepiece_dist.plan.planner import gravity, propose
     from onepiece_dist.plan.scorer import CropRecord
@@ -305,8 +310,8 @@ def test_the_top_down_grasps_join_the_pool_only_when_asked_and_the_rest_is_uncha
     observation = Observation(np.vstack([seen.points, _floor(-0.0101)]), seen.viewpoint, "box on a floor")
     spec = JobSpec()
     record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, "pointnet_context")
-    plain = propose(observation, record, PlanSpec(), np.random.default_rng(0))
-    added = propose(observation, record, PlanSpec(top_down=True), np.random.default_rng(0))
+    plain = propose(observation, record, PlanSpec(top_down=False), np.random.default_rng(0))
+    added = propose(observation, record, PlanSpec(), np.random.default_rng(0))  # kept by the pick trials
     assert plain.top_down == 0 and added.top_down == 3
     n = len(plain.poses)
     assert len(added.poses) == n + 3 and np.array_equal(added.poses[:n], plain.poses)

@@ -40,6 +40,9 @@ DESIGNS = {  # name -> PickTrainOptions fields
     "context_listwise": {"model": "pointnet_context", "ranking": 1.0},
     "context_space": {"model": "pointnet_context_space", "balanced": True},
 }
+TRIAL_DESIGNS = {  # designs tried beside the curve, never on it: name -> PickTrainOptions fields
+    "context_balanced_256": {"model": "pointnet_context", "balanced": True, "points": 256},
+}
 
 
 # the labels' batches: (objects, folder, shapes folder, shapes seed); each adds as many labels again
@@ -51,7 +54,7 @@ BATCHES = ((TRAIN_OBJECTS, "pick_labels", "shapes", 0),
 def label_spec(objects: str, folder: str):
     from onepiece_dist.specs.plan import PickLabelSpec
 
-    return PickLabelSpec(objects=objects, output=f"data/{folder}", views=8, per_view=16)
+    return PickLabelSpec(objects=objects, output=f"data/{folder}", views=8, per_view=16, plan={"top_down": False})
 
 
 def labels(batches: int = 1):
@@ -91,7 +94,7 @@ def fit_rows(all_labels, rows: np.ndarray, design: str, seed: int, folder: Path)
     spec = all_labels.attrs["spec"]
     crop = {"gripper": spec["gripper"], "voxel": spec["voxel"], "points_per_grasp": spec["points_per_grasp"],
             "source": "pick_labels"}
-    options = replace(PickTrainOptions(seed=seed), **DESIGNS[design])
+    options = replace(PickTrainOptions(seed=seed), **{**DESIGNS, **TRIAL_DESIGNS}[design])
     result = train_on_pick_labels(subset, folder, crop, options)
     label_seconds = all_labels.attrs["core_seconds"] * len(rows) / len(all_labels)
     return {"design": design, "labels": len(rows), "options": asdict(options),
@@ -107,12 +110,14 @@ def picks(checkpoint: str, views: int, methods: tuple[str, ...] = ("network",), 
     from onepiece_dist.specs.plan import PickSpec
 
     spec = PickSpec(objects=str(household_objects()), checkpoint=str(ROOT / checkpoint),
-                    output=str(OUT / "picks" / name), views=views, attempts=3, pictures=0, methods=methods)
+                    output=str(OUT / "picks" / name), views=views, attempts=3, pictures=0, methods=methods,
+                    plan={"top_down": False})  # the curve's pool: the view's sampled candidates alone
     start = time.perf_counter()
     report = run_picks(spec)
     summary = {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),
                           "within_k": m.within_k, "failures": m.first_failures} for m in report.methods}
-    return {"methods": summary, "verdict": report.verdict, "seconds": round(time.perf_counter() - start, 1)}
+    return {"methods": summary, "per_object": {m.method: report.first_picks(m.method) for m in report.methods},
+            "verdict": report.verdict, "seconds": round(time.perf_counter() - start, 1)}
 
 
 def main() -> None:

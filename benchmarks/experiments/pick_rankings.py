@@ -36,13 +36,14 @@ from onepiece_dist.stats.intervals import bootstrap_interval
 
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "benchmarks" / "results" / "pick_rankings.json"
-CHECKPOINT = ROOT / "onepiece_dist" / "plan" / "networks" / "pick_view.pt"
+# the network shipped before the top-down trial was kept (its rankings were tried on the product pool of then)
+CHECKPOINT = ROOT / "data" / "pick_curve" / "context_balanced_81152" / "best.pt"
 SELECTION = "pybullet:random_urdfs[600:660]"
 
 
 def judge(name: str, objects: str, rankings: tuple[str, ...] = RANKINGS) -> dict:
     spec = PickSpec(objects=objects, checkpoint=str(CHECKPOINT), output=str(ROOT / "data" / "pick_rankings" / name),
-                    views=8, attempts=1, pictures=0, methods=("network",))
+                    views=8, attempts=1, pictures=0, methods=("network",), plan={"top_down": False})
     start = time.perf_counter()
     task = partial(rank_object, rankings=rankings)
     done = [r for r in run_each_in_process(task, spec, resolve_source(objects)) if r.status == "ok"]

@@ -34,7 +34,8 @@ def pick_spec(objects: str, checkpoint: str, name: str):
     from onepiece_dist.specs.plan import PickSpec
 
     return PickSpec(objects=objects, checkpoint=checkpoint, output=str(OUT / "picks" / name), views=VIEWS,
-                    attempts=1, seed=STUDY_SEED, methods=("network",), pictures=0)
+                    attempts=1, seed=STUDY_SEED, methods=("network",), pictures=0,
+                    plan={"top_down": False})  # the pool the study was judged on (before the top-down trial)
 
 
 def cached(name: str, asked: dict, make) -> list[dict]:

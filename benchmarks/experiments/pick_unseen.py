@@ -20,18 +20,23 @@ ROOT = HERE.parent
 RESULTS = HERE / "results" / "pick_unseen.json"
 OUT = ROOT / "data" / "pick_unseen"
 # name: (checkpoint, what it is, where its household figure is committed)
-NETWORKS = {
+NETWORKS = {  # name -> (checkpoint, what, the results file with its household figure, top-down grasps in its pool)
     "shipped": ("onepiece_dist/plan/networks/pick_view.pt",
-                "the shipped network: context_balanced, 81,152 labels of the earlier pick world, seed 0",
-                "picks.json"),
+                "the shipped network: context_balanced, 81,152 labels, the first batch's executing the top-down "
+                "grasps (pick_top_down's seed 0), planning with them in the pool", "picks.json", True),
+    "earlier_shipped": ("data/pick_curve/context_balanced_81152/best.pt",
+                        "shipped before the top-down trial was kept: context_balanced, 81,152 labels of the earlier "
+                        "pick world, seed 0", "pick_curve.json", False),
     "random_s0": ("data/pick_curve/on_policy/random_s0/best.pt",
-                  "context_balanced, 81,152 labels (both batches made again, random), seed 0", "pick_on_policy.json"),
+                  "context_balanced, 81,152 labels (both batches made again, random), seed 0", "pick_on_policy.json",
+                  False),
     "random_s1": ("data/pick_curve/on_policy/random_s1/best.pt",
-                  "context_balanced, the same labels, seed 1", "pick_on_policy.json"),
+                  "context_balanced, the same labels, seed 1", "pick_on_policy.json", False),
     "on_policy_s0": ("data/pick_curve/on_policy/on_policy_s0/best.pt",
-                     "context_balanced, 81,152 labels, the second batch on policy, seed 0", "pick_on_policy.json"),
+                     "context_balanced, 81,152 labels, the second batch on policy, seed 0", "pick_on_policy.json",
+                     False),
     "on_policy_s1": ("data/pick_curve/on_policy/on_policy_s1/best.pt",
-                     "context_balanced, the same labels, seed 1", "pick_on_policy.json"),
+                     "context_balanced, the same labels, seed 1", "pick_on_policy.json", False),
 }
 
 
@@ -51,10 +56,11 @@ def judge(name: str, checkpoint: str, objects: str | None = None, top_down: bool
                     output=str(out / name), views=8, attempts=3, pictures=0, methods=("network",),
                     plan=PlanSpec(top_down=top_down))
     start = time.perf_counter()
-    network = run_picks(spec).method("network")
+    report = run_picks(spec)
+    network = report.method("network")
     return {"first_attempt": network.first_attempt, "interval": list(network.first_attempt_interval),
             "views": network.views, "failures": network.first_failures,
-            "seconds": round(time.perf_counter() - start, 1)}
+            "per_object": report.first_picks("network"), "seconds": round(time.perf_counter() - start, 1)}
 
 
 def base_point(seed: int) -> dict:
@@ -70,19 +76,22 @@ def base_point(seed: int) -> dict:
         unseen = json.loads(RESULTS.read_text())["networks"][f"random_s{seed}"]["unseen"]
         return {"checkpoint": BASE.format(seed=seed), "labels": committed[seed]["labels"],
                 "household": committed[seed]["picks"]["methods"]["network"]["first_attempt"],
-                "unseen": unseen["first_attempt"]}
+                "unseen": unseen["first_attempt"],
+                "per_object": {"household": committed[seed]["picks"]["per_object"]["network"],
+                               "unseen": unseen["per_object"]}}
     joined = labels(1).joined(second_batch(None))
     fitted = fit(joined, len(joined), DESIGN, seed, ROOT / BASE.format(seed=seed).rsplit("/", 1)[0])
     name, out = f"random_s{seed}_product", ROOT / "data" / "pick_curve" / "top_down"
+    found = {"household": judge(f"{name}_household", fitted["checkpoint"], str(household_objects()), out=out),
+             "unseen": judge(f"{name}_unseen", fitted["checkpoint"], out=out)}
     return {"checkpoint": fitted["checkpoint"], "labels": fitted["labels"],
-            "household": judge(f"{name}_household", fitted["checkpoint"], str(household_objects()), out=out)[
-                "first_attempt"],
-            "unseen": judge(f"{name}_unseen", fitted["checkpoint"], out=out)["first_attempt"]}
+            **{where: j["first_attempt"] for where, j in found.items()},
+            "per_object": {where: j["per_object"] for where, j in found.items()}}
 
 
 def household_figure(name: str) -> float | None:
     """The network's committed first-attempt rate on the household set."""
-    checkpoint, _, source = NETWORKS[name]
+    checkpoint, _, source, _ = NETWORKS[name]
     committed = json.loads((HERE / "results" / source).read_text())
     if source == "picks.json":
         household = next(s for s in committed["sets"] if s["name"] == "household")
@@ -97,9 +106,9 @@ def main() -> None:
     names = [n for n in parser.parse_args().networks.split(",") if n]
     done = json.loads(RESULTS.read_text())["networks"] if RESULTS.is_file() else {}
     for name in names:
-        checkpoint, what, _ = NETWORKS[name]
+        checkpoint, what, _, pool = NETWORKS[name]
         done[name] = {"checkpoint": checkpoint, "what": what, "household": household_figure(name),
-                      "unseen": judge(name, checkpoint)}
+                      "unseen": judge(name, checkpoint, top_down=pool)}
         print(name, done[name]["household"], done[name]["unseen"]["first_attempt"], flush=True)
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_unseen", "date": date.today().isoformat(),
            "networks": {n: done[n] for n in NETWORKS if n in done}}

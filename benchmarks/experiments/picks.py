@@ -51,7 +51,8 @@ def shipped() -> tuple[Path, dict]:
 
     record = shipped_record()
     return NETWORK, {"checkpoint": str(NETWORK.relative_to(ROOT)), "design": record.get("design"),
-                     "labels": record.get("labels"), "training_objects": record.get("training_objects")}
+                     "labels": record.get("labels"), "training_objects": record.get("training_objects"),
+                     **({"pool": record["pool"]} if record.get("pool") else {})}
 
 
 def training_summary(status) -> dict:

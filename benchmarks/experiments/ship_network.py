@@ -1,7 +1,9 @@
 """The network shipped with the package (issue 56, onepiece_dist/plan/shipped.py): the pick learning curve's best
-design at its largest size (benchmarks/results/pick_curve.json, data/pick_curve/), copied into
-onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark (benchmarks/experiments/picks.py)
-has judged it, run again with --record-picks to write its household figures into the record.
+design at its largest size (benchmarks/results/pick_curve.json, data/pick_curve/), or, where the top-down trial is
+kept (benchmarks/results/pick_top_down.json; the trials' paired rule, docs/picks.md), that trial's seed-0 network
+(a seed is never chosen), copied into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick
+benchmark (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household
+figures into the record.
 
     .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks]
 """
@@ -54,17 +56,46 @@ def weights(model: str) -> int:
 
 
 def ship(point: dict, curve: dict) -> dict:
+    """The curve's ``point`` shipped."""
+    return _ship(point, " + ".join(spec["objects"] for spec in trained_on(point, curve)),
+                 "python -m benchmarks.experiments.pick_curve", point["picks"]["methods"]["network"],
+                 "benchmarks/results/pick_curve.json")
+
+
+def kept_top_down() -> dict | None:
+    """The top-down trial's seed-0 point where the trial is kept on the household set, else None."""
+    from benchmarks.pages.pick_trials_section import top_down_gains
+
+    path = HERE / "results" / "pick_top_down.json"
+    result = json.loads(path.read_text()) if path.is_file() else None
+    if result is None or top_down_gains(result)[0]["household"].verdict != "kept":
+        return None
+    return next((p for p in result["points"] if p["seed"] == 0), None)
+
+
+def ship_top_down(point: dict) -> dict:
+    """The top-down trial's ``point`` shipped: it plans with the top-down grasps in its pool (plan.top_down)."""
+    from benchmarks.experiments.pick_curve import BATCHES
+
+    objects = f"{BATCHES[0][0]} (labels executing the top-down grasps) + {BATCHES[1][0]}"
+    household = point["with_pool"]["household"]
+    return _ship(point, objects, "python -m benchmarks.experiments.pick_top_down",
+                 household, "benchmarks/results/pick_top_down.json",
+                 pool="the view's sampled candidates and the three top-down grasps (plan.top_down)")
+
+
+def _ship(point: dict, objects: str, made_by: str, household: dict, source: str, pool: str | None = None) -> dict:
     from onepiece_dist.plan.shipped import NETWORK, RECORD
 
     saved = torch.load(ROOT / point["checkpoint"], map_location="cpu", weights_only=True)
     NETWORK.parent.mkdir(parents=True, exist_ok=True)
     torch.save({"model": saved["model"], "state_dict": saved["state_dict"], "crop": saved["crop"]}, NETWORK)
     record = {"design": point["design"], "model": saved["model"], "labels": point["labels"],
-              "training_objects": " + ".join(spec["objects"] for spec in trained_on(point, curve)), "trained_by":
-              "python -m benchmarks.experiments.pick_curve, then python -m benchmarks.experiments.ship_network",
-              "household_first_attempt": {"rate": point["picks"]["methods"]["network"]["first_attempt"],
-                                          "interval": point["picks"]["methods"]["network"]["interval"],
-                                          "views": None, "from": "benchmarks/results/pick_curve.json"}}
+              "training_objects": objects,
+              "trained_by": f"{made_by}, then python -m benchmarks.experiments.ship_network",
+              **({"pool": pool} if pool else {}),
+              "household_first_attempt": {"rate": household["first_attempt"], "interval": household["interval"],
+                                          "views": None, "from": source}}
     RECORD.write_text(json.dumps(record, indent=1) + "\n")
     return record
 
@@ -102,8 +133,8 @@ def main() -> None:
 
     curve = json.loads((HERE / "results" / "pick_curve.json").read_text())
     shipped = json.loads(RECORD.read_text())["design"] if RECORD.is_file() else None
-    point = best_point(curve, shipped, seed_spread())
-    print(ship(point, curve))
+    trial = kept_top_down()
+    print(ship_top_down(trial) if trial is not None else ship(best_point(curve, shipped, seed_spread()), curve))
 
 
 if __name__ == "__main__":

@@ -1,36 +1,51 @@
 """Design trials on docs/picks.md made on labels of today's pick world: the swept space (results/pick_space.json,
 benchmarks/experiments/pick_space.py: the shipped design and the one that also reads the hand's swept space, fitted
-on the same labels seed for seed, and whether the difference lies beyond the spread of a design's own seeds), and
-labels on policy (results/pick_on_policy.json, benchmarks/experiments/pick_on_policy.py)."""
+on the same labels seed for seed), labels on policy, training objects shaped like the lost ones, the top-down grasps
+and more of each crop's points. Every trial is judged by one rule (stats.intervals.paired_gain): fitted seed for seed
+on the same labels, a change is kept where the bootstrap interval over household objects of its gain (each object's
+rate averaged over the seeds) lies above zero."""
 
 from __future__ import annotations
 
 from collections import defaultdict
 
+from onepiece_dist.stats.intervals import PairedGain, paired_gain
+
 BASE, TRIED = "context_balanced", "context_space"
+VIEWS = 8
+RULE = ("kept where the paired interval over the household objects lies above zero (every trial's rule: "
+        "benchmarks/pages/pick_trials_section.py)")
+
+
+def gain_words(gain: PairedGain) -> str:
+    """``+x.x points over n seeds (paired interval over objects [lo, hi]): verdict``."""
+    low, high = gain.interval
+    return (f"{100 * gain.gain:+.1f} points over {gain.seeds} seed{'s' if gain.seeds != 1 else ''} (paired "
+            f"interval over objects [{100 * low:+.1f}, {100 * high:+.1f}]): {gain.verdict}")
 
 
 def _first(point: dict) -> float:
     return point["picks"]["methods"]["network"]["first_attempt"]
 
 
-def paired(space: dict) -> dict[int, dict[int, dict[str, float]]]:
-    """size -> seed -> design -> first attempt, for the sizes and seeds where both designs were fitted."""
-    found: dict[int, dict[int, dict[str, float]]] = defaultdict(lambda: defaultdict(dict))
+def paired(space: dict) -> dict[int, dict[int, dict[str, dict]]]:
+    """size -> seed -> design -> point, for the sizes and seeds where both designs were fitted."""
+    found: dict[int, dict[int, dict[str, dict]]] = defaultdict(lambda: defaultdict(dict))
     for p in space["points"]:
-        found[p["labels"]][p["seed"]][p["design"]] = _first(p)
+        found[p["labels"]][p["seed"]][p["design"]] = p
     return {size: {seed: pair for seed, pair in seeds.items() if {BASE, TRIED} <= set(pair)}
             for size, seeds in sorted(found.items())}
 
 
-def verdict(pairs: dict[int, dict[str, float]]) -> tuple[float, float, bool]:
-    """(mean gain over seeds, the larger spread of either design over its seeds, kept): kept only where the gain
-    exceeds that spread."""
-    gains = [pair[TRIED] - pair[BASE] for pair in pairs.values()]
-    spread = max((max(p[d] for p in pairs.values()) - min(p[d] for p in pairs.values()) for d in (BASE, TRIED)),
-                 default=0.0)
-    gain = sum(gains) / len(gains) if gains else 0.0
-    return gain, spread, bool(gains) and len(pairs) > 1 and gain > spread
+def _per_object(point: dict) -> dict[str, int]:
+    return point["picks"]["per_object"]["network"]
+
+
+def verdict(pairs: dict[int, dict[str, dict]]) -> PairedGain:
+    """TRIED against BASE over the seeds of ``pairs``, paired over the household objects."""
+    seeds = sorted(pairs)
+    return paired_gain([_per_object(pairs[s][TRIED]) for s in seeds], [_per_object(pairs[s][BASE]) for s in seeds],
+                       VIEWS)
 
 
 def space_section(space: dict) -> list[str]:
@@ -47,19 +62,15 @@ def space_section(space: dict) -> list[str]:
     rows, words = [], []
     for size, pairs in paired(space).items():
         for seed, pair in sorted(pairs.items()):
-            rows.append(f"| {size} | {seed} | {100 * pair[BASE]:.1f}% | {100 * pair[TRIED]:.1f}% | "
-                        f"{100 * (pair[TRIED] - pair[BASE]):+.1f} |")
-        gain, spread, kept = verdict(pairs)
-        words.append(f"at {size} labels the swept space gives {100 * gain:+.1f} points at one seed: undecided"
-                     if len(pairs) == 1 else
-                     f"at {size} labels the swept space gives {100 * gain:+.1f} points over {len(pairs)} seeds, "
-                     f"against a spread of {100 * spread:.1f} points over seeds: {'kept' if kept else 'not kept'}")
-    return [*lines, *rows, "", "; ".join(words).capitalize() + ".", "", base_spread_line(space)]
+            base, tried = _first(pair[BASE]), _first(pair[TRIED])
+            rows.append(f"| {size} | {seed} | {100 * base:.1f}% | {100 * tried:.1f}% | {100 * (tried - base):+.1f} |")
+        words.append(f"at {size} labels the swept space gives {gain_words(verdict(pairs))}")
+    return [*lines, *rows, "", "; ".join(words).capitalize() + f"; {RULE}.", "", base_spread_line(space)]
 
 
 def base_spread(space: dict) -> tuple[int, list[float]]:
     """(labels, sorted rates over seeds) of the shipped design alone, at the size where it moves most."""
-    by_size = {size: sorted(pair[BASE] for pair in pairs.values()) for size, pairs in paired(space).items()}
+    by_size = {size: sorted(_first(pair[BASE]) for pair in pairs.values()) for size, pairs in paired(space).items()}
     return max(by_size.items(), key=lambda item: (item[1][-1] - item[1][0], item[0]))
 
 
@@ -71,10 +82,9 @@ def base_spread_line(space: dict) -> str:
             f"{100 * (rates[-1] - rates[0]):.1f} points with its seed, so a seed is never chosen on them.")
 
 
-def on_policy_section(result: dict, spread: float) -> list[str]:
+def on_policy_section(result: dict) -> list[str]:
     """The on-policy trial (results/pick_on_policy.json): the same design on the first batch joined with the second
-    batch's views labelled at random or half from the first batch's network's best-scored; kept only where the mean
-    gain over two seeds or more exceeds ``spread`` (the shipped design's own spread over seeds)."""
+    batch's views labelled at random or half from the first batch's network's best-scored, seed for seed."""
     policy = result["policy"]
     found = {(p["second_batch"], p["seed"]): p for p in result["points"]}
     seeds = sorted({seed for _, seed in found})
@@ -82,13 +92,10 @@ def on_policy_section(result: dict, spread: float) -> list[str]:
             f"{found[(name, seed)]['second_success_rate']:.2f} | {100 * _first(found[(name, seed)]):.1f}% "
             f"[{_interval(found[(name, seed)])}] |"
             for seed in seeds for name in ("random", "on_policy") if (name, seed) in found]
-    pairs = [(_first(found[("on_policy", s)]), _first(found[("random", s)])) for s in seeds
-             if ("on_policy", s) in found and ("random", s) in found]
-    gain = sum(a - b for a, b in pairs) / len(pairs) if pairs else 0.0
-    verdict = ("one seed: undecided" if len(pairs) == 1 else "kept" if gain > spread else "not kept")
-    words = (f"On-policy labels give {100 * gain:+.1f} points over random labels of the same size at {len(pairs)} "
-             f"seed{'s' if len(pairs) != 1 else ''}, against the shipped design's own spread of {100 * spread:.1f} "
-             f"points over seeds on these labels (above): {verdict}" if pairs else "No pair fitted yet")
+    both = [s for s in seeds if ("on_policy", s) in found and ("random", s) in found]
+    gain = paired_gain([_per_object(found[("on_policy", s)]) for s in both],
+                       [_per_object(found[("random", s)]) for s in both], VIEWS)
+    words = f"On-policy labels give {gain_words(gain)}" if both else "No pair fitted yet"
     return [f"## Labels on policy: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. The second label batch's objects and views labelled twice: "
             f"16 random candidates a view, or {100 * policy['top_share']:.0f}% of them the best-scored by "
@@ -96,7 +103,7 @@ def on_policy_section(result: dict, spread: float) -> list[str]:
             f"{100 * policy['first_attempt']:.1f}% of the household views) and the rest at random; `{BASE}` fitted "
             "on the first batch joined with each (the same size), household first attempt:", "",
             "| seed | second batch | labels | its success rate | household first attempt [95% CI] |",
-            "| --- | --- | --- | --- | --- |", *rows, "", words + "."]
+            "| --- | --- | --- | --- | --- |", *rows, "", f"{words}; {RULE}."]
 
 
 def _interval(point: dict) -> str:
@@ -134,18 +141,19 @@ def _pct(value: float | None) -> str:
     return "-" if value is None else f"{100 * value:.1f}%"
 
 
-def vessels_section(result: dict, spread: float) -> list[str]:
+def vessels_section(result: dict) -> list[str]:
     """The vessel trial (results/pick_vessels.json): the first batch joined with a batch of household-shaped
-    objects against the first joined with the curve's second, seed for seed; kept only where the mean gain on the
-    household set over two seeds or more exceeds ``spread``; the unseen set's figures beside it, never chosen on."""
+    objects against the first joined with the curve's second, seed for seed; decided on the household set, the
+    unseen set's figures beside it, never chosen on."""
     points = sorted(result["points"], key=lambda p: p["seed"])
     rows = [f"| {p['seed']} | {100 * p['base']['household']:.1f}% | {100 * _first(p):.1f}% | "
             f"{100 * (_first(p) - p['base']['household']):+.1f} | {_pct(p['base']['unseen'])} | "
             f"{_pct(p['unseen']['first_attempt'])} | "
             f"{100 * (p['unseen']['first_attempt'] - p['base']['unseen']):+.1f} |" for p in points]
-    gain = sum(_first(p) - p["base"]["household"] for p in points) / max(len(points), 1)
-    unseen = sum(p["unseen"]["first_attempt"] - p["base"]["unseen"] for p in points) / max(len(points), 1)
-    verdict = ("one seed: undecided" if len(points) == 1 else "kept" if gain > spread else "not kept")
+    gain = paired_gain([_per_object(p) for p in points], [p["base"]["per_object"]["household"] for p in points],
+                       VIEWS)
+    unseen = paired_gain([p["unseen"]["per_object"] for p in points],
+                         [p["base"]["per_object"]["unseen"] for p in points], VIEWS)
     return [f"## Training objects shaped like the lost ones: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. The picks the shipped design loses are mostly flat packages, "
             "mugs and bowls, kinds its training shapes lack. A second batch of the curve's size on "
@@ -155,10 +163,13 @@ def vessels_section(result: dict, spread: float) -> list[str]:
             "with the curve's second (the random points of the on-policy trial above), first attempt:", "",
             "| seed | household, second batch | household, vessels | difference | unseen, second batch | "
             "unseen, vessels | difference |", "| --- | --- | --- | --- | --- | --- | --- |", *rows, "",
-            f"On the household set, where designs are chosen, the vessels give {100 * gain:+.1f} points over "
-            f"{len(points)} seed{'s' if len(points) != 1 else ''}, against the shipped design's spread of "
-            f"{100 * spread:.1f} points over seeds: {verdict}. On the unseen set, where nothing is chosen, "
-            f"{100 * unseen:+.1f} points."]
+            f"On the household set, where designs are chosen, the vessels give {gain_words(gain)}; {RULE}. On "
+            f"the unseen set, where nothing is chosen, {_unseen_words(unseen)}."]
+
+
+def _unseen_words(gain: PairedGain) -> str:
+    low, high = gain.interval
+    return f"{100 * gain.gain:+.1f} points [{100 * low:+.1f}, {100 * high:+.1f}]"
 
 
 def _sizes(points: list[dict]) -> str:
@@ -167,10 +178,22 @@ def _sizes(points: list[dict]) -> str:
     return f"{points[0]['labels']} labels in all, against {points[0]['base']['labels']}"
 
 
-def top_down_section(result: dict, spread: float) -> list[str]:
+def top_down_gains(result: dict) -> tuple[dict[str, PairedGain], dict[str, PairedGain]]:
+    """The top-down trial's gains over its base on each set: (pool and labels, the pool alone)."""
+    points = sorted(result["points"], key=lambda p: p["seed"])
+
+    def gain(where: str, arm) -> PairedGain:
+        return paired_gain([arm(p)[where]["per_object"] for p in points],
+                           [p["base"]["per_object"][where] for p in points], VIEWS)
+
+    return ({w: gain(w, lambda p: p["with_pool"]) for w in ("household", "unseen")},
+            {w: gain(w, lambda p: p["base"]["with_pool"]) for w in ("household", "unseen")})
+
+
+def top_down_section(result: dict) -> list[str]:
     """The top-down trial (results/pick_top_down.json): the base network on the product's pool and on the pool
-    with the top-down grasps, and a network whose labels executed them, seed for seed; kept only where the mean
-    gain on the household set over two seeds or more exceeds ``spread``; the unseen set's figures never chosen on."""
+    with the top-down grasps, and a network whose labels executed them, seed for seed; decided on the household
+    set, the unseen set's figures never chosen on."""
     points = sorted(result["points"], key=lambda p: p["seed"])
 
     def cells(p: dict, where: str) -> list[float]:
@@ -179,11 +202,8 @@ def top_down_section(result: dict, spread: float) -> list[str]:
 
     rows = [f"| {p['seed']} | " + " | ".join(_pct(v) for v in cells(p, "household") + cells(p, "unseen")) + " |"
             for p in points]
-    gains = {where: [cells(p, where)[2] - cells(p, where)[0] for p in points] for where in ("household", "unseen")}
-    pool = {where: [cells(p, where)[1] - cells(p, where)[0] for p in points] for where in ("household", "unseen")}
-    gain = sum(gains["household"]) / max(len(points), 1)
-    verdict = ("one seed: undecided" if len(points) == 1 else "kept" if gain > spread else "not kept")
-    mean = {k: {w: sum(v) / max(len(v), 1) for w, v in d.items()} for k, d in (("labels", gains), ("pool", pool))}
+    labels, pool = top_down_gains(result)
+    above = sum(cells(p, "household")[2] > cells(p, "household")[0] for p in points)
     return [f"## Top-down grasps in the pool and in the labels: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. The oracle above says the view's pool lacks what the top-down "
             "baseline finds (flat packages). With `plan.top_down` the planner also proposes the three top-down "
@@ -196,8 +216,6 @@ def top_down_section(result: dict, spread: float) -> list[str]:
             "| seed | household, base | + pool | + pool, + labels | unseen, base | + pool | + pool, + labels |",
             "| --- | --- | --- | --- | --- | --- | --- |", *rows, "",
             f"On the household set, where designs are chosen, the top-down grasps in pool and labels give "
-            f"{100 * gain:+.1f} points over {len(points)} seed{'s' if len(points) != 1 else ''} "
-            f"({100 * mean['pool']['household']:+.1f} from the pool alone; above the base at "
-            f"{sum(g > 0 for g in gains['household'])} of {len(points)} seeds), against the shipped design's spread of "
-            f"{100 * spread:.1f} points over seeds: {verdict}. On the unseen set, where nothing is chosen, "
-            f"{100 * mean['labels']['unseen']:+.1f} points ({100 * mean['pool']['unseen']:+.1f} from the pool alone)."]
+            f"{gain_words(labels['household'])} (above the base at {above} of {len(points)} seeds; the pool alone "
+            f"{gain_words(pool['household'])}); {RULE}. On the unseen set, where nothing is chosen, "
+            f"{_unseen_words(labels['unseen'])} ({_unseen_words(pool['unseen'])} from the pool alone)."]

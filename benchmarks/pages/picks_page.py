@@ -11,7 +11,6 @@ import numpy as np
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_trials_section import (
-    base_spread,
     on_policy_section,
     space_section,
     top_down_section,
@@ -118,10 +117,12 @@ def pool_line(result: dict) -> str:
     executed = sum(v["pool_executed"] for v in views)
     picked = sum(v["pool_picked"] for v in views)
     holding = sum(v["pool_picked"] > 0 for v in views)
-    line = (f"The oracle executed all {executed} candidates of {len(views)} views: {_pct(picked / executed)} of "
+    with_top_down = result["spec"]["plan"].get("top_down", False)
+    line = (f"The oracle executed all {executed} candidates of {len(views)} views"
+            f"{' (the top-down grasps among them)' if with_top_down else ''}: {_pct(picked / executed)} of "
             f"them pick, and {holding} of the {len(views)} views ({_pct(holding / len(views))}) hold at least one "
             "that picks: the pool's ceiling.")
-    if all("top_down" in v["attempts"] for v in views):
+    if all("top_down" in v["attempts"] for v in views) and not with_top_down:
         either = sum(v["pool_picked"] > 0 or v["attempts"]["top_down"][:1] == [True] for v in views)
         line += (f" With the top-down grasp added to the pool, {either} of the {len(views)} "
                  f"({_pct(either / len(views))}).")
@@ -203,13 +204,9 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    space = load("pick_space")
-    rates = base_spread(space)[1] if space is not None else [0.0]
-    spread = rates[-1] - rates[0]  # the shipped design's own spread over seeds: what a trial must beat
     render = {"pick_unseen": lambda r: unseen_section(r, picks), "pick_curve": lambda r: curve_section(r, picks),
-              "pick_space": space_section, "pick_on_policy": lambda r: on_policy_section(r, spread),
-              "pick_vessels": lambda r: vessels_section(r, spread),
-              "pick_top_down": lambda r: top_down_section(r, spread), "pick_rankings": rankings_section,
+              "pick_space": space_section, "pick_on_policy": on_policy_section,
+              "pick_vessels": vessels_section, "pick_top_down": top_down_section, "pick_rankings": rankings_section,
               "pick_pool_size": pool_size_lines}
     for name in SECTIONS:
         result = load(name)
@@ -223,8 +220,9 @@ def render_picks_page() -> str:
 def _how(picks: dict) -> str:
     t, spec = picks["training"], picks["sets"][0]["spec"]
     if t.get("design"):
+        pool = f" It plans on {t['pool']}." if t.get("pool") else ""
         trained = (f"The network: `{t['checkpoint']}` (the shipped one), design `{t['design']}`, {t['labels']} pick "
-                   f"labels on `{t['training_objects']}` (the learning curve below).")
+                   f"labels on `{t['training_objects']}` (the learning curve and the trials below).{pool}")
     elif t.get("candidates"):
         trained = (f"The network: `{t['spec']}`, {t['labels']} labels of {t['candidates']} candidates (success rate "
                    f"{t['label_success_rate']:.2f}), validation AP {t['validation_ap']:.2f}.")

@@ -70,6 +70,9 @@ def grasp(
                                                       "was trained for it (default: the checkpoint's).")] = None,
     no_plane: Annotated[bool, typer.Option("--no-plane", help="The cloud is the object alone: no support "
                                                               "plane.")] = False,
+    top_down: Annotated[bool, typer.Option("--top-down/--no-top-down", help="Also propose the three top-down "
+                                           "grasps across the cloud's narrow horizontal axis (docs/planning.md).")
+                        ] = True,
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
     device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
@@ -83,7 +86,7 @@ def grasp(
     view = _floats(viewpoint, 3, "--viewpoint")
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
-                        support_plane="none" if no_plane else "auto")
+                        support_plane="none" if no_plane else "auto", top_down=top_down)
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, _gripper(gripper))
     except (OnePieceError, ValueError) as error:

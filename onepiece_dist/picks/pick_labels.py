@@ -74,10 +74,11 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
 
 def _chosen(spec: PickLabelSpec, proposals, rng: np.random.Generator) -> np.ndarray:
     """Which candidates of a view to execute, in index order: a seeded random subset of ``per_view``; with a
-    checkpoint, its ``top_share`` best-scored first, the rest at random among the others. The top-down grasps
-    (plan.top_down) are always among them, in place of as many random ones."""
+    checkpoint, its ``top_share`` best-scored first (the top-down grasps scored as any other), the rest at random
+    among the others. Without one, the top-down grasps (plan.top_down) are always among them, in place of as many
+    random ones."""
     crops, count = proposals.crops, len(proposals.crops.counts)
-    if proposals.top_down:
+    if proposals.top_down and spec.checkpoint is None:
         sampled = count - proposals.top_down
         forced = np.arange(sampled, count)
         rest = rng.permutation(sampled)[: max(spec.per_view - len(forced), 0)]

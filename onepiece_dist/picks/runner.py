@@ -58,6 +58,11 @@ class PickReport:
     def method(self, name: str) -> MethodSummary:
         return next(m for m in self.methods if m.method == name)
 
+    def first_picks(self, method: str) -> dict[str, int]:
+        """Per loaded object (its name): the views ``method`` picked at the first attempt (what a paired
+        comparison of two networks on the same views reads)."""
+        return {o.name: sum(bool(v.first(method)) for v in o.views) for o in self.objects if o.status == "ok"}
+
     def to_json(self) -> dict:
         return {"spec": self.spec, "separable": self.separable, "verdict": self.verdict,
                 "methods": [dataclasses.asdict(m) for m in self.methods],

@@ -43,9 +43,10 @@ class PlanSpec(Frozen):
     device: Literal["auto", "cpu", "cuda"] = Field("auto", description="Where the network scores: a CUDA GPU when "
                                                    "there is one (auto), else the CPU.")
     seed: int = Field(0, ge=0, lt=2**63, description="Seed of the sampling and of the crops' resampling.")
-    top_down: bool = Field(False, description="Also propose the three top-down grasps across the object's narrow "
-                           "horizontal axis (the top-down baseline's), cropped and checked as the sampled ones; in "
-                           "pick labels they are always among a view's executed candidates.")
+    top_down: bool = Field(True, description="Also propose the three top-down grasps across the object's narrow "
+                           "horizontal axis (the top-down baseline's), cropped and checked as the sampled ones (kept "
+                           "by the pick trials: docs/picks.md); in pick labels without a checkpoint they are always "
+                           "among a view's executed candidates.")
 
 
 class CameraSpec(Frozen):
@@ -154,12 +155,6 @@ class PickLabelSpec(Frozen):
     @classmethod
     def _preset(cls, value: Any) -> Any:
         return gripper_fields(value)
-
-    @model_validator(mode="after")
-    def _one_choice(self) -> PickLabelSpec:
-        if self.checkpoint is not None and self.plan.top_down:
-            raise ValueError("checkpoint and plan.top_down both choose a view's executed candidates: give one")
-        return self
 
     def object_job(self) -> JobSpec:
         """The job-shaped spec the object loader reads (file limits, extents, physics)."""

@@ -149,7 +149,7 @@ def view_candidates(spec: JobSpec, views, rng: np.random.Generator) -> tuple[Gra
     cloud; and (n,) int64 the view each was sampled on (its crop's cloud)."""
     record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, spec.train.model)
     per_view = -(-spec.grasps_per_object // len(views.cameras))
-    plan = PlanSpec(candidates=per_view, support_plane="none")
+    plan = PlanSpec(candidates=per_view, support_plane="none", top_down=False)
     poses, sampled_on, tried = [], [], 0
     for k, camera in enumerate(views.cameras.astype(np.float64)):
         cloud = views.cloud(k).astype(np.float64)
