@@ -280,3 +280,29 @@ def test_a_trial_on_household_objects_is_kept_by_the_household_set_alone_never_t
     assert ": not kept;" in vessels_section(vessels)[-1]
 
 
+
+
+def test_the_last_kept_trial_ships_and_none_where_the_top_down_trial_is_not_kept():
+    from benchmarks.experiments.ship_network import kept_trial
+
+    lifted = [min(c + 1, 8) for c in STEADY]
+    higher = [min(c + 2, 8) for c in STEADY]
+
+    def judged(counts: list[int]) -> dict:
+        return {w: {"first_attempt": sum(counts) / 64, "per_object": views_picked(counts)}
+                for w in ("household", "unseen")}
+
+    def top_down(tried: list[int]) -> dict:
+        return {"points": [{"seed": s, "checkpoint": f"td{s}", "with_pool": judged(tried),
+                            "base": {"per_object": {w: views_picked(STEADY) for w in ("household", "unseen")},
+                                     "with_pool": judged(STEADY)}} for s in (0, 1)]}
+
+    def points(tried: list[int]) -> dict:
+        return {"points": [{"seed": s, "checkpoint": f"pts{s}", "with_pool": judged(tried)} for s in (0, 1)]}
+
+    assert kept_trial(top_down(STEADY), points(higher)) is None  # more points rest on a trial not kept
+    name, point = kept_trial(top_down(lifted), points(lifted))
+    assert (name, point["checkpoint"]) == ("pick_top_down", "td0")  # more points gain nothing over it
+    name, point = kept_trial(top_down(lifted), points(higher))
+    assert (name, point["checkpoint"]) == ("pick_points", "pts0")  # seed 0, never the best seed
+    assert kept_trial(top_down(lifted), None)[0] == "pick_top_down"

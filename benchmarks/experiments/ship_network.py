@@ -1,9 +1,10 @@
 """The network shipped with the package (issue 56, onepiece_dist/plan/shipped.py): the pick learning curve's best
 design at its largest size (benchmarks/results/pick_curve.json, data/pick_curve/), or, where the top-down trial is
-kept (benchmarks/results/pick_top_down.json; the trials' paired rule, docs/picks.md), that trial's seed-0 network
-(a seed is never chosen), copied into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick
-benchmark (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household
-figures into the record.
+kept (benchmarks/results/pick_top_down.json; the trials' paired rule, docs/picks.md), the last kept trial's seed-0
+network (the top-down trial's, or more points' on its labels: pick_points.json; a seed is never chosen), copied
+into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark
+(benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household figures into
+the record.
 
     .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks]
 """
@@ -62,25 +63,28 @@ def ship(point: dict, curve: dict) -> dict:
                  "benchmarks/results/pick_curve.json")
 
 
-def kept_top_down() -> dict | None:
-    """The top-down trial's seed-0 point where the trial is kept on the household set, else None."""
-    from benchmarks.pages.pick_trials_section import top_down_gains
+def kept_trial(top_down: dict | None, points: dict | None) -> tuple[str, dict] | None:
+    """(the trial's results name, its seed-0 point) of the last trial kept on the household set: more points
+    (fitted on the top-down trial's labels, judged against its networks) where both are kept, else the top-down
+    trial where kept, else None (the curve's best ships)."""
+    from benchmarks.pages.pick_trials_section import points_gains, top_down_gains
 
-    path = HERE / "results" / "pick_top_down.json"
-    result = json.loads(path.read_text()) if path.is_file() else None
-    if result is None or top_down_gains(result)[0]["household"].verdict != "kept":
+    if top_down is None or top_down_gains(top_down)[0]["household"].verdict != "kept":
         return None
-    return next((p for p in result["points"] if p["seed"] == 0), None)
+    kept = points is not None and points_gains(points, top_down)["household"].verdict == "kept"
+    name, result = ("pick_points", points) if kept else ("pick_top_down", top_down)
+    point = next((p for p in result["points"] if p["seed"] == 0), None)
+    return None if point is None else (name, point)
 
 
-def ship_top_down(point: dict) -> dict:
-    """The top-down trial's ``point`` shipped: it plans with the top-down grasps in its pool (plan.top_down)."""
+def ship_trial(name: str, point: dict) -> dict:
+    """A kept trial's ``point`` shipped: fitted on the labels that executed the top-down grasps, it plans with
+    them in its pool (plan.top_down)."""
     from benchmarks.experiments.pick_curve import BATCHES
 
     objects = f"{BATCHES[0][0]} (labels executing the top-down grasps) + {BATCHES[1][0]}"
-    household = point["with_pool"]["household"]
-    return _ship(point, objects, "python -m benchmarks.experiments.pick_top_down",
-                 household, "benchmarks/results/pick_top_down.json",
+    return _ship(point, objects, f"python -m benchmarks.experiments.{name}", point["with_pool"]["household"],
+                 f"benchmarks/results/{name}.json",
                  pool="the view's sampled candidates and the three top-down grasps (plan.top_down)")
 
 
@@ -133,8 +137,9 @@ def main() -> None:
 
     curve = json.loads((HERE / "results" / "pick_curve.json").read_text())
     shipped = json.loads(RECORD.read_text())["design"] if RECORD.is_file() else None
-    trial = kept_top_down()
-    print(ship_top_down(trial) if trial is not None else ship(best_point(curve, shipped, seed_spread()), curve))
+    trials = [HERE / "results" / f"{name}.json" for name in ("pick_top_down", "pick_points")]
+    trial = kept_trial(*(json.loads(p.read_text()) if p.is_file() else None for p in trials))
+    print(ship_trial(*trial) if trial is not None else ship(best_point(curve, shipped, seed_spread()), curve))
 
 
 if __name__ == "__main__":

@@ -219,3 +219,32 @@ def top_down_section(result: dict) -> list[str]:
             f"{gain_words(labels['household'])} (above the base at {above} of {len(points)} seeds; the pool alone "
             f"{gain_words(pool['household'])}); {RULE}. On the unseen set, where nothing is chosen, "
             f"{_unseen_words(labels['unseen'])} ({_unseen_words(pool['unseen'])} from the pool alone)."]
+
+
+def points_gains(result: dict, top_down: dict | None) -> dict[str, PairedGain]:
+    """More points' gain over the top-down trial's networks on each set, over the seeds both fitted."""
+    base = {p["seed"]: p["with_pool"] for p in (top_down or {}).get("points", [])}
+    points = [p for p in sorted(result["points"], key=lambda p: p["seed"]) if p["seed"] in base]
+    return {w: paired_gain([p["with_pool"][w]["per_object"] for p in points],
+                           [base[p["seed"]][w]["per_object"] for p in points], VIEWS) for w in ("household", "unseen")}
+
+
+def points_section(result: dict, top_down: dict | None) -> list[str]:
+    """More of each crop's points (results/pick_points.json) against the top-down trial's networks
+    (results/pick_top_down.json) on the same labels, seed for seed, both with the top-down grasps in the pool."""
+    base = {p["seed"]: p["with_pool"] for p in (top_down or {}).get("points", [])}
+    points = sorted((p for p in result["points"] if p["seed"] in base), key=lambda p: p["seed"])
+    gain = points_gains(result, top_down)
+    rows = [f"| {p['seed']} | " + " | ".join(f"{_pct(base[p['seed']][w]['first_attempt'])} | "
+                                             f"{_pct(p['with_pool'][w]['first_attempt'])}"
+                                             for w in ("household", "unseen")) + " |" for p in points]
+    return [f"## More of each crop's points: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. The shipped design sees 128 of each crop's 256 stored points, "
+            "drawn anew every batch (a planner resamples its crops to as many); thin parts (a handle, a rim, a flat "
+            f"package's edge) are then a few points. `{result['design']}` sees all 256, fitted seed for seed on the "
+            "top-down trial's labels against that trial's networks (128 points), both planning with the top-down "
+            "grasps in the pool, first attempt:", "",
+            "| seed | household, 128 points | 256 points | unseen, 128 points | 256 points |",
+            "| --- | --- | --- | --- | --- |", *rows, "",
+            f"On the household set, where designs are chosen, 256 points give {gain_words(gain['household'])}; "
+            f"{RULE}. On the unseen set, where nothing is chosen, {_unseen_words(gain['unseen'])}."]

@@ -12,6 +12,7 @@ from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_trials_section import (
     on_policy_section,
+    points_section,
     space_section,
     top_down_section,
     unseen_section,
@@ -183,7 +184,7 @@ def _dense_line(plan: dict) -> str:
 
 
 SECTIONS = ("pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down",
-            "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
+            "pick_points", "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
 
 
 def render_picks_page() -> str:
@@ -206,7 +207,8 @@ def render_picks_page() -> str:
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
     render = {"pick_unseen": lambda r: unseen_section(r, picks), "pick_curve": lambda r: curve_section(r, picks),
               "pick_space": space_section, "pick_on_policy": on_policy_section,
-              "pick_vessels": vessels_section, "pick_top_down": top_down_section, "pick_rankings": rankings_section,
+              "pick_vessels": vessels_section, "pick_top_down": top_down_section,
+              "pick_points": lambda r: points_section(r, load("pick_top_down")), "pick_rankings": rankings_section,
               "pick_pool_size": pool_size_lines}
     for name in SECTIONS:
         result = load(name)
