@@ -13,15 +13,10 @@ Results: benchmarks/results/pick_points.json (points kept; a run again fits only
 from __future__ import annotations
 
 import argparse
-import json
-import platform
-from datetime import date
 
-from benchmarks.experiments.pick_curve import HERE, OUT, fit
 from benchmarks.experiments.pick_on_policy import second_batch
-from benchmarks.experiments.pick_top_down import judged, top_down_batch
+from benchmarks.experiments.pick_top_down import fit_seeds, top_down_batch
 
-RESULTS = HERE / "results" / "pick_points.json"
 DESIGN = "context_balanced_256"
 
 
@@ -29,19 +24,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", default="0,1,2")  # a fourth did not fit in the session that ran it
     args = parser.parse_args()
-    joined = top_down_batch().joined(second_batch(None))
-    points = json.loads(RESULTS.read_text())["points"] if RESULTS.is_file() else []
-    for seed in (int(s) for s in args.seeds.split(",")):
-        if any(p["seed"] == seed for p in points):
-            continue
-        point = fit(joined, len(joined), DESIGN, seed, OUT / f"points/{DESIGN}_s{seed}")
-        point.update(seed=seed, with_pool=judged(f"{DESIGN}_s{seed}", point["checkpoint"]))
-        points.append(point)
-        print(seed, json.dumps({k: v["first_attempt"] for k, v in point["with_pool"].items()}), flush=True)
-        RESULTS.write_text(json.dumps({
-            "command": ".venv/bin/python -m benchmarks.experiments.pick_points", "date": date.today().isoformat(),
-            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "design": DESIGN,
-            "points": points}, indent=1) + "\n")
+    fit_seeds(top_down_batch().joined(second_batch(None)), DESIGN, args.seeds, DESIGN, "points", "pick_points",
+              {"design": DESIGN})
 
 
 if __name__ == "__main__":

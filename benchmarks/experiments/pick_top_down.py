@@ -41,6 +41,25 @@ def judged(name: str, checkpoint: str) -> dict:
             "unseen": judge(f"{name}_unseen", checkpoint, None, True, out)}
 
 
+def fit_seeds(joined, design: str, seeds: str, name: str, folder: str, script: str, header: dict) -> None:
+    """``design`` fitted on ``joined`` at each of ``seeds`` (comma-separated) not yet in ``script``'s results
+    (results/<script>.json), each kept in OUT/<folder>/<name>_s<seed> and judged with the top-down grasps in its
+    pool; the results written after each seed, ``header`` before the points."""
+    results = HERE / "results" / f"{script}.json"
+    points = json.loads(results.read_text())["points"] if results.is_file() else []
+    for seed in (int(s) for s in seeds.split(",")):
+        if any(p["seed"] == seed for p in points):
+            continue
+        point = fit(joined, len(joined), design, seed, OUT / folder / f"{name}_s{seed}")
+        point.update(seed=seed, with_pool=judged(f"{name}_s{seed}", point["checkpoint"]))
+        points.append(point)
+        print(seed, json.dumps({k: v["first_attempt"] for k, v in point["with_pool"].items()}), flush=True)
+        results.write_text(json.dumps({
+            "command": f".venv/bin/python -m benchmarks.experiments.{script}", "date": date.today().isoformat(),
+            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **header, "points": points},
+            indent=1) + "\n")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", default="0,1")

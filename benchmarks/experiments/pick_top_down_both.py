@@ -13,15 +13,10 @@ Results: benchmarks/results/pick_top_down_both.json (points kept; a run again fi
 from __future__ import annotations
 
 import argparse
-import json
-import platform
-from datetime import date
 
-from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, fit, label_spec, labelled
-from benchmarks.experiments.pick_top_down import judged, top_down_batch
+from benchmarks.experiments.pick_curve import BATCHES, label_spec, labelled
+from benchmarks.experiments.pick_top_down import fit_seeds, top_down_batch
 from benchmarks.experiments.pick_unseen import DESIGN
-
-RESULTS = HERE / "results" / "pick_top_down_both.json"
 
 
 def second_top_down_batch():
@@ -36,22 +31,9 @@ def main() -> None:
     parser.add_argument("--label-only", action="store_true", help="make the second batch's labels and stop")
     args = parser.parse_args()
     second = second_top_down_batch()
-    if args.label_only:
-        return
-    joined = top_down_batch().joined(second)
-    points = json.loads(RESULTS.read_text())["points"] if RESULTS.is_file() else []
-    for seed in (int(s) for s in args.seeds.split(",")):
-        if any(p["seed"] == seed for p in points):
-            continue
-        point = fit(joined, len(joined), DESIGN, seed, OUT / f"top_down/both_s{seed}")
-        point.update(seed=seed, with_pool=judged(f"both_s{seed}", point["checkpoint"]))
-        points.append(point)
-        print(seed, json.dumps({k: v["first_attempt"] for k, v in point["with_pool"].items()}), flush=True)
-        RESULTS.write_text(json.dumps({
-            "command": ".venv/bin/python -m benchmarks.experiments.pick_top_down_both",
-            "date": date.today().isoformat(),
-            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "labels": len(second),
-            "success_rate": float(second.success.mean()), "points": points}, indent=1) + "\n")
+    if not args.label_only:
+        fit_seeds(top_down_batch().joined(second), DESIGN, args.seeds, "both", "top_down", "pick_top_down_both",
+                  {"labels": len(second), "success_rate": float(second.success.mean())})
 
 
 if __name__ == "__main__":

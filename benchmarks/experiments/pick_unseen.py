@@ -19,7 +19,6 @@ HERE = Path(__file__).resolve().parents[1]
 ROOT = HERE.parent
 RESULTS = HERE / "results" / "pick_unseen.json"
 OUT = ROOT / "data" / "pick_unseen"
-# name: (checkpoint, what it is, where its household figure is committed)
 NETWORKS = {  # name -> (checkpoint, what, the results file with its household figure, top-down grasps in its pool)
     "shipped": ("onepiece_dist/plan/networks/pick_view.pt",
                 "the shipped network: context_balanced, 81,152 labels, the first batch's executing the top-down "

@@ -221,23 +221,27 @@ def top_down_section(result: dict) -> list[str]:
             f"{_unseen_words(labels['unseen'])} ({_unseen_words(pool['unseen'])} from the pool alone)."]
 
 
+def _points_pairs(result: dict, top_down: dict | None) -> list[tuple[dict, dict]]:
+    """(a more-points point, the top-down trial's judged network of its seed), for the seeds both fitted."""
+    base = {p["seed"]: p["with_pool"] for p in (top_down or {}).get("points", [])}
+    return [(p, base[p["seed"]]) for p in sorted(result["points"], key=lambda p: p["seed"]) if p["seed"] in base]
+
+
 def points_gains(result: dict, top_down: dict | None) -> dict[str, PairedGain]:
     """More points' gain over the top-down trial's networks on each set, over the seeds both fitted."""
-    base = {p["seed"]: p["with_pool"] for p in (top_down or {}).get("points", [])}
-    points = [p for p in sorted(result["points"], key=lambda p: p["seed"]) if p["seed"] in base]
-    return {w: paired_gain([p["with_pool"][w]["per_object"] for p in points],
-                           [base[p["seed"]][w]["per_object"] for p in points], VIEWS) for w in ("household", "unseen")}
+    pairs = _points_pairs(result, top_down)
+    return {w: paired_gain([p["with_pool"][w]["per_object"] for p, _ in pairs],
+                           [b[w]["per_object"] for _, b in pairs], VIEWS) for w in ("household", "unseen")}
 
 
 def points_section(result: dict, top_down: dict | None) -> list[str]:
     """More of each crop's points (results/pick_points.json) against the top-down trial's networks
     (results/pick_top_down.json) on the same labels, seed for seed, both with the top-down grasps in the pool."""
-    base = {p["seed"]: p["with_pool"] for p in (top_down or {}).get("points", [])}
-    points = sorted((p for p in result["points"] if p["seed"] in base), key=lambda p: p["seed"])
     gain = points_gains(result, top_down)
-    rows = [f"| {p['seed']} | " + " | ".join(f"{_pct(base[p['seed']][w]['first_attempt'])} | "
+    rows = [f"| {p['seed']} | " + " | ".join(f"{_pct(b[w]['first_attempt'])} | "
                                              f"{_pct(p['with_pool'][w]['first_attempt'])}"
-                                             for w in ("household", "unseen")) + " |" for p in points]
+                                             for w in ("household", "unseen")) + " |"
+            for p, b in _points_pairs(result, top_down)]
     return [f"## More of each crop's points: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. The shipped design sees 128 of each crop's 256 stored points, "
             "drawn anew every batch (a planner resamples its crops to as many); thin parts (a handle, a rim, a flat "
