@@ -305,3 +305,12 @@ def test_the_franka_hand_collides_where_the_box_palm_does_not():
         finally:
             world.close()
     assert hits == [True, False]
+
+
+def test_a_label_store_written_before_the_top_down_field_reads_as_having_executed_none():
+    written = PickLabelSpec(plan={"top_down": False}).model_dump(mode="json")
+    del written["plan"]["top_down"]  # as the stores made before plan.top_down existed keep it
+    assert PickLabelSpec.stored(written).plan.top_down is False
+    assert PickLabelSpec.model_validate(written).plan.top_down is True  # today's default would misread it
+    today = PickLabelSpec().model_dump(mode="json")
+    assert PickLabelSpec.stored(today) == PickLabelSpec()  # a store that says so keeps what it says

@@ -75,7 +75,7 @@ def labelled(spec, shapes: str, seed: int, make=None):
     from onepiece_dist.store.pick_labels import read_pick_labels
 
     path = ROOT / spec.output / "pick_labels.zarr"
-    if not (path.exists() and type(spec).model_validate(read_pick_labels(path).attrs["spec"]) == spec):
+    if not (path.exists() and type(spec).stored(read_pick_labels(path).attrs["spec"]) == spec):
         (make or training_shapes)(ROOT / "data" / shapes, 160, seed)
         run_pick_labels(spec)
     return read_pick_labels(path)

@@ -42,7 +42,7 @@ def eyes() -> None:
     from onepiece_dist.specs.plan import PickLabelSpec
     from onepiece_dist.store.pick_labels import read_pick_labels
 
-    spec = PickLabelSpec(**read_pick_labels(LABELS / "pick_labels.zarr").attrs["spec"])
+    spec = PickLabelSpec.stored(read_pick_labels(LABELS / "pick_labels.zarr").attrs["spec"])
     rows = [row for rows in run_each_in_process(object_eyes, spec, resolve_source(spec.objects)) for row in rows]
     EYES.parent.mkdir(parents=True, exist_ok=True)
     np.save(EYES, np.array(rows, dtype=np.float64))

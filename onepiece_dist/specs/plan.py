@@ -160,3 +160,9 @@ class PickLabelSpec(Frozen):
         """The job-shaped spec the object loader reads (file limits, extents, physics)."""
         return JobSpec(objects=self.objects, gripper=self.gripper, voxel=self.voxel, sampler=self.sampler,
                        sim=self.sim, max_file_bytes=self.max_file_bytes, seed=self.seed)
+
+    @classmethod
+    def stored(cls, data: dict[str, Any]) -> PickLabelSpec:
+        """The spec a label store kept (its attrs): stores written before ``plan.top_down`` existed executed no
+        top-down grasps, so its absence there reads False, never today's default."""
+        return cls.model_validate({**data, "plan": {"top_down": False, **data.get("plan", {})}})
