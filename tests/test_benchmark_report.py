@@ -300,9 +300,12 @@ def test_the_last_kept_trial_ships_and_none_where_the_top_down_trial_is_not_kept
     def points(tried: list[int]) -> dict:
         return {"points": [{"seed": s, "checkpoint": f"pts{s}", "with_pool": judged(tried)} for s in (0, 1)]}
 
-    assert kept_trial(top_down(STEADY), points(higher)) is None  # more points rest on a trial not kept
-    name, point = kept_trial(top_down(lifted), points(lifted))
+    best = [8] * 8
+    assert kept_trial(top_down(STEADY), {"pick_points": points(higher)}) is None  # rests on a trial not kept
+    name, point = kept_trial(top_down(lifted), {"pick_points": points(lifted)})
     assert (name, point["checkpoint"]) == ("pick_top_down", "td0")  # more points gain nothing over it
-    name, point = kept_trial(top_down(lifted), points(higher))
+    name, point = kept_trial(top_down(lifted), {"pick_points": points(higher), "pick_top_down_both": None})
     assert (name, point["checkpoint"]) == ("pick_points", "pts0")  # seed 0, never the best seed
-    assert kept_trial(top_down(lifted), None)[0] == "pick_top_down"
+    assert kept_trial(top_down(lifted), {"pick_points": None})[0] == "pick_top_down"
+    both = kept_trial(top_down(lifted), {"pick_points": points(higher), "pick_top_down_both": points(best)})
+    assert both[0] == "pick_top_down_both"  # of two kept, the one that gains most

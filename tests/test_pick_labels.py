@@ -179,6 +179,9 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
     ranked = train_on_pick_labels(labels, tmp_path / "listwise", crop,
                                   PickTrainOptions(epochs=1, validation=0.34, ranking=1.0))
     assert len(ranked.epochs) == 1 and np.isfinite(ranked.epochs[0].train_loss)
+    cosine = train_on_pick_labels(labels, tmp_path / "cosine", crop,
+                                  PickTrainOptions(epochs=3, patience=0, validation=0.34, schedule="cosine"))
+    assert len(cosine.epochs) == 3  # never stopped early: the rate decays over every epoch
     torch.load(result.checkpoint, weights_only=True)
     scorer = GraspScorer(result.checkpoint, GripperSpec(), device="cpu")
     n = 5
@@ -220,6 +223,18 @@ def on_policy(spec: PickLabelSpec, labels, checkpoint: Path) -> None:
     assert len(top_down) == 8 and {17, 18, 19} <= set(top_down)  # the top-down grasps, always, in place of three
     scored = _chosen(asked, SimpleNamespace(crops=crops, top_down=3), np.random.default_rng(0))
     assert np.array_equal(scored, chosen)  # with a checkpoint the top-down grasps are scored as any other
+
+
+def test_the_cosine_schedule_decays_the_rate_from_its_start_towards_zero():
+    from onepiece_dist.learn.pick_train import PickTrainOptions, learning_rate
+
+    cosine = PickTrainOptions(epochs=10, learning_rate=1e-3, schedule="cosine")
+    rates = [learning_rate(cosine, e) for e in range(10)]
+    assert rates[0] == pytest.approx(1e-3) and rates[5] == pytest.approx(5e-4) and 0 < rates[-1] < 5e-5
+    assert np.all(np.diff(rates) < 0)
+    assert {learning_rate(PickTrainOptions(), e) for e in range(10)} == {1e-3}
+    with pytest.raises(ValueError, match="schedule 'step'"):
+        learning_rate(PickTrainOptions(schedule="step"), 0)
 
 
 def test_the_listwise_term_is_small_only_where_each_views_successes_score_above_its_failures():

@@ -1,7 +1,8 @@
 """The network shipped with the package (issue 56, onepiece_dist/plan/shipped.py): the pick learning curve's best
 design at its largest size (benchmarks/results/pick_curve.json, data/pick_curve/), or, where the top-down trial is
-kept (benchmarks/results/pick_top_down.json; the trials' paired rule, docs/picks.md), the last kept trial's seed-0
-network (the top-down trial's, or more points' on its labels: pick_points.json; a seed is never chosen), copied
+kept (benchmarks/results/pick_top_down.json; the trials' paired rule, docs/picks.md), the kept trial's seed-0
+network (the top-down trial's, or of a trial judged against it that is kept: pick_points.json,
+pick_top_down_both.json, pick_schedule.json; a seed is never chosen), copied
 into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark
 (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household figures into
 the record.
@@ -63,17 +64,24 @@ def ship(point: dict, curve: dict) -> dict:
                  "benchmarks/results/pick_curve.json")
 
 
-def kept_trial(top_down: dict | None, points: dict | None) -> tuple[str, dict] | None:
-    """(the trial's results name, its seed-0 point) of the last trial kept on the household set: more points
-    (fitted on the top-down trial's labels, judged against its networks) where both are kept, else the top-down
-    trial where kept, else None (the curve's best ships)."""
-    from benchmarks.pages.pick_trials_section import points_gains, top_down_gains
+# trials judged against the top-down trial's networks, fitted on or beside its labels
+FOLLOWERS = ("pick_points", "pick_top_down_both", "pick_schedule")
+TRIAL_OBJECTS = {"pick_top_down_both": "{0} (labels executing the top-down grasps) + {1} (the same)"}
+
+
+def kept_trial(top_down: dict | None, followers: dict[str, dict | None]) -> tuple[str, dict] | None:
+    """(the trial's results name, its seed-0 point) of the trial kept on the household set: of the ``followers``
+    (results name -> results, each judged against the top-down trial's networks) kept, the one that gains most;
+    else the top-down trial where kept; else None (the curve's best ships)."""
+    from benchmarks.pages.pick_trials_section import gains_over_top_down, top_down_gains
 
     if top_down is None or top_down_gains(top_down)[0]["household"].verdict != "kept":
         return None
-    kept = points is not None and points_gains(points, top_down)["household"].verdict == "kept"
-    name, result = ("pick_points", points) if kept else ("pick_top_down", top_down)
-    point = next((p for p in result["points"] if p["seed"] == 0), None)
+    gains = {name: gains_over_top_down(result, top_down)["household"]
+             for name, result in followers.items() if result is not None}
+    kept = [name for name, gain in gains.items() if gain.verdict == "kept"]
+    name = max(kept, key=lambda n: gains[n].gain) if kept else "pick_top_down"
+    point = next((p for p in (followers.get(name) or top_down)["points"] if p["seed"] == 0), None)
     return None if point is None else (name, point)
 
 
@@ -82,9 +90,9 @@ def ship_trial(name: str, point: dict) -> dict:
     them in its pool (plan.top_down)."""
     from benchmarks.experiments.pick_curve import BATCHES
 
-    objects = f"{BATCHES[0][0]} (labels executing the top-down grasps) + {BATCHES[1][0]}"
-    return _ship(point, objects, f"python -m benchmarks.experiments.{name}", point["with_pool"]["household"],
-                 f"benchmarks/results/{name}.json",
+    objects = TRIAL_OBJECTS.get(name, "{0} (labels executing the top-down grasps) + {1}")
+    return _ship(point, objects.format(BATCHES[0][0], BATCHES[1][0]), f"python -m benchmarks.experiments.{name}",
+                 point["with_pool"]["household"], f"benchmarks/results/{name}.json",
                  pool="the view's sampled candidates and the three top-down grasps (plan.top_down)")
 
 
@@ -126,6 +134,11 @@ def record_picks() -> dict:
     return record
 
 
+def _results(name: str) -> dict | None:
+    path = HERE / "results" / f"{name}.json"
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-picks", action="store_true")
@@ -137,8 +150,7 @@ def main() -> None:
 
     curve = json.loads((HERE / "results" / "pick_curve.json").read_text())
     shipped = json.loads(RECORD.read_text())["design"] if RECORD.is_file() else None
-    trials = [HERE / "results" / f"{name}.json" for name in ("pick_top_down", "pick_points")]
-    trial = kept_trial(*(json.loads(p.read_text()) if p.is_file() else None for p in trials))
+    trial = kept_trial(_results("pick_top_down"), {name: _results(name) for name in FOLLOWERS})
     print(ship_trial(*trial) if trial is not None else ship(best_point(curve, shipped, seed_spread()), curve))
 
 

@@ -221,34 +221,65 @@ def top_down_section(result: dict) -> list[str]:
             f"{_unseen_words(labels['unseen'])} ({_unseen_words(pool['unseen'])} from the pool alone)."]
 
 
-def _points_pairs(result: dict, top_down: dict | None) -> list[tuple[dict, dict]]:
-    """(a more-points point, the top-down trial's judged network of its seed), for the seeds both fitted."""
+def _over_top_down(result: dict, top_down: dict | None) -> list[tuple[dict, dict]]:
+    """(a trial's point, the top-down trial's judged network of its seed), for the seeds both fitted: the trials
+    that build on the top-down trial's labels are judged against its networks."""
     base = {p["seed"]: p["with_pool"] for p in (top_down or {}).get("points", [])}
     return [(p, base[p["seed"]]) for p in sorted(result["points"], key=lambda p: p["seed"]) if p["seed"] in base]
 
 
-def points_gains(result: dict, top_down: dict | None) -> dict[str, PairedGain]:
-    """More points' gain over the top-down trial's networks on each set, over the seeds both fitted."""
-    pairs = _points_pairs(result, top_down)
+def gains_over_top_down(result: dict, top_down: dict | None) -> dict[str, PairedGain]:
+    """A trial's gain over the top-down trial's networks on each set, over the seeds both fitted."""
+    pairs = _over_top_down(result, top_down)
     return {w: paired_gain([p["with_pool"][w]["per_object"] for p, _ in pairs],
                            [b[w]["per_object"] for _, b in pairs], VIEWS) for w in ("household", "unseen")}
+
+
+def _over_top_down_lines(result: dict, top_down: dict | None, base: str, tried: str, gives: str) -> list[str]:
+    """The seed-for-seed table of a trial against the top-down trial's networks and its verdict."""
+    gain = gains_over_top_down(result, top_down)
+    rows = [f"| {p['seed']} | " + " | ".join(f"{_pct(b[w]['first_attempt'])} | "
+                                             f"{_pct(p['with_pool'][w]['first_attempt'])}"
+                                             for w in ("household", "unseen")) + " |"
+            for p, b in _over_top_down(result, top_down)]
+    return [f"| seed | household, {base} | {tried} | unseen, {base} | {tried} |", "| --- | --- | --- | --- | --- |",
+            *rows, "", f"On the household set, where designs are chosen, {gives} give {gain_words(gain['household'])}; "
+            f"{RULE}. On the unseen set, where nothing is chosen, {_unseen_words(gain['unseen'])}."]
 
 
 def points_section(result: dict, top_down: dict | None) -> list[str]:
     """More of each crop's points (results/pick_points.json) against the top-down trial's networks
     (results/pick_top_down.json) on the same labels, seed for seed, both with the top-down grasps in the pool."""
-    gain = points_gains(result, top_down)
-    rows = [f"| {p['seed']} | " + " | ".join(f"{_pct(b[w]['first_attempt'])} | "
-                                             f"{_pct(p['with_pool'][w]['first_attempt'])}"
-                                             for w in ("household", "unseen")) + " |"
-            for p, b in _points_pairs(result, top_down)]
     return [f"## More of each crop's points: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. The shipped design sees 128 of each crop's 256 stored points, "
             "drawn anew every batch (a planner resamples its crops to as many); thin parts (a handle, a rim, a flat "
             f"package's edge) are then a few points. `{result['design']}` sees all 256, fitted seed for seed on the "
             "top-down trial's labels against that trial's networks (128 points), both planning with the top-down "
             "grasps in the pool, first attempt:", "",
-            "| seed | household, 128 points | 256 points | unseen, 128 points | 256 points |",
-            "| --- | --- | --- | --- | --- |", *rows, "",
-            f"On the household set, where designs are chosen, 256 points give {gain_words(gain['household'])}; "
-            f"{RULE}. On the unseen set, where nothing is chosen, {_unseen_words(gain['unseen'])}."]
+            *_over_top_down_lines(result, top_down, "128 points", "256 points", "256 points")]
+
+
+def both_section(result: dict, top_down: dict | None) -> list[str]:
+    """Both label batches executing the top-down grasps (results/pick_top_down_both.json) against the top-down
+    trial's networks (only its first batch executed them), seed for seed, both with the top-down grasps in the
+    pool."""
+    return [f"## Both label batches executing the top-down grasps: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. Only the first label batch of the kept top-down trial executed "
+            "the top-down grasps, and its network still ranks sampled grasps above a top-down grasp that would hold "
+            f"on flat packages. The second batch's objects and views labelled again so ({result['labels']} labels, "
+            f"success rate {result['success_rate']:.2f}) join the trial's first batch; `{BASE}` fitted on them seed "
+            "for seed against the top-down trial's networks, both planning with the top-down grasps in the pool, "
+            "first attempt:", "",
+            *_over_top_down_lines(result, top_down, "first batch", "both batches", "both batches")]
+
+
+def schedule_section(result: dict, top_down: dict | None) -> list[str]:
+    """The learning rate's schedule (results/pick_schedule.json) against the top-down trial's networks on the same
+    labels, seed for seed, both with the top-down grasps in the pool."""
+    return [f"## The learning rate's schedule: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. The shipped design fits at a constant rate and stops when the "
+            "validation AP has not risen for 5 epochs. `context_balanced_cosine` decays the rate along a cosine over "
+            "all 30 epochs, never stopped early, its best epoch by validation AP kept as before; fitted seed for "
+            "seed on the top-down trial's labels against that trial's networks, both planning with the top-down "
+            "grasps in the pool, first attempt:", "",
+            *_over_top_down_lines(result, top_down, "constant", "cosine", "the cosine schedule")]

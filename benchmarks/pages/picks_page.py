@@ -11,8 +11,10 @@ import numpy as np
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_trials_section import (
+    both_section,
     on_policy_section,
     points_section,
+    schedule_section,
     space_section,
     top_down_section,
     unseen_section,
@@ -184,7 +186,8 @@ def _dense_line(plan: dict) -> str:
 
 
 SECTIONS = ("pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down",
-            "pick_points", "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
+            "pick_points", "pick_top_down_both", "pick_schedule", "pick_rankings",
+            "pick_pool_size")  # results rendered after the benchmark's, in this order
 
 
 def render_picks_page() -> str:
@@ -208,7 +211,9 @@ def render_picks_page() -> str:
     render = {"pick_unseen": lambda r: unseen_section(r, picks), "pick_curve": lambda r: curve_section(r, picks),
               "pick_space": space_section, "pick_on_policy": on_policy_section,
               "pick_vessels": vessels_section, "pick_top_down": top_down_section,
-              "pick_points": lambda r: points_section(r, load("pick_top_down")), "pick_rankings": rankings_section,
+              "pick_points": lambda r: points_section(r, load("pick_top_down")),
+              "pick_top_down_both": lambda r: both_section(r, load("pick_top_down")),
+              "pick_schedule": lambda r: schedule_section(r, load("pick_top_down")), "pick_rankings": rankings_section,
               "pick_pool_size": pool_size_lines}
     for name in SECTIONS:
         result = load(name)

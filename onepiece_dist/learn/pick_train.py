@@ -31,8 +31,9 @@ class PickTrainOptions:
     are balanced (as many successes as failures drawn), the weight of a listwise ranking term (each batch then
     holds whole views, and each view's successes are pushed above its failures: what the planner's first choice
     needs), epochs, patience, batch size, the points of each crop the network sees (a seeded subset of the stored
-    ones; a planner then resamples its crops to as many), learning rate, the share of objects held out for
-    validation, the seed."""
+    ones; a planner then resamples its crops to as many), learning rate and its schedule (constant with early
+    stopping, or cosine: decayed to zero over every epoch, never stopped early, the best epoch kept), the share of
+    objects held out for validation, the seed."""
 
     model: str = "pointnet_context"
     target: str = "every_trial"  # or "share"
@@ -43,6 +44,7 @@ class PickTrainOptions:
     batch_size: int = 256
     points: int = 128  # of each stored crop's, drawn anew every batch; the checkpoint's points_per_grasp
     learning_rate: float = 1e-3
+    schedule: str = "constant"  # or "cosine"
     validation: float = 0.1
     seed: int = 0
 
@@ -140,6 +142,8 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
     rng = np.random.default_rng([options.seed, 56])
     records, best, bad = [], -1.0, 0
     for epoch in range(options.epochs):
+        for group in optimiser.param_groups:
+            group["lr"] = learning_rate(options, epoch)
         loss = _epoch(model, optimiser, labels, train, options, trials, rng)
         scores = score_rows(model, labels, val, options.points)
         record = EpochRecord(epoch, loss, average_precision(scores, labels.success[val]),
@@ -152,10 +156,19 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
                         "val_ap": record.val_ap}, folder / "best.pt")
         else:
             bad += 1
-            if bad >= options.patience:
+            if bad >= options.patience and options.schedule == "constant":
                 break
     return PickTrainResult(folder / "best.pt", tuple(records), len(train), float(labels.success[train].mean()),
                            time.perf_counter() - start)
+
+
+def learning_rate(options: PickTrainOptions, epoch: int) -> float:
+    """The learning rate of ``epoch``: constant, or cosine from ``options.learning_rate`` towards zero."""
+    if options.schedule == "constant":
+        return options.learning_rate
+    if options.schedule != "cosine":
+        raise ValueError(f"schedule {options.schedule!r}: use 'constant' or 'cosine'")
+    return 0.5 * options.learning_rate * (1.0 + np.cos(np.pi * epoch / options.epochs))
 
 
 def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: PickTrainOptions, trials: int,
