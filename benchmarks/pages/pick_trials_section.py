@@ -243,7 +243,7 @@ def _over_top_down_lines(result: dict, top_down: dict | None, base: str, tried: 
                                              for w in ("household", "unseen")) + " |"
             for p, b in _over_top_down(result, top_down)]
     return [f"| seed | household, {base} | {tried} | unseen, {base} | {tried} |", "| --- | --- | --- | --- | --- |",
-            *rows, "", f"On the household set, where designs are chosen, {gives} give {gain_words(gain['household'])}; "
+            *rows, "", f"On the household set, where designs are chosen, {gives} {gain_words(gain['household'])}; "
             f"{RULE}. On the unseen set, where nothing is chosen, {_unseen_words(gain['unseen'])}."]
 
 
@@ -256,7 +256,7 @@ def points_section(result: dict, top_down: dict | None) -> list[str]:
             f"package's edge) are then a few points. `{result['design']}` sees all 256, fitted seed for seed on the "
             "top-down trial's labels against that trial's networks (128 points), both planning with the top-down "
             "grasps in the pool, first attempt:", "",
-            *_over_top_down_lines(result, top_down, "128 points", "256 points", "256 points")]
+            *_over_top_down_lines(result, top_down, "128 points", "256 points", "256 points give")]
 
 
 def both_section(result: dict, top_down: dict | None) -> list[str]:
@@ -270,7 +270,7 @@ def both_section(result: dict, top_down: dict | None) -> list[str]:
             f"success rate {result['success_rate']:.2f}) join the trial's first batch; `{BASE}` fitted on them seed "
             "for seed against the top-down trial's networks, both planning with the top-down grasps in the pool, "
             "first attempt:", "",
-            *_over_top_down_lines(result, top_down, "first batch", "both batches", "both batches")]
+            *_over_top_down_lines(result, top_down, "first batch", "both batches", "both batches give")]
 
 
 def schedule_section(result: dict, top_down: dict | None) -> list[str]:
@@ -282,4 +282,4 @@ def schedule_section(result: dict, top_down: dict | None) -> list[str]:
             "all 30 epochs, never stopped early, its best epoch by validation AP kept as before; fitted seed for "
             "seed on the top-down trial's labels against that trial's networks, both planning with the top-down "
             "grasps in the pool, first attempt:", "",
-            *_over_top_down_lines(result, top_down, "constant", "cosine", "the cosine schedule")]
+            *_over_top_down_lines(result, top_down, "constant", "cosine", "the cosine schedule gives")]
