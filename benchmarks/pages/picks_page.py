@@ -12,6 +12,7 @@ from benchmarks.pages.committed import load
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_trials_section import (
     both_section,
+    household_labels_section,
     on_policy_section,
     points_section,
     schedule_section,
@@ -186,7 +187,7 @@ def _dense_line(plan: dict) -> str:
 
 
 SECTIONS = ("pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down",
-            "pick_points", "pick_top_down_both", "pick_schedule", "pick_rankings",
+            "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels", "pick_rankings",
             "pick_pool_size")  # results rendered after the benchmark's, in this order
 
 
@@ -213,7 +214,9 @@ def render_picks_page() -> str:
               "pick_vessels": vessels_section, "pick_top_down": top_down_section,
               "pick_points": lambda r: points_section(r, load("pick_top_down")),
               "pick_top_down_both": lambda r: both_section(r, load("pick_top_down")),
-              "pick_schedule": lambda r: schedule_section(r, load("pick_top_down")), "pick_rankings": rankings_section,
+              "pick_schedule": lambda r: schedule_section(r, load("pick_top_down")),
+              "pick_household_labels": lambda r: household_labels_section(r, load("pick_top_down")),
+              "pick_rankings": rankings_section,
               "pick_pool_size": pool_size_lines}
     for name in SECTIONS:
         result = load(name)
