@@ -68,16 +68,18 @@ def labels(batches: int = 1):
     return joined
 
 
-def labelled(spec, shapes: str, seed: int, make=None):
+def labelled(spec, shapes: str | None, seed: int = 0, make=None):
     """The pick labels of ``spec`` (made here unless its folder holds labels of the same spec), its training shapes
-    (``data/<shapes>``, seeded; ``make``: training_shapes unless another maker is given) made first."""
+    (``data/<shapes>``, seeded; ``make``: training_shapes unless another maker is given; None: the spec's objects
+    need none) made first."""
     from benchmarks.experiments.training_shapes import training_shapes
     from onepiece_dist.picks.pick_labels import run_pick_labels
     from onepiece_dist.store.pick_labels import read_pick_labels
 
     path = ROOT / spec.output / "pick_labels.zarr"
     if not (path.exists() and type(spec).stored(read_pick_labels(path).attrs["spec"]) == spec):
-        (make or training_shapes)(ROOT / "data" / shapes, 160, seed)
+        if shapes is not None:
+            (make or training_shapes)(ROOT / "data" / shapes, 160, seed)
         run_pick_labels(spec)
     return read_pick_labels(path)
 

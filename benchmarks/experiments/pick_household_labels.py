@@ -1,10 +1,11 @@
-"""What real household meshes in the training labels give on objects never trained on (issue 55, a bound on the
-next lever): every design trial above plateaus at about 86% of the household views and 70% of the unseen ones on
-labels of procedural objects. Here the household set's 16 meshes are labelled too (48 views each, other seeds than
-the benchmark's, the top-down grasps executed) and join the top-down trial's labels; ``context_balanced`` fitted
-seed for seed against that trial's networks, judged on the unseen set only (the household set is now trained on,
-so it no longer judges). Not a design to ship: it says whether scanned household shapes in training move the
-unseen picks, which decides whether a training source of such meshes (outside both sets) is worth finding.
+"""What real household meshes in the training labels give on objects never trained on (issue 55, whether the
+next lever is worth seeking): every design trial above plateaus at about 86% of the household views and 70% of
+the unseen ones on labels of procedural objects. Here the household set's 16 meshes are labelled too (48 views
+each, other seeds than the benchmark's, the top-down grasps executed) and join the top-down trial's labels;
+``context_balanced`` fitted seed for seed against that trial's networks, judged on the unseen set only (the
+household set is now trained on, so it no longer judges). Not a design to ship: it says whether scanned household
+shapes in training move the unseen picks, which decides whether a training source of such meshes (outside both
+sets) is worth finding.
 
     .venv/bin/python -m benchmarks.experiments.pick_household_labels [--seeds 0,1]
 
@@ -18,7 +19,7 @@ import json
 import platform
 from datetime import date
 
-from benchmarks.experiments.pick_curve import HERE, OUT, ROOT, fit
+from benchmarks.experiments.pick_curve import HERE, OUT, fit, labelled
 from benchmarks.experiments.pick_on_policy import second_batch
 from benchmarks.experiments.pick_top_down import top_down_batch
 from benchmarks.experiments.pick_unseen import DESIGN, judge
@@ -29,16 +30,10 @@ SEED = 55  # the benchmark's drops and cameras use seed 0: these views are other
 
 def household_batch():
     from benchmarks.experiments.household import household_objects
-    from onepiece_dist.picks.pick_labels import run_pick_labels
     from onepiece_dist.specs.plan import PickLabelSpec
-    from onepiece_dist.store.pick_labels import read_pick_labels
 
-    spec = PickLabelSpec(objects=str(household_objects()), output="data/pick_labels_household", views=48,
-                         per_view=16, plan={"top_down": True}, seed=SEED)
-    path = ROOT / spec.output / "pick_labels.zarr"
-    if not (path.exists() and PickLabelSpec.stored(read_pick_labels(path).attrs["spec"]) == spec):
-        run_pick_labels(spec)
-    return read_pick_labels(path)
+    return labelled(PickLabelSpec(objects=str(household_objects()), output="data/pick_labels_household", views=48,
+                                  per_view=16, plan={"top_down": True}, seed=SEED), None)
 
 
 def main() -> None:

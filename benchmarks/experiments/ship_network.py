@@ -134,11 +134,6 @@ def record_picks() -> dict:
     return record
 
 
-def _results(name: str) -> dict | None:
-    path = HERE / "results" / f"{name}.json"
-    return json.loads(path.read_text()) if path.is_file() else None
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-picks", action="store_true")
@@ -150,7 +145,9 @@ def main() -> None:
 
     curve = json.loads((HERE / "results" / "pick_curve.json").read_text())
     shipped = json.loads(RECORD.read_text())["design"] if RECORD.is_file() else None
-    trial = kept_trial(_results("pick_top_down"), {name: _results(name) for name in FOLLOWERS})
+    from benchmarks.pages.committed import load
+
+    trial = kept_trial(load("pick_top_down"), {name: load(name) for name in FOLLOWERS})
     print(ship_trial(*trial) if trial is not None else ship(best_point(curve, shipped, seed_spread()), curve))
 
 
