@@ -46,7 +46,7 @@ def test_the_context_says_where_down_is_and_where_the_object_lies_in_the_gripper
     assert np.allclose(np.abs(seen[1, 6:]), up_and_ahead, atol=1e-6) and seen[1, 6] > 0
 
 
-def test_a_half_turn_about_the_approach_turns_every_context_vector_with_the_crop():
+def test_a_half_turn_about_the_approach_turns_every_context_vector_and_the_outline_with_the_crop():
     from onepiece_dist.learn.pick_train import HALF_TURN
     from onepiece_dist.learn.pick_train import _batch as training_batch
     from onepiece_dist.store.pick_labels import PickLabels
@@ -54,7 +54,8 @@ def test_a_half_turn_about_the_approach_turns_every_context_vector_with_the_crop
     rng = np.random.default_rng(3)
     rows = 4
     labels = PickLabels(points=rng.normal(size=(rows, 8, 3)).astype(np.float16), context=rng.normal(
-        size=(rows, 9)).astype(np.float32), space=np.zeros((rows, 0), np.float16), success=np.ones(rows, bool),
+        size=(rows, 9)).astype(np.float32), space=np.zeros((rows, 0), np.float16),
+        outline=rng.normal(size=(rows, 5, 3)).astype(np.float16), success=np.ones(rows, bool),
         held=np.ones(rows, np.int8), failure=np.zeros(rows, np.int8), view=np.zeros(rows, np.int16),
         pose=np.tile(np.eye(4), (rows, 1, 1)), object=np.zeros(rows, np.int32), attrs={})
     turn = np.array([True, False, True, False])
@@ -63,6 +64,8 @@ def test_a_half_turn_about_the_approach_turns_every_context_vector_with_the_crop
     assert np.array_equal(batch["context"].numpy()[turn], labels.context[turn] * flips)
     assert np.array_equal(batch["context"].numpy()[~turn], labels.context[~turn])
     assert np.array_equal(batch["points"].numpy()[turn], labels.points[turn].astype(np.float32) * HALF_TURN)
+    assert np.array_equal(batch["outline"].numpy()[turn], labels.outline[turn].astype(np.float32) * HALF_TURN)
+    assert np.array_equal(batch["outline"].numpy()[~turn], labels.outline[~turn].astype(np.float32))
 
 
 def test_the_top_down_baseline_picks_a_box_on_the_table(box_on_table):  # noqa: F811
@@ -126,11 +129,14 @@ def pick_labels(tmp_path_factory):
 
 @pytest.mark.slow
 def test_a_planned_crop_and_context_are_the_stored_labels_of_the_same_pose_and_view(pick_labels):
-    """The planner's crop of the view's cloud at a stored pose holds every stored point, and its context and the
-    hand's swept space are the stored ones."""
+    """The planner's crop of the view's cloud at a stored pose holds every stored point, and its context, the
+    hand's swept space and the object's outline are the stored ones; the outlines cut again for labels made
+    before they were kept are the stored ones too."""
+    from dataclasses import replace
+
     from onepiece_dist.objects import load_object, resolve_source
-    from onepiece_dist.picks.pick_labels import crop_record
-    from onepiece_dist.picks.views import observe_view
+    from onepiece_dist.picks.pick_labels import crop_record, outlines_again
+    from onepiece_dist.picks.views import index_of, observe_view
     from onepiece_dist.plan.planner import with_space
     from onepiece_dist.sim.collision import load_simulated
     from onepiece_dist.sim.pick import PickWorld
@@ -143,11 +149,21 @@ def test_a_planned_crop_and_context_are_the_stored_labels_of_the_same_pose_and_v
     try:
         load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
         seen = observe_view(spec, crop_record(spec), world, loaded.mesh, 1)
+        outlined = observe_view(spec, replace(crop_record(spec), model="pointnet_context_outline"), world,
+                                loaded.mesh, 1).proposals
     finally:
         world.close()
     rows = np.flatnonzero((labels.object == 0) & (labels.view == 1))
     assert len(rows) > 0
     poses = labels.pose[rows]
+    planned_outline = outlined.crops.outline[[index_of(outlined.poses, pose) for pose in poses]]
+    assert np.array_equal(planned_outline.astype(np.float16), labels.outline[rows])
+    assert labels.outline.shape[1:] == (64, 3) and np.abs(labels.outline[rows]).max() > 0.01
+    mine = labels.object == 0
+    assert np.array_equal(outlines_again(spec, ref, labels.view[mine], labels.pose[mine], labels.context[mine]),
+                          labels.outline[mine])
+    with pytest.raises(ValueError, match="differs"):
+        outlines_again(spec, ref, labels.view[mine], labels.pose[mine], labels.context[mine] + 1e-3)
     objects = seen.proposals.object_points
     down = -seen.proposals.plane.normal
     assert np.array_equal(grasp_context(poses, object_centre(objects), down, spec.gripper.closing_depth),
@@ -167,6 +183,8 @@ def test_a_planned_crop_and_context_are_the_stored_labels_of_the_same_pose_and_v
 
 @pytest.mark.slow
 def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick_labels, tmp_path):
+    from dataclasses import replace
+
     from onepiece_dist.learn.pick_train import PickTrainOptions, train_on_pick_labels
     from onepiece_dist.plan.scorer import Crops
 
@@ -198,6 +216,12 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
     assert space_scorer.score(full).shape == (n,)
     with pytest.raises(CloudRejected, match="swept space"):
         space_scorer.score(with_context)
+    outlined = train_on_pick_labels(labels, tmp_path / "outline", crop,
+                                    PickTrainOptions(model="pointnet_context_outline", epochs=1, validation=0.34))
+    outline_scorer = GraspScorer(outlined.checkpoint, GripperSpec(), device="cpu")
+    assert outline_scorer.score(replace(with_context, outline=labels.outline[:n].astype(np.float32))).shape == (n,)
+    with pytest.raises(CloudRejected, match="outline"):
+        outline_scorer.score(with_context)
     on_policy(spec, labels, result.checkpoint)
 
 

@@ -43,6 +43,7 @@ DESIGNS = {  # name -> PickTrainOptions fields
 TRIAL_DESIGNS = {  # designs tried beside the curve, never on it: name -> PickTrainOptions fields
     "context_balanced_256": {"model": "pointnet_context", "balanced": True, "points": 256},
     "context_balanced_cosine": {"model": "pointnet_context", "balanced": True, "schedule": "cosine"},
+    "context_balanced_outline": {"model": "pointnet_context_outline", "balanced": True},
 }
 
 

@@ -17,15 +17,14 @@ class PointNetGrasp(nn.Module):
     """PointNet classifier: shared per-point MLP (conv1d), max pooling, MLP head. points (n, P, 3) -> (n,).
     With ``context`` > 0 the head also reads ``batch["context"]`` (n, context): the grasp's gravity direction and
     object-centre offset in the gripper frame (core.grasp_context), through a small MLP of its own; with ``space`` > 0
-    also ``batch["space"]`` (n, space): the hand's swept space as the camera saw it (core.cloud.swept_space)."""
+    also ``batch["space"]`` (n, space): the hand's swept space as the camera saw it (core.cloud.swept_space); with
+    ``outline`` also ``batch["outline"]`` (n, K, 3): the observed object's points seen from the grasp
+    (core.cloud.outline), through a small PointNet of its own."""
 
-    def __init__(self, width: int = 64, context: int = 0, space: int = 0):
+    def __init__(self, width: int = 64, context: int = 0, space: int = 0, outline: bool = False):
         super().__init__()
-        self.context, self.space = context, space
-        self.features = nn.Sequential(
-            nn.Conv1d(3, width, 1), nn.BatchNorm1d(width), nn.ReLU(),
-            nn.Conv1d(width, 2 * width, 1), nn.BatchNorm1d(2 * width), nn.ReLU(),
-            nn.Conv1d(2 * width, 4 * width, 1), nn.BatchNorm1d(4 * width), nn.ReLU())
+        self.context, self.space, self.outline = context, space, outline
+        self.features = _point_features(width)
         extra = width // 2 if context else 0
         if context:
             self.context_features = nn.Sequential(nn.Linear(context, extra), nn.ReLU(), nn.Linear(extra, extra),
@@ -34,6 +33,9 @@ class PointNetGrasp(nn.Module):
             self.space_features = nn.Sequential(nn.Linear(space, 2 * width), nn.ReLU(), nn.Linear(2 * width, width),
                                                 nn.ReLU())
             extra += width
+        if outline:
+            self.outline_features = _point_features(width // 2)
+            extra += 2 * width
         self.head = nn.Sequential(nn.Linear(4 * width + extra, 2 * width), nn.ReLU(), nn.Dropout(0.3),
                                   nn.Linear(2 * width, 1))
 
@@ -45,7 +47,18 @@ class PointNetGrasp(nn.Module):
             pooled = torch.cat([pooled, self.context_features(context)], dim=1)
         if self.space:
             pooled = torch.cat([pooled, self.space_features(batch["space"])], dim=1)
+        if self.outline:  # metres -> 10 cm is 1, as the context's offset
+            outline = self.outline_features(batch["outline"].transpose(1, 2) * 10.0).max(dim=2).values
+            pooled = torch.cat([pooled, outline], dim=1)
         return self.head(pooled).squeeze(1)
+
+
+def _point_features(width: int) -> nn.Sequential:
+    """PointNet's shared per-point MLP: (n, 3, P) -> (n, 4 width, P)."""
+    return nn.Sequential(
+        nn.Conv1d(3, width, 1), nn.BatchNorm1d(width), nn.ReLU(),
+        nn.Conv1d(width, 2 * width, 1), nn.BatchNorm1d(2 * width), nn.ReLU(),
+        nn.Conv1d(2 * width, 4 * width, 1), nn.BatchNorm1d(4 * width), nn.ReLU())
 
 
 class VoxelCNN(nn.Module):
@@ -86,6 +99,12 @@ def PointNetWithSpace() -> PointNetGrasp:  # noqa: N802
     return PointNetGrasp(width=32, context=6, space=space_size())
 
 
+def PointNetWithOutline() -> PointNetGrasp:  # noqa: N802
+    """The context PointNet that also reads the observed object's outline seen from the grasp (core.cloud.outline):
+    what the object is outside the fingers."""
+    return PointNetGrasp(width=32, context=6, outline=True)
+
+
 def SmallPointNet() -> PointNetGrasp:  # noqa: N802
     """The same PointNet on the crop alone (the context's ablation)."""
     return PointNetGrasp(width=32)
@@ -93,7 +112,8 @@ def SmallPointNet() -> PointNetGrasp:  # noqa: N802
 
 MODELS = {"pointnet": PointNetGrasp, "voxel": VoxelCNN, "pointnet_context": PointNetWithContext,
           "pointnet_context_wide": WidePointNetWithContext, "pointnet_small": SmallPointNet,
-          "pointnet_context_view": PointNetWithView, "pointnet_context_space": PointNetWithSpace}
+          "pointnet_context_view": PointNetWithView, "pointnet_context_space": PointNetWithSpace,
+          "pointnet_context_outline": PointNetWithOutline}
 # models that read batch["context"]
 CONTEXT_MODELS = frozenset({"pointnet_context", "pointnet_context_wide", "pointnet_context_view",
-                            "pointnet_context_space"})
+                            "pointnet_context_space", "pointnet_context_outline"})

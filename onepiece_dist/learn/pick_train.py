@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from onepiece_dist.core.cloud.outline import OUTLINE_MODELS
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, turned_half
 from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
 from onepiece_dist.stats.ranking import average_precision
@@ -88,13 +89,15 @@ def _batch(labels: PickLabels, rows: np.ndarray, turn: np.ndarray | None = None,
         points = points[:, points_seen]
     context = labels.context[rows].astype(np.float32)
     space = labels.space[rows].astype(np.float32)
+    outline = labels.outline[rows].astype(np.float32)
     if turn is not None and turn.any():
         points[turn] *= HALF_TURN
+        outline[turn] *= HALF_TURN
         context[turn] *= np.tile(HALF_TURN, context.shape[1] // 3)  # each of its 3-vectors
         if space.shape[1]:
             space[turn] = turned_half(space[turn])
     return {"points": torch.from_numpy(points), "context": torch.from_numpy(context),
-            "space": torch.from_numpy(space)}
+            "space": torch.from_numpy(space), "outline": torch.from_numpy(outline)}
 
 
 def targets(labels: PickLabels, rows: np.ndarray, target: str, trials: int) -> np.ndarray:
@@ -134,6 +137,9 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
     folder.mkdir(parents=True, exist_ok=True)
     if options.model in SPACE_MODELS and labels.space.shape[1] == 0:
         raise ValueError(f"model {options.model!r} reads the hand's swept space, and these pick labels carry none "
+                         "(made before labels kept it): make them again with run_pick_labels")
+    if options.model in OUTLINE_MODELS and labels.outline.shape[1] == 0:
+        raise ValueError(f"model {options.model!r} reads the object's outline, and these pick labels carry none "
                          "(made before labels kept it): make them again with run_pick_labels")
     train, val = split_by_object(labels, options.validation, options.seed)
     model = MODELS[options.model]()
@@ -187,6 +193,8 @@ def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: Pick
             batch.pop("context")
         if options.model not in SPACE_MODELS:
             batch.pop("space")
+        if options.model not in OUTLINE_MODELS:
+            batch.pop("outline")
         target = torch.from_numpy(targets(labels, chunk, options.target, trials))
         logits = model(batch)
         loss = torch.nn.functional.binary_cross_entropy_with_logits(logits, target)

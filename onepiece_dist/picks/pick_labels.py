@@ -1,7 +1,7 @@
 """Labels made where the network is used (issue 55, docs/picks.md): each training object settled on the table and
 seen as the pick benchmark sees it (picks.views), a seeded subset of the planner's candidates on each view executed
 by the pick protocol; each label keeps the candidate's crop, its context, the hand's swept space as the camera
-saw it, whether it picked and why not.
+saw it, the object's outline seen from the grasp, whether it picked and why not.
 
 One task per object, in this process or on the job's Ray worker pool; the labels go to ``pick_labels.zarr``
 (store.pick_labels) in object order, whatever order the workers finish in.
@@ -17,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.cloud.outline import OUTLINE_POINTS, outline
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.picks.runner import PoolStatus, run_each_in_process
-from onepiece_dist.picks.views import Executions, observe_view
+from onepiece_dist.picks.views import Executions, index_of, observe_view
 from onepiece_dist.plan.scorer import CropRecord, GraspScorer
 from onepiece_dist.runtime.actors import restartable_actor
 from onepiece_dist.runtime.ray_env import connect
@@ -28,6 +29,8 @@ from onepiece_dist.runtime.registry import RegistryClient
 from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickLabelSpec
 from onepiece_dist.store.pick_labels import FAILURE_CODES, LabelledObject, write_pick_labels
+
+SAME_POSE, SAME_CONTEXT = 1e-9, 1e-6  # m (and unit vectors): a view seen again is the labelled one within these
 
 
 def crop_record(spec: PickLabelSpec) -> CropRecord:
@@ -65,11 +68,36 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
     return {"points": proposals.crops.points[chosen].astype(np.float16),
             "context": proposals.crops.context[chosen].astype(np.float32),
             "space": proposals.crops.space[chosen].astype(np.float16),
+            "outline": outline(proposals.object_points, proposals.poses[chosen],
+                               spec.gripper.closing_depth).astype(np.float16),
             "success": np.array([o.success for o in outcomes], bool),
             "held": np.array([o.held for o in outcomes], np.int8),
             "failure": np.array([FAILURE_CODES.index(o.failure) for o in outcomes], np.int8),
             "view": np.full(len(chosen), view, np.int16),
             "pose": proposals.poses[chosen].astype(np.float64)}
+
+
+def outlines_again(spec: PickLabelSpec, ref: ObjectRef, view: np.ndarray, pose: np.ndarray,
+                   context: np.ndarray) -> np.ndarray:
+    """The outlines (n, K, 3) float16 of one object's labels made before labels kept them: each of its ``view``
+    (n,) seen again (the same seeded settle, camera and cloud) and the outline cut for each row's gripper ``pose``
+    (n, 4, 4). The view seen again must give each row's pose and stored ``context`` (n, 6) to within rounding
+    (Bullet leaves the last bits of a settle to what the process simulated before); else ValueError."""
+    from onepiece_dist.sim.pick import pick_world
+
+    loaded = load_object(ref, spec.object_job())
+    world = pick_world(spec.gripper)
+    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+    out = np.zeros((len(view), OUTLINE_POINTS, 3), np.float16)
+    for number in np.unique(view):
+        rows = np.flatnonzero(view == number)
+        proposals = observe_view(spec, crop_record(spec), world, loaded.mesh, int(number)).proposals
+        found = [index_of(proposals.poses, p) for p in pose[rows]]
+        if not (np.abs(proposals.poses[found] - pose[rows]).max() < SAME_POSE
+                and np.abs(proposals.crops.context[found] - context[rows]).max() < SAME_CONTEXT):
+            raise ValueError(f"{ref.name} view {number}: seen again, the view differs from the labelled one")
+        out[rows] = outline(proposals.object_points, pose[rows], spec.gripper.closing_depth)
+    return out
 
 
 def _chosen(spec: PickLabelSpec, proposals, rng: np.random.Generator) -> np.ndarray:
@@ -141,4 +169,4 @@ def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None)
             ray.shutdown()
 
 
-__all__ = ["PickLabelWorker", "crop_record", "label_object", "run_pick_labels"]
+__all__ = ["PickLabelWorker", "crop_record", "label_object", "outlines_again", "run_pick_labels"]

@@ -18,6 +18,7 @@ from onepiece_dist.core.cloud.grasps import (
     suppress_near,
     voxel_downsample,
 )
+from onepiece_dist.core.cloud.outline import OUTLINE_MODELS, outline
 from onepiece_dist.core.cloud.support_check import support_plane
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, DepthRays, hand_grid, swept_space
 from onepiece_dist.core.cloud.top_down import top_down_grasps
@@ -158,6 +159,8 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     crops = with_context(crops, poses[keep], objects, gravity(plane), gripper.closing_depth)
     if observation.viewpoint is not None and record.model in SPACE_MODELS:  # 10-20 ms a view: only when read
         crops = with_space(crops, poses[keep], points, observation.viewpoint, gripper)
+    if record.model in OUTLINE_MODELS:
+        crops = with_outline(crops, poses[keep], objects, gripper.closing_depth)
     counts = _counts(found, int(np.sum(~keep)), len(added))
     return Proposals(poses[keep], crops, objects, plane, counts,
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint,
@@ -174,6 +177,11 @@ def with_context(crops: Crops, poses: np.ndarray, points: np.ndarray, down: np.n
     """``crops`` of ``poses`` with each grasp's context: ``down`` and the centre of the object's ``points``, seen
     from the gripper (core.grasp_context); with ``eye``, the direction to the camera too."""
     return dataclasses.replace(crops, context=grasp_context(poses, object_centre(points), down, closing_depth, eye))
+
+
+def with_outline(crops: Crops, poses: np.ndarray, points: np.ndarray, closing_depth: float) -> Crops:
+    """``crops`` of ``poses`` with the object's ``points`` seen from each grasp (core.cloud.outline)."""
+    return dataclasses.replace(crops, outline=outline(points, poses, closing_depth))
 
 
 def with_space(crops: Crops, poses: np.ndarray, points: np.ndarray, eye: np.ndarray, gripper: GripperSpec) -> Crops:

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from onepiece_dist.core.cloud.outline import OUTLINE_MODELS
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS
 from onepiece_dist.core.voxel import crop_regions, network_inputs, unpack_codes
 from onepiece_dist.errors import CheckpointRejected, CloudRejected
@@ -35,13 +36,15 @@ class CropRecord:
 class Crops:
     """Crops of n poses: codes (n, B) uint8, counts (n,) int64 observed points inside, points (n, P, 3) float16,
     and where the planner knows it, each grasp's context (n, 6) float32 (core.grasp_context) and, where it knows
-    the camera's position, the hand's swept space as the camera saw it (n, G) float32 (core.cloud.swept_space)."""
+    the camera's position, the hand's swept space as the camera saw it (n, G) float32 (core.cloud.swept_space), and
+    the object's outline seen from each grasp (n, K, 3) float32 (core.cloud.outline)."""
 
     codes: np.ndarray
     counts: np.ndarray
     points: np.ndarray
     context: np.ndarray | None = None
     space: np.ndarray | None = None
+    outline: np.ndarray | None = None
 
     def holding(self, min_points: int) -> tuple[Crops, np.ndarray]:
         """The crops with at least ``min_points`` observed points inside, and (n,) bool which they were."""
@@ -50,9 +53,9 @@ class Crops:
 
     def subset(self, which: np.ndarray) -> Crops:
         """The crops ``which`` (a bool mask or indices) selects."""
-        context = None if self.context is None else self.context[which]
-        space = None if self.space is None else self.space[which]
-        return Crops(self.codes[which], self.counts[which], self.points[which], context, space)
+        context, space, outline = (None if values is None else values[which]
+                                   for values in (self.context, self.space, self.outline))
+        return Crops(self.codes[which], self.counts[which], self.points[which], context, space, outline)
 
 
 def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.random.Generator) -> Crops:
@@ -80,6 +83,7 @@ class GraspScorer:
         self.device = resolve_device(device)
         self.reads_context = saved.model in CONTEXT_MODELS
         self.reads_space = saved.model in SPACE_MODELS
+        self.reads_outline = saved.model in OUTLINE_MODELS
         self.model = saved.build().to(self.device)
 
     @property
@@ -106,6 +110,10 @@ class GraspScorer:
                     batch["context"] = torch.from_numpy(self._context(crops)[start:stop]).to(self.device)
                 if self.reads_space:
                     batch["space"] = torch.from_numpy(self._space(crops)[start:stop]).to(self.device)
+                if self.reads_outline:
+                    outline = self._input(crops.outline, "the object's outline seen from each grasp",
+                                          "plan them with plan.propose, which computes it")
+                    batch["outline"] = torch.from_numpy(outline[start:stop]).to(self.device)
                 scores.append(torch.sigmoid(self.model(batch)).float().cpu().numpy())
         # rounded: the last bits of a sum depend on the CPU's kernels and threads, and must not reorder near ties
         return np.round(np.concatenate(scores).astype(np.float64), SCORE_DECIMALS) if scores else np.zeros(0)

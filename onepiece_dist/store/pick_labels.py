@@ -5,6 +5,8 @@ by the pick protocol, one row per execution, in object then view order. Readable
     context (n, 6) float32    gravity and the object-centre offset in the gripper frame (core.grasp_context)
     space (n, G) float16      the hand's swept space as the camera saw it (core.cloud.swept_space; G = 0 in stores
                               made before it)
+    outline (n, K, 3) float16 the observed object's points seen from the grasp (core.cloud.outline; K = 0 in
+                              stores made before it)
     success (n,) bool         every trial held
     held (n,) int8            trials that held
     failure (n,) int8         index into the root attribute ``failure_codes`` ('' for a pick)
@@ -25,7 +27,7 @@ from onepiece_dist.errors import StoreError
 from onepiece_dist.store.codecs import write_array
 
 FAILURE_CODES = ("", "start_collision", "no_contact", "slipped_lifting", "dropped_shaking")
-COLUMNS = ("points", "context", "space", "success", "held", "failure", "view", "pose")
+COLUMNS = ("points", "context", "space", "outline", "success", "held", "failure", "view", "pose")
 
 
 def _empty(shape: tuple[int, ...], dtype) -> np.ndarray:
@@ -44,6 +46,7 @@ class LabelledObject:
     points: np.ndarray = field(default_factory=lambda: _empty((0, 1, 3), np.float16))
     context: np.ndarray = field(default_factory=lambda: _empty((0, 6), np.float32))
     space: np.ndarray = field(default_factory=lambda: _empty((0, 0), np.float16))
+    outline: np.ndarray = field(default_factory=lambda: _empty((0, 0, 3), np.float16))
     success: np.ndarray = field(default_factory=lambda: _empty((0,), bool))
     held: np.ndarray = field(default_factory=lambda: _empty((0,), np.int8))
     failure: np.ndarray = field(default_factory=lambda: _empty((0,), np.int8))
@@ -66,6 +69,7 @@ class PickLabels:
     points: np.ndarray
     context: np.ndarray
     space: np.ndarray
+    outline: np.ndarray
     success: np.ndarray
     held: np.ndarray
     failure: np.ndarray
@@ -86,13 +90,14 @@ class PickLabels:
                  "core_seconds": self.attrs["core_seconds"] + other.attrs["core_seconds"],
                  "specs": [*self.attrs.get("specs", [self.attrs["spec"]]), other.attrs["spec"]]}
         return PickLabels(*(np.concatenate([getattr(self, name), getattr(other, name)]) for name in
-                            ("points", "context", "space", "success", "held", "failure")),
+                            ("points", "context", "space", "outline", "success", "held", "failure")),
                           np.concatenate([self.object, other.object + offset]),
                           np.concatenate([self.view, other.view]), np.concatenate([self.pose, other.pose]), attrs)
 
     def subset(self, rows: np.ndarray) -> PickLabels:
-        return PickLabels(self.points[rows], self.context[rows], self.space[rows], self.success[rows],
-                          self.held[rows], self.failure[rows], self.object[rows], self.view[rows], self.pose[rows],
+        return PickLabels(self.points[rows], self.context[rows], self.space[rows], self.outline[rows],
+                          self.success[rows], self.held[rows], self.failure[rows], self.object[rows],
+                          self.view[rows], self.pose[rows],
                           self.attrs)
 
 
@@ -121,9 +126,11 @@ def read_pick_labels(path: str | os.PathLike) -> PickLabels:
 
     try:
         group = zarr.open_group(str(path), mode="r")
-        arrays = {name: np.asarray(group[name][...]) for name in (*COLUMNS, "object") if name != "space"}
-        arrays["space"] = (np.asarray(group["space"][...]) if "space" in group else
-                           np.zeros((len(arrays["success"]), 0), np.float16))
+        optional = {"space": (0,), "outline": (0, 3)}  # absent from stores made before them: empty per row
+        arrays = {name: np.asarray(group[name][...]) for name in (*COLUMNS, "object") if name not in optional}
+        for name, shape in optional.items():
+            arrays[name] = (np.asarray(group[name][...]) if name in group else
+                            np.zeros((len(arrays["success"]), *shape), np.float16))
     except (FileNotFoundError, KeyError) as err:
         raise StoreError(f"{path}: not a pick-labels store ({err}): make one with run_pick_labels") from None
     return PickLabels(**arrays, attrs=dict(group.attrs))
