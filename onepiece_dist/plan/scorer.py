@@ -98,7 +98,9 @@ class GraspScorer:
         batch_size = batch_size or (GPU_BATCH if self.device.type == "cuda" else CPU_BATCH)
         scores = []
         grid = self.record.grid_shape()
-        with torch.inference_mode():
+        # cuDNN's convolutions default to TF32 on a GPU (10-bit mantissas: scores 1e-3 off the CPU's, enough to
+        # reorder a plan's near ties): full float32, as on a CPU
+        with torch.inference_mode(), torch.backends.cudnn.flags(enabled=True, allow_tf32=False):
             for start in range(0, len(crops.counts), batch_size):
                 stop = start + batch_size
                 if self.record.model == "voxel":
