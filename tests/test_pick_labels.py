@@ -160,10 +160,12 @@ def test_a_planned_crop_and_context_are_the_stored_labels_of_the_same_pose_and_v
     assert np.array_equal(planned_outline.astype(np.float16), labels.outline[rows])
     assert labels.outline.shape[1:] == (64, 3) and np.abs(labels.outline[rows]).max() > 0.01
     mine = labels.object == 0
-    assert np.array_equal(outlines_again(spec, ref, labels.view[mine], labels.pose[mine], labels.context[mine]),
-                          labels.outline[mine])
-    with pytest.raises(ValueError, match="differs"):
-        outlines_again(spec, ref, labels.view[mine], labels.pose[mine], labels.context[mine] + 1e-3)
+    again, same = outlines_again(spec, ref, labels.view[mine], labels.pose[mine], labels.context[mine])
+    assert same.all() and np.array_equal(again, labels.outline[mine])
+    moved = labels.context[mine].copy()
+    moved[labels.view[mine] == 1] += 1e-3  # as a view that settled elsewhere when seen again
+    _, same = outlines_again(spec, ref, labels.view[mine], labels.pose[mine], moved)
+    assert np.array_equal(same, labels.view[mine] != 1)
     objects = seen.proposals.object_points
     down = -seen.proposals.plane.normal
     assert np.array_equal(grasp_context(poses, object_centre(objects), down, spec.gripper.closing_depth),

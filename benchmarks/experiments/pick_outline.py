@@ -27,7 +27,7 @@ from benchmarks.experiments.pick_top_down import fit_seeds, top_down_batch
 DESIGN = "context_balanced_outline"
 
 
-def _object_outlines(args) -> tuple[int, np.ndarray, float]:
+def _object_outlines(args) -> tuple[int, tuple[np.ndarray, np.ndarray], float]:
     from onepiece_dist.objects import resolve_source
     from onepiece_dist.picks.pick_labels import outlines_again
     from onepiece_dist.specs.plan import PickLabelSpec
@@ -40,9 +40,12 @@ def _object_outlines(args) -> tuple[int, np.ndarray, float]:
 
 
 def outlined(labels, processes: int = 2):
-    """``labels`` (one store's) with each row's outline, cut from its view seen again; kept beside the store
-    (``<output>_outline``) and read back from there once made."""
-    from onepiece_dist.store.pick_labels import LabelledObject, read_pick_labels, write_pick_labels
+    """``labels`` (one store's) with each row's outline, cut from its view seen again; the rows of views that
+    settled elsewhere when seen again are left out (their count in the store's attribute ``views_not_again``);
+    kept beside the store (``<output>_outline``) and read back from there once made."""
+    import zarr
+
+    from onepiece_dist.store.pick_labels import read_pick_labels, write_pick_labels
 
     path = ROOT / (labels.attrs["spec"]["output"] + "_outline") / "pick_labels.zarr"
     if path.exists():
@@ -54,16 +57,30 @@ def outlined(labels, processes: int = 2):
     with get_context("spawn").Pool(processes) as pool:
         for index, outline, seconds in pool.imap_unordered(_object_outlines, tasks):
             found[index] = (outline, seconds)
-    objects = [LabelledObject(o["index"], o["name"], o["status"], o["reason"], o["seconds"],
-                              **{name: getattr(labels, name)[rows[o["index"]]] for name in
-                                 ("points", "context", "space", "success", "held", "failure", "view", "pose")},
-                              outline=found[o["index"]][0]) if o["index"] in rows else
-               LabelledObject.rejected(o["index"], o["name"], o["reason"], o["seconds"])
+    objects = [_with_outline(labels, o, rows.get(o["index"]), found.get(o["index"], (None,))[0])
                for o in labels.attrs["objects"]]
     seen_again = sum(seconds for _, seconds in found.values())
     write_pick_labels(path, objects, labels.attrs["spec"], labels.attrs["core_seconds"] + seen_again,
                       labels.attrs["wall_seconds"] + time.perf_counter() - start)
+    names = {o["index"]: o["name"] for o in ok}
+    missed = [f"{names[i]} view {v}" for i, ((_, same), _) in sorted(found.items())
+              for v in np.unique(labels.view[rows[i]][~same])]
+    zarr.open_group(str(path), mode="r+").attrs["views_not_again"] = missed
     return read_pick_labels(path)
+
+
+def _with_outline(labels, listed: dict, rows: np.ndarray | None, outlines: tuple | None):
+    """One object's labelled rows whose views came back, each with its outline (an object without rows as
+    listed)."""
+    from onepiece_dist.store.pick_labels import LabelledObject
+
+    if rows is None:  # rejected, or no rows
+        return LabelledObject(listed["index"], listed["name"], listed["status"], listed["reason"], listed["seconds"])
+    outline, same = outlines
+    columns = {name: getattr(labels, name)[rows[same]] for name in
+               ("points", "context", "space", "success", "held", "failure", "view", "pose")}
+    return LabelledObject(listed["index"], listed["name"], listed["status"], listed["reason"], listed["seconds"],
+                          **columns, outline=outline[same])
 
 
 def main() -> None:

@@ -78,26 +78,27 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
 
 
 def outlines_again(spec: PickLabelSpec, ref: ObjectRef, view: np.ndarray, pose: np.ndarray,
-                   context: np.ndarray) -> np.ndarray:
-    """The outlines (n, K, 3) float16 of one object's labels made before labels kept them: each of its ``view``
-    (n,) seen again (the same seeded settle, camera and cloud) and the outline cut for each row's gripper ``pose``
-    (n, 4, 4). The view seen again must give each row's pose and stored ``context`` (n, 6) to within rounding
-    (Bullet leaves the last bits of a settle to what the process simulated before); else ValueError."""
+                   context: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The outlines (n, K, 3) float16 of one object's labels made before labels kept them, and (n,) bool which
+    rows have one: each of its ``view`` (n,) seen again (the same seeded settle, camera and cloud) and the outline
+    cut for each row's gripper ``pose`` (n, 4, 4). A view has outlines only where, seen again, it gives each row's
+    pose and stored ``context`` (n, 6) to within rounding: Bullet leaves the last bits of a settle to what the
+    process simulated before, and now and then a settle that far apart ends elsewhere."""
     from onepiece_dist.sim.pick import pick_world
 
     loaded = load_object(ref, spec.object_job())
     world = pick_world(spec.gripper)
     load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
-    out = np.zeros((len(view), OUTLINE_POINTS, 3), np.float16)
+    out, same = np.zeros((len(view), OUTLINE_POINTS, 3), np.float16), np.zeros(len(view), bool)
     for number in np.unique(view):
         rows = np.flatnonzero(view == number)
         proposals = observe_view(spec, crop_record(spec), world, loaded.mesh, int(number)).proposals
         found = [index_of(proposals.poses, p) for p in pose[rows]]
-        if not (np.abs(proposals.poses[found] - pose[rows]).max() < SAME_POSE
+        if (np.abs(proposals.poses[found] - pose[rows]).max() < SAME_POSE
                 and np.abs(proposals.crops.context[found] - context[rows]).max() < SAME_CONTEXT):
-            raise ValueError(f"{ref.name} view {number}: seen again, the view differs from the labelled one")
-        out[rows] = outline(proposals.object_points, pose[rows], spec.gripper.closing_depth)
-    return out
+            out[rows] = outline(proposals.object_points, pose[rows], spec.gripper.closing_depth)
+            same[rows] = True
+    return out, same
 
 
 def _chosen(spec: PickLabelSpec, proposals, rng: np.random.Generator) -> np.ndarray:
