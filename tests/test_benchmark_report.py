@@ -309,3 +309,21 @@ def test_the_last_kept_trial_ships_and_none_where_the_top_down_trial_is_not_kept
     assert kept_trial(top_down(lifted), {"pick_points": None})[0] == "pick_top_down"
     both = kept_trial(top_down(lifted), {"pick_points": points(higher), "pick_top_down_both": points(best)})
     assert both[0] == "pick_top_down_both"  # of two kept, the one that gains most
+
+
+def test_the_outline_trial_names_the_views_it_left_out_and_is_judged_against_the_top_down_networks():
+    from benchmarks.pages.pick_trials_section import outline_section
+
+    def judged(counts: list[int]) -> dict:
+        return {w: {"first_attempt": sum(counts) / 64, "per_object": views_picked(counts)}
+                for w in ("household", "unseen")}
+
+    top_down = {"points": [{"seed": s, "with_pool": judged(STEADY)} for s in (0, 1)]}
+    result = {"command": "c", "date": "d", "machine": "m", "design": "context_balanced_outline", "labels": 81136,
+              "views_not_again": ["random_urdfs/223 view 6"],
+              "points": [{"seed": s, "with_pool": judged([min(c + 1, 8) for c in STEADY])} for s in (0, 1)]}
+    lines = outline_section(result, top_down)
+    assert "1 view that settled elsewhere when seen again (random_urdfs/223 view 6) left out, 81136 labels" in lines[2]
+    assert "the outline gives" in lines[-1] and "]): kept" in lines[-1]
+    result["views_not_again"] = []
+    assert "left out" not in outline_section(result, top_down)[2]

@@ -87,8 +87,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", default="0,1,2,3")
     args = parser.parse_args()
-    joined = outlined(top_down_batch()).joined(outlined(second_batch(None)))
-    fit_seeds(joined, DESIGN, args.seeds, DESIGN, "outline", "pick_outline", {"design": DESIGN})
+    first, second = outlined(top_down_batch()), outlined(second_batch(None))
+    joined = first.joined(second)
+    missed = [*first.attrs.get("views_not_again", []), *second.attrs.get("views_not_again", [])]
+    fit_seeds(joined, DESIGN, args.seeds, DESIGN, "outline", "pick_outline",
+              {"design": DESIGN, "labels": len(joined), "views_not_again": missed})
 
 
 if __name__ == "__main__":

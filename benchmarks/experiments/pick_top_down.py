@@ -47,6 +47,13 @@ def fit_seeds(joined, design: str, seeds: str, name: str, folder: str, script: s
     pool; the results written after each seed, ``header`` before the points."""
     results = HERE / "results" / f"{script}.json"
     points = json.loads(results.read_text())["points"] if results.is_file() else []
+
+    def write() -> None:
+        results.write_text(json.dumps({
+            "command": f".venv/bin/python -m benchmarks.experiments.{script}", "date": date.today().isoformat(),
+            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **header, "points": points},
+            indent=1) + "\n")
+
     for seed in (int(s) for s in seeds.split(",")):
         if any(p["seed"] == seed for p in points):
             continue
@@ -54,10 +61,9 @@ def fit_seeds(joined, design: str, seeds: str, name: str, folder: str, script: s
         point.update(seed=seed, with_pool=judged(f"{name}_s{seed}", point["checkpoint"]))
         points.append(point)
         print(seed, json.dumps({k: v["first_attempt"] for k, v in point["with_pool"].items()}), flush=True)
-        results.write_text(json.dumps({
-            "command": f".venv/bin/python -m benchmarks.experiments.{script}", "date": date.today().isoformat(),
-            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **header, "points": points},
-            indent=1) + "\n")
+        write()
+    if points:  # the header as this run has it, also where nothing was left to fit
+        write()
 
 
 def main() -> None:

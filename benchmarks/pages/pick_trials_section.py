@@ -304,3 +304,20 @@ def household_labels_section(result: dict, top_down: dict | None) -> list[str]:
             "", "| seed | unseen, top-down trial | + household meshes | difference |", "| --- | --- | --- | --- |",
             *rows, "", f"On the unseen set the household meshes give {gain_words(gain)} (the trials' rule applied "
             "to the unseen objects; nothing ships from it)."]
+
+
+def outline_section(result: dict, top_down: dict | None) -> list[str]:
+    """The object's outline seen from the grasp (results/pick_outline.json) against the top-down trial's networks
+    on the same labels, seed for seed, both with the top-down grasps in the pool."""
+    missed = result.get("views_not_again", [])
+    left_out = (f"; {len(missed)} view{'s' if len(missed) != 1 else ''} that settled elsewhere when seen again "
+                f"({', '.join(missed)}) left out, {result['labels']} labels" if missed else "")
+    return [f"## What the object is outside the fingers: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. A crop holds only the points between the fingers and the "
+            "context only the object's centre; the picks lost are mugs dropped when shaken (the body hanging off "
+            f"the rim), bowls and flat packages. `{result['design']}` also reads the observed object's outline seen "
+            "from the grasp (64 farthest-point samples of its cloud in the gripper frame, core/cloud/outline.py), "
+            "through a PointNet of its own. The top-down trial's labels, each view seen again to cut the outlines "
+            f"(the same seeded settle, camera and cloud{left_out}); fitted seed for seed against that trial's "
+            "networks, both planning with the top-down grasps in the pool, first attempt:", "",
+            *_over_top_down_lines(result, top_down, "crop and context", "+ outline", "the outline gives")]

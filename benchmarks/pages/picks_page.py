@@ -14,6 +14,7 @@ from benchmarks.pages.pick_trials_section import (
     both_section,
     household_labels_section,
     on_policy_section,
+    outline_section,
     points_section,
     schedule_section,
     space_section,
@@ -187,8 +188,8 @@ def _dense_line(plan: dict) -> str:
 
 
 SECTIONS = ("pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down",
-            "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels", "pick_rankings",
-            "pick_pool_size")  # results rendered after the benchmark's, in this order
+            "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels", "pick_outline",
+            "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
 
 
 def render_picks_page() -> str:
@@ -216,6 +217,7 @@ def render_picks_page() -> str:
               "pick_top_down_both": lambda r: both_section(r, load("pick_top_down")),
               "pick_schedule": lambda r: schedule_section(r, load("pick_top_down")),
               "pick_household_labels": lambda r: household_labels_section(r, load("pick_top_down")),
+              "pick_outline": lambda r: outline_section(r, load("pick_top_down")),
               "pick_rankings": rankings_section,
               "pick_pool_size": pool_size_lines}
     for name in SECTIONS:
