@@ -318,12 +318,17 @@ def test_the_outline_trial_names_the_views_it_left_out_and_is_judged_against_the
         return {w: {"first_attempt": sum(counts) / 64, "per_object": views_picked(counts)}
                 for w in ("household", "unseen")}
 
-    top_down = {"points": [{"seed": s, "with_pool": judged(STEADY)} for s in (0, 1)]}
+    def fitted(top1: float) -> dict:
+        return {"val_view_top1": top1, "val_ap": top1}
+
+    top_down = {"points": [{"seed": s, "with_pool": judged(STEADY), "best_epoch": fitted(0.7)} for s in (0, 1)]}
     result = {"command": "c", "date": "d", "machine": "m", "design": "context_balanced_outline", "labels": 81136,
               "views_not_again": ["random_urdfs/223 view 6"],
-              "points": [{"seed": s, "with_pool": judged([min(c + 1, 8) for c in STEADY])} for s in (0, 1)]}
+              "points": [{"seed": s, "with_pool": judged([min(c + 1, 8) for c in STEADY]),
+                          "best_epoch": fitted(0.8 - 0.2 * s)} for s in (0, 1)]}
     lines = outline_section(result, top_down)
-    assert "1 view that settled elsewhere when seen again (random_urdfs/223 view 6) left out, 81136 labels" in lines[2]
-    assert "the outline gives" in lines[-1] and "]): kept" in lines[-1]
+    assert "1 view that settled elsewhere when seen again left out: random_urdfs/223 view 6; 81136 labels" in lines[2]
+    assert "the outline gives" in lines[-3] and "]): kept" in lines[-3]
+    assert "picked in 70.0% of the views against 70.0% (higher at 1 of 2 seeds)" in lines[-1]
     result["views_not_again"] = []
     assert "left out" not in outline_section(result, top_down)[2]

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+import numpy as np
+
 from onepiece_dist.stats.intervals import PairedGain, paired_gain
 
 BASE, TRIED = "context_balanced", "context_space"
@@ -308,10 +310,11 @@ def household_labels_section(result: dict, top_down: dict | None) -> list[str]:
 
 def outline_section(result: dict, top_down: dict | None) -> list[str]:
     """The object's outline seen from the grasp (results/pick_outline.json) against the top-down trial's networks
-    on the same labels, seed for seed, both with the top-down grasps in the pool."""
+    on the same labels, seed for seed, both with the top-down grasps in the pool; and beside the picks, both
+    networks' ranking of the held-out procedural objects' labelled views (their validation)."""
     missed = result.get("views_not_again", [])
     left_out = (f"; {len(missed)} view{'s' if len(missed) != 1 else ''} that settled elsewhere when seen again "
-                f"({', '.join(missed)}) left out, {result['labels']} labels" if missed else "")
+                f"left out: {', '.join(missed)}; {result['labels']} labels" if missed else "")
     return [f"## What the object is outside the fingers: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. A crop holds only the points between the fingers and the "
             "context only the object's centre; the picks lost are mugs dropped when shaken (the body hanging off "
@@ -320,4 +323,25 @@ def outline_section(result: dict, top_down: dict | None) -> list[str]:
             "through a PointNet of its own. The top-down trial's labels, each view seen again to cut the outlines "
             f"(the same seeded settle, camera and cloud{left_out}); fitted seed for seed against that trial's "
             "networks, both planning with the top-down grasps in the pool, first attempt:", "",
-            *_over_top_down_lines(result, top_down, "crop and context", "+ outline", "the outline gives")]
+            *_over_top_down_lines(result, top_down, "crop and context", "+ outline", "the outline gives"), "",
+            _validation_words(result, top_down)]
+
+
+def _validation_words(result: dict, top_down: dict | None) -> str:
+    """How both networks rank the labelled views of their validation objects (held-out procedural objects, the
+    same at a seed), seed for seed."""
+    base = {p["seed"]: p["best_epoch"] for p in (top_down or {}).get("points", [])}
+    pairs = [(p["best_epoch"], base[p["seed"]]) for p in result["points"] if p["seed"] in base]
+    if not pairs:
+        return ""
+    higher = sum(a["val_view_top1"] > b["val_view_top1"] for a, b in pairs)
+    top1 = [np.mean([pair[k]["val_view_top1"] for pair in pairs]) for k in (0, 1)]
+    ap = [np.mean([pair[k]["val_ap"] for pair in pairs]) for k in (0, 1)]
+    better = top1[0] > top1[1] and ap[0] > ap[1]
+    carries = gains_over_top_down(result, top_down)["household"].verdict == "kept"
+    last = (" What it learns of the training objects does not carry to the household objects' picks."
+            if better and not carries else "")
+    return (f"On the labelled views of the held-out procedural objects (each fit's validation) the outline ranks "
+            f"{'better' if better else 'no better'}: the best-scored candidate picked in {100 * top1[0]:.1f}% of "
+            f"the views against {100 * top1[1]:.1f}% (higher at {higher} of {len(pairs)} seeds), AP {ap[0]:.3f} "
+            f"against {ap[1]:.3f}.{last}")
