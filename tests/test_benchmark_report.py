@@ -332,3 +332,25 @@ def test_the_outline_trial_names_the_views_it_left_out_and_is_judged_against_the
     assert "picked in 70.0% of the views against 70.0% (higher at 1 of 2 seeds)" in lines[-1]
     result["views_not_again"] = []
     assert "left out" not in outline_section(result, top_down)[2]
+
+
+def test_the_pools_ceiling_without_the_draw_says_whether_the_targets_lie_within_it():
+    from benchmarks.pages.pick_ceiling_section import ceiling_section, pooled_ceiling
+
+    def measured(held: list[int]) -> dict:
+        per_object = {f"o{k}": {"views": 8, "one_draw": 8, "repeated": 8, "first_held_out": 0, "best_held_out": h,
+                                "candidates": 100} for k, h in enumerate(held)}
+        share = {"rate": sum(held) / (8 * len(held)), "interval": [0.5, 1.0]}
+        return {"views": 8 * len(held), "candidates": 100 * len(held), "one_draw": share, "repeated": share,
+                "first_held_out": share, "best_held_out": share, "per_object": per_object}
+
+    result = {"command": "c", "date": "d", "machine": "m", "screen": 3, "selection": 8,
+              "sets": {"household": measured([8, 8, 6, 8]), "unseen": measured([0, 8])}}
+    rate, (low, high), objects = pooled_ceiling(result)
+    assert objects == 6 and rate == (8 + 8 + 6 + 8 + 0 + 8) / 48 and low < rate < high
+    targets = {"first_attempt": 0.85, "above_heuristics": 0.2}
+    words = ceiling_section(result, None, 0.7, targets)[-1]
+    assert "the ceiling is **79.2%**" in words and "85.0% at the first attempt lies above it" in words
+    assert "needs 90.0%, above it" in words
+    assert "lies within" in ceiling_section(result, None, 0.5, {**targets, "first_attempt": 0.75})[-1]
+    assert "needs" not in ceiling_section(result, None, None, targets)[-1]

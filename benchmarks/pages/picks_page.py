@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.pages.committed import load
+from benchmarks.pages.pick_ceiling_section import ceiling_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_trials_section import (
     both_section,
@@ -187,9 +188,9 @@ def _dense_line(plan: dict) -> str:
             f"**{'met' if seconds <= target else 'not met'}**). ")
 
 
-SECTIONS = ("pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down",
-            "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels", "pick_outline",
-            "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
+SECTIONS = ("pick_ceiling", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels",
+            "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels",
+            "pick_outline", "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
 
 
 def render_picks_page() -> str:
@@ -210,7 +211,8 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_unseen": lambda r: unseen_section(r, picks), "pick_curve": lambda r: curve_section(r, picks),
+    render = {"pick_ceiling": lambda r: _ceiling(r, picks), "pick_unseen": lambda r: unseen_section(r, picks),
+              "pick_curve": lambda r: curve_section(r, picks),
               "pick_space": space_section, "pick_on_policy": on_policy_section,
               "pick_vessels": vessels_section, "pick_top_down": top_down_section,
               "pick_points": lambda r: points_section(r, load("pick_top_down")),
@@ -227,6 +229,12 @@ def render_picks_page() -> str:
     if plan is not None:
         lines += [*latency_section(plan), ""]
     return "\n".join(lines)
+
+
+def _ceiling(result: dict, picks: dict | None) -> list[str]:
+    sets = [s for s in (picks or {}).get("sets", []) if s["name"] in HOUSEHOLD_SETS]
+    top_down = pooled(sets, "top_down")["first_attempt"] if sets else None
+    return ceiling_section(result, picks, top_down, (picks or {}).get("targets"))
 
 
 def _how(picks: dict) -> str:

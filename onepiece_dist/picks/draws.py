@@ -84,3 +84,55 @@ def run_candidate_draws(spec: PickSpec, checkpoints: tuple[str, ...], per_view: 
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     task = functools.partial(draw_candidates, checkpoints=checkpoints, per_view=per_view, draws=draws)
     return run_each_in_process(task, spec, resolve_source(spec.objects))
+
+
+@dataclass(frozen=True)
+class ViewCeiling:
+    """One view's pool against fresh draws: its ``candidates``; whether one picked at draw 0 (the draw every chooser
+    meets: the benchmark's oracle); how many picked at each screening draw 0 .. screen - 1; whether the first of
+    those (index order) picked at draw ``screen``, which it had not met (None: none passed the screen); and whether
+    the one of them that picked most often over draws ``screen`` .. selection - 1 (the first on ties) picked at
+    draw ``selection``, which no choice saw."""
+
+    view: int
+    candidates: int
+    one_draw: bool
+    repeated: int
+    first_held_out: bool | None
+    best_held_out: bool | None
+
+
+def view_ceilings(spec: PickSpec, ref: ObjectRef, index: int, screen: int, selection: int
+                  ) -> tuple[int, str, tuple, str]:
+    """Every view of one object (index, name, its ViewCeilings, a rejected object's reason): what a chooser that
+    knew which candidates pick again reaches, measured rather than read off one draw: the oracle picks whatever
+    won its one draw, and two executions of one grasp agree only about 90% of the time."""
+    from onepiece_dist.picks.views import simulated_object
+    from onepiece_dist.plan.shipped import shipped_network
+
+    record = GraspScorer(shipped_network(), spec.gripper, device="cpu").record  # the crops the planner cuts
+    try:
+        world, loaded = simulated_object(spec, record, ref)
+    except MeshRejected as err:
+        return index, ref.name, (), err.reason
+    return index, ref.name, tuple(_ceiling(spec, record, world, loaded.mesh, view, screen, selection)
+                                  for view in range(spec.views)), ""
+
+
+def _ceiling(spec: PickSpec, record, world, mesh, view: int, screen: int, selection: int) -> ViewCeiling:
+    seen = observe_view(spec, record, world, mesh, view)
+    poses = seen.proposals.poses if seen.proposals is not None else np.zeros((0, 4, 4))
+    poses = poses[: spec.oracle_candidates]
+    executions = Executions(spec, world, mesh, seen.resting, view)
+    kept = [i for i in range(len(poses)) if executions.run("view", i, poses[i]).success]
+    one_draw = bool(kept)
+    for draw in range(1, screen):
+        kept = [i for i in kept if executions.again("view", i, poses[i], draw).success]
+    if not kept:
+        return ViewCeiling(view, len(poses), one_draw, 0, None, None)
+    later = {i: [executions.again("view", i, poses[i], d).success for d in range(screen, selection)] for i in kept}
+    best = max(kept, key=lambda i: (sum(later[i]), -i))
+    first = later[kept[0]][0] if selection > screen else executions.again("view", kept[0], poses[kept[0]],
+                                                                          screen).success
+    return ViewCeiling(view, len(poses), one_draw, len(kept), bool(first),
+                       executions.again("view", best, poses[best], selection).success)

@@ -1,0 +1,89 @@
+"""The pool's ceiling without the draw (issue 55: is 85% reachable on this pool?). The benchmark's oracle executes
+every candidate of a view once and counts the view as picked where any candidate won that one draw; a chooser
+cannot see the draw, and two executions of one grasp agree about 90% of the time (docs/studies/pick_labels). Here
+every candidate of each view of the household and unseen sets is executed at draw 0 (the draw every chooser
+meets, so the one-draw share is the benchmark's oracle again), those that picked are executed again at draws 1 and
+2; those that picked at all three are executed at draws 3 to 7, and the one that picked most often there (the
+first on ties) once more at draw 8, which no choice saw: the share of views where it picks is what a chooser that
+knew which grasps pick again would reach at the first attempt (the first that passed the three, judged at draw 3,
+is reported beside). The pool is the shipped network's (the view's sampled candidates and the three top-down
+grasps).
+
+    .venv/bin/python -m benchmarks.experiments.pick_ceiling
+
+Results: benchmarks/results/pick_ceiling.json, rendered into docs/picks.md.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from datetime import date
+from multiprocessing import get_context
+
+import numpy as np
+
+from benchmarks.experiments.pick_curve import HERE, ROOT
+
+RESULTS = HERE / "results" / "pick_ceiling.json"
+SCREEN, SELECTION = 3, 8  # draws a candidate must pick at to pass; draws that choose among those; then the judge
+
+
+def _spec(name: str, objects: str):
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PickSpec, PlanSpec
+
+    return PickSpec(objects=objects, checkpoint=str(shipped_network()),
+                    output=str(ROOT / "data" / "pick_ceiling" / name), views=8, attempts=3, pictures=0,
+                    methods=("network",), plan=PlanSpec(top_down=True))
+
+
+def _object(task) -> tuple:
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.draws import view_ceilings
+
+    spec, index = task
+    return view_ceilings(spec, resolve_source(spec.objects)[index], index, SCREEN, SELECTION)
+
+
+def measure(name: str, objects: str, processes: int = 2) -> dict:
+    """One set's views against fresh draws, per object and pooled (a bootstrap interval over objects)."""
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.stats.intervals import bootstrap_interval
+
+    spec = _spec(name, objects)
+    start = time.perf_counter()
+    with get_context("spawn").Pool(processes) as pool:
+        found = sorted(pool.imap_unordered(_object, [(spec, i) for i in range(len(resolve_source(objects)))]))
+    per_object = {object_name: {"views": len(views), "one_draw": sum(v.one_draw for v in views),
+                                "repeated": sum(v.repeated > 0 for v in views),
+                                "first_held_out": sum(bool(v.first_held_out) for v in views),
+                                "best_held_out": sum(bool(v.best_held_out) for v in views),
+                                "candidates": sum(v.candidates for v in views)}
+                  for _, object_name, views, reason in found if not reason}
+    rates = {key: np.array([o[key] / o["views"] for o in per_object.values()]) for key in
+             ("one_draw", "repeated", "first_held_out", "best_held_out")}
+    views = sum(o["views"] for o in per_object.values())
+    return {"views": views, "candidates": sum(o["candidates"] for o in per_object.values()),
+            **{key: {"rate": sum(o[key] for o in per_object.values()) / views,
+                     "interval": list(bootstrap_interval(rates[key]))} for key in rates},
+            "per_object": per_object, "rejected": [n for _, n, _, reason in found if reason],
+            "seconds": round(time.perf_counter() - start, 1)}
+
+
+def main() -> None:
+    from benchmarks.experiments.household import UNSEEN, household_objects
+
+    sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
+    measured = {name: measure(name, objects) for name, objects in sets.items()}
+    RESULTS.write_text(json.dumps({
+        "command": ".venv/bin/python -m benchmarks.experiments.pick_ceiling", "date": date.today().isoformat(),
+        "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "screen": SCREEN, "selection": SELECTION,
+        "sets": measured}, indent=1) + "\n")
+    print({name: {k: m[k]["rate"] for k in ("one_draw", "repeated", "first_held_out", "best_held_out")}
+           for name, m in measured.items()})
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,66 @@
+"""docs/picks.md's section on the pool's ceiling without the draw (results/pick_ceiling.json,
+benchmarks/experiments/pick_ceiling.py): what a chooser that knew which grasps pick again reaches, beside the
+one-draw oracle, the network and the targets."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from onepiece_dist.stats.intervals import bootstrap_interval
+
+
+def _pct(value: float) -> str:
+    return f"{100 * value:.1f}%"
+
+
+def _network(picks: dict | None, name: str) -> str:
+    found = next((s for s in (picks or {}).get("sets", []) if s["name"] == name), None)
+    if found is None:
+        return "-"
+    return _pct(next(m["first_attempt"] for m in found["methods"] if m["method"] == "network"))
+
+
+def pooled_ceiling(result: dict) -> tuple[float, tuple[float, float], int]:
+    """The held-out rate over every object of both sets (the mean of per-object rates, as the headline pools), its
+    95% bootstrap interval over objects, and how many objects."""
+    rates = np.array([o["best_held_out"] / o["views"] for s in result["sets"].values()
+                      for o in s["per_object"].values() if o["views"]])
+    return float(rates.mean()), bootstrap_interval(rates), len(rates)
+
+
+def ceiling_section(result: dict, picks: dict | None, pooled_top_down: float | None,
+                    targets: dict | None) -> list[str]:
+    """The section: each set's one-draw share, repeated share and held-out rate; pooled against the benchmark's
+    ``targets`` (first_attempt, above_heuristics) where given."""
+    screen, draws = result["screen"], result["selection"]
+    rows = [f"| {name} | {s['views']} | {s['candidates']} | {_pct(s['one_draw']['rate'])} | "
+            f"{_pct(s['repeated']['rate'])} | {_pct(s['first_held_out']['rate'])} | "
+            f"{_pct(s['best_held_out']['rate'])} [{_pct(s['best_held_out']['interval'][0])}, "
+            f"{_pct(s['best_held_out']['interval'][1])}] | {_network(picks, name)} |"
+            for name, s in result["sets"].items()]
+    rate, (low, high), objects = pooled_ceiling(result)
+    words = [f"Pooled over the {objects} objects, the ceiling is **{_pct(rate)}** [{_pct(low)}, {_pct(high)}]"]
+    if targets is not None:
+        target, above = targets["first_attempt"], targets["above_heuristics"]
+        inside = " (though within its interval)" if rate < target <= high else ""
+        words[0] += (f": the target of {_pct(target)} at the first attempt lies "
+                     f"{'within' if rate >= target else 'above'} it{inside}")
+    if targets is not None and pooled_top_down is not None:
+        needed = pooled_top_down + above
+        words.append(f"{100 * above:.0f} points above top-down ({_pct(pooled_top_down)}) needs {_pct(needed)}, "
+                     f"{'within' if needed <= rate else 'above'} it"
+                     f"{' and its interval' if needed > high else ''}")
+    return [f"## The pool's ceiling without the draw: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. The oracle above counts a view as picked where any of its "
+            "candidates won the one draw every chooser meets; no chooser sees that draw (two executions of one "
+            "grasp agree about 90% of the time: docs/studies/pick_labels). Here every candidate of each view (the "
+            "shipped network's pool) is executed at draw 0 (so the one-draw share is the oracle's again), those "
+            f"that picked again at draws 1 to {screen - 1}; those that picked at all {screen} at draws {screen} to "
+            f"{draws - 1}, and the one that picked most often there (the first on ties) once more at draw {draws}, "
+            "which no choice saw: the share of views where it picks is what a chooser that knew which grasps pick "
+            f"again reaches at the first attempt. Beside it, the first candidate (index order) that passed the "
+            f"{screen} draws, judged at draw {screen}.", "",
+            f"| set | views | candidates | one draw (the oracle) | picked at all {screen} draws | the first of "
+            f"those, at draw {screen} | the best of those, at draw {draws} [95% CI over objects] | "
+            "the network, first attempt |", "| --- | --- | --- | --- | --- | --- | --- | --- |", *rows, "",
+            "; ".join(words) + "."]
