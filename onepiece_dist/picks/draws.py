@@ -20,8 +20,9 @@ from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.networks import scored_world
 from onepiece_dist.picks.runner import run_each_in_process
-from onepiece_dist.picks.views import Executions, observe_view
+from onepiece_dist.picks.views import Executions, observe_view, simulated_object
 from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.plan.shipped import shipped_network
 from onepiece_dist.specs.plan import PickSpec
 
 SAMPLE = 5858  # the stream of each view's sampled candidates
@@ -107,9 +108,6 @@ def view_ceilings(spec: PickSpec, ref: ObjectRef, index: int, screen: int, selec
     """Every view of one object (index, name, its ViewCeilings, a rejected object's reason): what a chooser that
     knew which candidates pick again reaches, measured rather than read off one draw: the oracle picks whatever
     won its one draw, and two executions of one grasp agree only about 90% of the time."""
-    from onepiece_dist.picks.views import simulated_object
-    from onepiece_dist.plan.shipped import shipped_network
-
     record = GraspScorer(shipped_network(), spec.gripper, device="cpu").record  # the crops the planner cuts
     try:
         world, loaded = simulated_object(spec, record, ref)
