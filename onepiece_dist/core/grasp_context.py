@@ -24,6 +24,11 @@ def transposed_rotation(rot: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     return rot[:, 0, :] * v[:, 0, None] + rot[:, 1, :] * v[:, 1, None] + rot[:, 2, :] * v[:, 2, None]
 
 
+def closing_centres(poses: np.ndarray, closing_depth: float) -> np.ndarray:
+    """(n, 3) the closing region's centre of each of ``poses`` (n, 4, 4): half ``closing_depth`` along approach."""
+    return poses[:, :3, 3] + poses[:, :3, 0] * (closing_depth / 2)
+
+
 def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closing_depth: float,
                   eye: np.ndarray | None = None) -> np.ndarray:
     """(n, 6) float32 context of ``poses`` (n, 4, 4) gripper-to-cloud: ``down`` (3,) unit gravity and ``centre`` (3,)
@@ -35,7 +40,7 @@ def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closi
     if len(poses) == 0:
         return np.zeros((0, width), np.float32)
     rot = poses[:, :3, :3]
-    closing_centre = poses[:, :3, 3] + poses[:, :3, 0] * (closing_depth / 2)
+    closing_centre = closing_centres(poses, closing_depth)
     gravity = transposed_rotation(rot, down)
     offset = transposed_rotation(rot, np.asarray(centre, dtype=np.float64)[None] - closing_centre)
     parts = [gravity, offset]

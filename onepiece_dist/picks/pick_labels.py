@@ -40,21 +40,28 @@ def crop_record(spec: PickLabelSpec) -> CropRecord:
 
 def label_object(spec: PickLabelSpec, ref: ObjectRef, index: int) -> LabelledObject:
     """Every view of one object labelled; a bad object becomes a rejected result, never an exception."""
-    from onepiece_dist.sim.pick import pick_world
-
     start = time.perf_counter()
     try:
-        loaded = load_object(ref, spec.object_job())
+        world, loaded = _labelling_world(spec, ref)
     except MeshRejected as err:
         return LabelledObject.rejected(index, ref.name, err.reason)
-    world = pick_world(spec.gripper)
-    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
     parts = [_label_view(spec, world, loaded.mesh, view) for view in range(spec.views)]
     parts = [p for p in parts if p is not None]
     if not parts:
         return LabelledObject.rejected(index, ref.name, "no view held a candidate", time.perf_counter() - start)
     joined = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     return LabelledObject(index, ref.name, "ok", seconds=time.perf_counter() - start, **joined)
+
+
+def _labelling_world(spec: PickLabelSpec, ref: ObjectRef):
+    """This process's pick world holding ``ref`` as ``spec`` loads it: (world, loaded object); a bad object raises
+    MeshRejected."""
+    from onepiece_dist.sim.pick import pick_world
+
+    loaded = load_object(ref, spec.object_job())
+    world = pick_world(spec.gripper)
+    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+    return world, loaded
 
 
 def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.ndarray] | None:
@@ -84,11 +91,7 @@ def outlines_again(spec: PickLabelSpec, ref: ObjectRef, view: np.ndarray, pose: 
     cut for each row's gripper ``pose`` (n, 4, 4). A view has outlines only where, seen again, it gives each row's
     pose and stored ``context`` (n, 6) to within rounding: Bullet leaves the last bits of a settle to what the
     process simulated before, and now and then a settle that far apart ends elsewhere."""
-    from onepiece_dist.sim.pick import pick_world
-
-    loaded = load_object(ref, spec.object_job())
-    world = pick_world(spec.gripper)
-    load_simulated(world, loaded, Path(spec.output) / "collision", spec.sim.collision, spec.sim.density)
+    world, loaded = _labelling_world(spec, ref)
     out, same = np.zeros((len(view), OUTLINE_POINTS, 3), np.float16), np.zeros(len(view), bool)
     for number in np.unique(view):
         rows = np.flatnonzero(view == number)

@@ -13,13 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.cloud.grasps import dot3
+from onepiece_dist.core.grasp_context import closing_centres, transposed_rotation
+
 OUTLINE_POINTS = 64
 OUTLINE_MODELS = frozenset({"pointnet_context_outline"})  # the networks that read it (learn.models)
 
 
 def _squared_distances(points: np.ndarray, point: np.ndarray) -> np.ndarray:
     d = points - point
-    return (d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2]
+    return dot3(d, d)
 
 
 def farthest_points(points: np.ndarray, count: int = OUTLINE_POINTS) -> np.ndarray:
@@ -46,12 +49,8 @@ def outline(points: np.ndarray, poses: np.ndarray, closing_depth: float, count: 
     if len(points) == 0 or len(poses) == 0:
         return np.zeros((len(poses), count, 3), np.float32)
     sample = np.asarray(points, dtype=np.float64)[farthest_points(points, count)]
-    rot = poses[:, :3, :3]
-    centre = poses[:, :3, 3] + rot[:, :, 0] * (closing_depth / 2)
-    rel = sample[None, :, :] - centre[:, None, :]  # (n, count, 3)
-    axes = [(rel[..., 0] * rot[:, None, 0, j] + rel[..., 1] * rot[:, None, 1, j]) + rel[..., 2] * rot[:, None, 2, j]
-            for j in range(3)]
-    return np.stack(axes, axis=2).astype(np.float32)
-
+    rel = sample[None, :, :] - closing_centres(poses, closing_depth)[:, None, :]  # (n, count, 3)
+    rot = np.repeat(poses[:, :3, :3], count, axis=0)
+    return transposed_rotation(rot, rel.reshape(-1, 3)).reshape(len(poses), count, 3).astype(np.float32)
 
 __all__ = ["OUTLINE_MODELS", "OUTLINE_POINTS", "farthest_points", "outline"]
