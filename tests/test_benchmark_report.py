@@ -338,13 +338,13 @@ def test_the_pools_ceiling_without_the_draw_says_whether_the_targets_lie_within_
     from benchmarks.pages.pick_ceiling_section import ceiling_section, pooled_ceiling
 
     def measured(held: list[int]) -> dict:
-        per_object = {f"o{k}": {"views": 8, "one_draw": 8, "repeated": 8, "first_held_out": 0, "best_held_out": h,
+        per_object = {f"o{k}": {"views": 8, "one_draw": 8, "repeated": 8, "first_held_out": 0.0, "best_held_out": h,
                                 "candidates": 100} for k, h in enumerate(held)}
         share = {"rate": sum(held) / (8 * len(held)), "interval": [0.5, 1.0]}
         return {"views": 8 * len(held), "candidates": 100 * len(held), "one_draw": share, "repeated": share,
                 "first_held_out": share, "best_held_out": share, "per_object": per_object}
 
-    result = {"command": "c", "date": "d", "machine": "m", "screen": 3, "selection": 8,
+    result = {"command": "c", "date": "d", "machine": "m", "screen": 4, "selection": 12, "shortlist": 8, "judge": 4,
               "sets": {"household": measured([8, 8, 6, 8]), "unseen": measured([0, 8])}}
     rate, (low, high), objects = pooled_ceiling(result)
     assert objects == 6 and rate == (8 + 8 + 6 + 8 + 0 + 8) / 48 and low < rate < high
@@ -354,3 +354,20 @@ def test_the_pools_ceiling_without_the_draw_says_whether_the_targets_lie_within_
     assert "needs 90.0%, above it" in words
     assert "lies within" in ceiling_section(result, None, 0.5, {**targets, "first_attempt": 0.75})[-1]
     assert "needs" not in ceiling_section(result, None, None, targets)[-1]
+
+
+def test_where_the_ranking_loses_judges_the_surest_of_the_first_three_on_draws_it_was_not_chosen_on():
+    from benchmarks.experiments.pick_ranked_draws import summary
+    from benchmarks.pages.pick_ceiling_section import ranked_draws_section
+
+    views = [{"scores": [0.9, 0.8, 0.7], "draws": [[1, 0, 0, 0], [1, 1, 1, 1], [0, 0, 0, 0]],
+              "top_down": [False, True, False]},
+             {"scores": [0.9, 0.5], "draws": [[1, 1, 1, 1], [0, 1, 0, 0]], "top_down": [False, False]},
+             {"scores": [], "draws": [], "top_down": []}]
+    s = summary(views)
+    assert s["views"] == 2 and s["first"] == 0.625 and s["first_draw0"] == 1.0 and s["first_judged"] == 0.5
+    assert s["best_of_3"] == 1.0  # chosen on draws 0-1 (the second of the first view), judged at draws 2-3
+    assert s["pairs"] == 4 and s["pairs_in_order"] == 0.75  # only 0.9 over 0.8 is out of order
+    assert s["top_down_share"] == 1.0 and s["top_down_grasps"] == 1 and s["other_share"] == 0.375
+    result = {"command": "c", "date": "d", "machine": "m", "top": 3, "draws": 4, "sets": {"household": s}}
+    assert "would add 50.0 points on the household set" in ranked_draws_section(result)[-1]

@@ -32,7 +32,7 @@ def ceiling_section(result: dict, picks: dict | None, pooled_top_down: float | N
                     targets: dict | None) -> list[str]:
     """The section: each set's one-draw share, repeated share and held-out rate; pooled against the benchmark's
     ``targets`` (first_attempt, above_heuristics) where given."""
-    screen, draws = result["screen"], result["selection"]
+    screen, selection, shortlist, judge = (result[k] for k in ("screen", "selection", "shortlist", "judge"))
     rows = [f"| {name} | {s['views']} | {s['candidates']} | {_pct(s['one_draw']['rate'])} | "
             f"{_pct(s['repeated']['rate'])} | {_pct(s['first_held_out']['rate'])} | "
             f"{_pct(s['best_held_out']['rate'])} [{_pct(s['best_held_out']['interval'][0])}, "
@@ -55,12 +55,40 @@ def ceiling_section(result: dict, picks: dict | None, pooled_top_down: float | N
             "candidates won the one draw every chooser meets; no chooser sees that draw (two executions of one "
             "grasp agree about 90% of the time: docs/studies/pick_labels). Here every candidate of each view (the "
             "shipped network's pool) is executed at draw 0 (so the one-draw share is the oracle's again), those "
-            f"that picked again at draws 1 to {screen - 1}; those that picked at all {screen} at draws {screen} to "
-            f"{draws - 1}, and the one that picked most often there (the first on ties) once more at draw {draws}, "
-            "which no choice saw: the share of views where it picks is what a chooser that knew which grasps pick "
-            f"again reaches at the first attempt. Beside it, the first candidate (index order) that passed the "
-            f"{screen} draws, judged at draw {screen}.", "",
+            f"that picked again at draws 1 to {screen - 1}; of those that picked at all {screen}, the first "
+            f"{shortlist} (index order) are drawn until they fail, up to draw {selection - 1}, and the one that held "
+            f"longest (the first on ties) is judged at draws {selection} to {selection + judge - 1}, which no choice "
+            "saw: its share of them is what a chooser that knew which grasps pick again reaches at the first "
+            f"attempt. Beside it, the first candidate (index order) that passed the {screen} draws, judged at draws "
+            f"{screen} to {screen + judge - 1}.", "",
             f"| set | views | candidates | one draw (the oracle) | picked at all {screen} draws | the first of "
-            f"those, at draw {screen} | the best of those, at draw {draws} [95% CI over objects] | "
-            "the network, first attempt |", "| --- | --- | --- | --- | --- | --- | --- | --- |", *rows, "",
+            f"those, {judge} draws | the best of {shortlist} of those, {judge} draws no choice saw [95% CI over "
+            "objects] | the network, first attempt |", "| --- | --- | --- | --- | --- | --- | --- | --- |", *rows,
+            "",
             "; ".join(words) + "."]
+
+
+def ranked_draws_section(result: dict) -> list[str]:
+    """Where the ranking loses (results/pick_ranked_draws.json): the network's first grasps drawn again."""
+    top, draws = result["top"], result["draws"]
+    half = draws // 2
+    rows = [f"| {name} | {s['views']} | {_pct(s['first_draw0'])} | {_pct(s['first'])} | {_pct(s['first_judged'])} | "
+            f"{_pct(s['best_of_3'])} | {_pct(s['best_of_10'])} | {_pct(s['pairs_in_order'])} of {s['pairs']} | "
+            f"{_pct(s['top_down_share'])} ({s['top_down_grasps']}) | {_pct(s['other_share'])} |"
+            for name, s in result["sets"].items()]
+    gains = {name: s["best_of_3"] - s["first_judged"] for name, s in result["sets"].items()}
+    return [f"## Where the ranking loses: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. On every view above, the shipped network's {top} best-ranked "
+            f"grasps (the planner's ranking, the top-down grasps in the pool), each executed at {draws} draws (draw 0 "
+            "the one every chooser meets). A grasp's share of its draws is how surely it picks: the first's is the "
+            f"network's expected first attempt. The best of the first 3 or {top} is chosen on draws 0 to "
+            f"{half - 1} and judged at draws {half} to {draws - 1} (a share chosen on the draws that judge it would "
+            "flatter it), beside the first judged at the same draws; the pairs column says how often the scores "
+            "order two of them whose shares differ as the shares do (a coin: 50%).", "",
+            f"| set | views | the first, draw 0 | the first, {draws} draws | the first, draws {half}-{draws - 1} | "
+            f"the surest of the first 3, draws {half}-{draws - 1} | the surest of the first {top}, the same | "
+            "pairs in order | top-down grasps among them (count) | the others |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |", *rows, "",
+            "Choosing the surest of the network's first three would add "
+            + " and ".join(f"{100 * gain:.1f} points on the {name} set" for name, gain in gains.items())
+            + " over its first, judged at the same draws."]

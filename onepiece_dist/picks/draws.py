@@ -19,8 +19,10 @@ import numpy as np
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.networks import scored_world
+from onepiece_dist.picks.object_picks import process_scorer
 from onepiece_dist.picks.runner import run_each_in_process
-from onepiece_dist.picks.views import Executions, observe_view, simulated_object
+from onepiece_dist.picks.views import Executions, index_of, observe_view, simulated_object
+from onepiece_dist.plan.planner import rank
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan.shipped import shipped_network
 from onepiece_dist.specs.plan import PickSpec
@@ -79,6 +81,44 @@ def _view(spec: PickSpec, scorers: list[GraspScorer], world, mesh, view: int, pe
     return rows
 
 
+@dataclass(frozen=True)
+class RankedDraws:
+    """One view's ``top`` best-ranked candidates by the network (the planner's ranking, best first): each one's
+    ``score`` and its ``draws`` (draw 0 the execution every chooser meets, then fresh ones); ``top_down`` whether it
+    is one of the view's top-down grasps."""
+
+    view: int
+    scores: tuple[float, ...]
+    draws: tuple[tuple[bool, ...], ...]
+    top_down: tuple[bool, ...]
+
+
+def ranked_draws(spec: PickSpec, ref: ObjectRef, index: int, top: int, draws: int) -> tuple[int, str, tuple, str]:
+    """Every view of one object (index, name, its RankedDraws, a rejected object's reason): how often the grasps
+    ``spec.checkpoint`` ranks first pick again, and whether a surer one sits just under its first."""
+    scorer = process_scorer(spec)
+    try:
+        world, loaded = simulated_object(spec, scorer.record, ref)
+    except MeshRejected as err:
+        return index, ref.name, (), err.reason
+    views = []
+    for view in range(spec.views):
+        seen = observe_view(spec, scorer.record, world, loaded.mesh, view)
+        proposals = seen.proposals
+        if proposals is None:
+            continue
+        ranked = rank(proposals, scorer.score(proposals.crops, spec.plan.batch_size), scorer.record, spec.plan,
+                      keep=top)
+        chosen = [index_of(proposals.poses, g.pose) for g in ranked]
+        executions = Executions(spec, world, loaded.mesh, seen.resting, view)
+        outcomes = [(executions.run("view", i, proposals.poses[i]).success,
+                     *(executions.again("view", i, proposals.poses[i], d).success for d in range(1, draws)))
+                    for i in chosen]
+        views.append(RankedDraws(view, tuple(g.score for g in ranked), tuple(outcomes),
+                                 tuple(i >= len(proposals.poses) - proposals.top_down for i in chosen)))
+    return index, ref.name, tuple(views), ""
+
+
 def run_candidate_draws(spec: PickSpec, checkpoints: tuple[str, ...], per_view: int, draws: int
                         ) -> list[CandidateDraws]:
     """Every object of ``spec.objects``, one at a time in a pinned simulation process (picks.runner)."""
@@ -90,20 +130,33 @@ def run_candidate_draws(spec: PickSpec, checkpoints: tuple[str, ...], per_view: 
 @dataclass(frozen=True)
 class ViewCeiling:
     """One view's pool against fresh draws: its ``candidates``; whether one picked at draw 0 (the draw every chooser
-    meets: the benchmark's oracle); how many picked at each screening draw 0 .. screen - 1; whether the first of
-    those (index order) picked at draw ``screen``, which it had not met (None: none passed the screen); and whether
-    the one of them that picked most often over draws ``screen`` .. selection - 1 (the first on ties) picked at
-    draw ``selection``, which no choice saw."""
+    meets: the benchmark's oracle); how many picked at each screening draw 0 .. screen - 1; the share of ``judge``
+    fresh draws from draw ``screen`` at which the first of those (index order) picked; and the share of ``judge``
+    draws from draw ``selection``, which no choice saw, at which the best of the first ``shortlist`` of them picked
+    (the first that held at every draw screen .. selection - 1, else the one that held longest). None where none
+    passed the screen."""
 
     view: int
     candidates: int
     one_draw: bool
     repeated: int
-    first_held_out: bool | None
-    best_held_out: bool | None
+    first_held_out: float | None
+    best_held_out: float | None
 
 
-def view_ceilings(spec: PickSpec, ref: ObjectRef, index: int, screen: int, selection: int
+@dataclass(frozen=True)
+class CeilingDraws:
+    """How a view's candidates are drawn: ``screen`` draws every kept candidate must pick at (draw 0 the oracle's);
+    of those that did, the first ``shortlist`` (index order) drawn until they fail, up to draw ``selection`` - 1;
+    each chosen one judged at ``judge`` draws it was not chosen by."""
+
+    screen: int = 4
+    selection: int = 12
+    shortlist: int = 8
+    judge: int = 4
+
+
+def view_ceilings(spec: PickSpec, ref: ObjectRef, index: int, draws: CeilingDraws
                   ) -> tuple[int, str, tuple, str]:
     """Every view of one object (index, name, its ViewCeilings, a rejected object's reason): what a chooser that
     knew which candidates pick again reaches, measured rather than read off one draw: the oracle picks whatever
@@ -113,24 +166,35 @@ def view_ceilings(spec: PickSpec, ref: ObjectRef, index: int, screen: int, selec
         world, loaded = simulated_object(spec, record, ref)
     except MeshRejected as err:
         return index, ref.name, (), err.reason
-    return index, ref.name, tuple(_ceiling(spec, record, world, loaded.mesh, view, screen, selection)
+    return index, ref.name, tuple(_ceiling(spec, record, world, loaded.mesh, view, draws)
                                   for view in range(spec.views)), ""
 
 
-def _ceiling(spec: PickSpec, record, world, mesh, view: int, screen: int, selection: int) -> ViewCeiling:
+def _ceiling(spec: PickSpec, record, world, mesh, view: int, draws: CeilingDraws) -> ViewCeiling:
     seen = observe_view(spec, record, world, mesh, view)
     poses = seen.proposals.poses if seen.proposals is not None else np.zeros((0, 4, 4))
     poses = poses[: spec.oracle_candidates]
     executions = Executions(spec, world, mesh, seen.resting, view)
+
+    def picks(i: int, first: int, count: int) -> list[bool]:
+        return [executions.again("view", i, poses[i], d).success for d in range(first, first + count)]
+
     kept = [i for i in range(len(poses)) if executions.run("view", i, poses[i]).success]
     one_draw = bool(kept)
-    for draw in range(1, screen):
+    for draw in range(1, draws.screen):
         kept = [i for i in kept if executions.again("view", i, poses[i], draw).success]
     if not kept:
         return ViewCeiling(view, len(poses), one_draw, 0, None, None)
-    later = {i: [executions.again("view", i, poses[i], d).success for d in range(screen, selection)] for i in kept}
-    best = max(kept, key=lambda i: (sum(later[i]), -i))
-    first = later[kept[0]][0] if selection > screen else executions.again("view", kept[0], poses[kept[0]],
-                                                                          screen).success
-    return ViewCeiling(view, len(poses), one_draw, len(kept), bool(first),
-                       executions.again("view", best, poses[best], selection).success)
+    held = {i: _held_until_failure(executions, i, poses[i], draws.screen, draws.selection)
+            for i in kept[: draws.shortlist]}
+    best = max(held, key=lambda i: (held[i], -i))
+    return ViewCeiling(view, len(poses), one_draw, len(kept), float(np.mean(picks(kept[0], draws.screen, draws.judge))),
+                       float(np.mean(picks(best, draws.selection, draws.judge))))
+
+
+def _held_until_failure(executions: Executions, index: int, pose: np.ndarray, first: int, end: int) -> int:
+    """How many draws from ``first`` (up to ``end`` - 1) candidate ``index`` picked at before its first failure."""
+    for draw in range(first, end):
+        if not executions.again("view", index, pose, draw).success:
+            return draw - first
+    return end - first
