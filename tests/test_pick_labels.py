@@ -57,7 +57,8 @@ def test_a_half_turn_about_the_approach_turns_every_context_vector_and_the_outli
         size=(rows, 9)).astype(np.float32), space=np.zeros((rows, 0), np.float16),
         outline=rng.normal(size=(rows, 5, 3)).astype(np.float16), success=np.ones(rows, bool),
         held=np.ones(rows, np.int8), failure=np.zeros(rows, np.int8), view=np.zeros(rows, np.int16),
-        pose=np.tile(np.eye(4), (rows, 1, 1)), object=np.zeros(rows, np.int32), attrs={})
+        pose=np.tile(np.eye(4), (rows, 1, 1)), picks=np.ones(rows, np.float32), object=np.zeros(rows, np.int32),
+        attrs={})
     turn = np.array([True, False, True, False])
     batch = training_batch(labels, np.arange(rows), turn)
     flips = np.tile(HALF_TURN, 3)

@@ -44,6 +44,7 @@ TRIAL_DESIGNS = {  # designs tried beside the curve, never on it: name -> PickTr
     "context_balanced_256": {"model": "pointnet_context", "balanced": True, "points": 256},
     "context_balanced_cosine": {"model": "pointnet_context", "balanced": True, "schedule": "cosine"},
     "context_balanced_outline": {"model": "pointnet_context_outline", "balanced": True},
+    "context_balanced_draws": {"model": "pointnet_context", "balanced": True, "target": "draws"},
 }
 
 

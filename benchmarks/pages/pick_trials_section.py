@@ -345,3 +345,20 @@ def _validation_words(result: dict, top_down: dict | None) -> str:
             f"{'better' if better else 'no better'}: the best-scored candidate picked in {100 * top1[0]:.1f}% of "
             f"the views against {100 * top1[1]:.1f}% (higher at {higher} of {len(pairs)} seeds), AP {ap[0]:.3f} "
             f"against {ap[1]:.3f}.{last}")
+
+
+def top_draws_section(result: dict, top_down: dict | None) -> list[str]:
+    """The network's own best grasps drawn again (results/pick_top_draws.json) against the top-down trial's
+    networks, seed for seed, both with the top-down grasps in the pool."""
+    return [f"## The network's best grasps drawn again: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. The network's first grasps pick less surely than the surest of "
+            "its pool (the ceiling above, most on the unseen set), and a label drawn once says little about which "
+            "of its best grasps pick again. Each of the first label "
+            "batch's objects seen at 4 of its views, the shipped network's 8 best-ranked candidates of each executed "
+            f"{result['their_draws']} times ({result['rows_drawn_again']} rows; {_pct(result['their_first_draw_rate'])}"
+            f" picked at their first draw, {_pct(result['their_mean_picks'])} of all draws): they join the top-down "
+            f"trial's labels ({result['labels']} in all) with the share of their draws that picked as their target "
+            f"(`{result['design']}`; the other rows' target is their one execution); fitted seed for seed against "
+            "that trial's networks, both planning with the top-down grasps in the pool, first attempt:", "",
+            *_over_top_down_lines(result, top_down, "top-down trial", "+ drawn again",
+                                  "the best grasps drawn again give")]

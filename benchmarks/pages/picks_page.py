@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.pages.committed import load
-from benchmarks.pages.pick_ceiling_section import ceiling_section
+from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_trials_section import (
     both_section,
@@ -20,6 +20,7 @@ from benchmarks.pages.pick_trials_section import (
     schedule_section,
     space_section,
     top_down_section,
+    top_draws_section,
     unseen_section,
     vessels_section,
 )
@@ -188,9 +189,10 @@ def _dense_line(plan: dict) -> str:
             f"**{'met' if seconds <= target else 'not met'}**). ")
 
 
-SECTIONS = ("pick_ceiling", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels",
-            "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels",
-            "pick_outline", "pick_rankings", "pick_pool_size")  # results rendered after the benchmark's, in this order
+# results rendered after the benchmark's, in this order
+SECTIONS = ("pick_ceiling", "pick_ranked_draws", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy",
+            "pick_vessels", "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule",
+            "pick_household_labels", "pick_outline", "pick_top_draws", "pick_rankings", "pick_pool_size")
 
 
 def render_picks_page() -> str:
@@ -211,7 +213,8 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_ceiling": lambda r: _ceiling(r, picks), "pick_unseen": lambda r: unseen_section(r, picks),
+    render = {"pick_ceiling": lambda r: _ceiling(r, picks), "pick_ranked_draws": ranked_draws_section,
+              "pick_unseen": lambda r: unseen_section(r, picks),
               "pick_curve": lambda r: curve_section(r, picks),
               "pick_space": space_section, "pick_on_policy": on_policy_section,
               "pick_vessels": vessels_section, "pick_top_down": top_down_section,
@@ -220,6 +223,7 @@ def render_picks_page() -> str:
               "pick_schedule": lambda r: schedule_section(r, load("pick_top_down")),
               "pick_household_labels": lambda r: household_labels_section(r, load("pick_top_down")),
               "pick_outline": lambda r: outline_section(r, load("pick_top_down")),
+              "pick_top_draws": lambda r: top_draws_section(r, load("pick_top_down")),
               "pick_rankings": rankings_section,
               "pick_pool_size": pool_size_lines}
     for name in SECTIONS:

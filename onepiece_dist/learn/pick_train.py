@@ -37,7 +37,7 @@ class PickTrainOptions:
     objects held out for validation, the seed."""
 
     model: str = "pointnet_context"
-    target: str = "every_trial"  # or "share"
+    target: str = "every_trial"  # or "share" (of the trials that held), or "draws" (of the executions that picked)
     balanced: bool = False
     ranking: float = 0.0  # weight of the per-view listwise term (0: every candidate on its own)
     epochs: int = 30
@@ -103,6 +103,8 @@ def _batch(labels: PickLabels, rows: np.ndarray, turn: np.ndarray | None = None,
 def targets(labels: PickLabels, rows: np.ndarray, target: str, trials: int) -> np.ndarray:
     if target == "share":
         return (labels.held[rows].astype(np.float32) / trials).clip(0, 1)
+    if target == "draws":  # the share of the row's executions that picked (its success where it had one)
+        return labels.picks[rows].astype(np.float32)
     return labels.success[rows].astype(np.float32)
 
 

@@ -42,7 +42,7 @@ def label_object(spec: PickLabelSpec, ref: ObjectRef, index: int) -> LabelledObj
     """Every view of one object labelled; a bad object becomes a rejected result, never an exception."""
     start = time.perf_counter()
     try:
-        world, loaded = _labelling_world(spec, ref)
+        world, loaded = labelling_world(spec, ref)
     except MeshRejected as err:
         return LabelledObject.rejected(index, ref.name, err.reason)
     parts = [_label_view(spec, world, loaded.mesh, view) for view in range(spec.views)]
@@ -53,7 +53,7 @@ def label_object(spec: PickLabelSpec, ref: ObjectRef, index: int) -> LabelledObj
     return LabelledObject(index, ref.name, "ok", seconds=time.perf_counter() - start, **joined)
 
 
-def _labelling_world(spec: PickLabelSpec, ref: ObjectRef):
+def labelling_world(spec: PickLabelSpec, ref: ObjectRef):
     """This process's pick world holding ``ref`` as ``spec`` loads it: (world, loaded object); a bad object raises
     MeshRejected."""
     from onepiece_dist.sim.pick import pick_world
@@ -91,7 +91,7 @@ def outlines_again(spec: PickLabelSpec, ref: ObjectRef, view: np.ndarray, pose: 
     cut for each row's gripper ``pose`` (n, 4, 4). A view has outlines only where, seen again, it gives each row's
     pose and stored ``context`` (n, 6) to within rounding: Bullet leaves the last bits of a settle to what the
     process simulated before, and now and then a settle that far apart ends elsewhere."""
-    world, loaded = _labelling_world(spec, ref)
+    world, loaded = labelling_world(spec, ref)
     out, same = np.zeros((len(view), OUTLINE_POINTS, 3), np.float16), np.zeros(len(view), bool)
     for number in np.unique(view):
         rows = np.flatnonzero(view == number)
@@ -117,7 +117,7 @@ def _chosen(spec: PickLabelSpec, proposals, rng: np.random.Generator) -> np.ndar
         return np.sort(np.concatenate([rest, forced]))
     if spec.checkpoint is None:
         return np.sort(rng.permutation(count)[: spec.per_view])
-    scorer = _scorer(spec.checkpoint, spec.gripper)
+    scorer = cached_scorer(spec.checkpoint, spec.gripper)
     seen = crops.points[:, : scorer.record.points_per_grasp]  # stored in random order: the first P as it trained
     scores = scorer.score(dataclasses.replace(crops, points=seen))
     top = np.lexsort((np.arange(count), -scores))[: int(round(spec.top_share * spec.per_view))]
@@ -126,7 +126,7 @@ def _chosen(spec: PickLabelSpec, proposals, rng: np.random.Generator) -> np.ndar
 
 
 @functools.lru_cache(maxsize=2)
-def _scorer(checkpoint: str, gripper) -> GraspScorer:
+def cached_scorer(checkpoint: str, gripper) -> GraspScorer:
     return GraspScorer(checkpoint, gripper, device="cpu")
 
 
@@ -173,4 +173,5 @@ def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None)
             ray.shutdown()
 
 
-__all__ = ["PickLabelWorker", "crop_record", "label_object", "outlines_again", "run_pick_labels"]
+__all__ = ["PickLabelWorker", "cached_scorer", "crop_record", "label_object", "labelling_world", "outlines_again",
+           "run_pick_labels"]

@@ -11,6 +11,8 @@ by the pick protocol, one row per execution, in object then view order. Readable
     held (n,) int8            trials that held
     failure (n,) int8         index into the root attribute ``failure_codes`` ('' for a pick)
     object (n,) int32, view (n,) int16, pose (n, 4, 4) float64 (gripper to world)
+    picks (n,) float32        the share of the row's executions that picked (picks.top_draws: fresh draws of a
+                              network's best grasps; absent from stores of one execution a row: its success)
 
 Root attributes: ``spec`` (the PickLabelSpec), ``objects`` (name, status, reason, rows, seconds per object),
 ``failure_codes``, ``core_seconds`` and ``wall_seconds``. One writer: the process that ran the labelling.
@@ -27,7 +29,7 @@ from onepiece_dist.errors import StoreError
 from onepiece_dist.store.codecs import write_array
 
 FAILURE_CODES = ("", "start_collision", "no_contact", "slipped_lifting", "dropped_shaking")
-COLUMNS = ("points", "context", "space", "outline", "success", "held", "failure", "view", "pose")
+COLUMNS = ("points", "context", "space", "outline", "success", "held", "failure", "view", "pose", "picks")
 
 
 def _empty(shape: tuple[int, ...], dtype) -> np.ndarray:
@@ -52,6 +54,11 @@ class LabelledObject:
     failure: np.ndarray = field(default_factory=lambda: _empty((0,), np.int8))
     view: np.ndarray = field(default_factory=lambda: _empty((0,), np.int16))
     pose: np.ndarray = field(default_factory=lambda: _empty((0, 4, 4), np.float64))
+    picks: np.ndarray | None = None  # None: one execution a row (its success)
+
+    def __post_init__(self):
+        if self.picks is None:
+            object.__setattr__(self, "picks", self.success.astype(np.float32))
 
     @classmethod
     def rejected(cls, index: int, name: str, reason: str, seconds: float = 0.0) -> LabelledObject:
@@ -76,6 +83,7 @@ class PickLabels:
     object: np.ndarray
     view: np.ndarray
     pose: np.ndarray
+    picks: np.ndarray
     attrs: dict
 
     def __len__(self) -> int:
@@ -89,16 +97,11 @@ class PickLabels:
                                                                      for o in other.attrs["objects"])],
                  "core_seconds": self.attrs["core_seconds"] + other.attrs["core_seconds"],
                  "specs": [*self.attrs.get("specs", [self.attrs["spec"]]), other.attrs["spec"]]}
-        return PickLabels(*(np.concatenate([getattr(self, name), getattr(other, name)]) for name in
-                            ("points", "context", "space", "outline", "success", "held", "failure")),
-                          np.concatenate([self.object, other.object + offset]),
-                          np.concatenate([self.view, other.view]), np.concatenate([self.pose, other.pose]), attrs)
+        both = {name: np.concatenate([getattr(self, name), getattr(other, name)]) for name in COLUMNS}
+        return PickLabels(**both, object=np.concatenate([self.object, other.object + offset]), attrs=attrs)
 
     def subset(self, rows: np.ndarray) -> PickLabels:
-        return PickLabels(self.points[rows], self.context[rows], self.space[rows], self.outline[rows],
-                          self.success[rows], self.held[rows], self.failure[rows], self.object[rows],
-                          self.view[rows], self.pose[rows],
-                          self.attrs)
+        return PickLabels(**{name: getattr(self, name)[rows] for name in (*COLUMNS, "object")}, attrs=self.attrs)
 
 
 def write_pick_labels(path: str | os.PathLike, objects: list[LabelledObject], spec: dict, core_seconds: float,
@@ -127,10 +130,13 @@ def read_pick_labels(path: str | os.PathLike) -> PickLabels:
     try:
         group = zarr.open_group(str(path), mode="r")
         optional = {"space": (0,), "outline": (0, 3)}  # absent from stores made before them: empty per row
-        arrays = {name: np.asarray(group[name][...]) for name in (*COLUMNS, "object") if name not in optional}
+        arrays = {name: np.asarray(group[name][...]) for name in (*COLUMNS, "object")
+                  if name not in optional and name != "picks"}
         for name, shape in optional.items():
             arrays[name] = (np.asarray(group[name][...]) if name in group else
                             np.zeros((len(arrays["success"]), *shape), np.float16))
+        arrays["picks"] = (np.asarray(group["picks"][...]) if "picks" in group else
+                           arrays["success"].astype(np.float32))
     except (FileNotFoundError, KeyError) as err:
         raise StoreError(f"{path}: not a pick-labels store ({err}): make one with run_pick_labels") from None
     return PickLabels(**arrays, attrs=dict(group.attrs))
