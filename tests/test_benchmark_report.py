@@ -371,3 +371,22 @@ def test_where_the_ranking_loses_judges_the_surest_of_the_first_three_on_draws_i
     assert s["top_down_share"] == 1.0 and s["top_down_grasps"] == 1 and s["other_share"] == 0.375
     result = {"command": "c", "date": "d", "machine": "m", "top": 3, "draws": 4, "sets": {"household": s}}
     assert "would add 50.0 points on the household set" in ranked_draws_section(result)[-1]
+
+
+def test_other_networks_ordering_the_best_grasps_are_judged_by_their_choices_share_of_draws():
+    import numpy as np
+
+    from benchmarks.experiments.pick_reranked import chosen
+    from benchmarks.pages.pick_ceiling_section import reranked_section
+
+    rows = [{"shares": np.array([0.5, 1.0, 0.0, 1.0]), "shipped": np.array([0.9, 0.8, 0.7, 0.6]),
+             "other": np.array([0.1, 0.2, 0.3, 0.9])},
+            {"shares": np.array([1.0, 0.0]), "shipped": np.array([0.9, 0.8]), "other": np.array([0.5, 0.5])}]
+    assert chosen(rows, "shipped", 3) == 0.75 and chosen(rows, "other", 3) == 0.5  # its 0.3 among the first 3
+    assert chosen(rows, "other", 10) == 1.0  # the first on ties, and the fourth when it may look that far
+    result = {"command": "c", "date": "d", "machine": "m", "sets": {"household": {
+        "views": 2, "views_elsewhere": ["o view 5"], "chosen": {
+            "shipped": {"3": 0.75, "10": 0.75}, "other": {"3": 0.5, "10": 1.0}}}}}
+    lines = reranked_section(result)
+    assert "left out, settled elsewhere when seen again: o view 5" in lines[2]
+    assert "`shipped` +0.0 points on the household set" in lines[-1]

@@ -2,8 +2,8 @@
 design at its largest size (benchmarks/results/pick_curve.json, data/pick_curve/), or, where the top-down trial is
 kept (benchmarks/results/pick_top_down.json; the trials' paired rule, docs/picks.md), the kept trial's seed-0
 network (the top-down trial's, or of a trial judged against it that is kept: pick_points.json,
-pick_top_down_both.json, pick_schedule.json, pick_outline.json; a seed is never chosen), copied
-into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark
+pick_top_down_both.json, pick_schedule.json, pick_outline.json, pick_top_draws.json; a seed is never chosen),
+copied into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark
 (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household figures into
 the record.
 
@@ -65,8 +65,10 @@ def ship(point: dict, curve: dict) -> dict:
 
 
 # trials judged against the top-down trial's networks, fitted on or beside its labels
-FOLLOWERS = ("pick_points", "pick_top_down_both", "pick_schedule", "pick_outline")
-TRIAL_OBJECTS = {"pick_top_down_both": "{0} (labels executing the top-down grasps) + {1} (the same)"}
+FOLLOWERS = ("pick_points", "pick_top_down_both", "pick_schedule", "pick_outline", "pick_top_draws")
+TRIAL_OBJECTS = {"pick_top_down_both": "{0} (labels executing the top-down grasps) + {1} (the same)",
+                 "pick_top_draws": "{0} (labels executing the top-down grasps) + {1} + {0} (the shipped network's "
+                                   "best grasps drawn again)"}
 
 
 def kept_trial(top_down: dict | None, followers: dict[str, dict | None]) -> tuple[str, dict] | None:

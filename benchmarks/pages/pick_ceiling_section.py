@@ -94,3 +94,27 @@ def ranked_draws_section(result: dict) -> list[str]:
             "Choosing the surest of the network's first three would add "
             + " and ".join(f"{100 * gain:.1f} points on the {name} set" for name, gain in gains.items())
             + " over its first, judged at the same draws."]
+
+
+def reranked_section(result: dict) -> list[str]:
+    """Other networks ordering the shipped network's best grasps (results/pick_reranked.json)."""
+    sets = result["sets"]
+    names = list(next(iter(sets.values()))["chosen"])
+    rows = [f"| `{name}` | " + " | ".join(f"{_pct(s['chosen'][name]['3'])} | {_pct(s['chosen'][name]['10'])}"
+                                          for s in sets.values()) + " |" for name in names]
+    moved = [v for s in sets.values() for v in s["views_elsewhere"]]
+    best = {w: max(names, key=lambda n: s["chosen"][n]["3"]) for w, s in sets.items()}
+    gains = {w: s["chosen"][best[w]]["3"] - s["chosen"]["shipped"]["3"] for w, s in sets.items()}
+    header = " | ".join(f"{w}, its best of the first 3 | of the first 10" for w in sets)
+    counted = ", ".join(f"{s['views']} {w} views" for w, s in sets.items())
+    left = f"; left out, settled elsewhere when seen again: {', '.join(moved)}" if moved else ""
+    return [f"## Other networks ordering those grasps: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. The same views' ranked grasps and draws, scored by the top-down "
+            "trial's networks at each seed (`top_down_s0` is the shipped one), their mean, and the drawn-again "
+            "trial's networks (below); each chooses its best among the first 3 and the first 10, judged by that "
+            f"grasp's share of its draws ({counted}{left}):", "",
+            f"| network | {header} |", "| --- |" + " --- | --- |" * len(sets), *rows, "",
+            "The best of them over the shipped network's own order of its first three: "
+            + " and ".join(f"`{best[w]}` {100 * gains[w]:+.1f} points on the {w} set" for w in sets)
+            + ": of what the surest of the first three would add (above), no network here finds more than a "
+            "fraction."]
