@@ -223,6 +223,14 @@ def test_a_network_fitted_on_pick_labels_loads_safely_and_needs_the_context(pick
                                     PickTrainOptions(model="pointnet_context_outline", epochs=1, validation=0.34))
     outline_scorer = GraspScorer(outlined.checkpoint, GripperSpec(), device="cpu")
     assert outline_scorer.score(replace(with_context, outline=labels.outline[:n].astype(np.float32))).shape == (n,)
+    still = train_on_pick_labels(labels, tmp_path / "still", crop, PickTrainOptions(
+        epochs=1, validation=0.34, learning_rate=0.0, start_from=str(result.checkpoint)))
+    before, after = (torch.load(c, weights_only=True)["state_dict"] for c in (result.checkpoint, still.checkpoint))
+    weights = [k for k in before if k.endswith("weight")]
+    assert weights and all(torch.equal(before[k], after[k]) for k in weights)  # it starts from those weights
+    with pytest.raises(ValueError, match="cannot start from it"):
+        train_on_pick_labels(labels, tmp_path / "other", crop, PickTrainOptions(
+            model="pointnet_context_outline", epochs=1, validation=0.34, start_from=str(result.checkpoint)))
     with pytest.raises(CloudRejected, match="outline"):
         outline_scorer.score(with_context)
     on_policy(spec, labels, result.checkpoint)

@@ -1,8 +1,9 @@
 """Other networks ordering the shipped network's best grasps (issue 55: can a network we have find the surer grasp
 among the first three?). The views of pick_ranked_draws (the shipped network's 10 best-ranked grasps of every
 benchmark view, each executed at 8 draws) are seen again and those grasps scored by the top-down trial's networks
-at every seed, their mean, and the networks of the drawn-again trial; each chooses its best among the first k
-(k = 3, 10), and its expected first attempt is the share of that grasp's 8 draws that picked. Nothing is chosen
+at every seed, their mean, the networks of the drawn-again trial and the shipped network fitted further on the
+drawn-again rows alone (pick_rerank_fit) and their mean; each chooses its best among the first k (k = 3, 10),
+and its expected first attempt is the share of that grasp's 8 draws that picked. Nothing is chosen
 here: the views judge. A view that settles elsewhere when seen again (Bullet keeps a little of what the process
 simulated before) is left out, named in the results.
 
@@ -25,8 +26,9 @@ from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
 
 RESULTS = HERE / "results" / "pick_reranked.json"
 NETWORKS = {**{f"top_down_s{s}": f"data/pick_curve/top_down/top_down_s{s}/best.pt" for s in range(4)},
-            **{f"top_draws_s{s}": f"data/pick_curve/top_draws/context_balanced_draws_s{s}/best.pt" for s in range(2)}}
-MEANS = {"top_down_mean": [f"top_down_s{s}" for s in range(4)]}
+            **{f"top_draws_s{s}": f"data/pick_curve/top_draws/context_balanced_draws_s{s}/best.pt" for s in range(2)},
+            **{f"rerank_s{s}": f"data/pick_curve/rerank/rerank_s{s}/best.pt" for s in range(2)}}
+MEANS = {"top_down_mean": [f"top_down_s{s}" for s in range(4)], "rerank_mean": ["rerank_s0", "rerank_s1"]}
 
 
 def _scored(which: str, objects: str, stored: dict) -> tuple[list[dict], list[str]]:

@@ -96,8 +96,9 @@ def ranked_draws_section(result: dict) -> list[str]:
             + " over its first, judged at the same draws."]
 
 
-def reranked_section(result: dict) -> list[str]:
-    """Other networks ordering the shipped network's best grasps (results/pick_reranked.json)."""
+def reranked_section(result: dict, fit: dict | None = None) -> list[str]:
+    """Other networks ordering the shipped network's best grasps (results/pick_reranked.json); ``fit``: how the
+    re-ranking networks were fitted (results/pick_rerank_fit.json)."""
     sets = result["sets"]
     names = list(next(iter(sets.values()))["chosen"])
     rows = [f"| `{name}` | " + " | ".join(f"{_pct(s['chosen'][name]['3'])} | {_pct(s['chosen'][name]['10'])}"
@@ -112,9 +113,18 @@ def reranked_section(result: dict) -> list[str]:
             f"{result['date']}, {result['machine']}. The same views' ranked grasps and draws, scored by the top-down "
             "trial's networks at each seed (`top_down_s0` is the shipped one), their mean, and the drawn-again "
             "trial's networks (below); each chooses its best among the first 3 and the first 10, judged by that "
-            f"grasp's share of its draws ({counted}{left}):", "",
+            f"grasp's share of its draws ({counted}{left}).{_fit_words(fit)}", "",
             f"| network | {header} |", "| --- |" + " --- | --- |" * len(sets), *rows, "",
             "The best of them over the shipped network's own order of its first three: "
             + " and ".join(f"`{best[w]}` {100 * gains[w]:+.1f} points on the {w} set" for w in sets)
             + ": of what the surest of the first three would add (above), no network here finds more than a "
             "fraction."]
+
+
+def _fit_words(fit: dict | None) -> str:
+    if fit is None:
+        return ""
+    best = ", ".join(f"epoch {p['best_epoch']['epoch']} (AP {p['best_epoch']['val_ap']:.3f})" for p in fit["points"])
+    return (f" `rerank_s*`: the shipped network fitted further on the drawn-again rows alone (`{fit['command']}`: "
+            f"{fit['points'][0]['rows']} rows, the share of each row's draws as the target and a listwise term, at "
+            f"a rate of {fit['options']['learning_rate']:g}; best epochs by the AP on held-out objects: {best}).")

@@ -214,7 +214,7 @@ def render_picks_page() -> str:
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
     render = {"pick_ceiling": lambda r: _ceiling(r, picks), "pick_ranked_draws": ranked_draws_section,
-              "pick_reranked": reranked_section,
+              "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_unseen": lambda r: unseen_section(r, picks),
               "pick_curve": lambda r: curve_section(r, picks),
               "pick_space": space_section, "pick_on_policy": on_policy_section,

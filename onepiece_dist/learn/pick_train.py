@@ -28,13 +28,14 @@ HALF_TURN = np.array([1.0, -1.0, -1.0], np.float32)  # (u, v, t) -> (u, -v, -t)
 
 @dataclass(frozen=True)
 class PickTrainOptions:
-    """How to fit: the model, the target (every trial held, or the share of trials that held), whether batches
-    are balanced (as many successes as failures drawn), the weight of a listwise ranking term (each batch then
-    holds whole views, and each view's successes are pushed above its failures: what the planner's first choice
-    needs), epochs, patience, batch size, the points of each crop the network sees (a seeded subset of the stored
-    ones; a planner then resamples its crops to as many), learning rate and its schedule (constant with early
-    stopping, or cosine: decayed to zero over every epoch, never stopped early, the best epoch kept), the share of
-    objects held out for validation, the seed."""
+    """How to fit: the model, the target (every trial held, the share of trials that held, or the share of a
+    row's executions that picked), whether batches are balanced (as many successes as failures drawn), the weight
+    of a listwise ranking term (each batch then holds whole views, and each view's successes are pushed above its
+    failures: what the planner's first choice needs), epochs, patience, batch size, the points of each crop the
+    network sees (a seeded subset of the stored ones; a planner then resamples its crops to as many), learning rate
+    and its schedule (constant with early stopping, or cosine: decayed to zero over every epoch, never stopped
+    early, the best epoch kept), the share of objects held out for validation, the seed, and a checkpoint of the
+    same model to start from (None: fresh weights)."""
 
     model: str = "pointnet_context"
     target: str = "every_trial"  # or "share" (of the trials that held), or "draws" (of the executions that picked)
@@ -48,6 +49,7 @@ class PickTrainOptions:
     schedule: str = "constant"  # or "cosine"
     validation: float = 0.1
     seed: int = 0
+    start_from: str | None = None  # a checkpoint of the same model whose weights the fit starts from
 
 
 @dataclass(frozen=True)
@@ -145,6 +147,8 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
                          "(made before labels kept it): make them again with run_pick_labels")
     train, val = split_by_object(labels, options.validation, options.seed)
     model = MODELS[options.model]()
+    if options.start_from is not None:
+        model.load_state_dict(_weights_of(options.start_from, options.model))
     optimiser = torch.optim.Adam(model.parameters(), lr=options.learning_rate)
     trials = int(labels.attrs["spec"]["sim"]["label_trials"])
     rng = np.random.default_rng([options.seed, 56])
@@ -168,6 +172,15 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
                 break
     return PickTrainResult(folder / "best.pt", tuple(records), len(train), float(labels.success[train].mean()),
                            time.perf_counter() - start)
+
+
+def _weights_of(checkpoint: str, model: str) -> dict:
+    """The state dict of ``checkpoint`` (loaded weights-only), which must hold a ``model`` network."""
+    saved = torch.load(checkpoint, map_location="cpu", weights_only=True)
+    if saved.get("model") != model:
+        raise ValueError(f"{checkpoint}: holds a {saved.get('model')!r} network; a fit of {model!r} cannot start "
+                         "from it: name a checkpoint of the same model")
+    return saved["state_dict"]
 
 
 def learning_rate(options: PickTrainOptions, epoch: int) -> float:
