@@ -35,8 +35,9 @@ def fit(seed: int) -> dict:
     from onepiece_dist.store.pick_labels import read_pick_labels
 
     rows = read_pick_labels(ROOT / FOLDER / "pick_labels.zarr")
-    crop = torch.load(shipped_network(), map_location="cpu", weights_only=True)["crop"]
-    options = PickTrainOptions(**OPTIONS, seed=seed, start_from=str(shipped_network()))
+    network = shipped_network()
+    crop = torch.load(network, map_location="cpu", weights_only=True)["crop"]
+    options = PickTrainOptions(**OPTIONS, seed=seed, start_from=str(network))
     result = train_on_pick_labels(rows, OUT / "rerank" / f"rerank_s{seed}", crop, options)
     return {"seed": seed, "checkpoint": str(result.checkpoint.relative_to(ROOT)), "rows": len(rows),
             "fit_seconds": round(result.seconds, 1), "best_epoch": asdict(result.best),
