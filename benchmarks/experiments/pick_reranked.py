@@ -37,8 +37,7 @@ def _scored(which: str, objects: str, stored: dict) -> tuple[list[dict], list[st
 
     from onepiece_dist.objects import resolve_source
     from onepiece_dist.picks.object_picks import process_scorer
-    from onepiece_dist.picks.views import index_of, observe_view, simulated_object
-    from onepiece_dist.plan.planner import rank
+    from onepiece_dist.picks.views import observe_view, ranked_indices, simulated_object
     from onepiece_dist.plan.scorer import GraspScorer
 
     torch.set_num_threads(1)
@@ -50,12 +49,12 @@ def _scored(which: str, objects: str, stored: dict) -> tuple[list[dict], list[st
         world, loaded = simulated_object(spec, shipped.record, ref)
         for view in stored.get(ref.name, []):
             proposals = observe_view(spec, shipped.record, world, loaded.mesh, view["view"]).proposals
-            ranked = rank(proposals, shipped.score(proposals.crops, spec.plan.batch_size), shipped.record, spec.plan,
-                          keep=len(view["scores"]))
+            ranked, chosen = ranked_indices(proposals, shipped.score(proposals.crops, spec.plan.batch_size),
+                                            shipped.record, spec.plan, len(view["scores"]))
             if not np.allclose([g.score for g in ranked], view["scores"], atol=1e-5):
                 moved.append(f"{ref.name} view {view['view']}")
                 continue
-            crops = proposals.crops.subset(np.array([index_of(proposals.poses, g.pose) for g in ranked]))
+            crops = proposals.crops.subset(np.array(chosen))
             scores = {name: s.score(crops, spec.plan.batch_size) for name, s in scorers.items()}
             scores.update({name: np.mean([scores[n] for n in parts], axis=0) for name, parts in MEANS.items()})
             rows.append({"shares": np.mean(view["draws"], axis=1), "shipped": np.array(view["scores"]), **scores})

@@ -21,8 +21,7 @@ from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.networks import scored_world
 from onepiece_dist.picks.object_picks import process_scorer
 from onepiece_dist.picks.runner import run_each_in_process
-from onepiece_dist.picks.views import Executions, index_of, observe_view, simulated_object
-from onepiece_dist.plan.planner import rank
+from onepiece_dist.picks.views import Executions, observe_view, ranked_indices, simulated_object
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan.shipped import shipped_network
 from onepiece_dist.specs.plan import PickSpec
@@ -74,10 +73,8 @@ def _view(spec: PickSpec, scorers: list[GraspScorer], world, mesh, view: int, pe
     executions = Executions(spec, world, mesh, seen.resting, view)
     rows = []
     for candidate in (int(c) for c in chosen):
-        pose = proposals.poses[candidate]
-        outcomes = [executions.run("view", candidate, pose).success]
-        outcomes += [executions.again("view", candidate, pose, d).success for d in range(1, draws)]
-        rows.append((view, candidate, tuple(bool(o) for o in outcomes), tuple(float(s) for s in scores[candidate])))
+        outcomes = executions.picked("view", candidate, proposals.poses[candidate], draws)
+        rows.append((view, candidate, outcomes, tuple(float(s) for s in scores[candidate])))
     return rows
 
 
@@ -107,13 +104,10 @@ def ranked_draws(spec: PickSpec, ref: ObjectRef, index: int, top: int, draws: in
         proposals = seen.proposals
         if proposals is None:
             continue
-        ranked = rank(proposals, scorer.score(proposals.crops, spec.plan.batch_size), scorer.record, spec.plan,
-                      keep=top)
-        chosen = [index_of(proposals.poses, g.pose) for g in ranked]
+        ranked, chosen = ranked_indices(proposals, scorer.score(proposals.crops, spec.plan.batch_size),
+                                        scorer.record, spec.plan, top)
         executions = Executions(spec, world, loaded.mesh, seen.resting, view)
-        outcomes = [(executions.run("view", i, proposals.poses[i]).success,
-                     *(executions.again("view", i, proposals.poses[i], d).success for d in range(1, draws)))
-                    for i in chosen]
+        outcomes = [executions.picked("view", i, proposals.poses[i], draws) for i in chosen]
         views.append(RankedDraws(view, tuple(g.score for g in ranked), tuple(outcomes),
                                  tuple(i >= len(proposals.poses) - proposals.top_down for i in chosen)))
     return index, ref.name, tuple(views), ""
@@ -175,10 +169,6 @@ def _ceiling(spec: PickSpec, record, world, mesh, view: int, draws: CeilingDraws
     poses = seen.proposals.poses if seen.proposals is not None else np.zeros((0, 4, 4))
     poses = poses[: spec.oracle_candidates]
     executions = Executions(spec, world, mesh, seen.resting, view)
-
-    def picks(i: int, first: int, count: int) -> list[bool]:
-        return [executions.again("view", i, poses[i], d).success for d in range(first, first + count)]
-
     kept = [i for i in range(len(poses)) if executions.run("view", i, poses[i]).success]
     one_draw = bool(kept)
     for draw in range(1, draws.screen):
@@ -188,8 +178,9 @@ def _ceiling(spec: PickSpec, record, world, mesh, view: int, draws: CeilingDraws
     held = {i: _held_until_failure(executions, i, poses[i], draws.screen, draws.selection)
             for i in kept[: draws.shortlist]}
     best = max(held, key=lambda i: (held[i], -i))
-    return ViewCeiling(view, len(poses), one_draw, len(kept), float(np.mean(picks(kept[0], draws.screen, draws.judge))),
-                       float(np.mean(picks(best, draws.selection, draws.judge))))
+    first = executions.picked("view", kept[0], poses[kept[0]], draws.judge, draws.screen)
+    return ViewCeiling(view, len(poses), one_draw, len(kept), float(np.mean(first)),
+                       float(np.mean(executions.picked("view", best, poses[best], draws.judge, draws.selection))))
 
 
 def _held_until_failure(executions: Executions, index: int, pose: np.ndarray, first: int, end: int) -> int:

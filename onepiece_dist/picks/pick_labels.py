@@ -40,12 +40,19 @@ def crop_record(spec: PickLabelSpec) -> CropRecord:
 
 def label_object(spec: PickLabelSpec, ref: ObjectRef, index: int) -> LabelledObject:
     """Every view of one object labelled; a bad object becomes a rejected result, never an exception."""
+    return labelled_object(spec, ref, index, _label_view, spec.views)
+
+
+def labelled_object(spec: PickLabelSpec, ref: ObjectRef, index: int, view_rows, views: int) -> LabelledObject:
+    """One object's rows: ``view_rows(spec, world, mesh, view)`` (a view's columns, or None where it held no
+    candidate) for each of its first ``views`` views, joined; a bad object, or one whose views held none, is a
+    rejected result, never an exception."""
     start = time.perf_counter()
     try:
         world, loaded = labelling_world(spec, ref)
     except MeshRejected as err:
         return LabelledObject.rejected(index, ref.name, err.reason)
-    parts = [_label_view(spec, world, loaded.mesh, view) for view in range(spec.views)]
+    parts = [view_rows(spec, world, loaded.mesh, view) for view in range(views)]
     parts = [p for p in parts if p is not None]
     if not parts:
         return LabelledObject.rejected(index, ref.name, "no view held a candidate", time.perf_counter() - start)
@@ -71,17 +78,20 @@ def _label_view(spec: PickLabelSpec, world, mesh, view: int) -> dict[str, np.nda
         return None
     chosen = _chosen(spec, proposals, seen.rng)
     executions = Executions(spec, world, mesh, seen.resting, view)
-    outcomes = [executions.run("view", i, proposals.poses[i]) for i in chosen]
-    return {"points": proposals.crops.points[chosen].astype(np.float16),
-            "context": proposals.crops.context[chosen].astype(np.float32),
-            "space": proposals.crops.space[chosen].astype(np.float16),
-            "outline": outline(proposals.object_points, proposals.poses[chosen],
-                               spec.gripper.closing_depth).astype(np.float16),
+    return label_rows(spec, proposals, chosen, [executions.run("view", i, proposals.poses[i]) for i in chosen], view)
+
+
+def label_rows(spec: PickLabelSpec, proposals, chosen, outcomes: list, view: int) -> dict[str, np.ndarray]:
+    """The label columns of ``proposals``' candidates ``chosen`` of ``view``, each executed with ``outcomes``
+    (sim.pick.PickOutcome, in the same order)."""
+    crops, poses = proposals.crops, proposals.poses[chosen]
+    return {"points": crops.points[chosen].astype(np.float16), "context": crops.context[chosen].astype(np.float32),
+            "space": crops.space[chosen].astype(np.float16),
+            "outline": outline(proposals.object_points, poses, spec.gripper.closing_depth).astype(np.float16),
             "success": np.array([o.success for o in outcomes], bool),
             "held": np.array([o.held for o in outcomes], np.int8),
             "failure": np.array([FAILURE_CODES.index(o.failure) for o in outcomes], np.int8),
-            "view": np.full(len(chosen), view, np.int16),
-            "pose": proposals.poses[chosen].astype(np.float64)}
+            "view": np.full(len(chosen), view, np.int16), "pose": poses.astype(np.float64)}
 
 
 def outlines_again(spec: PickLabelSpec, ref: ObjectRef, view: np.ndarray, pose: np.ndarray,
@@ -173,5 +183,5 @@ def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None)
             ray.shutdown()
 
 
-__all__ = ["PickLabelWorker", "cached_scorer", "crop_record", "label_object", "labelling_world", "outlines_again",
-           "run_pick_labels"]
+__all__ = ["PickLabelWorker", "cached_scorer", "crop_record", "label_object", "label_rows", "labelled_object",
+           "labelling_world", "outlines_again", "run_pick_labels"]

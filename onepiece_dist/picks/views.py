@@ -14,7 +14,7 @@ import numpy as np
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.objects import load_object
 from onepiece_dist.plan.observation import MIN_POINTS, Observation
-from onepiece_dist.plan.planner import Proposals, propose
+from onepiece_dist.plan.planner import Proposals, propose, rank
 from onepiece_dist.plan.scorer import CropRecord
 from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickSpec
@@ -95,6 +95,18 @@ class Executions:
 
         rng = np.random.default_rng([*self.seed, POOLS[pool], int(index), AGAIN, int(draw)])
         return execute_pick(self.world, pose, self.resting, self.noise, rng)
+
+    def picked(self, pool: str, index: int, pose: np.ndarray, count: int, first: int = 0) -> tuple[bool, ...]:
+        """Whether candidate ``index`` of ``pool`` picked at each of its draws ``first`` .. ``first + count - 1``
+        (draw 0 is ``run``'s, kept; the others ``again``'s), in draw order."""
+        return tuple(bool((self.run(pool, index, pose) if draw == 0 else self.again(pool, index, pose, draw)).success)
+                     for draw in range(first, first + count))
+
+
+def ranked_indices(proposals: Proposals, scores: np.ndarray, record: CropRecord, plan, keep: int) -> tuple:
+    """The planner's ``keep`` best of ``proposals`` by ``scores`` (planner.rank) and each one's index among them."""
+    ranked = rank(proposals, scores, record, plan, keep=keep)
+    return ranked, [index_of(proposals.poses, g.pose) for g in ranked]
 
 
 def index_of(poses: np.ndarray, pose: np.ndarray) -> int:
