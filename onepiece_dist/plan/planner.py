@@ -98,6 +98,7 @@ class Proposals:
     seconds: dict[str, float] = field(default_factory=dict)
     viewpoint: np.ndarray | None = None
     top_down: int = 0  # the last this many proposals are top-down grasps (PlanSpec.top_down)
+    cloud: np.ndarray | None = None  # the observed cloud the crops were cut from, the table's points too
 
 
 @dataclass(frozen=True)
@@ -155,16 +156,43 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     sampled = time.perf_counter()
     added = top_down_grasps(objects, gravity(plane), gripper) if spec.top_down else np.zeros((0, 4, 4))
     poses = np.concatenate([found.poses, added]) if len(added) else found.poses
-    crops, keep = cut_crops(objects, poses, record, rng).holding(spec.min_points)
-    crops = with_context(crops, poses[keep], objects, gravity(plane), gripper.closing_depth)
-    if observation.viewpoint is not None and record.model in SPACE_MODELS:  # 10-20 ms a view: only when read
-        crops = with_space(crops, poses[keep], points, observation.viewpoint, gripper)
-    if record.model in OUTLINE_MODELS:
-        crops = with_outline(crops, poses[keep], objects, gripper.closing_depth)
+    seen = Seen(objects, points, plane, observation.viewpoint)
+    crops, keep = planned_crops(seen, poses, record, rng, spec.min_points)
     counts = _counts(found, int(np.sum(~keep)), len(added))
     return Proposals(poses[keep], crops, objects, plane, counts,
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint,
-                     int(np.sum(keep[len(found.poses):])))
+                     int(np.sum(keep[len(found.poses):])), points)
+
+
+@dataclass(frozen=True)
+class Seen:
+    """What a crop reads of one observation: the object's ``points`` (the cloud less the support plane), the whole
+    ``cloud`` (the table's points too), the support ``plane`` (or None) and the camera's ``viewpoint`` (or None)."""
+
+    objects: np.ndarray
+    cloud: np.ndarray
+    plane: SupportPlane | None
+    viewpoint: np.ndarray | None
+
+    @classmethod
+    def of(cls, proposals: Proposals) -> Seen:
+        cloud = proposals.object_points if proposals.cloud is None else proposals.cloud
+        return cls(proposals.object_points, cloud, proposals.plane, proposals.viewpoint)
+
+
+def planned_crops(seen: Seen, poses: np.ndarray, record: CropRecord, rng: np.random.Generator,
+                  min_points: int = 0) -> tuple[Crops, np.ndarray]:
+    """Each of ``poses``' crop as the planner cuts it (cut_crops) with every input ``record``'s network reads (the
+    grasp's context; the swept space where the camera's position is known; the outline), those with fewer than
+    ``min_points`` observed points inside dropped: (crops, (n,) bool which were kept)."""
+    gripper = record.gripper
+    crops, keep = cut_crops(seen.objects, poses, record, rng).holding(min_points)
+    crops = with_context(crops, poses[keep], seen.objects, gravity(seen.plane), gripper.closing_depth)
+    if seen.viewpoint is not None and record.model in SPACE_MODELS:  # 10-20 ms a view: only when read
+        crops = with_space(crops, poses[keep], seen.cloud, seen.viewpoint, gripper)
+    if record.model in OUTLINE_MODELS:
+        crops = with_outline(crops, poses[keep], seen.objects, gripper.closing_depth)
+    return crops, keep
 
 
 def gravity(plane: SupportPlane | None) -> np.ndarray:
