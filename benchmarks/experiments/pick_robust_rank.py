@@ -25,6 +25,7 @@ import numpy as np
 from benchmarks.experiments.pick_ceiling import _spec
 from benchmarks.experiments.pick_curve import HERE
 from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
+from benchmarks.experiments.pick_reranked import chosen
 
 RESULTS = HERE / "results" / "pick_robust_rank.json"
 SAMPLES = 16
@@ -87,11 +88,6 @@ def _set(task) -> tuple[str, list[dict], list[str]]:
             rules = _rules(np.array(view["scores"]), perturbed, _near_mean(proposals.poses, scores, chosen))
             rows.append({"shares": np.mean(view["draws"], axis=1), **rules})
     return which, rows, moved
-
-
-def chosen(rows: list[dict], name: str, k: int) -> float:
-    """The mean share of draws of the grasp ``name`` scores best among each view's first ``k`` (first on ties)."""
-    return float(np.mean([row["shares"][int(np.argmax(row[name][:k]))] for row in rows]))
 
 
 def main() -> None:

@@ -53,3 +53,53 @@ def robust_rank_section(result: dict) -> list[str]:
             "noise: " + " and ".join(f"{100 * g['mean_x1']:+.1f} points on the {w} set" for w, g in gains.items())
             + "; the neighbourhood's mean: " + " and ".join(f"{100 * g['near_mean']:+.1f}" for g in gains.values())
             + "."]
+
+
+ENDS = ("picked", "slipped_lifting", "dropped_shaking", "no_contact", "start_collision")
+END_WORDS = ("picked", "slipped when lifted", "dropped when shaken", "closed on nothing", "start in collision")
+
+
+def rank_features_section(result: dict) -> list[str]:
+    """How the network's best grasps fail, object by object, and whether a prior on what the view shows of them
+    orders them better (results/pick_rank_features.json)."""
+    sets, prior = result["sets"], result["prior"]
+    agree = ", ".join(f"{100 * s['draws_agree']:.1f}% on the {w} set" for w, s in sets.items())
+    lines = [f"## Why the network's best grasps fail: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}, {result['seconds']:.0f} s. The views of the ranked grasps "
+             "above seen again and the first 10 of each executed at the same 8 draws, now keeping how each ended "
+             f"(the draws agree with the stored ones: {agree}). How the draws of the network's first, second and "
+             "third grasp ended:", "",
+             "| set | rank | " + " | ".join(END_WORDS) + " |", "| --- | --- |" + " --- |" * len(ENDS)]
+    for which, s in sets.items():
+        for rank, ends in s["failures"].items():
+            lines.append(f"| {which} | {rank} | " + " | ".join(str(ends.get(e, 0)) for e in ENDS) + " |")
+    lines += ["", "By object: how the first grasp's 8 draws per view ended, and the mean share of draws of the "
+              "first, of the surest of the first 3 and of the first 10 (the surest: the most draws picked, an "
+              "oracle's choice):", "",
+              "| set | object | " + " | ".join(END_WORDS) + " | first | surest of 3 | surest of 10 |",
+              "| --- | --- |" + " --- |" * (len(ENDS) + 3)]
+    for which, s in sets.items():
+        for name, o in s["objects"].items():
+            lines.append(f"| {which} | {name} | " + " | ".join(str(o["first"].get(e, 0)) for e in ENDS) + " | "
+                         + " | ".join(_pct(v) for v in o["shares"]) + " |")
+    never = [f"{name} ({which})" for which, s in sets.items() for name, o in s["objects"].items()
+             if o["shares"][2] < 0.1]
+    lines += ["", "Objects on which even the surest of the first 10 picks under 10% of its draws (no ranking of "
+              "the network's grasps picks them): " + (", ".join(never) if never else "none") + ".", "",
+              *_prior_lines(result, prior)]
+    return lines
+
+
+def _prior_lines(result: dict, prior: dict) -> list[str]:
+    unseen, left_out = prior["unseen"]["3"], prior["household_left_out"]["3"]
+    gains = (unseen[1] - unseen[0], left_out[1] - left_out[0])
+    kept = all(g > 0 for g in gains)
+    weights = ", ".join(f"{name} {w:+.2f}" for name, w in zip(result["features"], prior["weights"], strict=False))
+    return [f"A prior on what the view shows of a grasp ({', '.join(f'`{f}`' for f in result['features'])}: "
+            "`picks.rank_features`), a logistic model of each grasp's share of draws on those and the network's "
+            "score, fitted on the household set's ranked grasps (standardized weights: "
+            f"{weights}): choosing the first 3's best by it picks {_pct(unseen[1])} of the unseen set's draws "
+            f"against the network's order's {_pct(unseen[0])} ({100 * gains[0]:+.1f} points), and on the household "
+            f"set, each object judged by a model fitted without it, {_pct(left_out[1])} against {_pct(left_out[0])} "
+            f"({100 * gains[1]:+.1f}): " + ("kept." if kept else "not kept: what the view shows of a grasp beyond "
+                                             "the network's score does not tell the surer apart.")]
