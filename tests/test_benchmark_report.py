@@ -105,7 +105,8 @@ def test_test_ids_follow_the_file_named_before():
 
 
 def test_a_stage_rate_is_met_only_against_the_fastest_protocol_timing_of_its_run():
-    verdict = load_report()._drift_verdict
+    from benchmarks.pages.end_to_end_section import _drift_verdict as verdict
+
     protocol = {"label_trials_per_s_per_core": 80.0,
                 "rounds": [{"label_trials_per_s_per_core": 60.0}, {"label_trials_per_s_per_core": 100.0}]}
     assert verdict(85.0, protocol, "label", 0.8) == "met"
@@ -115,7 +116,8 @@ def test_a_stage_rate_is_met_only_against_the_fastest_protocol_timing_of_its_run
 
 
 def test_the_physics_floor_is_given_at_one_copys_rates_and_at_two_at_once():
-    floor = load_report()._physics_floor
+    from benchmarks.pages.end_to_end_section import _physics_floor as floor
+
     run = {"objects": 10, "candidates_per_object": 100, "workers": 2,
            "protocol": {"extract_trials_per_s_per_core": 10.0, "label_trials_per_s_per_core": 5.0}}
     label = {"trials_one_object": 900, "trials_transfer": 100}
