@@ -68,3 +68,4 @@ def test_what_a_view_shows_of_its_top_down_grasps(box_view):
     assert np.allclose(features["object_height"], np.ptp(proposals.object_points[:, 2]), atol=1e-6)
     assert (features["observed_width"] <= scorer.gripper.max_opening + 1e-3).all()
     assert (features["object_span"] >= features["observed_width"] - 1e-3).all()
+    assert ((features["antipodal"] >= 0) & (features["antipodal"] <= 1)).all()  # a cosine: one view's contacts

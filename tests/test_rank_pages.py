@@ -32,7 +32,7 @@ def _row(name: str, shares: list[float], signal: list[float], scores: list[float
     """A view's ranked grasps: 8 draws each picking ``shares`` of the time; a feature ``signal`` beside ``scores``."""
     picked = [[d < round(8 * s) for d in range(8)] for s in shares]
     failures = [["" if p else "slipped_lifting" for p in each] for each in picked]
-    features = [[score, sig] + [0.0] * 8 for score, sig in zip(scores, signal, strict=True)]
+    features = [[score, sig] + [0.0] * 10 for score, sig in zip(scores, signal, strict=True)]
     return {"object": name, "view": 0, "stored": picked, "picked": picked, "failures": failures,
             "features": features}
 

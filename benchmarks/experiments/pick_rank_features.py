@@ -30,6 +30,7 @@ from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
 
 RESULTS = HERE / "results" / "pick_rank_features.json"
 ROWS = ROOT / "data" / "pick_rank_features"
+NOISE_SAMPLES = 16  # the score under pose noise (pick_robust_rank's mean_x1) joins the prior's features
 
 
 def _set(task) -> tuple[str, list[dict], list[str]]:
@@ -40,13 +41,14 @@ def _set(task) -> tuple[str, list[dict], list[str]]:
     from onepiece_dist.picks.object_picks import process_scorer
     from onepiece_dist.picks.rank_features import rank_features
     from onepiece_dist.picks.views import Executions, observe_view, ranked_indices, simulated_object
+    from onepiece_dist.plan.robust import perturbed_scores
 
     which, objects, stored, draws = task
     torch.set_num_threads(1)
     spec = _spec(which, objects)
     scorer = process_scorer(spec)
     rows, moved = [], []
-    for ref in resolve_source(objects):
+    for number, ref in enumerate(resolve_source(objects)):
         world, loaded = simulated_object(spec, scorer.record, ref)
         for view in stored.get(ref.name, []):
             seen = observe_view(spec, scorer.record, world, loaded.mesh, view["view"])
@@ -59,7 +61,11 @@ def _set(task) -> tuple[str, list[dict], list[str]]:
             executions = Executions(spec, world, loaded.mesh, seen.resting, view["view"])
             outcomes = [[(executions.run("view", i, proposals.poses[i]) if d == 0 else
                           executions.again("view", i, proposals.poses[i], d)) for d in range(draws)] for i in chosen]
-            features = rank_features(proposals, np.array(chosen), scores, scorer.gripper)
+            noise = np.random.default_rng([number, view["view"], 55])
+            under_noise = perturbed_scores(proposals, np.array(chosen), scorer, scorer.record, NOISE_SAMPLES,
+                                           spec.sim.pose_noise, spec.sim.rotation_noise, noise).mean(axis=1)
+            features = np.column_stack([rank_features(proposals, np.array(chosen), scores, scorer.gripper),
+                                        under_noise])
             rows.append({"object": ref.name, "view": view["view"], "stored": view["draws"],
                          "picked": [[o.success for o in each] for each in outcomes],
                          "failures": [[o.failure for o in each] for each in outcomes],
@@ -151,7 +157,7 @@ def summarize(found: list[tuple[str, list[dict], list[str]]], seconds: float) ->
     rows = {which: set_rows for which, set_rows, _ in found}
     return {"command": ".venv/bin/python -m benchmarks.experiments.pick_rank_features",
             "date": date.today().isoformat(), "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
-            "features": list(FEATURES), "seconds": round(seconds, 1), "sets": measured,
+            "features": [*FEATURES, "score_under_noise"], "seconds": round(seconds, 1), "sets": measured,
             "prior": prior_trial(rows["household"], rows["unseen"])}
 
 

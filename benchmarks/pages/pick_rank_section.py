@@ -49,7 +49,8 @@ def robust_rank_section(result: dict) -> list[str]:
             "crop cut again from the same view (`plan.robust.perturbed_scores`); each rule chooses its best of the "
             f"first 3 and of the first 10, judged by that grasp's share of its 8 draws{left}.", "",
             f"| rule | {header} |", "| --- |" + " --- | --- |" * len(sets), *rows, "",
-            f"Against the network's own order, of its first three: {verdict}. The mean under the protocol's own "
+            f"Against the network's own order, of its first three: {verdict} (as `jittered` found for the whole "
+            "pool, in Rankings tried below). The mean under the protocol's own "
             "noise: " + " and ".join(f"{100 * g['mean_x1']:+.1f} points on the {w} set" for w, g in gains.items())
             + "; the neighbourhood's mean: " + " and ".join(f"{100 * g['near_mean']:+.1f}" for g in gains.values())
             + "."]
@@ -96,8 +97,9 @@ def _prior_lines(result: dict, prior: dict) -> list[str]:
     kept = all(g > 0 for g in gains)
     weights = ", ".join(f"{name} {w:+.2f}" for name, w in zip(result["features"], prior["weights"], strict=False))
     return [f"A prior on what the view shows of a grasp ({', '.join(f'`{f}`' for f in result['features'])}: "
-            "`picks.rank_features`), a logistic model of each grasp's share of draws on those and the network's "
-            "score, fitted on the household set's ranked grasps (standardized weights: "
+            "`picks.rank_features`; `score_under_noise`: the mean score of 16 perturbed poses, above), a logistic "
+            "model of each grasp's share of draws on those and the network's score, fitted on the household "
+            "set's ranked grasps (standardized weights: "
             f"{weights}): choosing the first 3's best by it picks {_pct(unseen[1])} of the unseen set's draws "
             f"against the network's order's {_pct(unseen[0])} ({100 * gains[0]:+.1f} points), and on the household "
             f"set, each object judged by a model fitted without it, {_pct(left_out[1])} against {_pct(left_out[0])} "

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.cloud.grasps import antipodal_scores, cloud_normals
 from onepiece_dist.core.grasp_context import closing_centres, object_centre
 from onepiece_dist.plan.planner import Proposals, gravity
 from onepiece_dist.specs.job import GripperSpec
@@ -21,6 +22,7 @@ FEATURES = (
     "observed_width",  # m: the observed points' extent between the fingers
     "object_height",  # m: the observed object's height
     "object_span",  # m: the observed object's extent along the closing axis
+    "antipodal",  # the analytic antipodal score on the view's cloud (core.cloud.grasps.antipodal_scores)
 )
 
 
@@ -38,6 +40,7 @@ def rank_features(proposals: Proposals, indices: np.ndarray, scores: np.ndarray,
     level = offset - np.outer(offset @ down, down)
     spans = np.ptp(points @ closing.T, axis=0)
     inside = proposals.crops.points[indices].astype(np.float64)
+    normals = cloud_normals(points, points, proposals.viewpoint)
     return np.column_stack([
         scores[indices],
         indices >= len(proposals.poses) - proposals.top_down,
@@ -49,4 +52,5 @@ def rank_features(proposals: Proposals, indices: np.ndarray, scores: np.ndarray,
         np.ptp(inside[:, :, 1], axis=1),
         np.full(len(indices), height),
         spans,
+        antipodal_scores(points, normals, poses, gripper),
     ]).astype(np.float64)
