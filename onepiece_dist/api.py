@@ -40,8 +40,8 @@ from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, proto
 from onepiece_dist.job.status import STATUS_SUFFIX, EvaluationReport, JobStatus, status_path, without_status_lines
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
+from onepiece_dist.picks.shape_check import plan_checked as plan_grasps
 from onepiece_dist.plan.robot import RobotPlan
-from onepiece_dist.plan.robot import plan_from_files as plan_grasps
 from onepiece_dist.runtime.local import run_local
 from onepiece_dist.runtime.ray_env import connect, loopback_environment
 from onepiece_dist.runtime.registry import CLUSTER_INFO_MARK, RegistryClient

@@ -57,3 +57,28 @@ def test_failures_are_counted_by_rank_and_object_and_a_prior_is_judged_on_grasps
     useless = {w: [_row(f"{w}{i}", [0.5, 1.0, 0.0], [0.0, 0.0, 0.0], [0.9, 0.8, 0.7]) for i in range(4)]
                for w in rows}
     assert prior_trial(useless["household"], useless["unseen"])["unseen"]["3"] == [0.5, 0.5]
+
+
+def test_a_check_is_judged_by_the_benchmark_paired_over_objects_and_by_the_draws_of_what_it_chose():
+    from benchmarks.experiments.pick_shape_check import drawn_summary, paired_check
+    from benchmarks.pages.pick_rank_section import shape_check_section
+
+    rows = [{"object": "a", "shares": [0.5, 1.0, 0.0, 1.0, 0.0], "held": [0.0, 0.75, 0.75, 1.0, 0.0]},
+            {"object": "a", "shares": [1.0, 0.0, 0.0, 0.0, 0.0], "held": None},  # no plane: the network's order
+            {"object": "b", "shares": [0.25, 0.5, 1.0, 1.0, 1.0], "held": [0.5, 0.5, 0.5, 0.5, 0.5]}]  # ties
+    three = drawn_summary(rows, 3)
+    assert three["first"] == 0.5833333333333334 and three["checked"] == 0.75 and three["reordered"] == 1
+    assert three["surest"] == (1.0 + 1.0 + 1.0) / 3 and three["gain_by_object"] == 0.125  # a: +0.25, b: 0
+    assert drawn_summary(rows, 5)["checked"] == (1.0 + 1.0 + 0.25) / 3  # the fourth held at every draw
+    bench = {"0": {"views": 4, "per_object": {"a": 2, "b": 3}}, "3": {"views": 4, "per_object": {"a": 4, "b": 4}}}
+    result = {"command": "c", "date": "d", "machine": "m", "draws": 8, "checks": [0, 3],
+              "sets": {"household": {k: {**v, "first_attempt": 0.5, "interval": [0, 1], "within_3": 1.0,
+                                         "failures": {}, "seconds": 1.0} for k, v in bench.items()}},
+              "expected": {"3": {"household": three}}}
+    gain = paired_check(result, "3")
+    assert gain["sets"]["household"]["mean"] == 0.75 and gain["verdict"] == "kept"  # a +2 of 2 views, b +1
+    lines = shape_check_section(result)
+    assert "| 3 | household | 3 | 58.3% | 75.0% | +12.5 [" in "\n".join(lines)
+    assert lines[-1].startswith("Checking the first 3: household +75.0 points") and "**kept**" in lines[-1]
+    result["sets"]["household"]["3"]["per_object"] = {"a": 4, "b": 1}  # one object up, the other down
+    assert paired_check(result, "3")["verdict"] == "not kept"

@@ -105,3 +105,45 @@ def _prior_lines(result: dict, prior: dict) -> list[str]:
             f"set, each object judged by a model fitted without it, {_pct(left_out[1])} against {_pct(left_out[0])} "
             f"({100 * gains[1]:+.1f}): " + ("kept." if kept else "not kept: what the view shows of a grasp beyond "
                                              "the network's score does not tell the surer apart.")]
+
+
+def shape_check_section(result: dict) -> list[str]:
+    """The network's first grasps checked on the shape the view implies (results/pick_shape_check.json)."""
+    from benchmarks.experiments.pick_shape_check import paired_check
+
+    sets, checks = result["sets"], [str(k) for k in result["checks"]]
+    rows = [f"| {which} | {k or 'none'} | {_pct(m[k]['first_attempt'])} [{_pct(m[k]['interval'][0])}, "
+            f"{_pct(m[k]['interval'][1])}] | {_pct(m[k]['within_3'])} | {m[k]['views']} | "
+            + ", ".join(f"{n} {reason.replace('_', ' ')}" for reason, n in sorted(m[k]["failures"].items()))
+            + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in checks]
+    gains = [paired_check(result, k) for k in checks[1:]]
+    lines = [f"## The first grasps checked on the shape the view implies: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}. What the view shows does not tell the surer of the network's "
+             "first grasps apart as numbers (above); executed, it might. The planner's option `check_first` "
+             "(`onepiece grasp --check N`; `picks.shape_check`) executes each of the first N ranked grasps "
+             f"{result['draws']} times by the pick protocol (its pose and friction noise) on the shape one view "
+             "implies, the observed points and their shadows on the table as one convex hull at the protocol's "
+             "density, in a pick world of its own, and reorders them by how often they held (the network's order on "
+             "ties). The object itself is never seen by the check. The shipped network alone, the benchmark's views, "
+             "judged by the benchmark's own executions:", "",
+             "| set | checked | first attempt [95% CI over objects] | within 3 | views | first attempts lost | "
+             "seconds |", "| --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
+    drawn = result.get("expected", {})
+    if drawn:
+        lines += ["One draw per view is a noisy judge of a reordering; the ranked-draws views (above: the network's "
+                  "first 10, each executed at 8 draws) judge it by the share of its 8 draws the grasp the check "
+                  "puts first picks, the check run as the benchmark runs it:", "",
+                  "| checked | set | views | the network's first | the check's first | gain over objects [95% CI] | "
+                  "the surest of those (an oracle) | reordered | the check held the network's first |",
+                  "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+                  *(f"| {k} | {w} | {d['views']} | {_pct(d['first'])} | {_pct(d['checked'])} | "
+                    f"{100 * d['gain_by_object']:+.1f} [{100 * d['gain_interval'][0]:+.1f}, "
+                    f"{100 * d['gain_interval'][1]:+.1f}] | {_pct(d['surest'])} | {d['reordered']} views | "
+                    f"{_pct(d['check_held_first'])} of its draws |" for k, by_set in drawn.items()
+                    for w, d in by_set.items()), ""]
+    for gain in gains:
+        lines.append(f"Checking the first {gain['checked']}: " + "; ".join(
+            f"{name} {100 * g['mean']:+.1f} points [{100 * g['interval'][0]:+.1f}, {100 * g['interval'][1]:+.1f}]"
+            for name, g in gain["sets"].items()) + f" (paired over objects): **{gain['verdict']}** (kept where the "
+            "interval over all objects lies above zero).")
+    return lines

@@ -11,7 +11,7 @@ import numpy as np
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section, reranked_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
-from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section
+from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
 from benchmarks.pages.pick_trials_section import (
     both_section,
     household_labels_section,
@@ -192,9 +192,9 @@ def _dense_line(plan: dict) -> str:
 
 # results rendered after the benchmark's, in this order
 SECTIONS = ("pick_ceiling", "pick_ranked_draws", "pick_reranked", "pick_robust_rank", "pick_rank_features",
-            "pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down",
-            "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels", "pick_outline",
-            "pick_top_draws", "pick_rankings", "pick_pool_size")
+            "pick_shape_check", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels",
+            "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule", "pick_household_labels",
+            "pick_outline", "pick_top_draws", "pick_rankings", "pick_pool_size")
 
 
 def render_picks_page() -> str:
@@ -218,6 +218,7 @@ def render_picks_page() -> str:
     render = {"pick_ceiling": lambda r: _ceiling(r, picks), "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_robust_rank": robust_rank_section, "pick_rank_features": rank_features_section,
+              "pick_shape_check": shape_check_section,
               "pick_unseen": lambda r: unseen_section(r, picks),
               "pick_curve": lambda r: curve_section(r, picks),
               "pick_space": space_section, "pick_on_policy": on_policy_section,

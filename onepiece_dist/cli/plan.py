@@ -73,6 +73,9 @@ def grasp(
     top_down: Annotated[bool, typer.Option("--top-down/--no-top-down", help="Also propose the three top-down "
                                            "grasps across the cloud's narrow horizontal axis (docs/planning.md).")
                         ] = True,
+    check: Annotated[int, typer.Option(help="Check the first N grasps in simulation on the shape the view implies "
+                                       "(its points and their shadows on the table) and reorder them by how often "
+                                       "they held (docs/picks.md); 0: the network's order.")] = 0,
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
     device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
@@ -86,7 +89,7 @@ def grasp(
     view = _floats(viewpoint, 3, "--viewpoint")
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
-                        support_plane="none" if no_plane else "auto", top_down=top_down)
+                        support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check)
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, _gripper(gripper))
     except (OnePieceError, ValueError) as error:

@@ -23,6 +23,7 @@ from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import sample_candidates
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef
+from onepiece_dist.picks.shape_check import checked
 from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view, simulated_object
 from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
@@ -165,7 +166,13 @@ def _choice(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
         scores = antipodal_scores(proposals.object_points, normals, proposals.poses, scorer.gripper)
     else:
         scores = scorer.score(proposals.crops, plan.batch_size)
-    ranked = rank(proposals, scores, scorer.record, plan, keep=spec.attempts)
+    checking = method == "network" and pool == "view" and plan.check_first > 0
+    ranked = rank(proposals, scores, scorer.record, plan, keep=max(spec.attempts, plan.check_first * checking))
+    if checking:
+        first = checked(ranked[: plan.check_first], proposals.object_points, proposals.plane, scorer.gripper,
+                        spec.sim, plan.check_draws, np.random.default_rng(seen.check_seed))
+        ranked = first + ranked[plan.check_first:]
+    ranked = ranked[: spec.attempts]
     poses = np.array([g.pose for g in ranked]).reshape(-1, 4, 4)
     return Choice(pool, tuple(index_of(proposals.poses, p) for p in poses), poses, ranked)
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from onepiece_dist.core.sampling import object_rng
 from onepiece_dist.objects import load_object
+from onepiece_dist.picks.shape_check import CHECK_STREAM
 from onepiece_dist.plan.observation import MIN_POINTS, Observation
 from onepiece_dist.plan.planner import Proposals, propose, rank
 from onepiece_dist.plan.scorer import CropRecord
@@ -24,11 +25,17 @@ POOLS = {"view": 0, "mesh": 1, "top_down": 2}
 AGAIN = 5858  # the stream of a candidate's fresh executions (Executions.again)
 
 
+def view_seed(spec: PickSpec, mesh, view: int) -> tuple[int, int, int]:
+    """The seed every generator of one view of ``mesh`` starts from: the object's content, the spec's seed, the view."""
+    return int(mesh.content_id[:16], 16), spec.seed, view
+
+
 @dataclass(frozen=True)
 class PickView:
     """A settled object seen once: ``resting`` (4, 4) its mesh-frame world pose, the camera's position, distance
     (m) and elevation (degrees), the observed ``cloud`` (m, 3) and the planner's ``proposals`` (None when the
-    camera saw fewer than MIN_POINTS points); ``rng`` continues the view's seeded stream."""
+    camera saw fewer than MIN_POINTS points); ``rng`` continues the view's seeded stream; ``check_seed`` seeds
+    the checks of its grasps on the shape it implies (picks.shape_check), apart from every other stream."""
 
     view: int
     resting: np.ndarray
@@ -38,6 +45,7 @@ class PickView:
     cloud: np.ndarray
     proposals: Proposals | None
     rng: np.random.Generator
+    check_seed: tuple[int, ...] = ()
 
 
 def simulated_object(spec: PickSpec, record: CropRecord, ref):
@@ -64,7 +72,8 @@ def observe_view(spec: PickSpec, record: CropRecord, world, mesh, view: int) -> 
     proposals = None
     if len(cloud) >= MIN_POINTS:
         proposals = propose(Observation(cloud, eye, f"{mesh.name} view {view}"), record, spec.plan, rng)
-    return PickView(view, resting, eye, drawn.distance, drawn.elevation_deg, cloud, proposals, rng)
+    return PickView(view, resting, eye, drawn.distance, drawn.elevation_deg, cloud, proposals, rng,
+                    (*view_seed(spec, mesh, view), CHECK_STREAM))
 
 
 class Executions:
@@ -76,7 +85,7 @@ class Executions:
         from onepiece_dist.sim.trials import LabelNoise
 
         self.world, self.resting, self.noise = world, resting, LabelNoise.from_spec(spec.sim)
-        self.seed = [int(mesh.content_id[:16], 16), spec.seed, view]
+        self.seed = list(view_seed(spec, mesh, view))
         self.done: dict[tuple[str, int], object] = {}
 
     def run(self, pool: str, index: int, pose: np.ndarray):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,7 +26,7 @@ from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
 from onepiece_dist.core.hand_frames import to_panda
-from onepiece_dist.errors import CloudRejected
+from onepiece_dist.errors import CloudRejected, SpecError
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
 from onepiece_dist.specs.job import GripperSpec
@@ -259,9 +260,19 @@ def _refuse_plane_alone(observation: Observation, proposals: Proposals) -> None:
                         f"{len(proposals.object_points)} off it: is the object in view, or already taken?")
 
 
-def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None) -> GraspPlan:
-    """The ranked grasps on ``observation`` by ``scorer``'s network (seeded by ``spec.seed``; default PlanSpec)."""
+# a check of the first ranked grasps (their proposals, the gripper) that returns them reordered: the planner holds
+# no simulator, so one is handed in (picks.shape_check.view_check) where the spec asks for it (check_first)
+GraspCheck = Callable[[tuple[PlannedGrasp, ...], Proposals, GripperSpec], tuple[PlannedGrasp, ...]]
+
+
+def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None,
+                check: GraspCheck | None = None) -> GraspPlan:
+    """The ranked grasps on ``observation`` by ``scorer``'s network (seeded by ``spec.seed``; default PlanSpec),
+    the first ``spec.check_first`` reordered by ``check``."""
     spec = spec or PlanSpec()
+    if spec.check_first and check is None:
+        raise SpecError(f"check_first={spec.check_first} checks grasps in simulation, which this call has none "
+                        "of: plan through onepiece_dist.api.plan_grasps or `onepiece grasp --check`")
     observation, notes = with_viewpoint(observation, spec)
     rng = np.random.default_rng([spec.seed, 49])
     proposals = propose(observation, scorer.record, spec, rng)
@@ -269,8 +280,14 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     clock = time.perf_counter()
     scores = scorer.score(proposals.crops, spec.batch_size)
     scored = time.perf_counter()
-    grasps = rank(proposals, scores, scorer.record, spec)
-    seconds = {**proposals.seconds, "score": scored - clock, "rank": time.perf_counter() - scored}
+    grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
+    ranked = time.perf_counter()
+    if spec.check_first:
+        grasps = check(grasps[: spec.check_first], proposals, scorer.gripper) + grasps[spec.check_first:]
+    grasps = grasps[: spec.top_k]
+    seconds = {**proposals.seconds, "score": scored - clock, "rank": ranked - scored}
+    if spec.check_first:
+        seconds["check"] = time.perf_counter() - ranked
     seconds["total"] = sum(seconds.values())
     counts = dataclasses.replace(proposals.counts, scored=len(scores))
     return GraspPlan(observation.source, grasps, counts, proposals.plane, seconds, notes)

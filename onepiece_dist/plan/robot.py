@@ -20,7 +20,7 @@ from onepiece_dist.plan.camera_files import (
     with_known_up,
 )
 from onepiece_dist.plan.observation import Observation, read_cloud
-from onepiece_dist.plan.planner import GraspPlan, plan_grasps
+from onepiece_dist.plan.planner import GraspCheck, GraspPlan, plan_grasps
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.plan.shipped import shipped_network
 from onepiece_dist.specs.job import GripperSpec
@@ -60,13 +60,15 @@ def read_observation(cloud: str | Path, intrinsics: str | None = None, depth_sca
 def plan_from_files(cloud: str | Path, checkpoint: str | Path | None = None, spec: PlanSpec | None = None,
                     intrinsics: str | None = None, depth_scale: float | None = None,
                     viewpoint: tuple[float, float, float] | None = None, camera_pose: str | Path | None = None,
-                    workspace: str | None = None, gripper: GripperSpec | None = None) -> RobotPlan:
+                    workspace: str | None = None, gripper: GripperSpec | None = None,
+                    check: GraspCheck | None = None) -> RobotPlan:
     """Grasps on a cloud file or depth image (``intrinsics``: fx,fy,cx,cy or a JSON file), by ``checkpoint``'s
-    network (None: the shipped one), in the robot's base frame when ``camera_pose`` (a JSON file) is given."""
+    network (None: the shipped one), in the robot's base frame when ``camera_pose`` (a JSON file) is given; the
+    first ``spec.check_first`` reordered by ``check`` (planner.plan_grasps)."""
     spec = spec or PlanSpec()
     observation, pose = read_observation(cloud, intrinsics, depth_scale, viewpoint, camera_pose, workspace)
     scorer = GraspScorer(checkpoint or shipped_network(), gripper, spec.device)
-    plan = plan_grasps(observation, scorer, spec)
+    plan = plan_grasps(observation, scorer, spec, check)
     if pose is not None:
         plan, observation = plan.transformed(pose), in_frame(observation, pose)
     frame = "the robot's base frame" if pose is not None else "the cloud's frame"

@@ -1,0 +1,87 @@
+"""The network's first grasps checked before the robot moves (issue 55: its scores cannot tell the surer of its
+best grasps apart). Each is executed by the pick protocol, ``draws`` times with the protocol's pose and friction
+noise, on the shape the view implies (core.cloud.completion: the observed points and their shadows on the table as
+one convex hull, at the protocol's density) in a pick world of its own, and the grasps are reordered by how often
+they held there, the network's order on ties. The check knows only the view: the object itself is never seen."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from onepiece_dist.core.cloud.completion import completed_shape
+from onepiece_dist.core.cloud.grasps import SupportPlane
+from onepiece_dist.core.frames import compose_poses
+from onepiece_dist.plan.planner import GraspCheck, PlannedGrasp, Proposals
+from onepiece_dist.plan.robot import RobotPlan, plan_from_files
+from onepiece_dist.specs.job import GripperSpec, SimSpec
+from onepiece_dist.specs.plan import PICK_SIM, PlanSpec
+
+CHECK_STREAM = 5959  # the stream of every check's generators, apart from every other stream of a view
+_WORLDS: dict = {}  # this process's check worlds, one per gripper, apart from the pick worlds that judge
+
+
+def check_world(gripper: GripperSpec):
+    """This process's pick world for checks with ``gripper`` (created on first use, then reused)."""
+    from onepiece_dist.sim.pick import PickWorld
+
+    if gripper not in _WORLDS:
+        _WORLDS[gripper] = PickWorld(gripper)
+    return _WORLDS[gripper]
+
+
+def held_shares(object_points: np.ndarray, plane: SupportPlane | None, poses: np.ndarray, gripper: GripperSpec,
+                sim: SimSpec, draws: int, rng: np.random.Generator) -> np.ndarray | None:
+    """(n,) the share of ``draws`` executions of each of ``poses`` (n, 4, 4; the cloud's frame) that held on the
+    completed shape of ``object_points`` standing on ``plane``; None where there is no plane or no shape."""
+    from onepiece_dist.sim.pick import execute_pick
+    from onepiece_dist.sim.trials import LabelNoise
+
+    shape = None if plane is None else completed_shape(object_points, plane)
+    if shape is None:
+        return None
+    world = check_world(gripper)
+    world.load_object([shape.vertices], shape.volume, sim.density)
+    noise, rest = LabelNoise.from_spec(sim), np.eye(4)
+    held = [[execute_pick(world, compose_poses(shape.to_plane, pose), rest, noise, rng).success
+             for _ in range(draws)] for pose in poses]
+    return np.mean(np.array(held, dtype=np.float64).reshape(len(poses), draws), axis=1)
+
+
+def checked(ranked: tuple[PlannedGrasp, ...], object_points: np.ndarray, plane: SupportPlane | None,
+            gripper: GripperSpec, sim: SimSpec, draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
+    """``ranked`` reordered by how often each held on the view's completed shape (the network's order on ties),
+    ranks numbered again; unchanged where there is no shape to check on."""
+    if len(ranked) < 2:
+        return ranked
+    shares = held_shares(object_points, plane, np.array([g.pose for g in ranked]), gripper, sim, draws, rng)
+    if shares is None:
+        return ranked
+    order = np.argsort(-shares, kind="stable")
+    return tuple(dataclasses.replace(ranked[i], rank=k + 1) for k, i in enumerate(order))
+
+
+def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM) -> GraspCheck:
+    """The planner's check (planner.GraspCheck) as ``spec`` asks for it: ``spec.check_draws`` executions of each
+    grasp by the ``sim`` protocol (default: the pick benchmark's), seeded by ``spec.seed``."""
+    rng = np.random.default_rng([spec.seed, CHECK_STREAM])
+
+    def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec
+              ) -> tuple[PlannedGrasp, ...]:
+        return checked(ranked, proposals.object_points, proposals.plane, gripper, sim, spec.check_draws, rng)
+
+    return check
+
+
+def plan_checked(cloud: str | Path, checkpoint: str | Path | None = None, spec: PlanSpec | None = None,
+                 intrinsics: str | None = None, depth_scale: float | None = None,
+                 viewpoint: tuple[float, float, float] | None = None, camera_pose: str | Path | None = None,
+                 workspace: str | None = None, gripper: GripperSpec | None = None) -> RobotPlan:
+    """plan.robot.plan_from_files with the first ``spec.check_first`` grasps checked on the shape the view implies
+    (the API's and `onepiece grasp`'s planning: onepiece_dist.api.plan_grasps)."""
+    spec = spec or PlanSpec()
+    check = view_check(spec) if spec.check_first else None
+    return plan_from_files(cloud, checkpoint, spec, intrinsics, depth_scale, viewpoint, camera_pose, workspace,
+                           gripper, check)

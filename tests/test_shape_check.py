@@ -1,0 +1,112 @@
+"""The network's first grasps checked on the shape one view implies (issue 55): the completed shape is the observed
+points and their shadows on the table, in the plane's frame; a grasp that holds a box there is put before one
+that closes on air; without a plane the network's order stands."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from onepiece_dist.core.cloud.completion import completed_shape, plane_frame
+from onepiece_dist.core.cloud.grasps import SupportPlane
+from onepiece_dist.core.cloud.top_down import top_down_grasps
+from onepiece_dist.core.frames import axis_turns
+from onepiece_dist.specs.plan import PICK_SIM
+
+FLOOR = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(0, bool))
+
+
+def seen_box(size=(0.04, 0.06, 0.08), step=0.004) -> np.ndarray:
+    """What a camera above one side sees of a box standing on z = 0: its top face and its -y face."""
+    (a, b, c), grid = size, np.arange(0, 1 + 1e-9, step / max(size))
+    u, v = np.meshgrid(grid, grid)
+    top = np.column_stack([(u.ravel() - 0.5) * a, (v.ravel() - 0.5) * b, np.full(u.size, c)])
+    side = np.column_stack([(u.ravel() - 0.5) * a, np.full(u.size, -b / 2), v.ravel() * c])
+    return np.vstack([top, side])
+
+
+def test_the_completed_shape_is_the_seen_points_down_to_the_plane_in_the_planes_frame():
+    points = seen_box()
+    shape = completed_shape(points, FLOOR)
+    assert shape.volume == pytest.approx(0.04 * 0.06 * 0.08, rel=1e-6)
+    assert shape.vertices[:, 2].min() == pytest.approx(0.0, abs=1e-12)
+    turn = np.eye(4)
+    turn[:3, :3] = axis_turns(np.array([[1.0, 0.0, 0.0]]), np.array([0.4]))[0]
+    turn[:3, 3] = [0.1, -0.2, 0.3]
+    tilted = points @ turn[:3, :3].T + turn[:3, 3]
+    normal = turn[:3, :3] @ FLOOR.normal
+    plane = SupportPlane(normal, -float(normal @ turn[:3, 3]), np.zeros(0, bool))
+    again = completed_shape(tilted, plane)
+    assert again.volume == pytest.approx(shape.volume, rel=1e-9)  # the same shape, wherever the camera's frame is
+    back = tilted @ again.to_plane[:3, :3].T + again.to_plane[:3, 3]
+    assert np.allclose(np.sort(back[:, 2]), np.sort(points[:, 2]), atol=1e-9)
+    assert np.allclose(plane_frame(FLOOR)[:3, 3], 0)
+    assert completed_shape(points[:3], FLOOR) is None and completed_shape(points, plane) is None  # below it
+
+
+@pytest.mark.sim
+def test_a_grasp_that_holds_the_completed_box_goes_before_one_that_closes_on_air():
+    from onepiece_dist.picks.shape_check import checked, held_shares
+    from onepiece_dist.plan.planner import PlannedGrasp
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import shipped_network
+
+    gripper = GraspScorer(shipped_network(), device="cpu").gripper  # the Franka hand the shipped network plans for
+    points = seen_box()
+    good = top_down_grasps(points, np.array([0.0, 0.0, -1.0]), gripper)[0]
+    air = good.copy()
+    air[:3, 3] += [0.15, 0.0, 0.0]
+    shares = held_shares(points, FLOOR, np.stack([air, good]), gripper, PICK_SIM, 4, np.random.default_rng(0))
+    assert shares[0] == 0.0 and shares[1] >= 0.5  # each draw with the protocol's pose and friction noise
+    again = held_shares(points, FLOOR, np.stack([air, good]), gripper, PICK_SIM, 4, np.random.default_rng(0))
+    assert np.array_equal(shares, again)
+    ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, score, 100)
+                   for k, (pose, score) in enumerate([(air, 0.9), (good, 0.8)]))
+    reordered = checked(ranked, points, FLOOR, gripper, PICK_SIM, 4, np.random.default_rng(0))
+    assert [g.score for g in reordered] == [0.8, 0.9] and [g.rank for g in reordered] == [1, 2]
+    assert checked(ranked, points, None, gripper, PICK_SIM, 2, np.random.default_rng(0)) == ranked  # no plane
+
+
+@pytest.mark.sim
+def test_the_api_checks_the_first_grasps_and_the_bare_planner_refuses_to_pretend_it_did(tmp_path):
+    from onepiece_dist.api import plan_grasps
+    from onepiece_dist.errors import SpecError
+    from onepiece_dist.plan import GraspScorer, Observation
+    from onepiece_dist.plan.planner import plan_grasps as bare_plan
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PlanSpec
+    from tests.test_plan import _floor
+
+    cloud = tmp_path / "box.npy"
+    np.save(cloud, np.vstack([seen_box(), _floor(0.0)]))
+    eye = (0.3, -0.3, 0.4)
+    plain = plan_grasps(cloud, spec=PlanSpec(top_k=6), viewpoint=eye).plan
+    checked = plan_grasps(cloud, spec=PlanSpec(top_k=6, check_first=3, check_draws=2), viewpoint=eye).plan
+    key = [g.pose.tobytes() for g in plain.grasps]
+    assert sorted(g.pose.tobytes() for g in checked.grasps[:3]) == sorted(key[:3])  # the first three, reordered
+    assert [g.pose.tobytes() for g in checked.grasps[3:]] == key[3:]
+    assert [g.rank for g in checked.grasps] == list(range(1, 7))
+    assert "check" in checked.seconds and "check" not in plain.seconds
+    scorer = GraspScorer(shipped_network(), device="cpu")
+    with pytest.raises(SpecError, match="check_first=3 checks grasps in simulation"):
+        bare_plan(Observation(np.load(cloud), np.array(eye), "box"), scorer, PlanSpec(check_first=3))
+
+
+@pytest.mark.sim
+def test_onepiece_grasp_check_writes_the_checks_seconds(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from onepiece_dist.cli.main import app
+    from tests.test_plan import _floor
+
+    cloud = tmp_path / "box.npy"
+    np.save(cloud, np.vstack([seen_box(), _floor(0.0)]))
+    ran = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--top", "4", "--check", "2",
+                                   "--out", str(tmp_path / "checked"), "--json"])
+    assert ran.exit_code == 0, ran.output
+    plan = json.loads((tmp_path / "checked" / "grasps.json").read_text())
+    assert "check" in plan["seconds"] and len(plan["grasps"]) == 4
+    bad = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--check", "-1"])
+    assert bad.exit_code != 0 and "check_first" in bad.output
