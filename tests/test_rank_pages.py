@@ -79,6 +79,7 @@ def test_a_check_is_judged_by_the_benchmark_paired_over_objects_and_by_the_draws
     assert gain["sets"]["household"]["mean"] == 0.75 and gain["verdict"] == "kept"  # a +2 of 2 views, b +1
     lines = shape_check_section(result)
     assert "| 3 | household | 3 | 58.3% | 75.0% | +12.5 [" in "\n".join(lines)
-    assert lines[-1].startswith("Checking the first 3: household +75.0 points") and "**kept**" in lines[-1]
+    assert lines[-1].startswith("Checking the first 3, by the benchmark's one draw: household +75.0 points")
+    assert "**kept**" in lines[-1]
     result["sets"]["household"]["3"]["per_object"] = {"a": 4, "b": 1}  # one object up, the other down
     assert paired_check(result, "3")["verdict"] == "not kept"
