@@ -83,3 +83,5 @@ def test_a_check_is_judged_by_the_benchmark_paired_over_objects_and_by_the_draws
     assert "**kept**" in lines[-1]
     result["sets"]["household"]["3"]["per_object"] = {"a": 4, "b": 1}  # one object up, the other down
     assert paired_check(result, "3")["verdict"] == "not kept"
+    result["expected_density"] = {"2": {"3": {"household": three}}}
+    assert "| 2x | 3 | household | 75.0% | +12.5 [" in "\n".join(shape_check_section(result))

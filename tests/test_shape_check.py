@@ -30,6 +30,8 @@ def test_the_completed_shape_is_the_seen_points_down_to_the_plane_in_the_planes_
     shape = completed_shape(points, FLOOR)
     assert shape.volume == pytest.approx(0.04 * 0.06 * 0.08, rel=1e-6)
     assert shape.vertices[:, 2].min() == pytest.approx(0.0, abs=1e-12)
+    footprint = shape.vertices[:, :2]
+    assert np.allclose(footprint.min(axis=0) + footprint.max(axis=0), 0, atol=1e-12)  # over a world's table
     turn = np.eye(4)
     turn[:3, :3] = axis_turns(np.array([[1.0, 0.0, 0.0]]), np.array([0.4]))[0]
     turn[:3, 3] = [0.1, -0.2, 0.3]
@@ -60,6 +62,10 @@ def test_a_grasp_that_holds_the_completed_box_goes_before_one_that_closes_on_air
     assert shares[0] == 0.0 and shares[1] >= 0.5  # each draw with the protocol's pose and friction noise
     again = held_shares(points, FLOOR, np.stack([air, good]), gripper, PICK_SIM, 4, np.random.default_rng(0))
     assert np.array_equal(shares, again)
+    far = np.array([0.8, 0.6, 0.0])  # a robot's base frame: the object beyond the check world's table
+    moved = np.stack([air, good])
+    moved[:, :3, 3] += far
+    assert held_shares(points + far, FLOOR, moved, gripper, PICK_SIM, 4, np.random.default_rng(0))[1] >= 0.5
     ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, score, 100)
                    for k, (pose, score) in enumerate([(air, 0.9), (good, 0.8)]))
     reordered = checked(ranked, points, FLOOR, gripper, PICK_SIM, 4, np.random.default_rng(0))

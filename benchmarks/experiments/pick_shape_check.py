@@ -7,6 +7,7 @@ Judged by the benchmark's own executions (draw 0: the draw every chooser meets);
 objects with a bootstrap interval.
 
     .venv/bin/python -m benchmarks.experiments.pick_shape_check [--checks 0,3,5]
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --density-scales 0.5,2   # the check's mass guessed
 
 Results: benchmarks/results/pick_shape_check.json, rendered into docs/picks.md.
 """
@@ -66,9 +67,10 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     from onepiece_dist.picks.shape_check import held_shares
     from onepiece_dist.picks.views import observe_view, ranked_indices, simulated_object
 
-    which, objects, stored = task
+    which, objects, stored, density_scale = task
     torch.set_num_threads(1)
     spec = _spec(objects, 3)
+    check_sim = spec.sim.model_copy(update={"density": spec.sim.density * density_scale})  # the check's guess
     scorer = process_scorer(spec)
     rows = []
     for ref in resolve_source(objects):
@@ -81,7 +83,7 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
             if not np.allclose([g.score for g in ranked], view["scores"][:LOOKED_AT], atol=1e-5):
                 continue
             held = held_shares(proposals.object_points, proposals.plane, proposals.poses[chosen], scorer.gripper,
-                               spec.sim, DRAWS, np.random.default_rng(seen.check_seed))
+                               check_sim, DRAWS, np.random.default_rng(seen.check_seed))
             rows.append({"object": ref.name, "shares": np.mean(view["draws"], axis=1)[:LOOKED_AT].tolist(),
                          "held": None if held is None else held.tolist()})
     return which, rows
@@ -109,15 +111,16 @@ def drawn_summary(rows: list[dict], k: int) -> dict:
             "gain_by_object": float(per_object.mean()), "gain_interval": list(bootstrap_interval(per_object))}
 
 
-def expected(sets: dict[str, str]) -> dict:
-    """Per number checked (3, LOOKED_AT) and set: drawn_summary over the ranked-draws views."""
+def expected(sets: dict[str, str], density_scale: float = 1.0) -> dict:
+    """Per number checked (3, LOOKED_AT) and set: drawn_summary over the ranked-draws views; the check's shape at
+    ``density_scale`` times the protocol's density (a robot does not know its object's mass)."""
     from multiprocessing import get_context
 
     from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
 
     ranked = json.loads(RANKED.read_text())
     with get_context("spawn").Pool(2) as pool:
-        found = pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"]) for w, o in sets.items()])
+        found = pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale) for w, o in sets.items()])
     rows = {**dict(found), "all objects": [row for _, set_rows in found for row in set_rows]}
     return {str(k): {which: drawn_summary(set_rows, k) for which, set_rows in rows.items()} for k in (3, LOOKED_AT)}
 
@@ -126,9 +129,17 @@ def main() -> None:
     from benchmarks.experiments.household import UNSEEN, household_objects
 
     parser = argparse.ArgumentParser()
-    parser.add_argument("--checks", default="0,3")
-    checks = [int(k) for k in parser.parse_args().checks.split(",")]
+    parser.add_argument("--checks", default="0,3,5")
+    parser.add_argument("--density-scales", default="", help="only the ranked-draws measure, the check's shape at "
+                        "these multiples of the protocol's density, kept beside the committed results")
+    args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
+    if args.density_scales:
+        result = json.loads(RESULTS.read_text())
+        result["expected_density"] = {scale: expected(sets, float(scale)) for scale in args.density_scales.split(",")}
+        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        return
+    checks = [int(k) for k in args.checks.split(",")]
     drawn = expected(sets)
     measured = {which: {str(k): judge(which, objects, k) for k in checks} for which, objects in sets.items()}
     RESULTS.write_text(json.dumps({"expected": drawn,

@@ -1,8 +1,9 @@
 """The shape one depth view implies of an object standing on a support plane: every observed point and its shadow
 on the plane, and the convex hull of them all (what lies under what the camera saw, down to the table, taken as
-solid). Given in the plane's frame: the plane is z = 0 and its normal +z, so a pick world's table stands in for
-it. A convex hull fills a mug's or a bowl's opening; it is what a planner can check a grasp against in simulation
-before it moves (picks.shape_check), not the object."""
+solid). Given in the plane's frame, moved along it to stand over the origin: the plane is z = 0 and its normal
++z, so a pick world's table stands in for it wherever the camera's or the robot's frame put the object. A convex
+hull fills a mug's or a bowl's opening; it is what a planner can check a grasp against in simulation before it
+moves (picks.shape_check), not the object."""
 
 from __future__ import annotations
 
@@ -18,8 +19,8 @@ VOLUME_DECIMALS = 9  # m^3: a mass from the hull's volume the same on every CPU
 
 @dataclass(frozen=True)
 class CompletedShape:
-    """``vertices`` (k, 3) of the hull (the plane's frame, m), its ``volume`` (m^3), and ``to_plane`` (4, 4): the
-    cloud's frame to the plane's."""
+    """``vertices`` (k, 3) of the hull (the plane's frame, its footprint's middle at the origin; m), its ``volume``
+    (m^3), and ``to_plane`` (4, 4): the cloud's frame to that frame."""
 
     vertices: np.ndarray
     volume: float
@@ -47,6 +48,9 @@ def completed_shape(points: np.ndarray, plane: SupportPlane) -> CompletedShape |
     local = local[local[:, 2] > 0]
     if len(local) < 4:
         return None
+    middle = (local[:, :2].min(axis=0) + local[:, :2].max(axis=0)) / 2  # over the middle of a world's table
+    local[:, :2] -= middle
+    to_plane[:2, 3] -= middle
     shadows = local.copy()
     shadows[:, 2] = 0.0
     both = np.vstack([local, shadows])
