@@ -27,6 +27,7 @@ import numpy as np
 from benchmarks.experiments.pick_ceiling import _spec
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
+from benchmarks.experiments.pick_ranked_draws import TOP, seen_again
 
 RESULTS = HERE / "results" / "pick_rank_features.json"
 ROWS = ROOT / "data" / "pick_rank_features"
@@ -37,10 +38,9 @@ def _set(task) -> tuple[str, list[dict], list[str]]:
     """Each stored view of one set seen again: per ranked grasp its features and each draw's outcome."""
     import torch
 
-    from onepiece_dist.objects import resolve_source
     from onepiece_dist.picks.object_picks import process_scorer
     from onepiece_dist.picks.rank_features import rank_features
-    from onepiece_dist.picks.views import Executions, observe_view, ranked_indices, simulated_object
+    from onepiece_dist.picks.views import Executions
     from onepiece_dist.plan.robust import perturbed_scores
 
     which, objects, stored, draws = task
@@ -48,28 +48,18 @@ def _set(task) -> tuple[str, list[dict], list[str]]:
     spec = _spec(which, objects)
     scorer = process_scorer(spec)
     rows, moved = [], []
-    for number, ref in enumerate(resolve_source(objects)):
-        world, loaded = simulated_object(spec, scorer.record, ref)
-        for view in stored.get(ref.name, []):
-            seen = observe_view(spec, scorer.record, world, loaded.mesh, view["view"])
-            proposals = seen.proposals
-            scores = scorer.score(proposals.crops, spec.plan.batch_size)
-            ranked, chosen = ranked_indices(proposals, scores, scorer.record, spec.plan, len(view["scores"]))
-            if not np.allclose([g.score for g in ranked], view["scores"], atol=1e-5):
-                moved.append(f"{ref.name} view {view['view']}")
-                continue
-            executions = Executions(spec, world, loaded.mesh, seen.resting, view["view"])
-            outcomes = [[(executions.run("view", i, proposals.poses[i]) if d == 0 else
-                          executions.again("view", i, proposals.poses[i], d)) for d in range(draws)] for i in chosen]
-            noise = np.random.default_rng([number, view["view"], 55])
-            under_noise = perturbed_scores(proposals, np.array(chosen), scorer, scorer.record, NOISE_SAMPLES,
-                                           spec.sim.pose_noise, spec.sim.rotation_noise, noise).mean(axis=1)
-            features = np.column_stack([rank_features(proposals, np.array(chosen), scores, scorer.gripper),
-                                        under_noise])
-            rows.append({"object": ref.name, "view": view["view"], "stored": view["draws"],
-                         "picked": [[o.success for o in each] for each in outcomes],
-                         "failures": [[o.failure for o in each] for each in outcomes],
-                         "features": features.tolist()})
+    for again in seen_again(spec, scorer, objects, stored, TOP, moved):
+        view, proposals, chosen = again.stored, again.seen.proposals, np.array(again.chosen)
+        executions = Executions(spec, again.world, again.mesh, again.seen.resting, view["view"])
+        outcomes = [executions.drawn("view", i, proposals.poses[i], draws) for i in chosen]
+        noise = np.random.default_rng([again.number, view["view"], 55])
+        under_noise = perturbed_scores(proposals, chosen, scorer, scorer.record, NOISE_SAMPLES,
+                                       spec.sim.pose_noise, spec.sim.rotation_noise, noise).mean(axis=1)
+        features = np.column_stack([rank_features(proposals, chosen, again.scores, scorer.gripper), under_noise])
+        rows.append({"object": again.ref.name, "view": view["view"], "stored": view["draws"],
+                     "picked": [[o.success for o in each] for each in outcomes],
+                     "failures": [[o.failure for o in each] for each in outcomes],
+                     "features": features.tolist()})
     return which, rows, moved
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import platform
 import time
+from dataclasses import dataclass
 from datetime import date
 from itertools import combinations
 from multiprocessing import get_context
@@ -26,6 +27,43 @@ from benchmarks.experiments.pick_curve import HERE
 
 RESULTS = HERE / "results" / "pick_ranked_draws.json"
 TOP, DRAWS = 10, 8
+
+
+@dataclass(frozen=True)
+class SeenAgain:
+    """A stored view of these results seen again: the object's ``number`` in its set, its ``ref``, the pick
+    ``world`` and ``mesh``, the ``stored`` view, the view as seen now, the network's ``scores`` of every proposal,
+    its ``ranked`` grasps and their indices among the proposals (``chosen``)."""
+
+    number: int
+    ref: object
+    world: object
+    mesh: object
+    stored: dict
+    seen: object
+    scores: np.ndarray
+    ranked: tuple
+    chosen: list[int]
+
+
+def seen_again(spec, scorer, objects: str, stored: dict, top: int, moved: list[str]):
+    """Each view of ``stored`` (these results' rows of one set, by object name) of ``objects`` seen again with
+    ``spec`` and ranked by ``scorer``'s network, its first ``top``, as a SeenAgain; a view whose ranking differs from
+    the stored one (Bullet keeps a little of what the process simulated before, and the view settled elsewhere)
+    is named in ``moved`` instead."""
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.views import observe_view, ranked_indices, simulated_object
+
+    for number, ref in enumerate(resolve_source(objects)):
+        world, loaded = simulated_object(spec, scorer.record, ref)
+        for view in stored.get(ref.name, []):
+            seen = observe_view(spec, scorer.record, world, loaded.mesh, view["view"])
+            scores = scorer.score(seen.proposals.crops, spec.plan.batch_size)
+            ranked, chosen = ranked_indices(seen.proposals, scores, scorer.record, spec.plan, top)
+            if np.allclose([g.score for g in ranked], view["scores"][:top], atol=1e-5):
+                yield SeenAgain(number, ref, world, loaded.mesh, view, seen, scores, ranked, chosen)
+            else:
+                moved.append(f"{ref.name} view {view['view']}")
 
 
 def _object(task) -> tuple:

@@ -23,6 +23,7 @@ import numpy as np
 from benchmarks.experiments.pick_ceiling import _spec
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
+from benchmarks.experiments.pick_ranked_draws import TOP, seen_again
 
 RESULTS = HERE / "results" / "pick_reranked.json"
 NETWORKS = {**{f"top_down_s{s}": f"data/pick_curve/top_down/top_down_s{s}/best.pt" for s in range(4)},
@@ -35,9 +36,7 @@ def _scored(which: str, objects: str, stored: dict) -> tuple[list[dict], list[st
     """Each stored view seen again: its draws and every network's scores of its ranked grasps; views that differ."""
     import torch
 
-    from onepiece_dist.objects import resolve_source
     from onepiece_dist.picks.object_picks import process_scorer
-    from onepiece_dist.picks.views import observe_view, ranked_indices, simulated_object
     from onepiece_dist.plan.scorer import GraspScorer
 
     torch.set_num_threads(1)
@@ -45,19 +44,12 @@ def _scored(which: str, objects: str, stored: dict) -> tuple[list[dict], list[st
     shipped = process_scorer(spec)
     scorers = {name: GraspScorer(str(ROOT / path), spec.gripper, device="cpu") for name, path in NETWORKS.items()}
     rows, moved = [], []
-    for ref in resolve_source(objects):
-        world, loaded = simulated_object(spec, shipped.record, ref)
-        for view in stored.get(ref.name, []):
-            proposals = observe_view(spec, shipped.record, world, loaded.mesh, view["view"]).proposals
-            ranked, chosen = ranked_indices(proposals, shipped.score(proposals.crops, spec.plan.batch_size),
-                                            shipped.record, spec.plan, len(view["scores"]))
-            if not np.allclose([g.score for g in ranked], view["scores"], atol=1e-5):
-                moved.append(f"{ref.name} view {view['view']}")
-                continue
-            crops = proposals.crops.subset(np.array(chosen))
-            scores = {name: s.score(crops, spec.plan.batch_size) for name, s in scorers.items()}
-            scores.update({name: np.mean([scores[n] for n in parts], axis=0) for name, parts in MEANS.items()})
-            rows.append({"shares": np.mean(view["draws"], axis=1), "shipped": np.array(view["scores"]), **scores})
+    for again in seen_again(spec, shipped, objects, stored, TOP, moved):
+        view = again.stored
+        crops = again.seen.proposals.crops.subset(np.array(again.chosen))
+        scores = {name: s.score(crops, spec.plan.batch_size) for name, s in scorers.items()}
+        scores.update({name: np.mean([scores[n] for n in parts], axis=0) for name, parts in MEANS.items()})
+        rows.append({"shares": np.mean(view["draws"], axis=1), "shipped": np.array(view["scores"]), **scores})
     return rows, moved
 
 

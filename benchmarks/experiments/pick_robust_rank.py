@@ -25,6 +25,7 @@ import numpy as np
 from benchmarks.experiments.pick_ceiling import _spec
 from benchmarks.experiments.pick_curve import HERE
 from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
+from benchmarks.experiments.pick_ranked_draws import TOP, seen_again
 from benchmarks.experiments.pick_reranked import chosen
 
 RESULTS = HERE / "results" / "pick_robust_rank.json"
@@ -61,9 +62,7 @@ def _set(task) -> tuple[str, list[dict], list[str]]:
     """Each stored view of one set seen again: its draws' shares and every rule's scores of its ranked grasps."""
     import torch
 
-    from onepiece_dist.objects import resolve_source
     from onepiece_dist.picks.object_picks import process_scorer
-    from onepiece_dist.picks.views import observe_view, ranked_indices, simulated_object
     from onepiece_dist.plan.robust import perturbed_scores
 
     which, objects, stored = task
@@ -72,21 +71,14 @@ def _set(task) -> tuple[str, list[dict], list[str]]:
     noise = spec.sim
     scorer = process_scorer(spec)
     rows, moved = [], []
-    for number, ref in enumerate(resolve_source(objects)):
-        world, loaded = simulated_object(spec, scorer.record, ref)
-        for view in stored.get(ref.name, []):
-            proposals = observe_view(spec, scorer.record, world, loaded.mesh, view["view"]).proposals
-            scores = scorer.score(proposals.crops, spec.plan.batch_size)
-            ranked, chosen = ranked_indices(proposals, scores, scorer.record, spec.plan, len(view["scores"]))
-            if not np.allclose([g.score for g in ranked], view["scores"], atol=1e-5):
-                moved.append(f"{ref.name} view {view['view']}")
-                continue
-            rng = np.random.default_rng([number, view["view"], 55])
-            perturbed = {scale: perturbed_scores(proposals, np.array(chosen), scorer, scorer.record, SAMPLES,
-                                                 noise.pose_noise * scale, noise.rotation_noise * scale, rng,
-                                                 spec.plan.batch_size) for scale in SCALES}
-            rules = _rules(np.array(view["scores"]), perturbed, _near_mean(proposals.poses, scores, chosen))
-            rows.append({"shares": np.mean(view["draws"], axis=1), **rules})
+    for again in seen_again(spec, scorer, objects, stored, TOP, moved):
+        view, proposals, chosen = again.stored, again.seen.proposals, again.chosen
+        rng = np.random.default_rng([again.number, view["view"], 55])
+        perturbed = {scale: perturbed_scores(proposals, np.array(chosen), scorer, scorer.record, SAMPLES,
+                                             noise.pose_noise * scale, noise.rotation_noise * scale, rng,
+                                             spec.plan.batch_size) for scale in SCALES}
+        rules = _rules(np.array(view["scores"]), perturbed, _near_mean(proposals.poses, again.scores, chosen))
+        rows.append({"shares": np.mean(view["draws"], axis=1), **rules})
     return which, rows, moved
 
 

@@ -24,6 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.experiments.pick_curve import HERE, ROOT
+from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
+from benchmarks.experiments.pick_ranked_draws import seen_again
 
 RESULTS = HERE / "results" / "pick_shape_check.json"
 OUT = ROOT / "data" / "pick_shape_check"
@@ -62,10 +64,8 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     elsewhere when seen again are left out."""
     import torch
 
-    from onepiece_dist.objects import resolve_source
     from onepiece_dist.picks.object_picks import process_scorer
     from onepiece_dist.picks.shape_check import held_shares
-    from onepiece_dist.picks.views import observe_view, ranked_indices, simulated_object
 
     which, objects, stored, density_scale = task
     torch.set_num_threads(1)
@@ -73,19 +73,12 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     check_sim = spec.sim.model_copy(update={"density": spec.sim.density * density_scale})  # the check's guess
     scorer = process_scorer(spec)
     rows = []
-    for ref in resolve_source(objects):
-        world, loaded = simulated_object(spec, scorer.record, ref)
-        for view in stored.get(ref.name, []):
-            seen = observe_view(spec, scorer.record, world, loaded.mesh, view["view"])
-            proposals = seen.proposals
-            ranked, chosen = ranked_indices(proposals, scorer.score(proposals.crops, spec.plan.batch_size),
-                                            scorer.record, spec.plan, LOOKED_AT)
-            if not np.allclose([g.score for g in ranked], view["scores"][:LOOKED_AT], atol=1e-5):
-                continue
-            held = held_shares(proposals.object_points, proposals.plane, proposals.poses[chosen], scorer.gripper,
-                               check_sim, DRAWS, np.random.default_rng(seen.check_seed))
-            rows.append({"object": ref.name, "shares": np.mean(view["draws"], axis=1)[:LOOKED_AT].tolist(),
-                         "held": None if held is None else held.tolist()})
+    for again in seen_again(spec, scorer, objects, stored, LOOKED_AT, []):
+        proposals = again.seen.proposals
+        held = held_shares(proposals.object_points, proposals.plane, proposals.poses[again.chosen], scorer.gripper,
+                           check_sim, DRAWS, np.random.default_rng(again.seen.check_seed))
+        rows.append({"object": again.ref.name, "shares": np.mean(again.stored["draws"], axis=1)[:LOOKED_AT].tolist(),
+                     "held": None if held is None else held.tolist()})
     return which, rows
 
 
@@ -116,7 +109,6 @@ def expected(sets: dict[str, str], density_scale: float = 1.0) -> dict:
     ``density_scale`` times the protocol's density (a robot does not know its object's mass)."""
     from multiprocessing import get_context
 
-    from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
 
     ranked = json.loads(RANKED.read_text())
     with get_context("spawn").Pool(2) as pool:

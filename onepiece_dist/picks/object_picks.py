@@ -23,11 +23,19 @@ from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import sample_candidates
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef
-from onepiece_dist.picks.shape_check import checked
+from onepiece_dist.picks.shape_check import view_check
 from onepiece_dist.picks.views import Executions, PickView, index_of, observe_view, simulated_object
 from onepiece_dist.plan.drawing import draw_plan
 from onepiece_dist.plan.observation import Observation
-from onepiece_dist.plan.planner import PlanCounts, PlannedGrasp, Proposals, gravity, rank, with_context
+from onepiece_dist.plan.planner import (
+    PlanCounts,
+    PlannedGrasp,
+    Proposals,
+    checked_first,
+    gravity,
+    rank,
+    with_context,
+)
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.specs.plan import PickSpec
 
@@ -169,9 +177,8 @@ def _choice(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
     checking = method == "network" and pool == "view" and plan.check_first > 0
     ranked = rank(proposals, scores, scorer.record, plan, keep=max(spec.attempts, plan.check_first * checking))
     if checking:
-        first = checked(ranked[: plan.check_first], proposals.object_points, proposals.plane, scorer.gripper,
-                        spec.sim, plan.check_draws, np.random.default_rng(seen.check_seed))
-        ranked = first + ranked[plan.check_first:]
+        check = view_check(plan, spec.sim, np.random.default_rng(seen.check_seed))
+        ranked = checked_first(ranked, proposals, scorer.gripper, plan.check_first, check)
     ranked = ranked[: spec.attempts]
     poses = np.array([g.pose for g in ranked]).reshape(-1, 4, 4)
     return Choice(pool, tuple(index_of(proposals.poses, p) for p in poses), poses, ranked)

@@ -63,10 +63,11 @@ def checked(ranked: tuple[PlannedGrasp, ...], object_points: np.ndarray, plane: 
     return tuple(dataclasses.replace(ranked[i], rank=k + 1) for k, i in enumerate(order))
 
 
-def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM) -> GraspCheck:
+def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator | None = None) -> GraspCheck:
     """The planner's check (planner.GraspCheck) as ``spec`` asks for it: ``spec.check_draws`` executions of each
-    grasp by the ``sim`` protocol (default: the pick benchmark's), seeded by ``spec.seed``."""
-    rng = np.random.default_rng([spec.seed, CHECK_STREAM])
+    grasp by the ``sim`` protocol (default: the pick benchmark's), drawn from ``rng`` (default: seeded by
+    ``spec.seed``)."""
+    rng = np.random.default_rng([spec.seed, CHECK_STREAM]) if rng is None else rng
 
     def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec
               ) -> tuple[PlannedGrasp, ...]:

@@ -105,11 +105,15 @@ class Executions:
         rng = np.random.default_rng([*self.seed, POOLS[pool], int(index), AGAIN, int(draw)])
         return execute_pick(self.world, pose, self.resting, self.noise, rng)
 
-    def picked(self, pool: str, index: int, pose: np.ndarray, count: int, first: int = 0) -> tuple[bool, ...]:
-        """Whether candidate ``index`` of ``pool`` picked at each of its draws ``first`` .. ``first + count - 1``
-        (draw 0 is ``run``'s, kept; the others ``again``'s), in draw order."""
-        return tuple(bool((self.run(pool, index, pose) if draw == 0 else self.again(pool, index, pose, draw)).success)
+    def drawn(self, pool: str, index: int, pose: np.ndarray, count: int, first: int = 0) -> tuple:
+        """Candidate ``index`` of ``pool`` executed at each of its draws ``first`` .. ``first + count - 1`` (draw 0
+        is ``run``'s, kept; the others ``again``'s), in draw order: their outcomes (sim.pick.PickOutcome)."""
+        return tuple(self.run(pool, index, pose) if draw == 0 else self.again(pool, index, pose, draw)
                      for draw in range(first, first + count))
+
+    def picked(self, pool: str, index: int, pose: np.ndarray, count: int, first: int = 0) -> tuple[bool, ...]:
+        """Whether candidate ``index`` of ``pool`` picked at each of those draws (``drawn``)."""
+        return tuple(bool(outcome.success) for outcome in self.drawn(pool, index, pose, count, first))
 
 
 def ranked_indices(proposals: Proposals, scores: np.ndarray, record: CropRecord, plan, keep: int) -> tuple:

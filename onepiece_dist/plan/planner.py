@@ -265,6 +265,12 @@ def _refuse_plane_alone(observation: Observation, proposals: Proposals) -> None:
 GraspCheck = Callable[[tuple[PlannedGrasp, ...], Proposals, GripperSpec], tuple[PlannedGrasp, ...]]
 
 
+def checked_first(grasps: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec, count: int,
+                  check: GraspCheck) -> tuple[PlannedGrasp, ...]:
+    """``grasps`` (ranked) with their first ``count`` reordered by ``check``, the rest as they were."""
+    return check(grasps[:count], proposals, gripper) + grasps[count:]
+
+
 def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None,
                 check: GraspCheck | None = None) -> GraspPlan:
     """The ranked grasps on ``observation`` by ``scorer``'s network (seeded by ``spec.seed``; default PlanSpec),
@@ -283,7 +289,7 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
     ranked = time.perf_counter()
     if spec.check_first:
-        grasps = check(grasps[: spec.check_first], proposals, scorer.gripper) + grasps[spec.check_first:]
+        grasps = checked_first(grasps, proposals, scorer.gripper, spec.check_first, check)
     grasps = grasps[: spec.top_k]
     seconds = {**proposals.seconds, "score": scored - clock, "rank": ranked - scored}
     if spec.check_first:
