@@ -63,9 +63,9 @@ def test_a_check_is_judged_by_the_benchmark_paired_over_objects_and_by_the_draws
     from benchmarks.experiments.pick_shape_check import drawn_summary, paired_check
     from benchmarks.pages.pick_rank_section import shape_check_section
 
-    rows = [{"object": "a", "shares": [0.5, 1.0, 0.0, 1.0, 0.0], "held": [0.0, 0.75, 0.75, 1.0, 0.0]},
-            {"object": "a", "shares": [1.0, 0.0, 0.0, 0.0, 0.0], "held": None},  # no plane: the network's order
-            {"object": "b", "shares": [0.25, 0.5, 1.0, 1.0, 1.0], "held": [0.5, 0.5, 0.5, 0.5, 0.5]}]  # ties
+    rows = [{"object": "a", "shares": [0.5, 1.0, 0.0, 1.0, 0.0], "held_hull": [0.0, 0.75, 0.75, 1.0, 0.0]},
+            {"object": "a", "shares": [1.0, 0.0, 0.0, 0.0, 0.0], "held_hull": None},  # no plane: the network's order
+            {"object": "b", "shares": [0.25, 0.5, 1.0, 1.0, 1.0], "held_hull": [0.5, 0.5, 0.5, 0.5, 0.5]}]  # ties
     three = drawn_summary(rows, 3)
     assert three["first"] == 0.5833333333333334 and three["checked"] == 0.75 and three["reordered"] == 1
     assert three["surest"] == (1.0 + 1.0 + 1.0) / 3 and three["gain_by_object"] == 0.125  # a: +0.25, b: 0
@@ -85,3 +85,26 @@ def test_a_check_is_judged_by_the_benchmark_paired_over_objects_and_by_the_draws
     assert paired_check(result, "3")["verdict"] == "not kept"
     result["expected_density"] = {"2": {"3": {"household": three}}}
     assert "| 2x | 3 | household | 75.0% | +12.5 [" in "\n".join(shape_check_section(result))
+    carved = {"views": 4, "per_object": {"a": 4, "b": 4}, "first_attempt": 1.0, "seconds": 2.0}
+    result["judged_shapes"] = {"carved": {"household": {"3": carved}}}
+    assert paired_check(result, "3", "carved")["sets"]["household"]["mean"] == 0.75  # against the unchecked runs
+    assert ("The first 3 checked on the carved shape, by the benchmark's one draw: household 50.0% -> 100.0% (2 s); "
+            "paired over objects household +75.0 points [") in "\n".join(shape_check_section(result))
+
+
+def test_two_shapes_are_compared_by_the_draws_of_what_each_check_chose_paired_over_objects():
+    from benchmarks.experiments.pick_shape_check import drawn_summary, shape_difference
+    from benchmarks.pages.pick_rank_section import shape_lines
+
+    rows = [{"object": "a", "shares": [0.5, 1.0, 0.0], "held_hull": [0.0, 0.0, 0.5], "held_carved": [0.0, 1.0, 0.5]},
+            {"object": "a", "shares": [1.0, 0.0, 0.0], "held_hull": [0.0, 1.0, 0.0], "held_carved": None},
+            {"object": "b", "shares": [0.0, 1.0, 0.5], "held_hull": [1.0, 0.0, 0.0], "held_carved": [0.0, 1.0, 0.0]}]
+    versus = shape_difference(rows, 3, "hull", "carved")  # each view: 1.0 against 0.0 (None: the network's first)
+    assert versus["mean"] == 1.0 and versus["shapes"] == ["hull", "carved"]
+    by_shape = {shape: {"3": {"all objects": drawn_summary(rows, 3, shape)}} for shape in ("hull", "carved")}
+    page = "\n".join(shape_lines({**by_shape, "versus": {"3": {"all objects": versus}}}))
+    assert "| carved | 3 | all objects | 100.0% | +62.5 [" in page and "| hull | 3 | all objects | 0.0% |" in page
+    assert "the carved shape **kept**" in page
+    worse = shape_difference(rows, 3, "carved", "hull")
+    assert "the hull shape **not kept**" in "\n".join(shape_lines({"versus": {"3": {"all objects": worse}}}))
+    assert shape_lines({}) == []

@@ -1,6 +1,7 @@
 """The network's first grasps checked on the shape one view implies (issue 55): the completed shape is the observed
-points and their shadows on the table, in the plane's frame; a grasp that holds a box there is put before one
-that closes on air; without a plane the network's order stands."""
+points and their shadows on the table, in the plane's frame, carved by what the camera saw through (an open box
+stays open, a closed one stays whole); a grasp that holds a box there is put before one that closes on air;
+without a plane the network's order stands."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import pytest
 
 from onepiece_dist.core.cloud.completion import completed_shape, plane_frame
 from onepiece_dist.core.cloud.grasps import SupportPlane
+from onepiece_dist.core.cloud.swept_space import DepthRays
 from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import axis_turns
 from onepiece_dist.specs.plan import PICK_SIM
@@ -28,9 +30,9 @@ def seen_box(size=(0.04, 0.06, 0.08), step=0.004) -> np.ndarray:
 def test_the_completed_shape_is_the_seen_points_down_to_the_plane_in_the_planes_frame():
     points = seen_box()
     shape = completed_shape(points, FLOOR)
-    assert shape.volume == pytest.approx(0.04 * 0.06 * 0.08, rel=1e-6)
-    assert shape.vertices[:, 2].min() == pytest.approx(0.0, abs=1e-12)
-    footprint = shape.vertices[:, :2]
+    assert shape.volume == pytest.approx(0.04 * 0.06 * 0.08, rel=1e-6) and len(shape.pieces) == 1
+    assert shape.pieces[0][:, 2].min() == pytest.approx(0.0, abs=1e-12)
+    footprint = shape.pieces[0][:, :2]
     assert np.allclose(footprint.min(axis=0) + footprint.max(axis=0), 0, atol=1e-12)  # over a world's table
     turn = np.eye(4)
     turn[:3, :3] = axis_turns(np.array([[1.0, 0.0, 0.0]]), np.array([0.4]))[0]
@@ -46,6 +48,46 @@ def test_the_completed_shape_is_the_seen_points_down_to_the_plane_in_the_planes_
     assert completed_shape(points[:3], FLOOR) is None and completed_shape(points, plane) is None  # below it
 
 
+def grid(low: float, high: float, step: float = 0.002) -> np.ndarray:
+    return np.arange(low, high + 1e-9, step)
+
+
+def open_box(side=0.08, wall=0.006, floor=0.006) -> np.ndarray:
+    """What a camera straight above sees of an open box of ``side`` standing on z = 0 in a table: the walls' tops,
+    the inside of its floor, and the table around it."""
+    u, v = np.meshgrid(grid(-0.15, 0.15), grid(-0.15, 0.15))
+    u, v = u.ravel(), v.ravel()
+    inner, outer = np.maximum(abs(u), abs(v)) < side / 2 - wall, np.maximum(abs(u), abs(v)) < side / 2
+    height = np.where(inner, floor, np.where(outer, side, 0.0))
+    return np.column_stack([u, v, height])
+
+
+def inside(shape, points: np.ndarray) -> np.ndarray:
+    """(m,) whether each of ``points`` (the plane's frame) lies in one of ``shape``'s convex pieces."""
+    from scipy.spatial import Delaunay
+
+    return np.any([Delaunay(piece).find_simplex(points) >= 0 for piece in shape.pieces], axis=0)
+
+
+def test_the_carved_shape_keeps_an_opening_the_camera_looked_into_and_a_closed_box_whole():
+    cloud, eye = open_box(), np.array([0.0, 0.0, 0.6])
+    objects = cloud[cloud[:, 2] > 0]
+    hull = completed_shape(objects, FLOOR)
+    shape = completed_shape(objects, FLOOR, DepthRays.of(cloud, eye))
+    assert hull.volume == pytest.approx(0.08**3, rel=0.1)
+    walls = 0.08**3 - (0.08 - 0.012) ** 2 * (0.08 - 0.006)
+    assert 0.8 * walls < shape.volume < 0.5 * hull.volume  # the walls, the floor a voxel thicker
+    assert not inside(shape, np.array([[0.0, 0.0, 0.05], [0.02, -0.01, 0.03]])).any()  # the opening stays open
+    assert inside(shape, np.array([[0.037, 0.0, 0.05], [0.0, -0.037, 0.02], [0.01, 0.01, 0.002]])).all()
+    again = completed_shape(objects, FLOOR, DepthRays.of(cloud, eye))
+    assert all(np.array_equal(a, b) for a, b in zip(again.pieces, shape.pieces, strict=True))
+    box = seen_box()
+    table = np.column_stack([*(c.ravel() for c in np.meshgrid(grid(-0.2, 0.2), grid(-0.2, 0.2))),
+                             np.zeros(201 * 201)])
+    whole = completed_shape(box, FLOOR, DepthRays.of(np.vstack([box, table]), np.array([0.0, -0.4, 0.5])))
+    assert whole.volume == pytest.approx(0.04 * 0.06 * 0.08, rel=0.15)  # nothing seen through a closed box
+
+
 @pytest.mark.sim
 def test_a_grasp_that_holds_the_completed_box_goes_before_one_that_closes_on_air():
     from onepiece_dist.picks.shape_check import checked, held_shares
@@ -58,19 +100,21 @@ def test_a_grasp_that_holds_the_completed_box_goes_before_one_that_closes_on_air
     good = top_down_grasps(points, np.array([0.0, 0.0, -1.0]), gripper)[0]
     air = good.copy()
     air[:3, 3] += [0.15, 0.0, 0.0]
-    shares = held_shares(points, FLOOR, np.stack([air, good]), gripper, PICK_SIM, 4, np.random.default_rng(0))
+    shape = completed_shape(points, FLOOR)
+    shares = held_shares(shape, np.stack([air, good]), gripper, PICK_SIM, 4, np.random.default_rng(0))
     assert shares[0] == 0.0 and shares[1] >= 0.5  # each draw with the protocol's pose and friction noise
-    again = held_shares(points, FLOOR, np.stack([air, good]), gripper, PICK_SIM, 4, np.random.default_rng(0))
+    again = held_shares(shape, np.stack([air, good]), gripper, PICK_SIM, 4, np.random.default_rng(0))
     assert np.array_equal(shares, again)
     far = np.array([0.8, 0.6, 0.0])  # a robot's base frame: the object beyond the check world's table
     moved = np.stack([air, good])
     moved[:, :3, 3] += far
-    assert held_shares(points + far, FLOOR, moved, gripper, PICK_SIM, 4, np.random.default_rng(0))[1] >= 0.5
+    assert held_shares(completed_shape(points + far, FLOOR), moved, gripper, PICK_SIM, 4,
+                       np.random.default_rng(0))[1] >= 0.5
     ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, score, 100)
                    for k, (pose, score) in enumerate([(air, 0.9), (good, 0.8)]))
-    reordered = checked(ranked, points, FLOOR, gripper, PICK_SIM, 4, np.random.default_rng(0))
+    reordered = checked(ranked, shape, gripper, PICK_SIM, 4, np.random.default_rng(0))
     assert [g.score for g in reordered] == [0.8, 0.9] and [g.rank for g in reordered] == [1, 2]
-    assert checked(ranked, points, None, gripper, PICK_SIM, 2, np.random.default_rng(0)) == ranked  # no plane
+    assert checked(ranked, None, gripper, PICK_SIM, 2, np.random.default_rng(0)) == ranked  # no shape
 
 
 @pytest.mark.sim
@@ -110,9 +154,11 @@ def test_onepiece_grasp_check_writes_the_checks_seconds(tmp_path):
     cloud = tmp_path / "box.npy"
     np.save(cloud, np.vstack([seen_box(), _floor(0.0)]))
     ran = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--top", "4", "--check", "2",
-                                   "--out", str(tmp_path / "checked"), "--json"])
+                                   "--check-shape", "carved", "--out", str(tmp_path / "checked"), "--json"])
     assert ran.exit_code == 0, ran.output
     plan = json.loads((tmp_path / "checked" / "grasps.json").read_text())
     assert "check" in plan["seconds"] and len(plan["grasps"]) == 4
     bad = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--check", "-1"])
     assert bad.exit_code != 0 and "check_first" in bad.output
+    bad = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--check-shape", "round"])
+    assert bad.exit_code != 0 and "check_shape" in bad.output

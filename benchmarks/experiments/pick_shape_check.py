@@ -2,12 +2,15 @@
 4.9 and 8.9 points more often than its first, and no network, noise or prior finds it). The shipped network on the
 household and unseen sets, the pick benchmark's views and protocol, first attempt, without and with the check
 (PlanSpec.check_first: its first k grasps each executed ``check_draws`` times on the observed points and their
-shadows on the table as one convex hull, in a pick world of its own, and reordered by how often they held).
+shadows on the table as one convex hull, or that hull carved by what the camera saw through, in a pick world of
+its own, and reordered by how often they held).
 Judged by the benchmark's own executions (draw 0: the draw every chooser meets); the difference paired over
 objects with a bootstrap interval.
 
     .venv/bin/python -m benchmarks.experiments.pick_shape_check [--checks 0,3,5]
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --density-scales 0.5,2   # the check's mass guessed
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --shapes hull,carved   # the shapes, by 8 draws
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-shape carved --checks 3   # by the benchmark
 
 Results: benchmarks/results/pick_shape_check.json, rendered into docs/picks.md.
 """
@@ -32,20 +35,21 @@ OUT = ROOT / "data" / "pick_shape_check"
 DRAWS = 8
 
 
-def _spec(objects: str, check_first: int, output: Path = OUT):
+def _spec(objects: str, check_first: int, output: Path = OUT, shape: str = "hull"):
     from onepiece_dist.plan.shipped import shipped_network
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     return PickSpec(objects=objects, checkpoint=str(shipped_network()), views=8, attempts=3, pictures=0,
                     output=str(output), methods=("network",),
-                    plan=PlanSpec(top_down=True, check_first=check_first, check_draws=DRAWS))
+                    plan=PlanSpec(top_down=True, check_first=check_first, check_draws=DRAWS, check_shape=shape))
 
 
-def judge(which: str, objects: str, check_first: int) -> dict:
-    """The shipped network alone on ``objects`` with its first ``check_first`` grasps checked, first attempt."""
+def judge(which: str, objects: str, check_first: int, shape: str = "hull") -> dict:
+    """The shipped network alone on ``objects`` with its first ``check_first`` grasps checked on ``shape``, first
+    attempt."""
     from onepiece_dist.picks.runner import run_picks
 
-    spec = _spec(objects, check_first, OUT / f"{which}_check{check_first}")
+    spec = _spec(objects, check_first, OUT / f"{which}_check{check_first}_{shape}", shape)
     start = time.perf_counter()
     report = run_picks(spec)
     network = report.method("network")
@@ -54,6 +58,7 @@ def judge(which: str, objects: str, check_first: int) -> dict:
             "per_object": report.first_picks("network"), "seconds": round(time.perf_counter() - start, 1)}
 
 
+SHAPES = {"hull": False, "carved": True}  # the check's shapes (core.cloud.completion), each measured
 LOOKED_AT = 5  # the ranked-draws views' first grasps the check is run on (the first 3 see the same draws)
 
 
@@ -65,56 +70,79 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     import torch
 
     from onepiece_dist.picks.object_picks import process_scorer
-    from onepiece_dist.picks.shape_check import held_shares
+    from onepiece_dist.picks.shape_check import check_shape, held_shares
+    from onepiece_dist.plan.planner import Seen
 
-    which, objects, stored, density_scale = task
+    which, objects, stored, density_scale, shapes = task
     torch.set_num_threads(1)
     spec = _spec(objects, 3)
     check_sim = spec.sim.model_copy(update={"density": spec.sim.density * density_scale})  # the check's guess
     scorer = process_scorer(spec)
     rows = []
     for again in seen_again(spec, scorer, objects, stored, LOOKED_AT, []):
-        proposals = again.seen.proposals
-        held = held_shares(proposals.object_points, proposals.plane, proposals.poses[again.chosen], scorer.gripper,
-                           check_sim, DRAWS, np.random.default_rng(again.seen.check_seed))
+        seen, poses = Seen.of(again.seen.proposals), again.seen.proposals.poses[again.chosen]
+        held = {name: held_shares(check_shape(seen, carve), poses, scorer.gripper, check_sim, DRAWS,
+                                  np.random.default_rng(again.seen.check_seed))
+                for name, carve in SHAPES.items() if name in shapes}
         rows.append({"object": again.ref.name, "shares": np.mean(again.stored["draws"], axis=1)[:LOOKED_AT].tolist(),
-                     "held": None if held is None else held.tolist()})
+                     **{f"held_{name}": None if h is None else h.tolist() for name, h in held.items()}})
     return which, rows
 
 
-def _first_of(row: dict, k: int) -> int:
+def _first_of(held: list | None, k: int) -> int:
     """Which of the first ``k`` the check puts first (the network's order on ties; its first without a check)."""
-    return 0 if row["held"] is None else int(np.argmax(row["held"][:k]))
+    return 0 if held is None else int(np.argmax(held[:k]))
 
 
-def drawn_summary(rows: list[dict], k: int) -> dict:
-    """The mean share of 8 draws of the network's first, of the check's first among the first ``k`` and of the
-    surest of the first ``k`` (an oracle); the views reordered; the check's gain paired over objects."""
+def drawn_summary(rows: list[dict], k: int, shape: str = "hull") -> dict:
+    """The mean share of 8 draws of the network's first, of the check's first on ``shape`` among the first ``k``
+    and of the surest of the first ``k`` (an oracle); the views reordered; the check's gain paired over objects."""
+    from onepiece_dist.stats.intervals import bootstrap_interval
+
+    gain, held = {}, [row[f"held_{shape}"] for row in rows]
+    for row, h in zip(rows, held, strict=True):
+        gain.setdefault(row["object"], []).append(row["shares"][_first_of(h, k)] - row["shares"][0])
+    per_object = np.array([np.mean(v) for _, v in sorted(gain.items())])
+    return {"views": len(rows), "first": float(np.mean([r["shares"][0] for r in rows])),
+            "checked": float(np.mean([r["shares"][_first_of(h, k)] for r, h in zip(rows, held, strict=True)])),
+            "surest": float(np.mean([max(r["shares"][:k]) for r in rows])),
+            "reordered": sum(_first_of(h, k) > 0 for h in held),
+            "check_held_first": float(np.mean([h[0] for h in held if h is not None])),
+            "gain_by_object": float(per_object.mean()), "gain_interval": list(bootstrap_interval(per_object))}
+
+
+def expected(sets: dict[str, str], density_scale: float = 1.0, shapes: tuple[str, ...] = ("hull",)) -> dict:
+    """Per shape checked on (SHAPES), number checked (3, LOOKED_AT) and set: drawn_summary over the ranked-draws
+    views; the check's shape at ``density_scale`` times the protocol's density (a robot does not know its object's
+    mass)."""
+    from multiprocessing import get_context
+
+    ranked = json.loads(RANKED.read_text())
+    with get_context("spawn").Pool(2) as pool:
+        found = pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes)
+                                      for w, o in sets.items()])
+    rows = {**dict(found), "all objects": [row for _, set_rows in found for row in set_rows]}
+    out = {shape: {str(k): {which: drawn_summary(set_rows, k, shape) for which, set_rows in rows.items()}
+                   for k in (3, LOOKED_AT)} for shape in shapes}
+    if len(shapes) > 1:
+        out["versus"] = {str(k): {which: shape_difference(set_rows, k, *shapes[:2]) for which, set_rows in rows.items()}
+                         for k in (3, LOOKED_AT)}
+        out["rows"] = dict(found)
+    return out
+
+
+def shape_difference(rows: list[dict], k: int, first: str, second: str) -> dict:
+    """The share of 8 draws of the check's first among the first ``k`` on the ``second`` shape less on the
+    ``first``, paired over objects: mean and 95% bootstrap interval."""
     from onepiece_dist.stats.intervals import bootstrap_interval
 
     gain = {}
     for row in rows:
-        gain.setdefault(row["object"], []).append(row["shares"][_first_of(row, k)] - row["shares"][0])
+        picked = [row["shares"][_first_of(row[f"held_{shape}"], k)] for shape in (first, second)]
+        gain.setdefault(row["object"], []).append(picked[1] - picked[0])
     per_object = np.array([np.mean(v) for _, v in sorted(gain.items())])
-    return {"views": len(rows), "first": float(np.mean([r["shares"][0] for r in rows])),
-            "checked": float(np.mean([r["shares"][_first_of(r, k)] for r in rows])),
-            "surest": float(np.mean([max(r["shares"][:k]) for r in rows])),
-            "reordered": sum(_first_of(r, k) > 0 for r in rows),
-            "check_held_first": float(np.mean([r["held"][0] for r in rows if r["held"] is not None])),
-            "gain_by_object": float(per_object.mean()), "gain_interval": list(bootstrap_interval(per_object))}
-
-
-def expected(sets: dict[str, str], density_scale: float = 1.0) -> dict:
-    """Per number checked (3, LOOKED_AT) and set: drawn_summary over the ranked-draws views; the check's shape at
-    ``density_scale`` times the protocol's density (a robot does not know its object's mass)."""
-    from multiprocessing import get_context
-
-
-    ranked = json.loads(RANKED.read_text())
-    with get_context("spawn").Pool(2) as pool:
-        found = pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale) for w, o in sets.items()])
-    rows = {**dict(found), "all objects": [row for _, set_rows in found for row in set_rows]}
-    return {str(k): {which: drawn_summary(set_rows, k) for which, set_rows in rows.items()} for k in (3, LOOKED_AT)}
+    return {"shapes": [first, second], "mean": float(per_object.mean()),
+            "interval": list(bootstrap_interval(per_object))}
 
 
 def main() -> None:
@@ -124,15 +152,32 @@ def main() -> None:
     parser.add_argument("--checks", default="0,3,5")
     parser.add_argument("--density-scales", default="", help="only the ranked-draws measure, the check's shape at "
                         "these multiples of the protocol's density, kept beside the committed results")
+    parser.add_argument("--shapes", default="", help="only the ranked-draws measure, the check on each of these "
+                        f"shapes ({', '.join(SHAPES)}), kept beside the committed results")
+    parser.add_argument("--check-shape", default="hull", choices=list(SHAPES), help="the shape the benchmark's "
+                        "check runs on; another than the hull is kept beside the committed results")
     args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
+    if args.shapes:
+        result = json.loads(RESULTS.read_text())
+        result["expected_shapes"] = expected(sets, 1.0, tuple(args.shapes.split(",")))
+        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        return
     if args.density_scales:
         result = json.loads(RESULTS.read_text())
-        result["expected_density"] = {scale: expected(sets, float(scale)) for scale in args.density_scales.split(",")}
+        result["expected_density"] = {scale: expected(sets, float(scale))["hull"]
+                                      for scale in args.density_scales.split(",")}
         RESULTS.write_text(json.dumps(result, indent=1) + "\n")
         return
     checks = [int(k) for k in args.checks.split(",")]
-    drawn = expected(sets)
+    if args.check_shape != "hull":  # beside the hull's: judged against its unchecked runs
+        result = json.loads(RESULTS.read_text())
+        result.setdefault("judged_shapes", {})[args.check_shape] = {
+            which: {str(k): judge(which, objects, k, args.check_shape) for k in checks if k}
+            for which, objects in sets.items()}
+        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        return
+    drawn = expected(sets)["hull"]
     measured = {which: {str(k): judge(which, objects, k) for k in checks} for which, objects in sets.items()}
     RESULTS.write_text(json.dumps({"expected": drawn,
         "command": ".venv/bin/python -m benchmarks.experiments.pick_shape_check", "date": date.today().isoformat(),
@@ -145,16 +190,17 @@ if __name__ == "__main__":
     main()
 
 
-def paired_check(result: dict, checked: str) -> dict:
-    """The first attempt with the first ``checked`` grasps checked against without, paired over objects (each
-    set, and both pooled): mean difference, 95% bootstrap interval, verdict (kept where the pooled one is above
-    zero)."""
+def paired_check(result: dict, checked: str, shape: str = "hull") -> dict:
+    """The first attempt with the first ``checked`` grasps checked on ``shape`` against without, paired over
+    objects (each set, and both pooled): mean difference, 95% bootstrap interval, verdict (kept where the pooled
+    one is above zero)."""
     from onepiece_dist.stats.intervals import bootstrap_interval
 
     per_set = {}
     for which, m in result["sets"].items():
         views = m["0"]["views"] / max(len(m["0"]["per_object"]), 1)
-        per_set[which] = [(m[checked]["per_object"][n] - m["0"]["per_object"][n]) / views
+        runs = m if shape == "hull" else result["judged_shapes"][shape][which]
+        per_set[which] = [(runs[checked]["per_object"][n] - m["0"]["per_object"][n]) / views
                           for n in sorted(m["0"]["per_object"])]
     per_set["all objects"] = [d for diffs in list(per_set.values()) for d in diffs]
     out = {name: {"mean": float(np.mean(d)), "interval": list(bootstrap_interval(np.array(d)))}

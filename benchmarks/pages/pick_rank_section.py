@@ -142,6 +142,8 @@ def shape_check_section(result: dict) -> list[str]:
                     f"{_pct(d['check_held_first'])} of its draws |" for k, by_set in drawn.items()
                     for w, d in by_set.items()), ""]
     lines += _density_lines(result.get("expected_density", {}))
+    lines += shape_lines(result.get("expected_shapes", {}))
+    lines += judged_shape_lines(result)
     for gain in gains:
         k = str(gain["checked"])
         pooled = drawn.get(k, {}).get("all objects")
@@ -172,3 +174,50 @@ def _density_lines(by_scale: dict) -> list[str]:
             "of the protocol's density (the objects keep theirs):", "",
             "| the check's density | checked | set | the check's first | gain over objects [95% CI] |",
             "| --- | --- | --- | --- | --- |", *rows, ""]
+
+
+def shape_lines(by_shape: dict) -> list[str]:
+    """The check on each shape (results' expected_shapes): the 8-draw gain of its choice, and the second shape's
+    choice against the first's, paired over objects, with a verdict (the second kept where that interval over all
+    objects lies above zero)."""
+    if not by_shape:
+        return []
+    shapes = [name for name in by_shape if name not in ("versus", "rows")]
+    rows = [f"| {shape} | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
+            f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] | {_pct(d['surest'])} | "
+            f"{_pct(d['check_held_first'])} of its draws |"
+            for shape in shapes for k, by_set in by_shape[shape].items() for w, d in by_set.items()]
+    lines = ["The hull fills a mug's or a bowl's opening, so a grasp on its rim meets a solid there. Carved, the hull "
+             "loses every voxel (4 mm) whose centre the camera saw through by more than 5 mm (the view's depth "
+             "rebuilt from the cloud and the camera's position, as the network's swept space reads it): an opening "
+             "it looked into stays open, what it could not see stays solid. The same measure on each shape:", "",
+             "| shape | checked | set | the check's first | gain over objects [95% CI] | the surest (an oracle) | "
+             "the check held the network's first |", "| --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
+    for k, by_set in by_shape.get("versus", {}).items():
+        first, second = by_set["all objects"]["shapes"]
+        pooled = by_set["all objects"]["interval"]
+        verdict = "kept" if pooled[0] > 0 else "not kept"
+        lines += [f"The check's first among the first {k} on the {second} shape against the {first}, paired over "
+                  "objects: " + "; ".join(f"{w} {100 * d['mean']:+.1f} points [{100 * d['interval'][0]:+.1f}, "
+                                          f"{100 * d['interval'][1]:+.1f}]" for w, d in by_set.items())
+                  + f": the {second} shape **{verdict}** (kept where the interval over all objects lies above "
+                  "zero).", ""]
+    return lines
+
+
+def judged_shape_lines(result: dict) -> list[str]:
+    """The check on another shape judged by the benchmark's one draw (results' judged_shapes), paired over objects
+    against the unchecked runs."""
+    from benchmarks.experiments.pick_shape_check import paired_check
+
+    lines = []
+    for shape, by_set in result.get("judged_shapes", {}).items():
+        for k in next(iter(by_set.values())):
+            gain = paired_check(result, k, shape)
+            firsts = "; ".join(f"{w} {_pct(result['sets'][w]['0']['first_attempt'])} -> "
+                               f"{_pct(m[k]['first_attempt'])} ({m[k]['seconds']:.0f} s)" for w, m in by_set.items())
+            lines += [f"The first {k} checked on the {shape} shape, by the benchmark's one draw: {firsts}; paired over "
+                      "objects " + "; ".join(f"{name} {100 * g['mean']:+.1f} points [{100 * g['interval'][0]:+.1f}, "
+                                             f"{100 * g['interval'][1]:+.1f}]" for name, g in gain["sets"].items())
+                      + f": **{gain['verdict']}** as the planner's default.", ""]
+    return lines

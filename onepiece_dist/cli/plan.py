@@ -76,6 +76,9 @@ def grasp(
     check: Annotated[int, typer.Option(help="Check the first N grasps in simulation on the shape the view implies "
                                        "(its points and their shadows on the table) and reorder them by how often "
                                        "they held (docs/picks.md); 0: the network's order.")] = 0,
+    check_shape: Annotated[str, typer.Option(help="The shape checked on: hull (the points and their shadows as one "
+                                             "convex hull) or carved (that hull less what the camera saw through: "
+                                             "openings stay open).")] = "hull",
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
     device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
@@ -89,7 +92,8 @@ def grasp(
     view = _floats(viewpoint, 3, "--viewpoint")
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
-                        support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check)
+                        support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check,
+                        check_shape=check_shape)
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, _gripper(gripper))
     except (OnePieceError, ValueError) as error:

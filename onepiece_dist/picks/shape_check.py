@@ -1,8 +1,9 @@
 """The network's first grasps checked before the robot moves (issue 55: its scores cannot tell the surer of its
 best grasps apart). Each is executed by the pick protocol, ``draws`` times with the protocol's pose and friction
 noise, on the shape the view implies (core.cloud.completion: the observed points and their shadows on the table as
-one convex hull, at the protocol's density) in a pick world of its own, and the grasps are reordered by how often
-they held there, the network's order on ties. The check knows only the view: the object itself is never seen."""
+one convex hull, or that hull carved by what the camera saw through; at the protocol's density) in a pick world of
+its own, and the grasps are reordered by how often they held there, the network's order on ties. The check knows
+only the view: the object itself is never seen."""
 
 from __future__ import annotations
 
@@ -11,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from onepiece_dist.core.cloud.completion import completed_shape
-from onepiece_dist.core.cloud.grasps import SupportPlane
+from onepiece_dist.core.cloud.completion import CompletedShape, completed_shape
+from onepiece_dist.core.cloud.swept_space import DepthRays
 from onepiece_dist.core.frames import compose_poses
-from onepiece_dist.plan.planner import GraspCheck, PlannedGrasp, Proposals
+from onepiece_dist.plan.planner import GraspCheck, PlannedGrasp, Proposals, Seen
 from onepiece_dist.plan.robot import RobotPlan, plan_from_files
 from onepiece_dist.specs.job import GripperSpec, SimSpec
 from onepiece_dist.specs.plan import PICK_SIM, PlanSpec
@@ -32,31 +33,39 @@ def check_world(gripper: GripperSpec):
     return _WORLDS[gripper]
 
 
-def held_shares(object_points: np.ndarray, plane: SupportPlane | None, poses: np.ndarray, gripper: GripperSpec,
-                sim: SimSpec, draws: int, rng: np.random.Generator) -> np.ndarray | None:
-    """(n,) the share of ``draws`` executions of each of ``poses`` (n, 4, 4; the cloud's frame) that held on the
-    completed shape of ``object_points`` standing on ``plane``; None where there is no plane or no shape."""
+def check_shape(seen: Seen, carve: bool = False) -> CompletedShape | None:
+    """The shape ``seen`` implies of the object (core.cloud.completion), carved by what the camera saw through
+    where ``carve`` and the camera's position is known; None without a support plane or a volume."""
+    if seen.plane is None:
+        return None
+    rays = DepthRays.of(seen.cloud, seen.viewpoint) if carve and seen.viewpoint is not None else None
+    return completed_shape(seen.objects, seen.plane, rays)
+
+
+def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: GripperSpec, sim: SimSpec, draws: int,
+                rng: np.random.Generator) -> np.ndarray | None:
+    """(n,) the share of ``draws`` executions of each of ``poses`` (n, 4, 4; the cloud's frame) that held on
+    ``shape`` standing on a pick world's table; None where there is no shape."""
     from onepiece_dist.sim.pick import execute_pick
     from onepiece_dist.sim.trials import LabelNoise
 
-    shape = None if plane is None else completed_shape(object_points, plane)
     if shape is None:
         return None
     world = check_world(gripper)
-    world.load_object([shape.vertices], shape.volume, sim.density)
+    world.load_object(list(shape.pieces), shape.volume, sim.density)
     noise, rest = LabelNoise.from_spec(sim), np.eye(4)
     held = [[execute_pick(world, compose_poses(shape.to_plane, pose), rest, noise, rng).success
              for _ in range(draws)] for pose in poses]
     return np.mean(np.array(held, dtype=np.float64).reshape(len(poses), draws), axis=1)
 
 
-def checked(ranked: tuple[PlannedGrasp, ...], object_points: np.ndarray, plane: SupportPlane | None,
-            gripper: GripperSpec, sim: SimSpec, draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
-    """``ranked`` reordered by how often each held on the view's completed shape (the network's order on ties),
-    ranks numbered again; unchanged where there is no shape to check on."""
+def checked(ranked: tuple[PlannedGrasp, ...], shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec,
+            draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
+    """``ranked`` reordered by how often each held on ``shape`` (the network's order on ties), ranks numbered
+    again; unchanged where there is no shape to check on."""
     if len(ranked) < 2:
         return ranked
-    shares = held_shares(object_points, plane, np.array([g.pose for g in ranked]), gripper, sim, draws, rng)
+    shares = held_shares(shape, np.array([g.pose for g in ranked]), gripper, sim, draws, rng)
     if shares is None:
         return ranked
     order = np.argsort(-shares, kind="stable")
@@ -71,7 +80,8 @@ def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator
 
     def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec
               ) -> tuple[PlannedGrasp, ...]:
-        return checked(ranked, proposals.object_points, proposals.plane, gripper, sim, spec.check_draws, rng)
+        shape = check_shape(Seen.of(proposals), spec.check_shape == "carved")
+        return checked(ranked, shape, gripper, sim, spec.check_draws, rng)
 
     return check
 

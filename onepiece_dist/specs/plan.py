@@ -48,12 +48,16 @@ class PlanSpec(Frozen):
                            "by the pick trials: docs/picks.md); in pick labels without a checkpoint they are always "
                            "among a view's executed candidates.")
     check_first: int = Field(0, ge=0, le=50, description="The first this many ranked grasps executed by the pick "
-                             "protocol on the shape the view implies (the object's observed points and their "
-                             "shadows on the support plane as one convex hull, in a simulated world of its own: "
+                             "protocol on the shape the view implies (check_shape, in a simulated world of its own: "
                              "picks.shape_check) and reordered by how often they held, the network's order on ties; "
                              "0: the network's order alone. Needs a support plane (else the order stands).")
     check_draws: int = Field(8, ge=1, le=32, description="Executions of each checked grasp, each with the "
                              "protocol's pose and friction noise.")
+    check_shape: Literal["hull", "carved"] = Field("hull", description="The shape checked on: the object's "
+                                                   "observed points and their shadows on the support plane as one "
+                                                   "convex hull, or that hull less every voxel the camera saw "
+                                                   "through (an opening it looked into stays open; needs the "
+                                                   "camera's position, else the hull).")
 
 
 class CameraSpec(Frozen):
