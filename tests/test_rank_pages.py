@@ -102,9 +102,25 @@ def test_two_shapes_are_compared_by_the_draws_of_what_each_check_chose_paired_ov
     versus = shape_difference(rows, 3, "hull", "carved")  # each view: 1.0 against 0.0 (None: the network's first)
     assert versus["mean"] == 1.0 and versus["shapes"] == ["hull", "carved"]
     by_shape = {shape: {"3": {"all objects": drawn_summary(rows, 3, shape)}} for shape in ("hull", "carved")}
-    page = "\n".join(shape_lines({**by_shape, "versus": {"3": {"all objects": versus}}}))
+    page = "\n".join(shape_lines({**by_shape, "versus": {"carved": {"3": {"all objects": versus}}}}))
     assert "| carved | 3 | all objects | 100.0% | +62.5 [" in page and "| hull | 3 | all objects | 0.0% |" in page
     assert "the carved shape **kept**" in page
     worse = shape_difference(rows, 3, "carved", "hull")
-    assert "the hull shape **not kept**" in "\n".join(shape_lines({"versus": {"3": {"all objects": worse}}}))
+    assert "the hull shape **not kept**" in "\n".join(shape_lines({"versus": {"hull": {"3": {"all objects": worse}}}}))
     assert shape_lines({}) == []
+
+
+def test_the_checks_draws_are_judged_by_their_first_draws_and_more_draws_must_choose_better():
+    from benchmarks.experiments.pick_shape_check import drawn_summary, first_draws
+    from benchmarks.pages.pick_rank_section import draws_lines
+
+    rows = [{"object": "a", "shares": [0.0, 1.0, 0.5], "drawn_hull": [[1, 0, 0, 0], [0, 1, 1, 1], [1, 1, 0, 0]]},
+            {"object": "b", "shares": [1.0, 0.0, 0.0], "drawn_hull": None}]
+    assert first_draws(rows, 1)[0]["held_hull"] == [1.0, 0.0, 1.0] and first_draws(rows, 1)[1]["held_hull"] is None
+    one, four = (drawn_summary(first_draws(rows, n), 3) for n in (1, 4))
+    assert one["checked"] == 0.5 and four["checked"] == 1.0  # one draw keeps the network's first, four see the second
+    page = "\n".join(draws_lines({"1": {"3": {"all objects": one}}, "4": {"3": {"all objects": four}}}))
+    assert "| 4 | 3 | all objects | 100.0% | +50.0 [" in page and "4 draws choose +50.0 points against 1" in page
+    assert "more draws choose better" in page
+    same = "\n".join(draws_lines({"1": {"3": {"all objects": four}}, "4": {"3": {"all objects": four}}}))
+    assert "bounded by its shape, not by its draws" in same and draws_lines({}) == []

@@ -88,6 +88,17 @@ def test_the_carved_shape_keeps_an_opening_the_camera_looked_into_and_a_closed_b
     assert whole.volume == pytest.approx(0.04 * 0.06 * 0.08, rel=0.15)  # nothing seen through a closed box
 
 
+def test_the_mirrored_shape_completes_a_can_seen_from_one_side_and_keeps_a_box_whole():
+    angle, height = np.meshgrid(np.linspace(np.pi, 2 * np.pi, 60), grid(0.002, 0.1))
+    half_can = np.column_stack([0.03 * np.cos(angle.ravel()) + 0.2, 0.03 * np.sin(angle.ravel()) - 0.1,
+                                height.ravel()])  # the near half of a can (r 3 cm) a camera at -y sees
+    can = np.pi * 0.03**2 * 0.1
+    assert completed_shape(half_can, FLOOR).volume == pytest.approx(can / 2, rel=0.03)
+    assert completed_shape(half_can, FLOOR, mirror=True).volume == pytest.approx(can, rel=0.03)
+    box = completed_shape(seen_box(), FLOOR, mirror=True).volume
+    assert 0.04 * 0.06 * 0.08 <= box + 1e-12 and box < 1.25 * 0.04 * 0.06 * 0.08
+
+
 @pytest.mark.sim
 def test_a_grasp_that_holds_the_completed_box_goes_before_one_that_closes_on_air():
     from onepiece_dist.picks.shape_check import checked, held_shares

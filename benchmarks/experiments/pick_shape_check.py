@@ -10,6 +10,7 @@ objects with a bootstrap interval.
     .venv/bin/python -m benchmarks.experiments.pick_shape_check [--checks 0,3,5]
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --density-scales 0.5,2   # the check's mass guessed
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --shapes hull,carved   # the shapes, by 8 draws
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-draws 4,8,16   # the check's own draws
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-shape carved --checks 3   # by the benchmark
 
 Results: benchmarks/results/pick_shape_check.json, rendered into docs/picks.md.
@@ -58,7 +59,7 @@ def judge(which: str, objects: str, check_first: int, shape: str = "hull") -> di
             "per_object": report.first_picks("network"), "seconds": round(time.perf_counter() - start, 1)}
 
 
-SHAPES = {"hull": False, "carved": True}  # the check's shapes (core.cloud.completion), each measured
+SHAPES = ("hull", "carved", "mirrored")  # the check's shapes (PlanSpec.check_shape), each measured
 LOOKED_AT = 5  # the ranked-draws views' first grasps the check is run on (the first 3 see the same draws)
 
 
@@ -66,14 +67,15 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     """The ranked-draws views of one set seen again (pick_ranked_draws: the shipped network's first 10, each at 8
     draws): how often each of its first LOOKED_AT held on the check, with the benchmark's own generator (a grasp's
     check draws do not depend on how many follow it), and the shares of draws of those grasps. Views that settle
-    elsewhere when seen again are left out."""
+    elsewhere when seen again are left out. With another number of ``draws`` than DRAWS, the check's draws come
+    from a stream of their own and each draw's outcome is kept too (``drawn_<shape>``)."""
     import torch
 
     from onepiece_dist.picks.object_picks import process_scorer
-    from onepiece_dist.picks.shape_check import check_shape, held_shares
+    from onepiece_dist.picks.shape_check import check_shape, held_draws
     from onepiece_dist.plan.planner import Seen
 
-    which, objects, stored, density_scale, shapes = task
+    which, objects, stored, density_scale, shapes, draws = task
     torch.set_num_threads(1)
     spec = _spec(objects, 3)
     check_sim = spec.sim.model_copy(update={"density": spec.sim.density * density_scale})  # the check's guess
@@ -81,11 +83,13 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     rows = []
     for again in seen_again(spec, scorer, objects, stored, LOOKED_AT, []):
         seen, poses = Seen.of(again.seen.proposals), again.seen.proposals.poses[again.chosen]
-        held = {name: held_shares(check_shape(seen, carve), poses, scorer.gripper, check_sim, DRAWS,
-                                  np.random.default_rng(again.seen.check_seed))
-                for name, carve in SHAPES.items() if name in shapes}
+        seed = again.seen.check_seed if draws == DRAWS else [again.seen.check_seed, draws]
+        held = {name: held_draws(check_shape(seen, name), poses, scorer.gripper, check_sim, draws,
+                                 np.random.default_rng(seed)) for name in SHAPES if name in shapes}
         rows.append({"object": again.ref.name, "shares": np.mean(again.stored["draws"], axis=1)[:LOOKED_AT].tolist(),
-                     **{f"held_{name}": None if h is None else h.tolist() for name, h in held.items()}})
+                     **{f"held_{name}": None if h is None else np.mean(h, axis=1).tolist() for name, h in held.items()},
+                     **({f"drawn_{name}": None if h is None else h.astype(int).tolist() for name, h in held.items()}
+                        if draws != DRAWS else {})})
     return which, rows
 
 
@@ -115,20 +119,40 @@ def expected(sets: dict[str, str], density_scale: float = 1.0, shapes: tuple[str
     """Per shape checked on (SHAPES), number checked (3, LOOKED_AT) and set: drawn_summary over the ranked-draws
     views; the check's shape at ``density_scale`` times the protocol's density (a robot does not know its object's
     mass)."""
+    found = _drawn_sets(sets, density_scale, shapes, DRAWS)
+    rows = {**dict(found), "all objects": [row for _, set_rows in found for row in set_rows]}
+    out = {shape: {str(k): {which: drawn_summary(set_rows, k, shape) for which, set_rows in rows.items()}
+                   for k in (3, LOOKED_AT)} for shape in shapes}
+    for other in shapes[1:]:  # each against the first
+        out.setdefault("versus", {})[other] = {
+            str(k): {which: shape_difference(set_rows, k, shapes[0], other) for which, set_rows in rows.items()}
+            for k in (3, LOOKED_AT)}
+        out.setdefault("rows", {})[other] = dict(found)
+    return out
+
+
+def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, ...], draws: int) -> list:
     from multiprocessing import get_context
 
     ranked = json.loads(RANKED.read_text())
     with get_context("spawn").Pool(2) as pool:
-        found = pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes)
-                                      for w, o in sets.items()])
+        return pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes, draws)
+                                     for w, o in sets.items()])
+
+
+def expected_draws(sets: dict[str, str], counts: tuple[int, ...]) -> dict:
+    """Per number of the check's draws (``counts``, each the first of one run at the largest), number checked and
+    set: drawn_summary over the ranked-draws views, the check on the hull."""
+    found = _drawn_sets(sets, 1.0, ("hull",), max(counts))
     rows = {**dict(found), "all objects": [row for _, set_rows in found for row in set_rows]}
-    out = {shape: {str(k): {which: drawn_summary(set_rows, k, shape) for which, set_rows in rows.items()}
-                   for k in (3, LOOKED_AT)} for shape in shapes}
-    if len(shapes) > 1:
-        out["versus"] = {str(k): {which: shape_difference(set_rows, k, *shapes[:2]) for which, set_rows in rows.items()}
-                         for k in (3, LOOKED_AT)}
-        out["rows"] = dict(found)
-    return out
+    return {str(n): {str(k): {which: drawn_summary(first_draws(set_rows, n), k) for which, set_rows in rows.items()}
+                     for k in (3, LOOKED_AT)} for n in counts}
+
+
+def first_draws(rows: list[dict], count: int) -> list[dict]:
+    """``rows`` with the hull check's shares taken over its first ``count`` draws."""
+    return [{**row, "held_hull": None if row["drawn_hull"] is None
+             else np.mean(np.array(row["drawn_hull"])[:, :count], axis=1).tolist()} for row in rows]
 
 
 def shape_difference(rows: list[dict], k: int, first: str, second: str) -> dict:
@@ -156,11 +180,20 @@ def main() -> None:
                         f"shapes ({', '.join(SHAPES)}), kept beside the committed results")
     parser.add_argument("--check-shape", default="hull", choices=list(SHAPES), help="the shape the benchmark's "
                         "check runs on; another than the hull is kept beside the committed results")
+    parser.add_argument("--check-draws", default="", help="only the ranked-draws measure, the hull's check with "
+                        "each of these numbers of draws, kept beside the committed results")
     args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
+    if args.check_draws:
+        result = json.loads(RESULTS.read_text())
+        result["expected_draws"] = expected_draws(sets, tuple(int(n) for n in args.check_draws.split(",")))
+        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        return
     if args.shapes:
         result = json.loads(RESULTS.read_text())
-        result["expected_shapes"] = expected(sets, 1.0, tuple(args.shapes.split(",")))
+        found, kept = expected(sets, 1.0, tuple(args.shapes.split(","))), result.setdefault("expected_shapes", {})
+        for key, value in found.items():  # the shapes measured before kept beside these
+            kept[key] = {**kept.get(key, {}), **value} if key in ("versus", "rows") else value
         RESULTS.write_text(json.dumps(result, indent=1) + "\n")
         return
     if args.density_scales:

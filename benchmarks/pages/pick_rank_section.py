@@ -143,6 +143,7 @@ def shape_check_section(result: dict) -> list[str]:
                     for w, d in by_set.items()), ""]
     lines += _density_lines(result.get("expected_density", {}))
     lines += shape_lines(result.get("expected_shapes", {}))
+    lines += draws_lines(result.get("expected_draws", {}))
     lines += judged_shape_lines(result)
     for gain in gains:
         k = str(gain["checked"])
@@ -190,10 +191,12 @@ def shape_lines(by_shape: dict) -> list[str]:
     lines = ["The hull fills a mug's or a bowl's opening, so a grasp on its rim meets a solid there. Carved, the hull "
              "loses every voxel (4 mm) whose centre the camera saw through by more than 5 mm (the view's depth "
              "rebuilt from the cloud and the camera's position, as the network's swept space reads it): an opening "
-             "it looked into stays open, what it could not see stays solid. The same measure on each shape:", "",
+             "it looked into stays open, what it could not see stays solid. Mirrored, the hull also holds the points' "
+             "half turn about the vertical axis of the circle that best fits their footprint (what a symmetric "
+             "object, a can or a box, shows of its far side). The same measure on each shape:", "",
              "| shape | checked | set | the check's first | gain over objects [95% CI] | the surest (an oracle) | "
              "the check held the network's first |", "| --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
-    for k, by_set in by_shape.get("versus", {}).items():
+    for k, by_set in (item for by_k in by_shape.get("versus", {}).values() for item in by_k.items()):
         first, second = by_set["all objects"]["shapes"]
         pooled = by_set["all objects"]["interval"]
         verdict = "kept" if pooled[0] > 0 else "not kept"
@@ -221,3 +224,23 @@ def judged_shape_lines(result: dict) -> list[str]:
                                              f"{100 * g['interval'][1]:+.1f}]" for name, g in gain["sets"].items())
                       + f": **{gain['verdict']}** as the planner's default.", ""]
     return lines
+
+
+def draws_lines(by_count: dict) -> list[str]:
+    """The hull's check with fewer or more draws of each grasp (results' expected_draws): the 8-draw gain of its
+    choice, and whether more draws choose better (the largest count's pooled gain against the smallest's)."""
+    if not by_count:
+        return []
+    rows = [f"| {n} | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
+            f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] |"
+            for n, by_k in by_count.items() for k, by_set in by_k.items() for w, d in by_set.items()]
+    counts = sorted(by_count, key=int)
+    few, many = (by_count[n]["3"]["all objects"] for n in (counts[0], counts[-1]))
+    more = many["checked"] - few["checked"]
+    words = (f"{counts[-1]} draws choose {100 * more:+.1f} points against {counts[0]}: "
+             + ("more draws choose better, the check is bounded by its noise" if more > 0.01 else
+                "more draws do not choose better; the check is bounded by its shape, not by its draws"))
+    return ["Is the check bounded by its own noise? The hull's check with each grasp executed more or fewer times "
+            "(each count the first draws of one run, a stream of its own), judged as above:", "",
+            "| the check's draws | checked | set | the check's first | gain over objects [95% CI] |",
+            "| --- | --- | --- | --- | --- |", *rows, "", f"Over all objects, first 3: {words}.", ""]

@@ -77,8 +77,9 @@ def grasp(
                                        "(its points and their shadows on the table) and reorder them by how often "
                                        "they held (docs/picks.md); 0: the network's order.")] = 0,
     check_shape: Annotated[str, typer.Option(help="The shape checked on: hull (the points and their shadows as one "
-                                             "convex hull) or carved (that hull less what the camera saw through: "
-                                             "openings stay open).")] = "hull",
+                                             "convex hull), carved (that hull less what the camera saw through: "
+                                             "openings stay open) or mirrored (with the points' half turn about "
+                                             "their axis: a symmetric object's far side).")] = "hull",
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
     device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,

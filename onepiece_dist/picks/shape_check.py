@@ -33,19 +33,20 @@ def check_world(gripper: GripperSpec):
     return _WORLDS[gripper]
 
 
-def check_shape(seen: Seen, carve: bool = False) -> CompletedShape | None:
-    """The shape ``seen`` implies of the object (core.cloud.completion), carved by what the camera saw through
-    where ``carve`` and the camera's position is known; None without a support plane or a volume."""
+def check_shape(seen: Seen, shape: str = "hull") -> CompletedShape | None:
+    """The ``shape`` (PlanSpec.check_shape) ``seen`` implies of the object (core.cloud.completion): the hull,
+    mirrored, or carved by what the camera saw through where its position is known; None without a support plane
+    or a volume."""
     if seen.plane is None:
         return None
-    rays = DepthRays.of(seen.cloud, seen.viewpoint) if carve and seen.viewpoint is not None else None
-    return completed_shape(seen.objects, seen.plane, rays)
+    rays = DepthRays.of(seen.cloud, seen.viewpoint) if shape == "carved" and seen.viewpoint is not None else None
+    return completed_shape(seen.objects, seen.plane, rays, mirror=shape == "mirrored")
 
 
-def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: GripperSpec, sim: SimSpec, draws: int,
-                rng: np.random.Generator) -> np.ndarray | None:
-    """(n,) the share of ``draws`` executions of each of ``poses`` (n, 4, 4; the cloud's frame) that held on
-    ``shape`` standing on a pick world's table; None where there is no shape."""
+def held_draws(shape: CompletedShape | None, poses: np.ndarray, gripper: GripperSpec, sim: SimSpec, draws: int,
+               rng: np.random.Generator) -> np.ndarray | None:
+    """(n, draws) bool: whether each of ``draws`` executions of each of ``poses`` (n, 4, 4; the cloud's frame)
+    held on ``shape`` standing on a pick world's table; None where there is no shape."""
     from onepiece_dist.sim.pick import execute_pick
     from onepiece_dist.sim.trials import LabelNoise
 
@@ -56,7 +57,14 @@ def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: Grippe
     noise, rest = LabelNoise.from_spec(sim), np.eye(4)
     held = [[execute_pick(world, compose_poses(shape.to_plane, pose), rest, noise, rng).success
              for _ in range(draws)] for pose in poses]
-    return np.mean(np.array(held, dtype=np.float64).reshape(len(poses), draws), axis=1)
+    return np.array(held, dtype=bool).reshape(len(poses), draws)
+
+
+def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: GripperSpec, sim: SimSpec, draws: int,
+                rng: np.random.Generator) -> np.ndarray | None:
+    """(n,) the share of ``draws`` executions of each of ``poses`` that held on ``shape`` (held_draws)."""
+    held = held_draws(shape, poses, gripper, sim, draws, rng)
+    return None if held is None else np.mean(held, axis=1, dtype=np.float64)
 
 
 def checked(ranked: tuple[PlannedGrasp, ...], shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec,
@@ -80,7 +88,7 @@ def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator
 
     def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec
               ) -> tuple[PlannedGrasp, ...]:
-        shape = check_shape(Seen.of(proposals), spec.check_shape == "carved")
+        shape = check_shape(Seen.of(proposals), spec.check_shape)
         return checked(ranked, shape, gripper, sim, spec.check_draws, rng)
 
     return check

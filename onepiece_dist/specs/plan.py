@@ -53,11 +53,12 @@ class PlanSpec(Frozen):
                              "0: the network's order alone. Needs a support plane (else the order stands).")
     check_draws: int = Field(8, ge=1, le=32, description="Executions of each checked grasp, each with the "
                              "protocol's pose and friction noise.")
-    check_shape: Literal["hull", "carved"] = Field("hull", description="The shape checked on: the object's "
-                                                   "observed points and their shadows on the support plane as one "
-                                                   "convex hull, or that hull less every voxel the camera saw "
-                                                   "through (an opening it looked into stays open; needs the "
-                                                   "camera's position, else the hull).")
+    check_shape: Literal["hull", "carved", "mirrored"] = Field(
+        "hull", description="The shape checked on: the object's observed points and their shadows on the support "
+        "plane as one convex hull; that hull less every voxel the camera saw through (carved: an opening it looked "
+        "into stays open; needs the camera's position, else the hull); or the hull of the points and their half "
+        "turn about the vertical axis of the circle that best fits their footprint (mirrored: a symmetric object's "
+        "far side).")
 
 
 class CameraSpec(Frozen):

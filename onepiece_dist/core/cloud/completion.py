@@ -46,10 +46,12 @@ def plane_frame(plane: SupportPlane) -> np.ndarray:
 
 
 def completed_shape(points: np.ndarray, plane: SupportPlane, rays: DepthRays | None = None,
-                    voxel: float = CARVE_VOXEL, fill: float = CARVE_FILL) -> CompletedShape | None:
+                    voxel: float = CARVE_VOXEL, fill: float = CARVE_FILL, mirror: bool = False
+                    ) -> CompletedShape | None:
     """The hull of the object's observed ``points`` (m, 3; the cloud less the plane) and their shadows on
-    ``plane``, carved by ``rays`` (the whole cloud's depth from the camera, core.cloud.swept_space) into boxes of
-    ``voxel`` where given; None when they span no volume (fewer than 4 points, or all on one plane)."""
+    ``plane``, with ``mirror`` their half turn about the vertical axis too (mirrored), carved by ``rays`` (the
+    whole cloud's depth from the camera, core.cloud.swept_space) into pieces of ``voxel`` where given; None when
+    they span no volume (fewer than 4 points, or all on one plane)."""
     from scipy.spatial import ConvexHull, QhullError
 
     to_plane = plane_frame(plane)
@@ -57,6 +59,8 @@ def completed_shape(points: np.ndarray, plane: SupportPlane, rays: DepthRays | N
     local = local[local[:, 2] > 0]
     if len(local) < 4:
         return None
+    if mirror:
+        local = np.vstack([local, mirrored(local)])
     middle = (local[:, :2].min(axis=0) + local[:, :2].max(axis=0)) / 2  # over the middle of a world's table
     local[:, :2] -= middle
     to_plane[:2, 3] -= middle
@@ -70,6 +74,21 @@ def completed_shape(points: np.ndarray, plane: SupportPlane, rays: DepthRays | N
     if rays is None:
         return CompletedShape((both[hull.vertices],), round(float(hull.volume), VOLUME_DECIMALS), to_plane)
     return carved(both[hull.vertices], hull.equations, to_plane, rays, voxel, fill)
+
+
+def mirrored(local: np.ndarray) -> np.ndarray:
+    """``local`` (m, 3; the plane's frame) turned half a turn about the vertical axis through the centre of the
+    circle that best fits their footprint (a can's axis, about a box's middle: what a symmetric object shows of its
+    far side), or through their mean where that circle's centre lies further from it than their footprint's span."""
+    xy = local[:, :2]
+    design = np.column_stack([2 * xy, np.ones(len(xy))])
+    centre = np.linalg.lstsq(design, xy[:, 0] ** 2 + xy[:, 1] ** 2, rcond=None)[0][:2]
+    mean = xy.mean(axis=0)
+    if not np.all(np.isfinite(centre)) or np.hypot(*(centre - mean)) > np.ptp(xy, axis=0).max():
+        centre = mean
+    out = local.copy()
+    out[:, :2] = 2 * centre - xy
+    return out
 
 
 def carved(vertices: np.ndarray, facets: np.ndarray, to_plane: np.ndarray, rays: DepthRays,
