@@ -111,7 +111,7 @@ def test_two_shapes_are_compared_by_the_draws_of_what_each_check_chose_paired_ov
 
 
 def test_the_checks_draws_are_judged_by_their_first_draws_and_more_draws_must_choose_better():
-    from benchmarks.experiments.pick_shape_check import drawn_summary, first_draws
+    from benchmarks.experiments.pick_shape_check import drawn_summary, draws_difference, first_draws
     from benchmarks.pages.pick_rank_section import draws_lines
 
     rows = [{"object": "a", "shares": [0.0, 1.0, 0.5], "drawn_hull": [[1, 0, 0, 0], [0, 1, 1, 1], [1, 1, 0, 0]]},
@@ -124,3 +124,12 @@ def test_the_checks_draws_are_judged_by_their_first_draws_and_more_draws_must_ch
     assert "more draws choose better" in page
     same = "\n".join(draws_lines({"1": {"3": {"all objects": four}}, "4": {"3": {"all objects": four}}}))
     assert "bounded by its shape, not by its draws" in same and draws_lines({}) == []
+    versus = draws_difference(rows, 3, 1, 4)  # a: the network's first (0.0) against the second (1.0); b: alike
+    assert versus["mean"] == -0.5 and versus["draws"] == [4, 1]
+    page = "\n".join(draws_lines({"1": {"3": {"all objects": one}}, "4": {"3": {"all objects": four}},
+                                  "versus": {"1": {"3": {"all objects": versus}}}}))
+    assert "The check's first of 3 with 1 draws against 4, paired over objects: all objects -50.0 points [" in page
+    assert "1 draws not shown as good" in page
+    alike = draws_difference(rows, 3, 4, 4)
+    assert "4 draws as good" in "\n".join(draws_lines({"4": {"3": {"all objects": four}},
+                                                         "versus": {"4": {"3": {"all objects": alike}}}}))

@@ -145,8 +145,20 @@ def expected_draws(sets: dict[str, str], counts: tuple[int, ...]) -> dict:
     set: drawn_summary over the ranked-draws views, the check on the hull."""
     found = _drawn_sets(sets, 1.0, ("hull",), max(counts))
     rows = {**dict(found), "all objects": [row for _, set_rows in found for row in set_rows]}
-    return {str(n): {str(k): {which: drawn_summary(first_draws(set_rows, n), k) for which, set_rows in rows.items()}
-                     for k in (3, LOOKED_AT)} for n in counts}
+    out = {str(n): {str(k): {which: drawn_summary(first_draws(set_rows, n), k) for which, set_rows in rows.items()}
+                    for k in (3, LOOKED_AT)} for n in counts}
+    out["versus"] = {str(n): {str(k): {which: draws_difference(set_rows, k, n, max(counts))
+                                       for which, set_rows in rows.items()} for k in (3, LOOKED_AT)}
+                     for n in counts if n < max(counts)}
+    return out
+
+
+def draws_difference(rows: list[dict], k: int, few: int, many: int) -> dict:
+    """The check's first among the first ``k`` with its first ``few`` draws against its first ``many``, paired
+    over objects (shape_difference)."""
+    both = [{**row, "held_few": a["held_hull"], "held_many": b["held_hull"]}
+            for row, a, b in zip(rows, first_draws(rows, few), first_draws(rows, many), strict=True)]
+    return {**shape_difference(both, k, "many", "few"), "draws": [many, few]}
 
 
 def first_draws(rows: list[dict], count: int) -> list[dict]:

@@ -226,6 +226,9 @@ def judged_shape_lines(result: dict) -> list[str]:
     return lines
 
 
+FEWER_MARGIN = 2.0  # points: fewer draws are as good where their paired loss is surely under this
+
+
 def draws_lines(by_count: dict) -> list[str]:
     """The hull's check with fewer or more draws of each grasp (results' expected_draws): the 8-draw gain of its
     choice, and whether more draws choose better (the largest count's pooled gain against the smallest's)."""
@@ -233,8 +236,8 @@ def draws_lines(by_count: dict) -> list[str]:
         return []
     rows = [f"| {n} | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
             f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] |"
-            for n, by_k in by_count.items() for k, by_set in by_k.items() for w, d in by_set.items()]
-    counts = sorted(by_count, key=int)
+            for n, by_k in by_count.items() if n != "versus" for k, by_set in by_k.items() for w, d in by_set.items()]
+    counts = sorted((n for n in by_count if n != "versus"), key=int)
     few, many = (by_count[n]["3"]["all objects"] for n in (counts[0], counts[-1]))
     more = many["checked"] - few["checked"]
     words = (f"{counts[-1]} draws choose {100 * more:+.1f} points against {counts[0]}: "
@@ -243,4 +246,20 @@ def draws_lines(by_count: dict) -> list[str]:
     return ["Is the check bounded by its own noise? The hull's check with each grasp executed more or fewer times "
             "(each count the first draws of one run, a stream of its own), judged as above:", "",
             "| the check's draws | checked | set | the check's first | gain over objects [95% CI] |",
-            "| --- | --- | --- | --- | --- |", *rows, "", f"Over all objects, first 3: {words}.", ""]
+            "| --- | --- | --- | --- | --- |", *rows, "", f"Over all objects, first 3: {words}.", "",
+            *_fewer_draws(by_count.get("versus", {}))]
+
+
+def _fewer_draws(versus: dict) -> list[str]:
+    """Fewer draws against the most, paired over objects: as good where the interval's lower end lies above
+    -FEWER_MARGIN (a non-inferiority margin), else worse."""
+    lines = []
+    for n, by_k in versus.items():
+        d = by_k["3"]["all objects"]
+        many, low = d["draws"][0], 100 * d["interval"][0]
+        verdict = (f"as good (its interval lies above -{FEWER_MARGIN:.0f} points)" if low > -FEWER_MARGIN else
+                   f"not shown as good (its interval reaches below -{FEWER_MARGIN:.0f} points)")
+        lines += [f"The check's first of 3 with {n} draws against {many}, paired over objects: " + "; ".join(
+            f"{w} {100 * v['mean']:+.1f} points [{100 * v['interval'][0]:+.1f}, {100 * v['interval'][1]:+.1f}]"
+            for w, v in by_k["3"].items()) + f": {n} draws {verdict}.", ""]
+    return lines

@@ -51,8 +51,8 @@ class PlanSpec(Frozen):
                              "protocol on the shape the view implies (check_shape, in a simulated world of its own: "
                              "picks.shape_check) and reordered by how often they held, the network's order on ties; "
                              "0: the network's order alone. Needs a support plane (else the order stands).")
-    check_draws: int = Field(8, ge=1, le=32, description="Executions of each checked grasp, each with the "
-                             "protocol's pose and friction noise.")
+    check_draws: int = Field(4, ge=1, le=32, description="Executions of each checked grasp, each with the "
+                             "protocol's pose and friction noise (4 choose as well as 8 or 16: docs/picks.md).")
     check_shape: Literal["hull", "carved", "mirrored"] = Field(
         "hull", description="The shape checked on: the object's observed points and their shadows on the support "
         "plane as one convex hull; that hull less every voxel the camera saw through (carved: an opening it looked "
