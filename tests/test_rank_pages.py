@@ -96,7 +96,8 @@ def test_two_shapes_are_compared_by_the_draws_of_what_each_check_chose_paired_ov
     from benchmarks.experiments.pick_shape_check import drawn_summary, shape_difference
     from benchmarks.pages.pick_rank_section import shape_lines
 
-    rows = [{"object": "a", "shares": [0.5, 1.0, 0.0], "held_hull": [0.0, 0.0, 0.5], "held_carved": [0.0, 1.0, 0.5]},
+    rows = [{"object": "a", "shares": [0.5, 1.0, 0.0], "held_hull": [0.0, 0.0, 0.5], "held_carved": [0.0, 1.0, 0.5],
+             "seconds_carved": 3.0},
             {"object": "a", "shares": [1.0, 0.0, 0.0], "held_hull": [0.0, 1.0, 0.0], "held_carved": None},
             {"object": "b", "shares": [0.0, 1.0, 0.5], "held_hull": [1.0, 0.0, 0.0], "held_carved": [0.0, 1.0, 0.0]}]
     versus = shape_difference(rows, 3, "hull", "carved")  # each view: 1.0 against 0.0 (None: the network's first)
@@ -104,6 +105,7 @@ def test_two_shapes_are_compared_by_the_draws_of_what_each_check_chose_paired_ov
     by_shape = {shape: {"3": {"all objects": drawn_summary(rows, 3, shape)}} for shape in ("hull", "carved")}
     page = "\n".join(shape_lines({**by_shape, "versus": {"carved": {"3": {"all objects": versus}}}}))
     assert "| carved | 3 | all objects | 100.0% | +62.5 [" in page and "| hull | 3 | all objects | 0.0% |" in page
+    assert "of its draws | 3.0 |" in page and "of its draws | - |" in page  # timed where the run timed it
     assert "the carved shape **kept**" in page
     worse = shape_difference(rows, 3, "carved", "hull")
     assert "the hull shape **not kept**" in "\n".join(shape_lines({"versus": {"hull": {"3": {"all objects": worse}}}}))

@@ -84,9 +84,14 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     for again in seen_again(spec, scorer, objects, stored, LOOKED_AT, []):
         seen, poses = Seen.of(again.seen.proposals), again.seen.proposals.poses[again.chosen]
         seed = again.seen.check_seed if draws == DRAWS else [again.seen.check_seed, draws]
-        held = {name: held_draws(check_shape(seen, name), poses, scorer.gripper, check_sim, draws,
-                                 np.random.default_rng(seed)) for name in SHAPES if name in shapes}
+        held, seconds = {}, {}
+        for name in (name for name in SHAPES if name in shapes):
+            clock = time.perf_counter()
+            held[name] = held_draws(check_shape(seen, name), poses, scorer.gripper, check_sim, draws,
+                                    np.random.default_rng(seed))
+            seconds[f"seconds_{name}"] = round(time.perf_counter() - clock, 3)  # the shape and its executions
         rows.append({"object": again.ref.name, "shares": np.mean(again.stored["draws"], axis=1)[:LOOKED_AT].tolist(),
+                     **seconds,
                      **{f"held_{name}": None if h is None else np.mean(h, axis=1).tolist() for name, h in held.items()},
                      **({f"drawn_{name}": None if h is None else h.astype(int).tolist() for name, h in held.items()}
                         if draws != DRAWS else {})})
@@ -112,7 +117,12 @@ def drawn_summary(rows: list[dict], k: int, shape: str = "hull") -> dict:
             "surest": float(np.mean([max(r["shares"][:k]) for r in rows])),
             "reordered": sum(_first_of(h, k) > 0 for h in held),
             "check_held_first": float(np.mean([h[0] for h in held if h is not None])),
+            "seconds_a_view": _mean_or_none([row[f"seconds_{shape}"] for row in rows if f"seconds_{shape}" in row]),
             "gain_by_object": float(per_object.mean()), "gain_interval": list(bootstrap_interval(per_object))}
+
+
+def _mean_or_none(values: list[float]) -> float | None:
+    return float(np.mean(values)) if values else None
 
 
 def expected(sets: dict[str, str], density_scale: float = 1.0, shapes: tuple[str, ...] = ("hull",)) -> dict:

@@ -186,7 +186,7 @@ def shape_lines(by_shape: dict) -> list[str]:
     shapes = [name for name in by_shape if name not in ("versus", "rows")]
     rows = [f"| {shape} | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
             f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] | {_pct(d['surest'])} | "
-            f"{_pct(d['check_held_first'])} of its draws |"
+            f"{_pct(d['check_held_first'])} of its draws | {_seconds(d.get('seconds_a_view'))} |"
             for shape in shapes for k, by_set in by_shape[shape].items() for w, d in by_set.items()]
     lines = ["The hull fills a mug's or a bowl's opening, so a grasp on its rim meets a solid there. Carved, the hull "
              "loses every voxel (4 mm) whose centre the camera saw through by more than 5 mm (the view's depth "
@@ -195,7 +195,8 @@ def shape_lines(by_shape: dict) -> list[str]:
              "half turn about the vertical axis of the circle that best fits their footprint (what a symmetric "
              "object, a can or a box, shows of its far side). The same measure on each shape:", "",
              "| shape | checked | set | the check's first | gain over objects [95% CI] | the surest (an oracle) | "
-             "the check held the network's first |", "| --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
+             "the check held the network's first | the check's seconds a view (one worker) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
     for k, by_set in (item for by_k in by_shape.get("versus", {}).values() for item in by_k.items()):
         first, second = by_set["all objects"]["shapes"]
         pooled = by_set["all objects"]["interval"]
@@ -227,6 +228,11 @@ def judged_shape_lines(result: dict) -> list[str]:
 
 
 FEWER_MARGIN = 2.0  # points: fewer draws are as good where their paired loss is surely under this
+
+
+def _seconds(value: float | None) -> str:
+    """A time in seconds, or "-" where the run did not time it."""
+    return "-" if value is None else f"{value:.1f}"
 
 
 def draws_lines(by_count: dict) -> list[str]:
