@@ -85,7 +85,7 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
         seen, poses = Seen.of(again.seen.proposals), again.seen.proposals.poses[again.chosen]
         seed = again.seen.check_seed if draws == DRAWS else [again.seen.check_seed, draws]
         held, seconds = {}, {}
-        for name in (name for name in SHAPES if name in shapes):
+        for name in [name for name in SHAPES if name in shapes]:
             clock = time.perf_counter()
             held[name] = held_draws(check_shape(seen, name), poses, scorer.gripper, check_sim, draws,
                                     np.random.default_rng(seed))

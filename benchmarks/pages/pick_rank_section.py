@@ -240,10 +240,10 @@ def draws_lines(by_count: dict) -> list[str]:
     choice, and whether more draws choose better (the largest count's pooled gain against the smallest's)."""
     if not by_count:
         return []
+    counts = sorted((n for n in by_count if n != "versus"), key=int)
     rows = [f"| {n} | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
             f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] |"
-            for n, by_k in by_count.items() if n != "versus" for k, by_set in by_k.items() for w, d in by_set.items()]
-    counts = sorted((n for n in by_count if n != "versus"), key=int)
+            for n in counts for k, by_set in by_count[n].items() for w, d in by_set.items()]
     few, many = (by_count[n]["3"]["all objects"] for n in (counts[0], counts[-1]))
     more = many["checked"] - few["checked"]
     words = (f"{counts[-1]} draws choose {100 * more:+.1f} points against {counts[0]}: "

@@ -3,8 +3,9 @@ on the plane, and the convex hull of them all (what lies under what the camera s
 solid). Given in the plane's frame, moved along it to stand over the origin: the plane is z = 0 and its normal
 +z, so a pick world's table stands in for it wherever the camera's or the robot's frame put the object. A convex
 hull fills a mug's or a bowl's opening; carved (where the camera's position is known), the hull loses every voxel
-the camera saw through, so an opening it looked into stays open and what it could not see stays solid. Either is
-what a planner can check a grasp against in simulation before it moves (picks.shape_check), not the object."""
+the camera saw through, so an opening it looked into stays open and what it could not see stays solid; mirrored,
+it also holds the points' half turn about their vertical axis (a symmetric object's far side). Each is what a
+planner can check a grasp against in simulation before it moves (picks.shape_check), not the object."""
 
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ SEEN_THROUGH = 0.005  # m: a voxel's centre this far in front of the observed su
 @dataclass(frozen=True)
 class CompletedShape:
     """``pieces``: (k, 3) vertex arrays of its convex pieces (the plane's frame, its footprint's middle at the
-    origin; m): the hull alone, or the carved hull's boxes; its ``volume`` (m^3), and ``to_plane`` (4, 4): the
+    origin; m): the hull alone, or the carved hull's pieces; its ``volume`` (m^3), and ``to_plane`` (4, 4): the
     cloud's frame to that frame."""
 
     pieces: tuple[np.ndarray, ...]
