@@ -135,3 +135,26 @@ def test_the_checks_draws_are_judged_by_their_first_draws_and_more_draws_must_ch
     alike = draws_difference(rows, 3, 4, 4)
     assert "4 draws as good" in "\n".join(draws_lines({"4": {"3": {"all objects": four}},
                                                          "versus": {"4": {"3": {"all objects": alike}}}}))
+
+
+def _more_views(gains: list[int]) -> dict:
+    """The check's runs at 4 views an object: per object the views picked unchecked (2) and checked (2 + gain)."""
+    def run(picks: list[int]) -> dict:
+        per_object = {f"o{i}": n for i, n in enumerate(picks)}
+        return {"first_attempt": sum(picks) / (4 * len(picks)), "interval": [0.0, 1.0], "views": 4 * len(picks),
+                "failures": {"slipped_lifting": 1}, "per_object": per_object, "seconds": 1.0}
+
+    return {"views": 4, "check_draws": 4,
+            "sets": {"household": {"0": run([2] * len(gains)), "3": run([2 + g for g in gains])}}}
+
+
+def test_the_check_judged_at_more_views_is_kept_only_where_its_pooled_interval_lies_above_zero():
+    from benchmarks.pages.pick_rank_section import more_views_lines
+    from onepiece_dist.specs.plan import PlanSpec
+
+    assert more_views_lines(None) == []
+    kept = more_views_lines(_more_views([1, 1, 2, 1, 0, 1]))[-1]
+    assert "all objects +25.0 points" in kept and "**kept** as the planner's default" in kept
+    assert f"`PlanSpec.check_first` = {PlanSpec().check_first}" in kept
+    mixed = more_views_lines(_more_views([1, -1, 0, 1, -1, 0]))[-1]
+    assert "all objects +0.0 points" in mixed and "**not kept**" in mixed

@@ -36,21 +36,27 @@ OUT = ROOT / "data" / "pick_shape_check"
 DRAWS = 8
 
 
-def _spec(objects: str, check_first: int, output: Path = OUT, shape: str = "hull"):
+VIEWS = 8  # the pick benchmark's views an object
+
+
+def _spec(objects: str, check_first: int, output: Path = OUT, shape: str = "hull", views: int = VIEWS,
+          draws: int = DRAWS):
     from onepiece_dist.plan.shipped import shipped_network
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
-    return PickSpec(objects=objects, checkpoint=str(shipped_network()), views=8, attempts=3, pictures=0,
+    return PickSpec(objects=objects, checkpoint=str(shipped_network()), views=views, attempts=3, pictures=0,
                     output=str(output), methods=("network",),
-                    plan=PlanSpec(top_down=True, check_first=check_first, check_draws=DRAWS, check_shape=shape))
+                    plan=PlanSpec(top_down=True, check_first=check_first, check_draws=draws, check_shape=shape))
 
 
-def judge(which: str, objects: str, check_first: int, shape: str = "hull") -> dict:
-    """The shipped network alone on ``objects`` with its first ``check_first`` grasps checked on ``shape``, first
-    attempt."""
+def judge(which: str, objects: str, check_first: int, shape: str = "hull", views: int = VIEWS,
+          draws: int = DRAWS) -> dict:
+    """The shipped network alone on ``objects`` (``views`` an object, the first VIEWS the benchmark's) with its
+    first ``check_first`` grasps checked on ``shape`` (each executed ``draws`` times), first attempt."""
     from onepiece_dist.picks.runner import run_picks
 
-    spec = _spec(objects, check_first, OUT / f"{which}_check{check_first}_{shape}", shape)
+    name = f"{which}_check{check_first}_{shape}" + ("" if (views, draws) == (VIEWS, DRAWS) else f"_{views}v{draws}d")
+    spec = _spec(objects, check_first, OUT / name, shape, views, draws)
     start = time.perf_counter()
     report = run_picks(spec)
     network = report.method("network")
@@ -204,6 +210,9 @@ def main() -> None:
                         "check runs on; another than the hull is kept beside the committed results")
     parser.add_argument("--check-draws", default="", help="only the ranked-draws measure, the hull's check with "
                         "each of these numbers of draws, kept beside the committed results")
+    parser.add_argument("--views", type=int, default=VIEWS, help="the benchmark's one draw at this many views an "
+                        "object (the first 8 the benchmark's), the check with the planner's default draws, kept "
+                        "beside the committed results")
     args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
     if args.check_draws:
@@ -225,6 +234,9 @@ def main() -> None:
         RESULTS.write_text(json.dumps(result, indent=1) + "\n")
         return
     checks = [int(k) for k in args.checks.split(",")]
+    if args.views != VIEWS:
+        more_views(sets, checks, args.views)
+        return
     if args.check_shape != "hull":  # beside the hull's: judged against its unchecked runs
         result = json.loads(RESULTS.read_text())
         result.setdefault("judged_shapes", {})[args.check_shape] = {
@@ -239,6 +251,19 @@ def main() -> None:
         "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "draws": DRAWS, "checks": checks,
         "sets": measured}, indent=1) + "\n")
     print(json.dumps({w: {k: v["first_attempt"] for k, v in m.items()} for w, m in measured.items()}, indent=1))
+
+
+def more_views(sets: dict[str, str], checks: list[int], views: int) -> None:
+    """The benchmark's one draw at ``views`` an object, each number in ``checks`` checked with the planner's default
+    draws; kept beside the committed results (``more_views``)."""
+    from onepiece_dist.specs.plan import PlanSpec
+
+    draws = PlanSpec().check_draws
+    found = {which: {str(k): judge(which, objects, k, views=views, draws=draws) for k in checks}
+             for which, objects in sets.items()}
+    result = json.loads(RESULTS.read_text())  # read after the runs: another mode may have written meanwhile
+    result["more_views"] = {"views": views, "check_draws": draws, "sets": found}
+    RESULTS.write_text(json.dumps(result, indent=1) + "\n")
 
 
 if __name__ == "__main__":
