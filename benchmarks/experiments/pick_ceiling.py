@@ -40,7 +40,7 @@ def _spec(name: str, objects: str):
 
     return PickSpec(objects=objects, checkpoint=str(shipped_network()),
                     output=str(ROOT / "data" / "pick_ceiling" / name), views=8, attempts=3, pictures=0,
-                    methods=("network",), plan=PlanSpec(top_down=True))
+                    methods=("network",), plan=PlanSpec(top_down=True, check_first=0))
 
 
 def _object(task) -> tuple:

@@ -116,7 +116,7 @@ def picks(checkpoint: str, views: int, methods: tuple[str, ...] = ("network",), 
 
     spec = PickSpec(objects=str(household_objects()), checkpoint=str(ROOT / checkpoint),
                     output=str(OUT / "picks" / name), views=views, attempts=3, pictures=0, methods=methods,
-                    plan={"top_down": False})  # the curve's pool: the view's sampled candidates alone
+                    plan={"top_down": False, "check_first": 0})  # the curve's pool: the view's sampled candidates alone
     start = time.perf_counter()
     report = run_picks(spec)
     summary = {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),

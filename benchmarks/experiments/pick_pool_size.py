@@ -24,7 +24,7 @@ def judge(name: str, objects: str, candidates: int) -> dict:
 
     spec = PickSpec(objects=objects, checkpoint=str(CHECKPOINT), views=8, attempts=3, pictures=0,
                     output=str(ROOT / "data" / "pick_pool_size" / f"{name}_{candidates}"), methods=("network",),
-                    plan={"candidates": candidates, "top_down": False})
+                    plan={"candidates": candidates, "top_down": False, "check_first": 0})
     start = time.perf_counter()
     network = run_picks(spec).method("network")
     return {"set": name, "candidates": candidates, "first_attempt": round(network.first_attempt, 4),

@@ -43,7 +43,7 @@ SELECTION = "pybullet:random_urdfs[600:660]"
 
 def judge(name: str, objects: str, rankings: tuple[str, ...] = RANKINGS) -> dict:
     spec = PickSpec(objects=objects, checkpoint=str(CHECKPOINT), output=str(ROOT / "data" / "pick_rankings" / name),
-                    views=8, attempts=1, pictures=0, methods=("network",), plan={"top_down": False})
+                    views=8, attempts=1, pictures=0, methods=("network",), plan={"top_down": False, "check_first": 0})
     start = time.perf_counter()
     task = partial(rank_object, rankings=rankings)
     done = [r for r in run_each_in_process(task, spec, resolve_source(objects)) if r.status == "ok"]

@@ -35,7 +35,8 @@ def pick_spec(objects: str, checkpoint: str, name: str):
 
     return PickSpec(objects=objects, checkpoint=checkpoint, output=str(OUT / "picks" / name), views=VIEWS,
                     attempts=1, seed=STUDY_SEED, methods=("network",), pictures=0,
-                    plan={"top_down": False})  # the pool the study was judged on (before the top-down trial)
+                    plan={"top_down": False, "check_first": 0})  # the pool the study was judged on (before the
+    # top-down trial), the network's order alone
 
 
 def cached(name: str, asked: dict, make) -> list[dict]:

@@ -53,7 +53,7 @@ def judge(name: str, checkpoint: str, objects: str | None = None, top_down: bool
 
     spec = PickSpec(objects=objects or str(household_objects(objects=UNSEEN)), checkpoint=str(ROOT / checkpoint),
                     output=str(out / name), views=8, attempts=3, pictures=0, methods=("network",),
-                    plan=PlanSpec(top_down=top_down))
+                    plan=PlanSpec(top_down=top_down, check_first=0))
     start = time.perf_counter()
     report = run_picks(spec)
     network = report.method("network")

@@ -164,9 +164,10 @@ def object_table(result: dict) -> list[str]:
 def latency_section(plan: dict) -> list[str]:
     target = plan["targets"]["cpu_seconds_per_view"]
     median = plan["median_seconds_per_view"]
+    checks = "median_checked_seconds" in plan
     rows = [f"| {r['object']} | {r['points']} | {r['sampled']} | {r['candidates']} | {r['seconds']['sample']:.3f} | "
             f"{r['seconds']['crop']:.3f} | {r['seconds']['score']:.3f} | {r['seconds']['total']:.3f} | "
-            f"{r['baseline_seconds']:.3f} |" for r in plan["rows"]]
+            f"{r['baseline_seconds']:.3f} |" + (_check_cell(r) if checks else "") for r in plan["rows"]]
     gpu = plan.get("gpu")
     gpu_line = (f"Scoring {plan['candidates']} crops on {gpu['device']}: {1000 * gpu['score_seconds']:.1f} ms (target "
                 f"{1000 * plan['targets']['gpu_score_seconds']:.0f} ms: "
@@ -176,10 +177,31 @@ def latency_section(plan: dict) -> list[str]:
             f"{plan['date']}, {plan['machine']}. {plan['candidates']} placements sampled per view; a placement "
             "whose open gripper meets the cloud at every bite and shift, or holds too few points, is never scored. "
             "Baseline: the same candidates cropped and scored one at a time.", "",
-            "| scene | points | placements | scored | sample (s) | crop (s) | score (s) | total (s) | baseline (s) |",
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |", *rows, "",
+            "| scene | points | placements | scored | sample (s) | crop (s) | score (s) | total (s) | baseline (s) |"
+            + (" the check (s) |" if checks else ""),
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |" + (" --- |" if checks else ""), *rows, "",
             f"Median per view: {median:.3f} s against {plan['median_baseline_seconds']:.3f} s one at a time. Target "
-            f"{target} s on one core: **{'met' if median <= target else 'not met'}**. {_dense_line(plan)}{gpu_line}"]
+            f"{target} s on one core: **{'met' if median <= target else 'not met'}**. {_dense_line(plan)}"
+            f"{_checked_line(plan)}{gpu_line}"]
+
+
+def _check_cell(row: dict) -> str:
+    if "check_seconds" not in row:
+        return " - |"
+    return f" {row['check_seconds']:.3f} |" if row["check_plane"] else " no plane |"
+
+
+def _checked_line(plan: dict) -> str:
+    """The planner's default with its check (PlanSpec.check_first): the network's planning and the check."""
+    if "median_checked_seconds" not in plan:
+        return ""
+    row = next(r for r in plan["rows"] if "check_seconds" in r)
+    seconds, target = plan["median_checked_seconds"], plan["targets"]["cpu_seconds_per_view"]
+    return (f"The planner's default also checks its first {row['check_first']} grasps, each executed "
+            f"{row['check_draws']} times in simulation on the shape the view implies (docs/planning.md): with the "
+            f"check, median {seconds:.3f} s a view (the {target} s target: "
+            f"**{'met' if seconds <= target else 'not met'}**; `--check 0`, the network's order alone, is the figure "
+            "above). ")
 
 
 def _dense_line(plan: dict) -> str:
@@ -246,6 +268,15 @@ def _ceiling(result: dict, picks: dict | None) -> list[str]:
     return ceiling_section(result, picks, top_down, (picks or {}).get("targets"))
 
 
+def _check_words(plan: dict) -> str:
+    """What the network on the view does before its first attempt (PlanSpec.check_first)."""
+    if not plan.get("check_first"):
+        return " The network on the view ranks by its score alone."
+    return (f" The network on the view checks its first {plan['check_first']} grasps before the first attempt "
+            f"(`plan.check_first`): each executed {plan['check_draws']} times by the pick protocol on the shape the "
+            f"view implies ({plan.get('check_shape', 'hull')}), reordered by how often they held (below).")
+
+
 def _how(picks: dict) -> str:
     t, spec = picks["training"], picks["sets"][0]["spec"]
     if t.get("design"):
@@ -258,7 +289,8 @@ def _how(picks: dict) -> str:
     else:
         trained = f"The network: `{t.get('checkpoint')}`."
     camera = spec["camera"]
-    return (f"{picks['date']}, {picks['machine']}. {trained} Each object dropped on a table in a seeded orientation "
+    return (f"{picks['date']}, {picks['machine']}. {trained}{_check_words(spec['plan'])} Each object dropped on a "
+            "table in a seeded orientation "
             f"and settled; {spec['views']} views per object from a camera {camera['distance'][0]}-"
             f"{camera['distance'][1]} m away at {camera['elevation_deg'][0]:.0f}-{camera['elevation_deg'][1]:.0f} "
             f"degrees elevation ({camera['image_size']} px, {camera['fov_deg']:.0f} degrees); each chooser's ranked "

@@ -101,7 +101,7 @@ def measure(folder: Path) -> dict:
     from onepiece_dist.specs.plan import PlanSpec
 
     torch.set_num_threads(1)
-    net, spec, rows = scorer(folder), PlanSpec(candidates=CANDIDATES), []
+    net, spec, rows = scorer(folder), PlanSpec(candidates=CANDIDATES, check_first=0), []
     seen = scenes()
     for name, observation in [*seen, (f"{seen[0][0]} (2M points)", dense(seen[0][1]))]:
         plans = [plan_grasps(observation, net, spec) for _ in range(REPEATS)]
@@ -110,8 +110,24 @@ def measure(folder: Path) -> dict:
         baseline = one_at_a_time(proposals, net, np.random.default_rng(0))
         rows.append({"object": name, "points": len(observation.points), **best.counts,
                      "seconds": {k: round(v, 4) for k, v in best.seconds.items()},
-                     "baseline_seconds": round(baseline + best.seconds["sample"], 4)})
+                     "baseline_seconds": round(baseline + best.seconds["sample"], 4),
+                     **(check_seconds(observation, net, spec) if len(observation.points) < 1_000_000 else {})})
     return {"rows": rows, "gpu": gpu_scoring(folder)}
+
+
+def check_seconds(observation, net, spec) -> dict:
+    """The planner's default check (PlanSpec.check_first, picks.shape_check) on ``observation``: its seconds (the
+    least of REPEATS, the check's pick world made before) and whether the cloud gave it a support plane to stand
+    its shape on."""
+    from onepiece_dist.picks.shape_check import view_check
+    from onepiece_dist.plan.planner import plan_grasps
+    from onepiece_dist.specs.plan import PlanSpec
+
+    checked = spec.model_copy(update={"check_first": PlanSpec().check_first})
+    plans = [plan_grasps(observation, net, checked, view_check(checked)) for _ in range(REPEATS)]
+    return {"check_first": checked.check_first, "check_draws": checked.check_draws,
+            "check_seconds": round(min(p.seconds["check"] for p in plans), 4),
+            "check_plane": plans[0].plane is not None}
 
 
 def gpu_scoring(folder: Path) -> dict | None:
@@ -149,7 +165,9 @@ def main() -> None:
               "candidates": CANDIDATES, "targets": TARGETS, **measured,
               "median_seconds_per_view": float(np.median(totals)),
               "dense_seconds": millions[0]["seconds"]["total"] if millions else None,
-              "median_baseline_seconds": float(np.median([r["baseline_seconds"] for r in measured["rows"]]))}
+              "median_baseline_seconds": float(np.median([r["baseline_seconds"] for r in measured["rows"]])),
+              "median_checked_seconds": float(np.median([r["seconds"]["total"] + r["check_seconds"]
+                                                         for r in measured["rows"] if "check_seconds" in r]))}
     out = HERE / "results" / "plan.json"
     out.write_text(json.dumps(result, indent=1) + "\n")
     print(out)

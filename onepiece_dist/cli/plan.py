@@ -75,7 +75,8 @@ def grasp(
                         ] = True,
     check: Annotated[int, typer.Option(help="Check the first N grasps in simulation on the shape the view implies "
                                        "(its points and their shadows on the table) and reorder them by how often "
-                                       "they held (docs/picks.md); 0: the network's order.")] = 0,
+                                       "they held (kept by the pick benchmark: docs/picks.md); 0: the network's "
+                                       "order alone.")] = 3,
     check_shape: Annotated[str, typer.Option(help="The shape checked on: hull (the points and their shadows as one "
                                              "convex hull), carved (that hull less what the camera saw through: "
                                              "openings stay open) or mirrored (with the points' half turn about "

@@ -278,7 +278,8 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     spec = spec or PlanSpec()
     if spec.check_first and check is None:
         raise SpecError(f"check_first={spec.check_first} checks grasps in simulation, which this call has none "
-                        "of: plan through onepiece_dist.api.plan_grasps or `onepiece grasp --check`")
+                        "of: plan through onepiece_dist.api.plan_grasps (or `onepiece grasp`), or set check_first=0 "
+                        "for the network's order alone")
     observation, notes = with_viewpoint(observation, spec)
     rng = np.random.default_rng([spec.seed, 49])
     proposals = propose(observation, scorer.record, spec, rng)

@@ -47,10 +47,11 @@ class PlanSpec(Frozen):
                            "horizontal axis (the top-down baseline's), cropped and checked as the sampled ones (kept "
                            "by the pick trials: docs/picks.md); in pick labels without a checkpoint they are always "
                            "among a view's executed candidates.")
-    check_first: int = Field(0, ge=0, le=50, description="The first this many ranked grasps executed by the pick "
+    check_first: int = Field(3, ge=0, le=50, description="The first this many ranked grasps executed by the pick "
                              "protocol on the shape the view implies (check_shape, in a simulated world of its own: "
-                             "picks.shape_check) and reordered by how often they held, the network's order on ties; "
-                             "0: the network's order alone. Needs a support plane (else the order stands).")
+                             "picks.shape_check) and reordered by how often they held, the network's order on ties "
+                             "(3: kept by the pick benchmark, docs/picks.md); 0: the network's order alone, as a "
+                             "planner without a simulator must. Needs a support plane (else the order stands).")
     check_draws: int = Field(4, ge=1, le=32, description="Executions of each checked grasp, each with the "
                              "protocol's pose and friction noise (4 choose as well as 8 or 16: docs/picks.md).")
     check_shape: Literal["hull", "carved", "mirrored"] = Field(
