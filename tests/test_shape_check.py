@@ -147,7 +147,10 @@ def test_the_api_checks_the_first_grasps_and_the_bare_planner_refuses_to_pretend
     assert sorted(g.pose.tobytes() for g in checked.grasps[:3]) == sorted(key[:3])  # the first three, reordered
     assert [g.pose.tobytes() for g in checked.grasps[3:]] == key[3:]
     assert [g.rank for g in checked.grasps] == list(range(1, 7))
-    assert "check" in checked.seconds and "check" not in plain.seconds
+    assert "check" in checked.seconds and "check" not in plain.seconds and not checked.notes
+    np.save(tmp_path / "alone.npy", seen_box())
+    alone = plan_grasps(tmp_path / "alone.npy", spec=PlanSpec(top_k=6, support_plane="none"), viewpoint=eye).plan
+    assert len(alone.notes) == 1 and "the first 3 grasps are in the network's order, not checked" in alone.notes[0]
     scorer = GraspScorer(shipped_network(), device="cpu")
     assert PlanSpec().check_first == 3  # kept by the pick benchmark: the planner without a simulator refuses it
     with pytest.raises(SpecError, match="check_first=3 checks grasps in simulation.*check_first=0"):

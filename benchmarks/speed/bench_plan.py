@@ -108,7 +108,7 @@ def measure(folder: Path) -> dict:
         best = min(plans, key=lambda p: p.seconds["total"])
         proposals = propose(observation, net.record, spec, np.random.default_rng(0))
         baseline = one_at_a_time(proposals, net, np.random.default_rng(0))
-        rows.append({"object": name, "points": len(observation.points), **best.counts,
+        rows.append({"object": name, "points": len(observation.points), **best.counts.to_json(),
                      "seconds": {k: round(v, 4) for k, v in best.seconds.items()},
                      "baseline_seconds": round(baseline + best.seconds["sample"], 4),
                      **(check_seconds(observation, net, spec) if len(observation.points) < 1_000_000 else {})})

@@ -297,7 +297,15 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
         seconds["check"] = time.perf_counter() - ranked
     seconds["total"] = sum(seconds.values())
     counts = dataclasses.replace(proposals.counts, scored=len(scores))
-    return GraspPlan(observation.source, grasps, counts, proposals.plane, seconds, notes)
+    return GraspPlan(observation.source, grasps, counts, proposals.plane, seconds, notes + _unchecked(spec, proposals))
+
+
+def _unchecked(spec: PlanSpec, proposals: Proposals) -> tuple[str, ...]:
+    """A note where the spec asks for the check and the cloud gives it no support plane to stand its shape on."""
+    if not spec.check_first or proposals.plane is not None:
+        return ()
+    return (f"the first {spec.check_first} grasps are in the network's order, not checked: the check stands the "
+            "shape the view implies on a support plane, and this cloud has none (--no-plane, or none found)",)
 
 
 ESTIMATED_DISTANCE = 0.6  # m above the support plane's points where a camera of unknown position is put
