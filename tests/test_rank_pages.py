@@ -130,11 +130,16 @@ def test_the_checks_draws_are_judged_by_their_first_draws_and_more_draws_must_ch
     assert versus["mean"] == -0.5 and versus["draws"] == [4, 1]
     page = "\n".join(draws_lines({"1": {"3": {"all objects": one}}, "4": {"3": {"all objects": four}},
                                   "versus": {"1": {"3": {"all objects": versus}}}}))
-    assert "The check's first of 3 with 1 draws against 4, paired over objects: all objects -50.0 points [" in page
-    assert "1 draws not shown as good" in page
+    assert "The check's first of 3 with 1 draw against 4, paired over objects: all objects -50.0 points [" in page
+    assert "1 draw not shown as good" in page and "below" not in page.split("more draws choose better")[1][:20]
     alike = draws_difference(rows, 3, 4, 4)
     assert "4 draws as good" in "\n".join(draws_lines({"4": {"3": {"all objects": four}},
                                                          "versus": {"4": {"3": {"all objects": alike}}}}))
+    # 1 draw worse, 2 as good as 4: noise bounds the check below 2 draws, its shape from 2 on
+    page = "\n".join(draws_lines({"1": {"3": {"all objects": one}}, "2": {"3": {"all objects": four}},
+                                  "4": {"3": {"all objects": four}},
+                                  "versus": {"1": {"3": {"all objects": versus}}, "2": {"3": {"all objects": alike}}}}))
+    assert "noise below 2 draws; from 2 on (as good as 4, paired below) it is bounded by its shape" in page
 
 
 def _more_views(gains: list[int]) -> dict:

@@ -279,14 +279,30 @@ def draws_lines(by_count: dict) -> list[str]:
             for n in counts for k, by_set in by_count[n].items() for w, d in by_set.items()]
     few, many = (by_count[n]["3"]["all objects"] for n in (counts[0], counts[-1]))
     more = many["checked"] - few["checked"]
-    words = (f"{counts[-1]} draws choose {100 * more:+.1f} points against {counts[0]}: "
+    words = (f"{counts[-1]} draws choose {100 * more:+.1f} points against {_draws(counts[0])}: "
              + ("more draws choose better, the check is bounded by its noise" if more > 0.01 else
                 "more draws do not choose better; the check is bounded by its shape, not by its draws"))
+    enough = _fewest_as_good(by_count.get("versus", {}), counts)
+    if more > 0.01 and enough is not None and enough != counts[0]:
+        words += (f" below {enough} draws; from {enough} on (as good as {counts[-1]}, paired below) it is bounded "
+                  "by its shape")
     return ["Is the check bounded by its own noise? The hull's check with each grasp executed more or fewer times "
             "(each count the first draws of one run, a stream of its own), judged as above:", "",
             "| the check's draws | checked | set | the check's first | gain over objects [95% CI] |",
             "| --- | --- | --- | --- | --- |", *rows, "", f"Over all objects, first 3: {words}.", "",
             *_fewer_draws(by_count.get("versus", {}))]
+
+
+def _draws(n: str) -> str:
+    return f"{n} draw" if n == "1" else f"{n} draws"
+
+
+def _fewest_as_good(versus: dict, counts: list[str]) -> str | None:
+    """The fewest draws from which on every count is as good as the most (_fewer_draws' margin), if any."""
+    good = [n for n in counts[:-1]
+            if n in versus and 100 * versus[n]["3"]["all objects"]["interval"][0] > -FEWER_MARGIN]
+    later = [n for n in counts[:-1] if all(m in good for m in counts[counts.index(n):-1])]
+    return later[0] if later else None
 
 
 def _fewer_draws(versus: dict) -> list[str]:
@@ -298,7 +314,7 @@ def _fewer_draws(versus: dict) -> list[str]:
         many, low = d["draws"][0], 100 * d["interval"][0]
         verdict = (f"as good (its interval lies above -{FEWER_MARGIN:.0f} points)" if low > -FEWER_MARGIN else
                    f"not shown as good (its interval reaches below -{FEWER_MARGIN:.0f} points)")
-        lines += [f"The check's first of 3 with {n} draws against {many}, paired over objects: " + "; ".join(
+        lines += [f"The check's first of 3 with {_draws(n)} against {many}, paired over objects: " + "; ".join(
             f"{w} {100 * v['mean']:+.1f} points [{100 * v['interval'][0]:+.1f}, {100 * v['interval'][1]:+.1f}]"
-            for w, v in by_k["3"].items()) + f": {n} draws {verdict}.", ""]
+            for w, v in by_k["3"].items()) + f": {_draws(n)} {verdict}.", ""]
     return lines
