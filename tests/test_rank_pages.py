@@ -163,3 +163,17 @@ def test_the_check_judged_at_more_views_is_kept_only_where_its_pooled_interval_l
     assert f"`PlanSpec.check_first` = {PlanSpec().check_first}" in kept
     mixed = more_views_lines(_more_views([1, -1, 0, 1, -1, 0]))[-1]
     assert "all objects +0.0 points" in mixed and "**not kept**" in mixed
+
+
+def test_the_top_down_grasp_beside_the_check_is_judged_against_the_check_alone():
+    from benchmarks.pages.pick_rank_section import more_views_lines
+
+    more = _more_views([1, 1, 2, 1, 0, 1])
+    runs = more["sets"]["household"]
+    runs["3_top_down"] = {**runs["3"], "per_object": {o: n + 1 for o, n in runs["3"]["per_object"].items()}}
+    lines = more_views_lines(more)
+    assert any(line.startswith("| household | 3 and the best top-down grasp | ") for line in lines)
+    assert "against the first 3 alone at 4 views an object: household +25.0 points" in lines[-1]
+    assert "**kept**" in lines[-1] and "`PlanSpec.check_top_down` = False" in lines[-1]
+    runs["3_top_down"] = runs["3"]
+    assert "all objects +0.0 points" in more_views_lines(more)[-1] and "**not kept**" in more_views_lines(more)[-1]

@@ -182,3 +182,39 @@ def test_onepiece_grasp_check_writes_the_checks_seconds(tmp_path):
     assert bad.exit_code != 0 and "check_first" in bad.output
     bad = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--check-shape", "round"])
     assert bad.exit_code != 0 and "check_shape" in bad.output
+
+
+@pytest.mark.sim
+def test_the_best_top_down_grasp_is_checked_beside_the_first_ones_only_when_asked(tmp_path):
+    from onepiece_dist.api import plan_grasps
+    from onepiece_dist.picks.shape_check import view_check
+    from onepiece_dist.plan import GraspScorer, Observation
+    from onepiece_dist.plan.planner import best_top_down, checked_first, propose, rank
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PlanSpec
+    from tests.test_plan import _floor
+
+    points, eye = np.vstack([seen_box(), _floor(0.0)]), (0.3, -0.3, 0.4)
+    np.save(tmp_path / "box.npy", points)
+    spec = PlanSpec(top_k=10, check_first=3, check_draws=2, check_top_down=True)
+    scorer = GraspScorer(shipped_network(), device="cpu")
+    proposals = propose(Observation(points, np.array(eye), "box"), scorer.record, spec,
+                        np.random.default_rng([spec.seed, 49]))  # the planner's own stream
+    best = best_top_down(proposals, scorer.score(proposals.crops), scorer.record)
+    assert proposals.top_down == 3 and best is not None
+    plain = plan_grasps(tmp_path / "box.npy", spec=spec.model_copy(update={"check_first": 0}), viewpoint=eye).plan
+    checked = plan_grasps(tmp_path / "box.npy", spec=spec, viewpoint=eye).plan
+    key = [g.pose.tobytes() for g in plain.grasps]
+    first = key[:3] + ([] if best.pose.tobytes() in key[:3] else [best.pose.tobytes()])
+    assert sorted(g.pose.tobytes() for g in checked.grasps[:len(first)]) == sorted(first)
+    assert [g.pose.tobytes() for g in checked.grasps[len(first):]] == [k for k in key[3:] if k not in first][
+        :10 - len(first)]
+    assert [g.rank for g in checked.grasps] == list(range(1, 11))
+    ranked = rank(proposals, scorer.score(proposals.crops), scorer.record, spec)  # a grasp from the rest joins
+    moved = checked_first(ranked, proposals, scorer.gripper, 3, view_check(spec), ranked[6])
+    assert sorted(g.pose.tobytes() for g in moved[:4]) == sorted(g.pose.tobytes() for g in (*ranked[:3], ranked[6]))
+    assert [g.pose.tobytes() for g in moved[4:]] == [g.pose.tobytes() for g in (*ranked[3:6], *ranked[7:])]
+    assert [g.rank for g in moved] == list(range(1, 11))
+    sampled = propose(Observation(points, np.array(eye), "box"), scorer.record,
+                      spec.model_copy(update={"top_down": False}), np.random.default_rng(0))
+    assert best_top_down(sampled, scorer.score(sampled.crops), scorer.record) is None  # no top-down grasps

@@ -37,26 +37,30 @@ DRAWS = 8
 
 
 VIEWS = 8  # the pick benchmark's views an object
+TOP_DOWN = "_top_down"  # a run's key in more_views with the best top-down grasp checked beside the first ones
 
 
 def _spec(objects: str, check_first: int, output: Path = OUT, shape: str = "hull", views: int = VIEWS,
-          draws: int = DRAWS):
+          draws: int = DRAWS, top_down: bool = False):
     from onepiece_dist.plan.shipped import shipped_network
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     return PickSpec(objects=objects, checkpoint=str(shipped_network()), views=views, attempts=3, pictures=0,
                     output=str(output), methods=("network",),
-                    plan=PlanSpec(top_down=True, check_first=check_first, check_draws=draws, check_shape=shape))
+                    plan=PlanSpec(top_down=True, check_first=check_first, check_draws=draws, check_shape=shape,
+                                  check_top_down=top_down))
 
 
 def judge(which: str, objects: str, check_first: int, shape: str = "hull", views: int = VIEWS,
-          draws: int = DRAWS) -> dict:
+          draws: int = DRAWS, top_down: bool = False) -> dict:
     """The shipped network alone on ``objects`` (``views`` an object, the first VIEWS the benchmark's) with its
-    first ``check_first`` grasps checked on ``shape`` (each executed ``draws`` times), first attempt."""
+    first ``check_first`` grasps checked on ``shape`` (each executed ``draws`` times; with ``top_down``, the best
+    top-down grasp beside them), first attempt."""
     from onepiece_dist.picks.runner import run_picks
 
-    name = f"{which}_check{check_first}_{shape}" + ("" if (views, draws) == (VIEWS, DRAWS) else f"_{views}v{draws}d")
-    spec = _spec(objects, check_first, OUT / name, shape, views, draws)
+    name = (f"{which}_check{check_first}_{shape}" + ("" if (views, draws) == (VIEWS, DRAWS) else f"_{views}v{draws}d")
+            + ("_top_down" if top_down else ""))
+    spec = _spec(objects, check_first, OUT / name, shape, views, draws, top_down)
     start = time.perf_counter()
     report = run_picks(spec)
     network = report.method("network")
@@ -213,6 +217,8 @@ def main() -> None:
     parser.add_argument("--views", type=int, default=VIEWS, help="the benchmark's one draw at this many views an "
                         "object (the first 8 the benchmark's), the check with the planner's default draws, kept "
                         "beside the committed results")
+    parser.add_argument("--check-top-down", action="store_true", help="with --views: the check with the best "
+                        "top-down grasp beside the first ones, kept beside the runs at as many views")
     args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
     if args.check_draws:
@@ -235,7 +241,7 @@ def main() -> None:
         return
     checks = [int(k) for k in args.checks.split(",")]
     if args.views != VIEWS:
-        more_views(sets, checks, args.views)
+        more_views(sets, checks, args.views, args.check_top_down)
         return
     if args.check_shape != "hull":  # beside the hull's: judged against its unchecked runs
         result = json.loads(RESULTS.read_text())
@@ -253,16 +259,25 @@ def main() -> None:
     print(json.dumps({w: {k: v["first_attempt"] for k, v in m.items()} for w, m in measured.items()}, indent=1))
 
 
-def more_views(sets: dict[str, str], checks: list[int], views: int) -> None:
+def more_views(sets: dict[str, str], checks: list[int], views: int, top_down: bool = False) -> None:
     """The benchmark's one draw at ``views`` an object, each number in ``checks`` checked with the planner's default
-    draws; kept beside the committed results (``more_views``)."""
+    draws (with ``top_down``: the best top-down grasp checked beside them, added to the runs at as many views); kept
+    beside the committed results (``more_views``)."""
     from onepiece_dist.specs.plan import PlanSpec
 
     draws = PlanSpec().check_draws
-    found = {which: {str(k): judge(which, objects, k, views=views, draws=draws) for k in checks}
-             for which, objects in sets.items()}
+    suffix = TOP_DOWN if top_down else ""
+    found = {which: {f"{k}{suffix}": judge(which, objects, k, views=views, draws=draws, top_down=top_down)
+                     for k in checks if k or not top_down} for which, objects in sets.items()}
     result = json.loads(RESULTS.read_text())  # read after the runs: another mode may have written meanwhile
-    result["more_views"] = {"views": views, "check_draws": draws, "sets": found}
+    if top_down:
+        kept = result["more_views"]
+        if kept["views"] != views or kept["check_draws"] != draws:
+            raise SystemExit(f"--check-top-down judges against the runs at {views} views: run --views {views} first")
+        for which, runs in found.items():
+            kept["sets"][which].update(runs)
+    else:
+        result["more_views"] = {"views": views, "check_draws": draws, "sets": found}
     RESULTS.write_text(json.dumps(result, indent=1) + "\n")
 
 
@@ -270,20 +285,20 @@ if __name__ == "__main__":
     main()
 
 
-def paired_check(result: dict, checked: str, shape: str = "hull") -> dict:
-    """The first attempt with the first ``checked`` grasps checked on ``shape`` against without, paired over
-    objects (each set, and both pooled): mean difference, 95% bootstrap interval, verdict (kept where the pooled
-    one is above zero)."""
+def paired_check(result: dict, checked: str, shape: str = "hull", base: str = "0") -> dict:
+    """The first attempt with the first ``checked`` grasps checked on ``shape`` against the run ``base`` (default:
+    unchecked), paired over objects (each set, and both pooled): mean difference, 95% bootstrap interval, verdict
+    (kept where the pooled one is above zero)."""
     from onepiece_dist.stats.intervals import bootstrap_interval
 
     per_set = {}
     for which, m in result["sets"].items():
         views = m["0"]["views"] / max(len(m["0"]["per_object"]), 1)
         runs = m if shape == "hull" else result["judged_shapes"][shape][which]
-        per_set[which] = [(runs[checked]["per_object"][n] - m["0"]["per_object"][n]) / views
+        per_set[which] = [(runs[checked]["per_object"][n] - m[base]["per_object"][n]) / views
                           for n in sorted(m["0"]["per_object"])]
     per_set["all objects"] = [d for diffs in list(per_set.values()) for d in diffs]
     out = {name: {"mean": float(np.mean(d)), "interval": list(bootstrap_interval(np.array(d)))}
            for name, d in per_set.items()}
-    return {"checked": int(checked), "sets": out,
+    return {"checked": int(checked.removesuffix(TOP_DOWN)), "sets": out,
             "verdict": "kept" if out["all objects"]["interval"][0] > 0 else "not kept"}

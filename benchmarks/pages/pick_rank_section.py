@@ -172,29 +172,60 @@ def _views_an_object(sets: dict) -> int:
 def more_views_lines(more: dict | None) -> list[str]:
     """The check judged by the benchmark's one draw at more views an object (results' more_views): the runs, each
     gain paired over objects, and whether the planner checks by default."""
-    from benchmarks.experiments.pick_shape_check import paired_check
-    from onepiece_dist.specs.plan import PlanSpec
+    from benchmarks.experiments.pick_shape_check import TOP_DOWN
 
     if not more:
         return []
-    sets, default = more["sets"], PlanSpec().check_first
+    sets = more["sets"]
     lines = ["", f"The same by the benchmark's one draw at {more['views']} views an object (the first 8 the "
              f"benchmark's), the check at its default {more['check_draws']} draws a grasp:", "",
              "| set | checked | first attempt [95% CI over objects] | views | first attempts lost | seconds |",
              "| --- | --- | --- | --- | --- | --- |",
-             *(f"| {which} | {k if k != '0' else 'none'} | {_pct(m[k]['first_attempt'])} [{_pct(m[k]['interval'][0])}, "
+             *(f"| {which} | {_run_name(k)} | {_pct(m[k]['first_attempt'])} [{_pct(m[k]['interval'][0])}, "
                f"{_pct(m[k]['interval'][1])}] | {m[k]['views']} | "
                + ", ".join(f"{n} {reason.replace('_', ' ')}" for reason, n in sorted(m[k]["failures"].items()))
                + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in m), ""]
-    for k in [k for k in next(iter(sets.values())) if k != "0"]:
-        gain = paired_check(more, k)
-        planner = (f"the planner checks its first {default} by default (`PlanSpec.check_first` = {default})"
-                   if default else "the planner does not check by default (`PlanSpec.check_first` = 0)")
-        lines.append(f"Checking the first {k} at {more['views']} views an object: " + "; ".join(
-            f"{name} {100 * g['mean']:+.1f} points [{100 * g['interval'][0]:+.1f}, {100 * g['interval'][1]:+.1f}]"
-            for name, g in gain["sets"].items()) + f" (paired over objects): **{gain['verdict']}** as the planner's "
-            f"default (kept where its interval over all objects lies above zero); {planner}.")
+    runs = list(next(iter(sets.values())))
+    lines += [_more_views_verdict(more, k) for k in runs if k.isdigit() and k != "0"]
+    lines += [_top_down_verdict(more, k) for k in runs if k.endswith(TOP_DOWN)]
     return lines
+
+
+def _run_name(key: str) -> str:
+    from benchmarks.experiments.pick_shape_check import TOP_DOWN
+
+    if key == "0":
+        return "none"
+    return f"{key.removesuffix(TOP_DOWN)} and the best top-down grasp" if key.endswith(TOP_DOWN) else key
+
+
+def _gain_words(gain: dict) -> str:
+    return "; ".join(f"{name} {100 * g['mean']:+.1f} points [{100 * g['interval'][0]:+.1f}, "
+                     f"{100 * g['interval'][1]:+.1f}]" for name, g in gain["sets"].items())
+
+
+def _more_views_verdict(more: dict, k: str) -> str:
+    from benchmarks.experiments.pick_shape_check import paired_check
+    from onepiece_dist.specs.plan import PlanSpec
+
+    gain, default = paired_check(more, k), PlanSpec().check_first
+    planner = (f"the planner checks its first {default} by default (`PlanSpec.check_first` = {default})"
+               if default else "the planner does not check by default (`PlanSpec.check_first` = 0)")
+    return (f"Checking the first {k} at {more['views']} views an object: {_gain_words(gain)} (paired over "
+            f"objects): **{gain['verdict']}** as the planner's default (kept where its interval over all objects "
+            f"lies above zero); {planner}.")
+
+
+def _top_down_verdict(more: dict, k: str) -> str:
+    from benchmarks.experiments.pick_shape_check import TOP_DOWN, paired_check
+    from onepiece_dist.specs.plan import PlanSpec
+
+    first = k.removesuffix(TOP_DOWN)
+    gain, default = paired_check(more, k, base=first), PlanSpec().check_top_down
+    return (f"The best-scored top-down grasp checked beside the first {first} (`check_top_down`), against the first "
+            f"{first} alone at {more['views']} views an object: {_gain_words(gain)} (paired over objects): "
+            f"**{gain['verdict']}** as the planner's default (kept where its interval over all objects lies above "
+            f"zero); `PlanSpec.check_top_down` = {default}.")
 
 
 def _density_lines(by_scale: dict) -> list[str]:

@@ -233,13 +233,25 @@ def _counts(found: CloudCandidates, empty: int, added: int = 0) -> PlanCounts:
 def rank(proposals: Proposals, scores: np.ndarray, record: CropRecord, spec: PlanSpec,
          keep: int | None = None) -> tuple[PlannedGrasp, ...]:
     """The best ``keep`` (default ``spec.top_k``) proposals by ``scores`` (n,) after non-maximum suppression."""
-    gripper = record.gripper
-    chosen = suppress_near(proposals.poses, scores, gripper, spec.nms_distance, spec.nms_angle_deg,
+    chosen = suppress_near(proposals.poses, scores, record.gripper, spec.nms_distance, spec.nms_angle_deg,
                            keep or spec.top_k)
+    return _planned(proposals, scores, record.gripper, chosen)
+
+
+def _planned(proposals: Proposals, scores: np.ndarray, gripper: GripperSpec, chosen) -> tuple[PlannedGrasp, ...]:
+    """The proposals ``chosen`` (indices, best first) as planned grasps ranked 1, 2, ..."""
     panda = to_panda(proposals.poses[chosen], gripper.finger_length) if len(chosen) else np.zeros((0, 4, 4))
     return tuple(PlannedGrasp(rank + 1, proposals.poses[i], panda[rank], gripper.max_opening,
                               _observed_width(proposals.crops.points[i]), float(scores[i]),
                               int(proposals.crops.counts[i])) for rank, i in enumerate(chosen))
+
+
+def best_top_down(proposals: Proposals, scores: np.ndarray, record: CropRecord) -> PlannedGrasp | None:
+    """The best-scored of the view's top-down grasps (PlanSpec.top_down: the last proposals), None without them."""
+    if not proposals.top_down:
+        return None
+    first = len(proposals.poses) - proposals.top_down
+    return _planned(proposals, scores, record.gripper, [first + int(np.argmax(scores[first:]))])[0]
 
 
 def _observed_width(points: np.ndarray) -> float:
@@ -266,9 +278,14 @@ GraspCheck = Callable[[tuple[PlannedGrasp, ...], Proposals, GripperSpec], tuple[
 
 
 def checked_first(grasps: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec, count: int,
-                  check: GraspCheck) -> tuple[PlannedGrasp, ...]:
-    """``grasps`` (ranked) with their first ``count`` reordered by ``check``, the rest as they were."""
-    return check(grasps[:count], proposals, gripper) + grasps[count:]
+                  check: GraspCheck, extra: PlannedGrasp | None = None) -> tuple[PlannedGrasp, ...]:
+    """``grasps`` (ranked) with their first ``count`` reordered by ``check``, ``extra`` checked beside them (last
+    on ties; taken out of the rest where it is there), the rest as they were; ranks numbered again."""
+    first, rest = grasps[:count], grasps[count:]
+    if extra is not None and not any(np.array_equal(g.pose, extra.pose) for g in first):
+        first, rest = (*first, extra), tuple(g for g in rest if not np.array_equal(g.pose, extra.pose))
+    ordered = check(first, proposals, gripper) + rest
+    return tuple(dataclasses.replace(g, rank=k + 1) for k, g in enumerate(ordered))
 
 
 def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None,
@@ -290,7 +307,8 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
     ranked = time.perf_counter()
     if spec.check_first:
-        grasps = checked_first(grasps, proposals, scorer.gripper, spec.check_first, check)
+        extra = best_top_down(proposals, scores, scorer.record) if spec.check_top_down else None
+        grasps = checked_first(grasps, proposals, scorer.gripper, spec.check_first, check, extra)
     grasps = grasps[: spec.top_k]
     seconds = {**proposals.seconds, "score": scored - clock, "rank": ranked - scored}
     if spec.check_first:

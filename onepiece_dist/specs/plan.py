@@ -54,6 +54,8 @@ class PlanSpec(Frozen):
                              "planner without a simulator must. Needs a support plane (else the order stands).")
     check_draws: int = Field(4, ge=1, le=32, description="Executions of each checked grasp, each with the "
                              "protocol's pose and friction noise (4 choose as well as 8 or 16: docs/picks.md).")
+    check_top_down: bool = Field(False, description="Also check the best-scored top-down grasp (top_down) beside "
+                                 "the first check_first, placed first only where it held more often than each.")
     check_shape: Literal["hull", "carved", "mirrored"] = Field(
         "hull", description="The shape checked on: the object's observed points and their shadows on the support "
         "plane as one convex hull; that hull less every voxel the camera saw through (carved: an opening it looked "
