@@ -178,6 +178,7 @@ def test_onepiece_grasp_check_writes_the_checks_seconds(tmp_path):
         ran = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--out", str(folder),
                                        *given])
         assert ran.exit_code == 0 and ("check" in json.loads((folder / "grasps.json").read_text())["seconds"]) == checks
+        assert ("executed in simulation on the shape the view implies" in ran.output) == checks  # said on stderr
     bad = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--check", "-1"])
     assert bad.exit_code != 0 and "check_first" in bad.output
     bad = CliRunner().invoke(app, ["grasp", str(cloud), "--viewpoint", "0.3,-0.3,0.4", "--check-shape", "round"])

@@ -117,6 +117,9 @@ def _print_plan(plan, json_path: Path, png: Path | None) -> None:
     c = plan.counts
     err(f"{plan.source}: {c.sampled} placements, {c.collided} collided, {c.below_plane} below the "
         f"plane, {c.too_few_points} with too few points, {c.scored} scored in {plan.seconds['total']:.2f} s")
+    if "check" in plan.seconds:
+        err(f"the first grasps executed in simulation on the shape the view implies and reordered by how often they "
+            f"held ({plan.seconds['check']:.2f} s; --check 0: the network's order alone)")
     for g in plan.grasps:
         centre = g.pose[:3, 3]
         err(f"  #{g.rank}  score {g.score:.3f}  palm at ({centre[0]:+.3f}, {centre[1]:+.3f}, {centre[2]:+.3f}) m  "
