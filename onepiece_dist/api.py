@@ -8,8 +8,7 @@
     report = run_picks(PickSpec(checkpoint="data/x.zarr.train/best.pt", objects="meshes/"))
 
     from onepiece_dist.api import plan_grasps           # grasps on a camera's files (docs/planning.md)
-    planned = plan_grasps("depth.png", intrinsics="k.json", camera_pose="camera.json")  # the shipped network,
-    # its first 3 grasps checked in simulation on the shape the view implies (PlanSpec.check_first; 0: its order)
+    planned = plan_grasps("depth.png", intrinsics="k.json", camera_pose="camera.json")  # first 3 checked in sim
 
 ``Client(address=None)`` runs jobs on an embedded Ray (loopback only) in a background thread of this process;
 ``Client(address="http://127.0.0.1:8265")`` submits them to a cluster through the Ray Jobs API, where they keep

@@ -45,19 +45,6 @@ def test_the_picks_page_is_the_rendered_one_and_answers_first():
         assert (ROOT / "docs" / picture).is_file(), picture
 
 
-def test_the_picks_page_says_whether_the_network_checked_and_what_the_check_costs_against_the_target():
-    from benchmarks.pages.picks_page import _check_words, _checked_line
-
-    assert "ranks by its score alone" in _check_words({"check_first": 0})
-    assert "checks its first 3 grasps" in _check_words({"check_first": 3, "check_draws": 4, "check_shape": "hull"})
-    row = {"check_first": 3, "check_draws": 4, "check_seconds": 0.4, "check_plane": True}
-    plan = {"rows": [{"points": 10}, row], "targets": {"cpu_seconds_per_view": 0.3}}
-    assert _checked_line(plan) == ""  # a run before the check was timed
-    slow = _checked_line({**plan, "median_checked_seconds": 0.56})
-    assert "median 0.560 s a view (the 0.3 s target: **not met**" in slow
-    assert "**met**" in _checked_line({**plan, "median_checked_seconds": 0.25})
-
-
 def test_the_household_figure_pools_both_sets_over_their_objects():
     from benchmarks.pages.picks_page import pooled
 

@@ -177,3 +177,16 @@ def test_the_top_down_grasp_beside_the_check_is_judged_against_the_check_alone()
     assert "**kept**" in lines[-1] and "`PlanSpec.check_top_down` = False" in lines[-1]
     runs["3_top_down"] = runs["3"]
     assert "all objects +0.0 points" in more_views_lines(more)[-1] and "**not kept**" in more_views_lines(more)[-1]
+
+
+def test_the_picks_page_says_whether_the_network_checked_and_what_the_check_costs_against_the_target():
+    from benchmarks.pages.picks_page import _check_words, _checked_line
+
+    assert "ranks by its score alone" in _check_words({"check_first": 0})
+    assert "checks its first 3 grasps" in _check_words({"check_first": 3, "check_draws": 4, "check_shape": "hull"})
+    row = {"check_first": 3, "check_draws": 4, "check_seconds": 0.4, "check_plane": True}
+    plan = {"rows": [{"points": 10}, row], "targets": {"cpu_seconds_per_view": 0.3}}
+    assert _checked_line(plan) == ""  # a run before the check was timed
+    slow = _checked_line({**plan, "median_checked_seconds": 0.56})
+    assert "median 0.560 s a view (the 0.3 s target: **not met**" in slow
+    assert "**met**" in _checked_line({**plan, "median_checked_seconds": 0.25})
