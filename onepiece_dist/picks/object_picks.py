@@ -31,8 +31,7 @@ from onepiece_dist.plan.planner import (
     PlanCounts,
     PlannedGrasp,
     Proposals,
-    best_top_down,
-    checked_first,
+    check_ranked,
     gravity,
     rank,
     with_context,
@@ -179,8 +178,7 @@ def _choice(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
     ranked = rank(proposals, scores, scorer.record, plan, keep=max(spec.attempts, plan.check_first * checking))
     if checking:
         check = view_check(plan, spec.sim, np.random.default_rng(seen.check_seed))
-        extra = best_top_down(proposals, scores, scorer.record) if plan.check_top_down else None
-        ranked = checked_first(ranked, proposals, scorer.gripper, plan.check_first, check, extra)
+        ranked = check_ranked(ranked, proposals, scores, scorer.record, plan, check)
     ranked = ranked[: spec.attempts]
     poses = np.array([g.pose for g in ranked]).reshape(-1, 4, 4)
     return Choice(pool, tuple(index_of(proposals.poses, p) for p in poses), poses, ranked)

@@ -288,6 +288,15 @@ def checked_first(grasps: tuple[PlannedGrasp, ...], proposals: Proposals, grippe
     return tuple(dataclasses.replace(g, rank=k + 1) for k, g in enumerate(ordered))
 
 
+def check_ranked(grasps: tuple[PlannedGrasp, ...], proposals: Proposals, scores: np.ndarray, record: CropRecord,
+                 spec: PlanSpec, check: GraspCheck) -> tuple[PlannedGrasp, ...]:
+    """``grasps`` (ranked) with the first ``spec.check_first`` reordered by ``check``, the best top-down grasp
+    checked beside them where ``spec.check_top_down`` asks (checked_first): the planner's and the pick benchmark's
+    one check."""
+    extra = best_top_down(proposals, scores, record) if spec.check_top_down else None
+    return checked_first(grasps, proposals, record.gripper, spec.check_first, check, extra)
+
+
 def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None,
                 check: GraspCheck | None = None) -> GraspPlan:
     """The ranked grasps on ``observation`` by ``scorer``'s network (seeded by ``spec.seed``; default PlanSpec),
@@ -307,8 +316,7 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
     ranked = time.perf_counter()
     if spec.check_first:
-        extra = best_top_down(proposals, scores, scorer.record) if spec.check_top_down else None
-        grasps = checked_first(grasps, proposals, scorer.gripper, spec.check_first, check, extra)
+        grasps = check_ranked(grasps, proposals, scores, scorer.record, spec, check)
     grasps = grasps[: spec.top_k]
     seconds = {**proposals.seconds, "score": scored - clock, "rank": ranked - scored}
     if spec.check_first:
