@@ -2,8 +2,9 @@
 best grasps apart). Each is executed by the pick protocol, ``draws`` times with the protocol's pose and friction
 noise, on the shape the view implies (core.cloud.completion: the observed points and their shadows on the table as
 one convex hull, or that hull carved by what the camera saw through; at the protocol's density) in a pick world of
-its own, and the grasps are reordered by how often they held there, the network's order on ties. The check knows
-only the view: the object itself is never seen."""
+its own, and the grasps are reordered by how often they held there, the network's order on ties. Where the view
+holds several objects apart (core.cloud.objects), each grasp is checked on the shape of the one it closes on. The
+check knows only the view: the object itself is never seen."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.cloud.completion import CompletedShape, completed_shape
+from onepiece_dist.core.cloud.objects import closed_on, separate_objects
 from onepiece_dist.core.cloud.swept_space import DepthRays
 from onepiece_dist.core.frames import compose_poses
 from onepiece_dist.plan.planner import GraspCheck, PlannedGrasp, Proposals, Seen
@@ -33,14 +35,14 @@ def check_world(gripper: GripperSpec):
     return _WORLDS[gripper]
 
 
-def check_shape(seen: Seen, shape: str = "hull") -> CompletedShape | None:
-    """The ``shape`` (PlanSpec.check_shape) ``seen`` implies of the object (core.cloud.completion): the hull,
-    mirrored, or carved by what the camera saw through where its position is known; None without a support plane
-    or a volume."""
+def check_shape(seen: Seen, shape: str = "hull", points: np.ndarray | None = None) -> CompletedShape | None:
+    """The ``shape`` (PlanSpec.check_shape) ``seen`` implies of the object (core.cloud.completion; its ``points``,
+    default all of the view's object points): the hull, mirrored, or carved by what the camera saw through where
+    its position is known; None without a support plane or a volume."""
     if seen.plane is None:
         return None
     rays = DepthRays.of(seen.cloud, seen.viewpoint) if shape == "carved" and seen.viewpoint is not None else None
-    return completed_shape(seen.objects, seen.plane, rays, mirror=shape == "mirrored")
+    return completed_shape(seen.objects if points is None else points, seen.plane, rays, mirror=shape == "mirrored")
 
 
 def held_draws(shape: CompletedShape | None, poses: np.ndarray, gripper: GripperSpec, sim: SimSpec, draws: int,
@@ -73,7 +75,23 @@ def checked(ranked: tuple[PlannedGrasp, ...], shape: CompletedShape | None, grip
     again; unchanged where there is no shape to check on."""
     if len(ranked) < 2:
         return ranked
-    shares = held_shares(shape, np.array([g.pose for g in ranked]), gripper, sim, draws, rng)
+    return _reordered(ranked, held_shares(shape, np.array([g.pose for g in ranked]), gripper, sim, draws, rng))
+
+
+def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape | None], gripper: GripperSpec,
+                  sim: SimSpec, draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
+    """``ranked`` reordered by how often each held on its own shape (``shapes``, one a grasp: the object it closes
+    on), the network's order on ties; unchanged where a grasp has no shape to check on."""
+    if len(ranked) < 2:
+        return ranked
+    shares = [held_shares(shape, grasp.pose[None], gripper, sim, draws, rng)
+              for grasp, shape in zip(ranked, shapes, strict=True)]
+    if any(share is None for share in shares):
+        return ranked
+    return _reordered(ranked, np.concatenate(shares))
+
+
+def _reordered(ranked: tuple[PlannedGrasp, ...], shares: np.ndarray | None) -> tuple[PlannedGrasp, ...]:
     if shares is None:
         return ranked
     order = np.argsort(-shares, kind="stable")
@@ -88,8 +106,14 @@ def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator
 
     def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec
               ) -> tuple[PlannedGrasp, ...]:
-        shape = check_shape(Seen.of(proposals), spec.check_shape)
-        return checked(ranked, shape, gripper, sim, spec.check_draws, rng)
+        seen = Seen.of(proposals)
+        objects = separate_objects(seen.objects)
+        if len(objects) == 1:  # one object: its shape from every observed point
+            return checked(ranked, check_shape(seen, spec.check_shape), gripper, sim, spec.check_draws, rng)
+        shapes = [check_shape(seen, spec.check_shape, points) for points in objects]
+        mine = [closed_on(objects, g.pose, gripper.closing_depth, gripper.closing_width, gripper.closing_height)
+                for g in ranked]
+        return checked_apart(ranked, [shapes[k] for k in mine], gripper, sim, spec.check_draws, rng)
 
     return check
 

@@ -1,0 +1,73 @@
+"""The object points of one view told apart: points whose cells of GAP touch (26-connected) are one object, so
+objects further apart than about GAP are separate. A planner that completes the shape of "the object" from the
+whole cloud (core.cloud.completion) would otherwise join two objects standing side by side into one hull and
+fill the space between them; a grasp is checked on the object it closes on (picks.shape_check)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+GAP = 0.01  # m: about two rays apart at the pick camera's 0.8 m, yet less than a finger's width
+MIN_SHARE = 0.1  # an object holds at least this share of the view's object points (less: stray points)
+MIN_POINTS = 30  # and at least this many
+
+_HALF_NEIGHBOURS = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
+                             if (i, j, k) > (0, 0, 0)], dtype=np.int64)  # 13: each touching pair once
+
+
+def point_groups(points: np.ndarray, gap: float = GAP) -> np.ndarray:
+    """(n,) int: the connected group of each of ``points`` (n, 3), 0 the largest, then by size (ties: the group
+    met first in cell order)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    if len(points) == 0:
+        return np.zeros(0, dtype=np.int64)
+    cells, inverse = np.unique(np.floor(np.asarray(points) / gap).astype(np.int64), axis=0, return_inverse=True)
+    low, span = cells.min(axis=0) - 1, cells.max(axis=0) - cells.min(axis=0) + 3
+    keys = _keys(cells, low, span)  # sorted, as np.unique sorts the cells lexicographically
+    rows, cols = [], []
+    for offset in _HALF_NEIGHBOURS:
+        wanted = _keys(cells + offset, low, span)
+        at = np.minimum(np.searchsorted(keys, wanted), len(keys) - 1)
+        hit = keys[at] == wanted
+        rows.append(np.nonzero(hit)[0])
+        cols.append(at[hit])
+    row, col = np.concatenate(rows), np.concatenate(cols)
+    graph = coo_matrix((np.ones(len(row), dtype=np.int8), (row, col)), shape=(len(cells), len(cells)))
+    _, cell_group = connected_components(graph, directed=False)
+    group = cell_group[inverse.ravel()]
+    order = np.argsort(-np.bincount(group), kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank[group]
+
+
+def _keys(cells: np.ndarray, low: np.ndarray, span: np.ndarray) -> np.ndarray:
+    shifted = cells - low
+    return (shifted[:, 0] * span[1] + shifted[:, 1]) * span[2] + shifted[:, 2]
+
+
+def separate_objects(points: np.ndarray, gap: float = GAP) -> list[np.ndarray]:
+    """The objects among ``points`` (the view's cloud less its support plane): each group of at least MIN_SHARE
+    of them and MIN_POINTS, largest first; the stray groups belong to none. One object (or none): ``[points]``
+    whole, stray points and all."""
+    groups = point_groups(points, gap)
+    sizes = np.bincount(groups) if len(groups) else np.zeros(0, dtype=np.int64)
+    kept = np.nonzero((sizes >= MIN_POINTS) & (sizes >= MIN_SHARE * len(points)))[0]
+    if len(kept) < 2:
+        return [points]
+    return [points[groups == g] for g in kept]
+
+
+def closed_on(objects: list[np.ndarray], pose: np.ndarray, depth: float, width: float, height: float) -> int:
+    """Which of ``objects`` the grasp ``pose`` (gripper to cloud, docs/gripper_frame.md) closes on: the one with
+    the most points in its closing region (depth x width x height), else the one nearest the region's centre."""
+    inside, nearest = [], []
+    centre = pose[:3, 3] + pose[:3, 0] * depth / 2
+    for points in objects:
+        local = (points - pose[:3, 3]) @ pose[:3, :3]
+        inside.append(int(np.sum((local[:, 0] >= 0) & (local[:, 0] < depth) & (np.abs(local[:, 1]) < width / 2)
+                                 & (np.abs(local[:, 2]) < height / 2))))
+        nearest.append(float(np.min(np.sum((points - centre) ** 2, axis=1))))
+    return int(np.argmax(inside)) if max(inside) > 0 else int(np.argmin(nearest))

@@ -1,0 +1,68 @@
+"""Objects standing apart in one view are told apart (core.cloud.objects), and the planner's check completes the
+shape of the object a grasp closes on, not one hull over both (picks.shape_check)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from onepiece_dist.core.cloud.completion import completed_shape
+from onepiece_dist.core.cloud.grasps import SupportPlane
+from onepiece_dist.core.cloud.objects import GAP, closed_on, point_groups, separate_objects
+from onepiece_dist.core.cloud.top_down import top_down_grasps
+from onepiece_dist.specs.plan import PICK_SIM
+from tests.test_shape_check import seen_box
+
+FLOOR = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(0, bool))
+APART = np.array([0.09, 0.0, 0.0])  # a second box 5 cm beyond the first's +x face
+
+
+def test_points_further_apart_than_the_gap_are_separate_objects_and_stray_points_are_none():
+    box = seen_box()
+    groups = point_groups(np.vstack([box, box + APART]))
+    assert len(np.unique(groups)) == 2 and len(np.unique(groups[: len(box)])) == 1
+    assert point_groups(np.vstack([box, box + [0.04 + GAP / 2, 0.0, 0.0]])).max() == 0  # touching: one object
+    small = seen_box((0.03, 0.03, 0.04))
+    apart = separate_objects(np.vstack([box, small + APART]))
+    assert [len(p) for p in apart] == [len(box), len(small)]  # largest first
+    stray = np.vstack([box, [[0.3, 0.3, 0.05]]])
+    whole = separate_objects(stray)
+    assert len(whole) == 1 and whole[0] is stray  # one object: every point kept, the stray one too
+    assert point_groups(np.zeros((0, 3))).shape == (0,)
+
+
+@pytest.mark.sim
+def test_a_grasp_beside_a_second_object_is_checked_on_its_own_object_not_on_one_hull_over_both():
+    from onepiece_dist.picks.shape_check import held_shares
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import shipped_network
+
+    gripper = GraspScorer(shipped_network(), device="cpu").gripper
+    box = seen_box()
+    both = np.vstack([box, box + APART])
+    grasp = top_down_grasps(box, np.array([0.0, 0.0, -1.0]), gripper)[0]  # a finger in the space between them
+    objects = separate_objects(both)
+    mine = closed_on(objects, grasp, gripper.closing_depth, gripper.closing_width, gripper.closing_height)
+    assert np.array_equal(objects[mine], box)
+    far = grasp.copy()
+    far[:3, 3] += [0.0, 0.3, 0.0]  # closes on nothing: the nearest object's
+    assert closed_on(objects, far, gripper.closing_depth, gripper.closing_width, gripper.closing_height) == mine
+    own = held_shares(completed_shape(box, FLOOR), grasp[None], gripper, PICK_SIM, 4, np.random.default_rng(0))
+    joined = held_shares(completed_shape(both, FLOOR), grasp[None], gripper, PICK_SIM, 4, np.random.default_rng(0))
+    assert own[0] >= 0.5 and joined[0] == 0.0  # one hull over both fills the space the finger goes into
+
+
+@pytest.mark.sim
+def test_the_planner_checks_each_grasp_on_its_own_object_where_the_view_holds_two(tmp_path):
+    from onepiece_dist.api import plan_grasps
+    from onepiece_dist.specs.plan import PlanSpec
+    from tests.test_plan import _floor
+
+    cloud = tmp_path / "two.npy"
+    np.save(cloud, np.vstack([seen_box(), seen_box() + APART, _floor(0.0)]))
+    eye = (0.3, -0.3, 0.4)
+    plain = plan_grasps(cloud, spec=PlanSpec(top_k=6, check_first=0), viewpoint=eye).plan
+    checked = plan_grasps(cloud, spec=PlanSpec(top_k=6, check_draws=2), viewpoint=eye).plan  # the default: 3
+    key = [g.pose.tobytes() for g in plain.grasps]
+    assert sorted(g.pose.tobytes() for g in checked.grasps[:3]) == sorted(key[:3])
+    assert [g.pose.tobytes() for g in checked.grasps[3:]] == key[3:] and "check" in checked.seconds
