@@ -66,3 +66,23 @@ def test_the_planner_checks_each_grasp_on_its_own_object_where_the_view_holds_tw
     key = [g.pose.tobytes() for g in plain.grasps]
     assert sorted(g.pose.tobytes() for g in checked.grasps[:3]) == sorted(key[:3])
     assert [g.pose.tobytes() for g in checked.grasps[3:]] == key[3:] and "check" in checked.seconds
+
+
+def test_a_grasps_context_reads_the_centre_of_the_object_it_closes_on():
+    from onepiece_dist.core.grasp_context import grasp_context, object_centre
+    from onepiece_dist.plan.planner import Seen, planned_crops
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import shipped_network
+
+    record = GraspScorer(shipped_network(), device="cpu").record
+    gripper, box = record.gripper, seen_box()
+    grasps = np.stack([top_down_grasps(box, np.array([0.0, 0.0, -1.0]), gripper)[0],
+                       top_down_grasps(box + APART, np.array([0.0, 0.0, -1.0]), gripper)[0]])
+    both = np.vstack([box, box + APART])
+    crops, keep = planned_crops(Seen(both, both, FLOOR, None), grasps, record, np.random.default_rng(0))
+    assert keep.all()
+    own = np.stack([grasp_context(grasps[k:k + 1], object_centre(points), np.array([0.0, 0.0, -1.0]),
+                                  gripper.closing_depth)[0] for k, points in enumerate((box, box + APART))])
+    np.testing.assert_array_equal(crops.context, own)
+    alone, _ = planned_crops(Seen(box, box, FLOOR, None), grasps[:1], record, np.random.default_rng(0))
+    np.testing.assert_array_equal(alone.context, own[:1])  # one object: its own centre, as before

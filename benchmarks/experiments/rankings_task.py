@@ -12,6 +12,7 @@ import numpy as np
 from onepiece_dist.core.cloud.grasps import dot3
 from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import perturb_poses
+from onepiece_dist.core.grasp_context import object_centre
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, process_scorer
 from onepiece_dist.picks.views import Executions, index_of, observe_view, simulated_object
 from onepiece_dist.plan.planner import Proposals, gravity, rank, with_context
@@ -56,7 +57,7 @@ def _scores_at(poses: np.ndarray, proposals: Proposals, scorer: GraspScorer, spe
     """(k,) ``scorer``'s scores of grasps at other ``poses`` on the view's object points, cut and given their
     context as the planner does; 0 where a crop holds fewer than ``spec.plan.min_points`` points."""
     crops = with_context(cut_crops(proposals.object_points, poses, scorer.record, rng), poses,
-                         proposals.object_points, gravity(proposals.plane), scorer.gripper.closing_depth)
+                         object_centre(proposals.object_points), gravity(proposals.plane), scorer.gripper.closing_depth)
     return np.where(crops.counts >= spec.plan.min_points, scorer.score(crops, spec.plan.batch_size), 0.0)
 
 
@@ -115,8 +116,8 @@ def _view_input(name: str, proposals: Proposals, spec: PickSpec, eye: np.ndarray
     network = _member(name, spec)
     crops = proposals.crops
     if network.model.context == 9:
-        crops = with_context(crops, proposals.poses, proposals.object_points, gravity(proposals.plane),
-                             network.gripper.closing_depth, eye)
+        crops = with_context(crops, proposals.poses, object_centre(proposals.object_points),
+                             gravity(proposals.plane), network.gripper.closing_depth, eye)
     best = int(np.argmax(network.score(crops, spec.plan.batch_size)))
     return "view", best, proposals.poses[best]
 

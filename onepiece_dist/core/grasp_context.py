@@ -32,7 +32,8 @@ def closing_centres(poses: np.ndarray, closing_depth: float) -> np.ndarray:
 def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closing_depth: float,
                   eye: np.ndarray | None = None) -> np.ndarray:
     """(n, 6) float32 context of ``poses`` (n, 4, 4) gripper-to-cloud: ``down`` (3,) unit gravity and ``centre`` (3,)
-    the observed object's centre, both in the cloud's frame, seen from each gripper frame. With the camera's
+    the observed object's centre (or each grasp's object's, (n, 3)), both in the cloud's frame, seen from each
+    gripper frame. With the camera's
     position ``eye`` (3,), or each grasp's (n, 3): (n, 9), then the unit direction from the closing region's centre
     to the camera, in the gripper frame (which side of the crop was seen, which lies in occluded space)."""
     poses = np.asarray(poses, dtype=np.float64)
@@ -42,7 +43,8 @@ def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closi
     rot = poses[:, :3, :3]
     closing_centre = closing_centres(poses, closing_depth)
     gravity = transposed_rotation(rot, down)
-    offset = transposed_rotation(rot, np.asarray(centre, dtype=np.float64)[None] - closing_centre)
+    centre = np.asarray(centre, dtype=np.float64)
+    offset = transposed_rotation(rot, (centre if centre.ndim == 2 else centre[None]) - closing_centre)
     parts = [gravity, offset]
     if eye is not None:
         towards = np.asarray(eye, dtype=np.float64) - closing_centre

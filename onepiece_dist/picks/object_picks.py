@@ -18,7 +18,7 @@ import numpy as np
 from onepiece_dist.core.cloud.grasps import SupportPlane, above_plane, antipodal_scores, cloud_normals
 from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import compose_poses, transform_points
-from onepiece_dist.core.grasp_context import WORLD_DOWN
+from onepiece_dist.core.grasp_context import WORLD_DOWN, object_centre
 from onepiece_dist.core.mesh import sample_surface
 from onepiece_dist.core.sampling import sample_candidates
 from onepiece_dist.errors import MeshRejected
@@ -197,7 +197,7 @@ def _full_mesh_proposals(spec: PickSpec, scorer: GraspScorer, mesh, seen: PickVi
     crops, keep = cut_crops(world_surface, poses, scorer.record, rng).holding(spec.plan.min_points)
     if not keep.any():
         return None
-    crops = with_context(crops, poses[keep], world_surface, WORLD_DOWN, gripper.closing_depth)
+    crops = with_context(crops, poses[keep], object_centre(world_surface), WORLD_DOWN, gripper.closing_depth)
     counts = PlanCounts(found.tried, found.rejected_collision, len(found.poses) - len(poses), int(np.sum(~keep)),
                         int(np.sum(keep)))
     return Proposals(poses[keep], crops, world_surface, seen.proposals.plane, counts)

@@ -19,12 +19,13 @@ from onepiece_dist.core.cloud.grasps import (
     suppress_near,
     voxel_downsample,
 )
+from onepiece_dist.core.cloud.objects import grasped_centres
 from onepiece_dist.core.cloud.outline import OUTLINE_MODELS, outline
 from onepiece_dist.core.cloud.support_check import support_plane
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, DepthRays, hand_grid, swept_space
 from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
-from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context, object_centre
+from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context
 from onepiece_dist.core.hand_frames import to_panda
 from onepiece_dist.errors import CloudRejected, SpecError
 from onepiece_dist.plan.observation import Observation
@@ -188,7 +189,9 @@ def planned_crops(seen: Seen, poses: np.ndarray, record: CropRecord, rng: np.ran
     ``min_points`` observed points inside dropped: (crops, (n,) bool which were kept)."""
     gripper = record.gripper
     crops, keep = cut_crops(seen.objects, poses, record, rng).holding(min_points)
-    crops = with_context(crops, poses[keep], seen.objects, gravity(seen.plane), gripper.closing_depth)
+    centres = grasped_centres(seen.objects, poses[keep], gripper.closing_depth, gripper.closing_width,
+                              gripper.closing_height)
+    crops = with_context(crops, poses[keep], centres, gravity(seen.plane), gripper.closing_depth)
     if seen.viewpoint is not None and record.model in SPACE_MODELS:  # 10-20 ms a view: only when read
         crops = with_space(crops, poses[keep], seen.cloud, seen.viewpoint, gripper)
     if record.model in OUTLINE_MODELS:
@@ -201,11 +204,12 @@ def gravity(plane: SupportPlane | None) -> np.ndarray:
     return WORLD_DOWN if plane is None else -plane.normal
 
 
-def with_context(crops: Crops, poses: np.ndarray, points: np.ndarray, down: np.ndarray,
+def with_context(crops: Crops, poses: np.ndarray, centre: np.ndarray, down: np.ndarray,
                  closing_depth: float, eye: np.ndarray | None = None) -> Crops:
-    """``crops`` of ``poses`` with each grasp's context: ``down`` and the centre of the object's ``points``, seen
-    from the gripper (core.grasp_context); with ``eye``, the direction to the camera too."""
-    return dataclasses.replace(crops, context=grasp_context(poses, object_centre(points), down, closing_depth, eye))
+    """``crops`` of ``poses`` with each grasp's context: ``down`` and the object's ``centre`` (3,) (or each grasp's
+    object's, (n, 3): core.cloud.objects.grasped_centres), seen from the gripper (core.grasp_context); with
+    ``eye``, the direction to the camera too."""
+    return dataclasses.replace(crops, context=grasp_context(poses, centre, down, closing_depth, eye))
 
 
 def with_outline(crops: Crops, poses: np.ndarray, points: np.ndarray, closing_depth: float) -> Crops:

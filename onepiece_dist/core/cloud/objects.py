@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.grasp_context import object_centre
+
 GAP = 0.01  # m: about two rays apart at the pick camera's 0.8 m, yet less than a finger's width
 MIN_SHARE = 0.1  # an object holds at least this share of the view's object points (less: stray points)
 MIN_POINTS = 30  # and at least this many
@@ -71,3 +73,13 @@ def closed_on(objects: list[np.ndarray], pose: np.ndarray, depth: float, width: 
                                  & (np.abs(local[:, 2]) < height / 2))))
         nearest.append(float(np.min(np.sum((points - centre) ** 2, axis=1))))
     return int(np.argmax(inside)) if max(inside) > 0 else int(np.argmin(nearest))
+
+
+def grasped_centres(points: np.ndarray, poses: np.ndarray, depth: float, width: float, height: float) -> np.ndarray:
+    """The observed object's centre (core.grasp_context.object_centre) of ``points`` (the view's object points),
+    (3,); where they hold several objects apart, each of ``poses``' own object's centre (closed_on), (n, 3)."""
+    objects = separate_objects(points)
+    if len(objects) == 1:
+        return object_centre(points)
+    centres = [object_centre(o) for o in objects]
+    return np.array([centres[closed_on(objects, pose, depth, width, height)] for pose in poses]).reshape(-1, 3)
