@@ -86,3 +86,20 @@ def test_a_grasps_context_reads_the_centre_of_the_object_it_closes_on():
     np.testing.assert_array_equal(crops.context, own)
     alone, _ = planned_crops(Seen(box, box, FLOOR, None), grasps[:1], record, np.random.default_rng(0))
     np.testing.assert_array_equal(alone.context, own[:1])  # one object: its own centre, as before
+
+
+def test_the_planner_proposes_the_top_down_grasps_of_each_object_apart():
+    from onepiece_dist.plan import GraspScorer, Observation
+    from onepiece_dist.plan.planner import propose
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PlanSpec
+    from tests.test_plan import _floor
+
+    record, eye = GraspScorer(shipped_network(), device="cpu").record, np.array([0.3, -0.3, 0.4])
+    one = propose(Observation(np.vstack([seen_box(), _floor(0.0)]), eye, "one"), record, PlanSpec(),
+                  np.random.default_rng(0))
+    two = propose(Observation(np.vstack([seen_box(), seen_box() + APART, _floor(0.0)]), eye, "two"), record,
+                  PlanSpec(), np.random.default_rng(0))
+    assert one.top_down == 3 and two.top_down == 6
+    tops = two.poses[-6:, :3, 3]  # above each box's top, none between them
+    assert np.sum(np.abs(tops[:, 0]) <= 0.025) == 3 and np.sum(np.abs(tops[:, 0] - APART[0]) <= 0.025) == 3

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.cloud.completion import CompletedShape, completed_shape
-from onepiece_dist.core.cloud.objects import closed_on, separate_objects
+from onepiece_dist.core.cloud.objects import closed_on
 from onepiece_dist.core.cloud.swept_space import DepthRays
 from onepiece_dist.core.frames import compose_poses
 from onepiece_dist.plan.planner import GraspCheck, PlannedGrasp, Proposals, Seen
@@ -107,7 +107,7 @@ def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator
     def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec
               ) -> tuple[PlannedGrasp, ...]:
         seen = Seen.of(proposals)
-        objects = separate_objects(seen.objects)
+        objects = seen.separate()
         if len(objects) == 1:  # one object: its shape from every observed point
             return checked(ranked, check_shape(seen, spec.check_shape), gripper, sim, spec.check_draws, rng)
         shapes = [check_shape(seen, spec.check_shape, points) for points in objects]

@@ -19,7 +19,7 @@ from onepiece_dist.core.cloud.grasps import (
     suppress_near,
     voxel_downsample,
 )
-from onepiece_dist.core.cloud.objects import grasped_centres
+from onepiece_dist.core.cloud.objects import grasped_centres, separate_objects
 from onepiece_dist.core.cloud.outline import OUTLINE_MODELS, outline
 from onepiece_dist.core.cloud.support_check import support_plane
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, DepthRays, hand_grid, swept_space
@@ -156,9 +156,11 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,
                                 spec.orientations)
     sampled = time.perf_counter()
-    added = top_down_grasps(objects, gravity(plane), gripper) if spec.top_down else np.zeros((0, 4, 4))
+    apart = separate_objects(objects)
+    added = (np.concatenate([top_down_grasps(o, gravity(plane), gripper) for o in apart]) if spec.top_down
+             else np.zeros((0, 4, 4)))  # each object's: the top of two objects apart is neither's
     poses = np.concatenate([found.poses, added]) if len(added) else found.poses
-    seen = Seen(objects, points, plane, observation.viewpoint)
+    seen = Seen(objects, points, plane, observation.viewpoint, tuple(apart))
     crops, keep = planned_crops(seen, poses, record, rng, spec.min_points)
     counts = _counts(found, int(np.sum(~keep)), len(added))
     return Proposals(poses[keep], crops, objects, plane, counts,
@@ -175,6 +177,11 @@ class Seen:
     cloud: np.ndarray
     plane: SupportPlane | None
     viewpoint: np.ndarray | None
+    apart: tuple[np.ndarray, ...] | None = None  # the objects told apart (core.cloud.objects), where known
+
+    def separate(self) -> list[np.ndarray]:
+        """The objects of ``objects`` told apart (core.cloud.objects.separate_objects): ``[objects]`` for one."""
+        return list(self.apart) if self.apart is not None else separate_objects(self.objects)
 
     @classmethod
     def of(cls, proposals: Proposals) -> Seen:
@@ -189,7 +196,7 @@ def planned_crops(seen: Seen, poses: np.ndarray, record: CropRecord, rng: np.ran
     ``min_points`` observed points inside dropped: (crops, (n,) bool which were kept)."""
     gripper = record.gripper
     crops, keep = cut_crops(seen.objects, poses, record, rng).holding(min_points)
-    centres = grasped_centres(seen.objects, poses[keep], gripper.closing_depth, gripper.closing_width,
+    centres = grasped_centres(seen.separate(), poses[keep], gripper.closing_depth, gripper.closing_width,
                               gripper.closing_height)
     crops = with_context(crops, poses[keep], centres, gravity(seen.plane), gripper.closing_depth)
     if seen.viewpoint is not None and record.model in SPACE_MODELS:  # 10-20 ms a view: only when read

@@ -75,11 +75,11 @@ def closed_on(objects: list[np.ndarray], pose: np.ndarray, depth: float, width: 
     return int(np.argmax(inside)) if max(inside) > 0 else int(np.argmin(nearest))
 
 
-def grasped_centres(points: np.ndarray, poses: np.ndarray, depth: float, width: float, height: float) -> np.ndarray:
-    """The observed object's centre (core.grasp_context.object_centre) of ``points`` (the view's object points),
-    (3,); where they hold several objects apart, each of ``poses``' own object's centre (closed_on), (n, 3)."""
-    objects = separate_objects(points)
+def grasped_centres(objects: list[np.ndarray], poses: np.ndarray, depth: float, width: float, height: float
+                    ) -> np.ndarray:
+    """The observed object's centre (core.grasp_context.object_centre) of the one of ``objects``
+    (separate_objects), (3,); of several, each of ``poses``' own object's centre (closed_on), (n, 3)."""
     if len(objects) == 1:
-        return object_centre(points)
+        return object_centre(objects[0])
     centres = [object_centre(o) for o in objects]
     return np.array([centres[closed_on(objects, pose, depth, width, height)] for pose in poses]).reshape(-1, 3)
