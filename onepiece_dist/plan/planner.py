@@ -101,6 +101,7 @@ class Proposals:
     viewpoint: np.ndarray | None = None
     top_down: int = 0  # the last this many proposals are top-down grasps (PlanSpec.top_down)
     cloud: np.ndarray | None = None  # the observed cloud the crops were cut from, the table's points too
+    apart: tuple[np.ndarray, ...] | None = None  # the objects told apart (core.cloud.objects)
 
 
 @dataclass(frozen=True)
@@ -165,7 +166,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     counts = _counts(found, int(np.sum(~keep)), len(added))
     return Proposals(poses[keep], crops, objects, plane, counts,
                      {"sample": sampled - clock, "crop": time.perf_counter() - sampled}, observation.viewpoint,
-                     int(np.sum(keep[len(found.poses):])), points)
+                     int(np.sum(keep[len(found.poses):])), points, seen.apart)
 
 
 @dataclass(frozen=True)
@@ -186,7 +187,7 @@ class Seen:
     @classmethod
     def of(cls, proposals: Proposals) -> Seen:
         cloud = proposals.object_points if proposals.cloud is None else proposals.cloud
-        return cls(proposals.object_points, cloud, proposals.plane, proposals.viewpoint)
+        return cls(proposals.object_points, cloud, proposals.plane, proposals.viewpoint, proposals.apart)
 
 
 def planned_crops(seen: Seen, poses: np.ndarray, record: CropRecord, rng: np.random.Generator,
