@@ -80,7 +80,9 @@ def headline(picks: dict) -> list[str]:
     where = (f"{net['objects']} real household meshes ({len(sets[0]['objects'])} on which every design was chosen "
              f"and {len(unseen['objects'])} unseen, on which nothing was)" if unseen else
              f"{net['objects']} real household meshes")
-    lines = [f"On {where}, the network (`{picks['training']['checkpoint']}`) picks **{_pct(rate)}** "
+    check = sets[0]["spec"]["plan"].get("check_first", 0)
+    checked = f", its first {check} grasps checked in simulation," if check else ""
+    lines = [f"On {where}, the network (`{picks['training']['checkpoint']}`){checked} picks **{_pct(rate)}** "
              f"{_interval(net['first_attempt_interval'])} at the first attempt from one depth view ({net['views']} "
              "views).", "", "| target | figure | |", "| --- | --- | --- |",
              f"| household first attempt >= {_pct(targets['first_attempt'])} ({net['objects']} objects) | "
