@@ -222,33 +222,25 @@ def main() -> None:
     args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
     if args.check_draws:
-        result = json.loads(RESULTS.read_text())
-        result["expected_draws"] = expected_draws(sets, tuple(int(n) for n in args.check_draws.split(",")))
-        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        found = expected_draws(sets, tuple(int(n) for n in args.check_draws.split(",")))
+        _beside(lambda result: result.update(expected_draws=found))
         return
     if args.shapes:
-        result = json.loads(RESULTS.read_text())
-        found, kept = expected(sets, 1.0, tuple(args.shapes.split(","))), result.setdefault("expected_shapes", {})
-        for key, value in found.items():  # the shapes measured before kept beside these
-            kept[key] = {**kept.get(key, {}), **value} if key in ("versus", "rows") else value
-        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        found = expected(sets, 1.0, tuple(args.shapes.split(",")))
+        _beside(lambda result: _keep_shapes(result.setdefault("expected_shapes", {}), found))
         return
     if args.density_scales:
-        result = json.loads(RESULTS.read_text())
-        result["expected_density"] = {scale: expected(sets, float(scale))["hull"]
-                                      for scale in args.density_scales.split(",")}
-        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        found = {scale: expected(sets, float(scale))["hull"] for scale in args.density_scales.split(",")}
+        _beside(lambda result: result.update(expected_density=found))
         return
     checks = [int(k) for k in args.checks.split(",")]
     if args.views != VIEWS:
         more_views(sets, checks, args.views, args.check_top_down)
         return
     if args.check_shape != "hull":  # beside the hull's: judged against its unchecked runs
-        result = json.loads(RESULTS.read_text())
-        result.setdefault("judged_shapes", {})[args.check_shape] = {
-            which: {str(k): judge(which, objects, k, args.check_shape) for k in checks if k}
-            for which, objects in sets.items()}
-        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        found = {which: {str(k): judge(which, objects, k, args.check_shape) for k in checks if k}
+                 for which, objects in sets.items()}
+        _beside(lambda result: result.setdefault("judged_shapes", {}).update({args.check_shape: found}))
         return
     drawn = expected(sets)["hull"]
     measured = {which: {str(k): judge(which, objects, k) for k in checks} for which, objects in sets.items()}
@@ -269,16 +261,31 @@ def more_views(sets: dict[str, str], checks: list[int], views: int, top_down: bo
     suffix = TOP_DOWN if top_down else ""
     found = {which: {f"{k}{suffix}": judge(which, objects, k, views=views, draws=draws, top_down=top_down)
                      for k in checks if k or not top_down} for which, objects in sets.items()}
-    result = json.loads(RESULTS.read_text())  # read after the runs: another mode may have written meanwhile
-    if top_down:
+    def keep(result: dict) -> None:
+        if not top_down:
+            result["more_views"] = {"views": views, "check_draws": draws, "sets": found}
+            return
         kept = result["more_views"]
         if kept["views"] != views or kept["check_draws"] != draws:
             raise SystemExit(f"--check-top-down judges against the runs at {views} views: run --views {views} first")
         for which, runs in found.items():
             kept["sets"][which].update(runs)
-    else:
-        result["more_views"] = {"views": views, "check_draws": draws, "sets": found}
+
+    _beside(keep)
+
+
+def _beside(update) -> None:
+    """The committed results with ``update`` (a function of them) applied: read after a mode's runs, as another
+    mode may have written meanwhile."""
+    result = json.loads(RESULTS.read_text())
+    update(result)
     RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+
+
+def _keep_shapes(kept: dict, found: dict) -> None:
+    """The shapes measured before kept beside ``found``'s."""
+    for key, value in found.items():
+        kept[key] = {**kept.get(key, {}), **value} if key in ("versus", "rows") else value
 
 
 if __name__ == "__main__":

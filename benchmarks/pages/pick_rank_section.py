@@ -114,7 +114,7 @@ def shape_check_section(result: dict) -> list[str]:
     sets, checks = result["sets"], [str(k) for k in result["checks"]]
     rows = [f"| {which} | {k or 'none'} | {_pct(m[k]['first_attempt'])} [{_pct(m[k]['interval'][0])}, "
             f"{_pct(m[k]['interval'][1])}] | {_pct(m[k]['within_3'])} | {m[k]['views']} | "
-            + ", ".join(f"{n} {reason.replace('_', ' ')}" for reason, n in sorted(m[k]["failures"].items()))
+            + _lost(m[k]["failures"])
             + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in checks]
     gains = [paired_check(result, k) for k in checks[1:]]
     lines = [f"## The first grasps checked on the shape the view implies: `{result['command']}`", "",
@@ -164,6 +164,11 @@ def shape_check_section(result: dict) -> list[str]:
     return lines[:-1] + more_views_lines(result.get("more_views"))
 
 
+def _lost(failures: dict) -> str:
+    """A run's first attempts lost, by reason."""
+    return ", ".join(f"{n} {reason.replace('_', ' ')}" for reason, n in sorted(failures.items()))
+
+
 def _views_an_object(sets: dict) -> int:
     m = next(iter(sets.values()))["0"]
     return round(m["views"] / max(len(m["per_object"]), 1))
@@ -183,7 +188,7 @@ def more_views_lines(more: dict | None) -> list[str]:
              "| --- | --- | --- | --- | --- | --- |",
              *(f"| {which} | {_run_name(k)} | {_pct(m[k]['first_attempt'])} [{_pct(m[k]['interval'][0])}, "
                f"{_pct(m[k]['interval'][1])}] | {m[k]['views']} | "
-               + ", ".join(f"{n} {reason.replace('_', ' ')}" for reason, n in sorted(m[k]["failures"].items()))
+               + _lost(m[k]["failures"])
                + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in m), ""]
     runs = list(next(iter(sets.values())))
     lines += [_more_views_verdict(more, k) for k in runs if k.isdigit() and k != "0"]

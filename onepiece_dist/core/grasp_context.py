@@ -33,9 +33,9 @@ def grasp_context(poses: np.ndarray, centre: np.ndarray, down: np.ndarray, closi
                   eye: np.ndarray | None = None) -> np.ndarray:
     """(n, 6) float32 context of ``poses`` (n, 4, 4) gripper-to-cloud: ``down`` (3,) unit gravity and ``centre`` (3,)
     the observed object's centre (or each grasp's object's, (n, 3)), both in the cloud's frame, seen from each
-    gripper frame. With the camera's
-    position ``eye`` (3,), or each grasp's (n, 3): (n, 9), then the unit direction from the closing region's centre
-    to the camera, in the gripper frame (which side of the crop was seen, which lies in occluded space)."""
+    gripper frame. With the camera's position ``eye`` (3,), or each grasp's (n, 3): (n, 9), then the unit direction
+    from the closing region's centre to the camera, in the gripper frame (which side of the crop was seen, which
+    lies in occluded space)."""
     poses = np.asarray(poses, dtype=np.float64)
     width = CONTEXT_SIZE + (3 if eye is not None else 0)
     if len(poses) == 0:

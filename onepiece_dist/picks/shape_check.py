@@ -110,9 +110,9 @@ def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator
         objects = seen.separate()
         if len(objects) == 1:  # one object: its shape from every observed point
             return checked(ranked, check_shape(seen, spec.check_shape), gripper, sim, spec.check_draws, rng)
-        shapes = [check_shape(seen, spec.check_shape, points) for points in objects]
         mine = [closed_on(objects, g.pose, gripper.closing_depth, gripper.closing_width, gripper.closing_height)
                 for g in ranked]
+        shapes = {k: check_shape(seen, spec.check_shape, objects[k]) for k in sorted(set(mine))}  # those grasped
         return checked_apart(ranked, [shapes[k] for k in mine], gripper, sim, spec.check_draws, rng)
 
     return check
