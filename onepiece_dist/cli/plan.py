@@ -81,6 +81,10 @@ def grasp(
                                              "convex hull), carved (that hull less what the camera saw through: "
                                              "openings stay open) or mirrored (with the points' half turn about "
                                              "their axis: a symmetric object's far side).")] = "hull",
+    one_object: Annotated[bool, typer.Option("--one-object", help="Take the whole cloud above the table for one "
+                                             "object; by default objects 1 cm or more apart are told apart, each "
+                                             "with its own top-down grasps and checked shape (docs/planning.md).")
+                          ] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
     device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
@@ -95,7 +99,7 @@ def grasp(
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check,
-                        check_shape=check_shape)
+                        check_shape=check_shape, objects_apart=not one_object)
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, _gripper(gripper))
     except (OnePieceError, ValueError) as error:

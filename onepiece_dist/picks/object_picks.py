@@ -31,6 +31,7 @@ from onepiece_dist.plan.planner import (
     PlanCounts,
     PlannedGrasp,
     Proposals,
+    Seen,
     check_ranked,
     gravity,
     rank,
@@ -127,7 +128,7 @@ def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> V
         if method == "oracle":
             outcomes, pool = _oracle(spec, seen.proposals, executions)
         else:
-            choice = _choice(method, spec, scorer, seen, full_mesh)
+            choice = choose(method, spec, scorer, seen, full_mesh)
             outcomes = [executions.run(choice.pool, i, pose)
                         for i, pose in zip(choice.indices, choice.poses, strict=True)]
             if method == "network" and view < spec.pictures:
@@ -150,13 +151,15 @@ def _oracle(spec: PickSpec, proposals: Proposals, executions: Executions) -> tup
     return ranked, (count, sum(o.success for o in outcomes))
 
 
-def _choice(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
+def choose(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
             full_mesh: Proposals | None) -> Choice:
     """The grasps ``method`` would try, best first (at most ``spec.attempts``); a random choice ranks a seeded
-    permutation."""
+    permutation; top-down grasps the largest of the view's objects told apart (core.cloud.objects: all its object
+    points where it holds one)."""
     proposals, rng = seen.proposals, seen.rng
     if method == "top_down":
-        poses = top_down_grasps(proposals.object_points, gravity(proposals.plane), scorer.gripper)[: spec.attempts]
+        largest = Seen.of(proposals).separate()[0]
+        poses = top_down_grasps(largest, gravity(proposals.plane), scorer.gripper)[: spec.attempts]
         return Choice("top_down", tuple(range(len(poses))), poses)
     if method in ("network_full_mesh", "random_full_mesh"):
         proposals, pool = full_mesh, "mesh"

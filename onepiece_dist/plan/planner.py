@@ -157,7 +157,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,
                                 spec.orientations)
     sampled = time.perf_counter()
-    apart = separate_objects(objects)
+    apart = separate_objects(objects) if spec.objects_apart else [objects]
     added = (np.concatenate([top_down_grasps(o, gravity(plane), gripper) for o in apart]) if spec.top_down
              else np.zeros((0, 4, 4)))  # each object's: the top of two objects apart is neither's
     poses = np.concatenate([found.poses, added]) if len(added) else found.poses

@@ -15,6 +15,7 @@ import pybullet as pb
 
 from onepiece_dist.core import portable
 from onepiece_dist.core.frames import compose_poses, perturb_pose, quat_from_matrix, transform_points
+from onepiece_dist.sim.beside import Beside, Neighbour
 from onepiece_dist.sim.trials import (
     LabelNoise,
     close_fingers,
@@ -41,10 +42,12 @@ DROPS = 5  # drops tried until the object comes to rest within WORKSPACE of the 
 
 
 class PickWorld(SimWorld):
-    """A :class:`SimWorld` with a table; the gripper waits above it while the object settles."""
+    """A :class:`SimWorld` with a table; the gripper waits above it while the object settles. Other objects may
+    stand beside the object (``beside``, sim.beside: set after each ``load_object``, which removes them)."""
 
     def _connect(self) -> None:
         super()._connect()
+        self.beside = Beside()
         c = self.client
         table = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2],
                                         physicsClientId=c)
@@ -53,6 +56,19 @@ class PickWorld(SimWorld):
         pb.changeDynamics(self.table, -1, lateralFriction=1.0, rollingFriction=ROLLING_FRICTION,
                           spinningFriction=ROLLING_FRICTION, physicsClientId=c)
         self.park()
+
+    def _unload(self) -> None:
+        self.beside.clear(self.client)
+        super()._unload()
+
+    def set_neighbours(self, neighbours: tuple[Neighbour, ...]) -> None:
+        """Stand ``neighbours`` beside the loaded object, at their resting poses."""
+        self.beside.set(self.client, neighbours)
+
+    def as_neighbour(self, resting: np.ndarray) -> Neighbour:
+        """The loaded object (its own mass and friction) as a neighbour resting at ``resting`` (4, 4)."""
+        return Neighbour(tuple(p + self._centroid for p in self._pieces), self._mass, self.object_friction,
+                         np.array(resting, dtype=np.float64))
 
     def park(self) -> None:
         pose = np.eye(4)
@@ -81,21 +97,49 @@ class PickWorld(SimWorld):
                 break
         return resting
 
-    def _drop(self, rng: np.random.Generator, vertices: np.ndarray) -> np.ndarray:
+    def settle_beside(self, rng: np.random.Generator, vertices: np.ndarray, gap: float) -> np.ndarray:
+        """Drop the object in a seeded random orientation beside its neighbours (standing at their resting poses):
+        along a seeded horizontal direction from the table centre, ``gap`` (m) beyond their farthest point that
+        way, and let it and them come to rest; dropped again (up to DROPS times, the neighbours back at rest)
+        while any of them leaves the workspace. Returns its mesh-frame world pose (the neighbours':
+        ``beside.poses``)."""
+        for _ in range(DROPS):
+            self.carry_payload(None)
+            self.beside.reset(self.client)
+            resting = self._drop(rng, vertices, gap)
+            poses = [resting, *self.beside.poses(self.client)]
+            if all(np.all(np.abs(p[:2, 3]) < WORKSPACE) and p[2, 3] > -TABLE_THICKNESS for p in poses):
+                break
+        return resting
+
+    def _drop(self, rng: np.random.Generator, vertices: np.ndarray, gap: float | None = None) -> np.ndarray:
         self.park()
         pose = np.eye(4)
         pose[:3, :3] = _random_rotation(rng)
-        lowest = float(transform_points(vertices, pose)[:, 2].min())
-        pose[2, 3] = DROP_CLEARANCE - lowest
+        turned = transform_points(vertices, pose)
+        pose[2, 3] = DROP_CLEARANCE - float(turned[:, 2].min())
+        if gap is not None:
+            pose[:2, 3] = self._beside_place(rng, turned[:, :2], gap)
         self.set_object_pose(pose)
         pb.setGravity(0, 0, -9.81, physicsClientId=self.client)
         for _ in range(int(SETTLE_SECONDS / self.physics.time_step / SETTLE_CHECK)):
             for _ in range(SETTLE_CHECK):
                 pb.stepSimulation(physicsClientId=self.client)
             linear, angular = pb.getBaseVelocity(self.obj, physicsClientId=self.client)
-            if max(np.abs(linear).max(), np.abs(angular).max()) < SETTLE_SPEED:
+            if max(np.abs(linear).max(), np.abs(angular).max(), self.beside.speed(self.client)) < SETTLE_SPEED:
                 break
         return self.object_pose()
+
+
+    def _beside_place(self, rng: np.random.Generator, footprint: np.ndarray, gap: float) -> np.ndarray:
+        """(2,) where to put the mesh origin of an object whose turned vertices (about that origin) span
+        ``footprint`` (n, 2): along a seeded horizontal direction, ``gap`` beyond the neighbours' farthest point
+        that way (portable sines: the same place on every CPU)."""
+        sin, cos = portable.sin_cos(np.array([rng.uniform(0, 2 * np.pi)]))
+        way = np.array([cos[0], sin[0]])
+        far = max((float(np.max(transform_points(np.vstack(n.pieces), n.resting)[:, :2] @ way))
+                   for n in self.beside.neighbours), default=0.0)
+        return way * (far + gap - float(np.min(footprint @ way)))
 
 
 def _random_rotation(rng: np.random.Generator) -> np.ndarray:
@@ -127,14 +171,21 @@ def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, ca
             rng: np.random.Generator, depth_noise: float = 0.0) -> np.ndarray:
     """(m, 3) world points the camera sees of the object at ``object_pose`` on the table, kept within WORKSPACE
     of the object's resting place (a workspace crop), with Gaussian ``depth_noise`` (m) along each ray."""
+    return observe_scene(transform_points(vertices, object_pose), faces, object_pose[:3, 3], camera, rng,
+                         depth_noise)
+
+
+def observe_scene(vertices: np.ndarray, faces: np.ndarray, centre: np.ndarray, camera: Camera,
+                  rng: np.random.Generator, depth_noise: float = 0.0) -> np.ndarray:
+    """(m, 3) world points the camera sees of the triangles ``vertices`` (world frame; every object of the scene)
+    and ``faces`` on the table, kept within WORKSPACE of ``centre`` (3,), with Gaussian ``depth_noise`` (m)."""
     table = (np.array([TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2]), np.array([0.0, 0.0, -TABLE_THICKNESS / 2]))
-    depth = depth_images(transform_points(vertices, object_pose), faces, [camera], table)[0]
+    depth = depth_images(vertices, faces, [camera], table)[0]
     points = back_project(depth, camera)
     if depth_noise > 0 and len(points):
         rays = points - camera.pose[:3, 3]
         rays /= np.linalg.norm(rays, axis=1, keepdims=True)
         points = points + rays * rng.normal(0, depth_noise, (len(points), 1))
-    centre = object_pose[:3, 3]
     near = np.all(np.abs(points[:, :2] - centre[:2]) < WORKSPACE, axis=1) & (points[:, 2] > -0.005)
     return points[near]
 
@@ -186,6 +237,7 @@ def _one_pick(world: PickWorld, pose: np.ndarray, resting: np.ndarray) -> str:
     c = world.client
     world.carry_payload(None)
     world.set_object_pose(resting)
+    world.beside.reset(c)
     pb.setGravity(0, 0, -9.81, physicsClientId=c)
     back = np.eye(4)
     back[0, 3] = -PREGRASP
@@ -196,7 +248,7 @@ def _one_pick(world: PickWorld, pose: np.ndarray, resting: np.ndarray) -> str:
         pb.setJointMotorControl2(world.gripper, link, pb.VELOCITY_CONTROL, targetVelocity=0, force=0,
                                  physicsClientId=c)
     pb.performCollisionDetection(physicsClientId=c)
-    if any(p[8] < -START_TOLERANCE for body in (world.obj, world.table)
+    if any(p[8] < -START_TOLERANCE for body in (world.obj, world.table, *world.beside.bodies)
            for p in pb.getContactPoints(world.gripper, body, physicsClientId=c)):
         return "start_collision"
     steps = int(round(PREGRASP / APPROACH_STEP))

@@ -150,7 +150,7 @@ class SimWorld:
             pb.disconnect(physicsClientId=self.client)
             self._connect()
         self._centroid = np.vstack(pieces).mean(axis=0)
-        self._mass = float(np.clip(density * volume, MIN_MASS, MAX_MASS))
+        self._mass = object_mass(density, volume)
         self._pieces = [p - self._centroid for p in pieces]
         path = _write_hulls(self._pieces)
         try:
@@ -211,6 +211,11 @@ class SimWorld:
     def gripper_pose(self) -> np.ndarray:
         pos, quat = pb.getBasePositionAndOrientation(self.gripper, physicsClientId=self.client)
         return matrix_from_pose(pos, quat)
+
+
+def object_mass(density: float, volume: float) -> float:
+    """kg of a simulated object of ``density`` (kg/m^3) and ``volume`` (m^3), clipped to [MIN_MASS, MAX_MASS]."""
+    return float(np.clip(density * volume, MIN_MASS, MAX_MASS))
 
 
 HULLS_PREFIX = "onepiece-hulls-"  # then the writing process's id: onepiece-hulls-<pid>-<random>.obj

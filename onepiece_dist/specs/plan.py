@@ -62,6 +62,10 @@ class PlanSpec(Frozen):
         "into stays open; needs the camera's position, else the hull); or the hull of the points and their half "
         "turn about the vertical axis of the circle that best fits their footprint (mirrored: a symmetric object's "
         "far side).")
+    objects_apart: bool = Field(True, description="Tell the view's objects apart (points whose 1 cm cells touch "
+                                "are one object: core.cloud.objects): each gets its own top-down grasps, a grasp's "
+                                "context reads the centre of the object it closes on and the check stands that "
+                                "object's shape. False: the whole cloud above the plane is one object.")
 
 
 class CameraSpec(Frozen):
