@@ -129,7 +129,7 @@ def test_a_grasp_is_executed_on_the_object_it_closes_on(pair_spec):
 
     record = process_scorer(pair_spec).record
     refs = pairs_of(resolve_source(pair_spec.objects))[0]
-    pair = tuple(scene_object(pair_spec, record, ref) for ref in refs)
+    pair = tuple(scene_object(pair_spec, record, ref) for ref in (refs.first, refs.second))
     world = pick_world(record.gripper)
     scene = observe_pair(pair_spec, record, world, pair, 0)
     assert len(scene.view.proposals.apart) == 2  # the view holds both, told apart
@@ -151,8 +151,8 @@ def test_a_pair_is_picked_by_every_chooser_the_same_twice(pair_spec):
     from onepiece_dist.picks.pairs import pairs_of, pick_pair
 
     refs = pairs_of(resolve_source(pair_spec.objects))
-    assert [tuple(r.name for r in p) for p in refs] == [("box_40x30x60", "box_20x50x50"),
-                                                        ("box_20x50x50", "box_40x30x60")]
+    assert [(p.first.name, p.second.name) for p in refs] == [("box_40x30x60", "box_20x50x50"),
+                                                              ("box_20x50x50", "box_40x30x60")]
     runs = [pick_pair(pair_spec, refs[0], 0) for _ in range(2)]
     assert runs[0].views == runs[1].views and runs[0].status == "ok"
     assert runs[0].name == "box_40x30x60+box_20x50x50"
@@ -245,3 +245,48 @@ def test_onepiece_grasp_one_object_plans_as_the_spec_that_takes_the_cloud_for_on
     one = plan_grasps(cloud, spec=PlanSpec(check_first=0, objects_apart=False), viewpoint=(0.3, -0.3, 0.4)).plan
     np.testing.assert_allclose(planned[("--one-object",)], [g.pose for g in one.grasps], atol=1e-8)  # as written
     assert not np.allclose(planned[()], planned[("--one-object",)], atol=1e-6)
+
+
+def test_a_pick_spec_of_pairs_leaves_out_the_full_mesh_methods_and_refuses_them_by_name(tmp_path):
+    from onepiece_dist.errors import SpecError
+    from onepiece_dist.picks.runner import pick_units
+    from onepiece_dist.specs.plan import METHODS, PAIR_METHODS, PickSpec, parse_pick_spec
+
+    assert PickSpec(checkpoint="x", pairs=True).methods == PAIR_METHODS
+    assert PickSpec(checkpoint="x").methods == METHODS
+    with pytest.raises(SpecError, match="network_full_mesh sample one object's full mesh"):
+        parse_pick_spec({"checkpoint": "x", "pairs": True, "methods": ["network", "network_full_mesh"]}, "pairs.yaml")
+    with pytest.raises(SpecError, match="holds 1 object; a pair needs two"):
+        pick_units(PickSpec(checkpoint="x", objects="primitives[0:1]", pairs=True))
+    assert [p.name for p in pick_units(PickSpec(checkpoint="x", objects="primitives[0:3]", pairs=True))] == [
+        "box_40x30x60+box_20x50x50", "box_20x50x50+box_60x60x15", "box_60x60x15+box_40x30x60"]
+
+
+@pytest.mark.slow
+@pytest.mark.ray
+def test_onepiece_pick_pairs_runs_in_process_and_on_the_embedded_ray_with_the_same_picks(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from onepiece_dist.cli.main import app
+    from onepiece_dist.picks.runner import run_picks
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PickSpec
+
+    spec_file = tmp_path / "pairs.yaml"
+    spec_file.write_text("methods: [network, random, top_down]\nplan: {candidates: 160, check_draws: 1}\n"
+                         "pictures: 1\n")
+    ran = CliRunner().invoke(app, ["pick", str(shipped_network()), "--objects", "primitives[0:2]", "--views", "1",
+                                   "--attempts", "2", "--pairs", "--spec", str(spec_file), "--in-process", "--out",
+                                   str(tmp_path / "here"), "--json"])
+    assert ran.exit_code == 0, ran.output
+    here = json.loads(ran.stdout)
+    assert [o["name"] for o in here["objects"]] == ["box_40x30x60+box_20x50x50", "box_20x50x50+box_40x30x60"]
+    assert [m["method"] for m in here["methods"]] == ["network", "random", "top_down"] and here["spec"]["pairs"]
+    assert (tmp_path / "here" / "pictures" / "box_40x30x60_box_20x50x50-view0.png").is_file()
+    spec = PickSpec(**{**here["spec"], "output": str(tmp_path / "ray"), "pictures": 0, "workers": 2})
+    on_ray = run_picks(spec)
+    assert [[dict(v.attempts) for v in o.views] for o in on_ray.objects] == [
+        [{m: tuple(a) for m, a in v["attempts"].items()} for v in o["views"]] for o in here["objects"]]
+    assert all(o.node for o in on_ray.objects)  # ran in Ray workers

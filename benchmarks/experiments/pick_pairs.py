@@ -1,8 +1,9 @@
 """Two objects on the table (docs/picks.md): the pick benchmark has one object on its table; a robot's table holds
 several. Each object of the household and unseen sets stands in two pairs (with the next object of its set, and
-the last with the first), 8 seeded views a pair (onepiece_dist/picks/pairs.py): the second object dropped 1-5 cm
-beyond the first along a seeded direction, both settled, one camera aimed between them. A grasp picks when it
-lifts and holds the object it closes on, the other beside it in every trial.
+the last with the first), 8 seeded views a pair, run as `onepiece pick --pairs` runs them
+(onepiece_dist/picks/pairs.py, on the embedded Ray): the second object dropped 1-5 cm beyond the first along a
+seeded direction, both settled, one camera aimed between them. A grasp picks when it lifts and holds the object
+it closes on, the other beside it in every trial.
 
 Runs (the same views, each candidate's outcome its own seeded execution, so the runs compare view for view):
 - ``default``: the planner as it ships (the view's objects told apart, its first 3 checked) beside a random
@@ -21,7 +22,6 @@ import json
 import platform
 import time
 from datetime import date
-from multiprocessing import get_context
 
 import numpy as np
 
@@ -39,34 +39,24 @@ def _spec(name: str, objects: str, run: str):
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     plan, methods = RUNS[run]
-    return PickSpec(objects=objects, checkpoint=str(shipped_network()), output=str(ROOT / "data" / "picks" / name),
-                    views=VIEWS, attempts=ATTEMPTS, pictures=0, methods=methods, plan=PlanSpec(**plan))
+    return PickSpec(objects=objects, checkpoint=str(shipped_network()), pairs=True,
+                    output=str(ROOT / "data" / "pick_pairs" / name), views=VIEWS, attempts=ATTEMPTS, pictures=0,
+                    methods=methods, plan=PlanSpec(**plan), workers=2)
 
 
-def _pair(task):
-    from onepiece_dist.objects import resolve_source
-    from onepiece_dist.picks.pairs import pairs_of, pick_pair
-
-    spec, index = task
-    return pick_pair(spec, pairs_of(resolve_source(spec.objects))[index], index)
-
-
-def measure(name: str, objects: str, run: str, processes: int = 2) -> dict:
-    """One set's pairs in one run: the benchmark's summary over pairs and each pair's first picks per method."""
-    from onepiece_dist.objects import resolve_source
-    from onepiece_dist.picks.runner import summarise
+def measure(name: str, objects: str, run: str) -> dict:
+    """One set's pairs in one run (the benchmark's own, `onepiece pick --pairs`, on the embedded Ray): its
+    summary over pairs and each pair's first picks per method."""
+    from onepiece_dist.picks.runner import run_picks
 
     spec = _spec(name, objects, run)
     start = time.perf_counter()
-    pairs = len(resolve_source(objects))
-    with get_context("spawn").Pool(processes) as pool:
-        found = sorted(pool.imap_unordered(_pair, [(spec, i) for i in range(pairs)]), key=lambda p: p.index)
-    report = summarise(spec, found)
+    report = run_picks(spec)
     return {"methods": {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),
                                    "within_3": m.within_k, "views": m.views, "failures": m.first_failures}
                         for m in report.methods},
             "per_pair": {m: report.first_picks(m) for m in spec.methods},
-            "rejected": {p.name: p.reason for p in found if p.status != "ok"},
+            "rejected": {p.name: p.reason for p in report.objects if p.status != "ok"},
             "verdict": report.verdict, "seconds": round(time.perf_counter() - start, 1)}
 
 

@@ -80,8 +80,9 @@ def pairs_section(result: dict) -> list[str]:
                         for name, runs in result["sets"].items())
     rule = "shown where the interval over all pairs lies above zero"
     return [f"## Two objects on the table: `{result['command']}`", "",
-            f"{result['date']}, {result['machine']}. A robot's table holds more than one object. Each object of "
-            "the household and unseen sets stands in two pairs (with the next object of its set; the last with the "
+            f"{result['date']}, {result['machine']}. A robot's table holds more than one object: `onepiece pick "
+            "--pairs` (`PickSpec.pairs`) sets two on it. Each object of the household and unseen sets stands in two "
+            "pairs (with the next object of its set; the last with the "
             f"first), {result['views']} seeded views a pair: the first object dropped at the table centre and "
             "settled, the second dropped 1-5 cm beyond it along a seeded direction, both settled, one camera aimed "
             "between them (as above). Every chooser plans on the cloud of both; a grasp picks when it lifts and "

@@ -145,6 +145,8 @@ def pick(
     seed: Annotated[int, typer.Option(help="Seed of drops, cameras and planning.")] = 0,
     spec_file: Annotated[Path | None, typer.Option("--spec", help="YAML pick spec (PickSpec); options given "
                                                                   "here override it.")] = None,
+    pairs: Annotated[bool, typer.Option("--pairs", help="Two objects on the table a view: each object with the "
+                                        "next; a grasp picks the one it closes on (docs/picks.md).")] = False,
     address: Address = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
@@ -156,7 +158,7 @@ def pick(
 
     given = _spec_mapping(spec_file)
     given.update({"checkpoint": str(checkpoint), "objects": objects, "output": str(out), "views": views,
-                  "attempts": attempts, "seed": seed})
+                  "attempts": attempts, "seed": seed, **({"pairs": True} if pairs else {})})
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))
         report = run_picks(spec, address=address, in_process=in_process,

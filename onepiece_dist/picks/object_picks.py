@@ -122,8 +122,15 @@ def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> V
     if seen.proposals is None:
         return ViewPicks(view, *geometry, len(seen.cloud), 0, empty, empty)
     executions = Executions(spec, world, mesh, seen.resting, view)
-    attempts, failures, pool = {}, {}, (0, 0)
     full_mesh = _full_mesh_proposals(spec, scorer, mesh, seen) if _needs_full_mesh(spec) else None
+    return picked_view(spec, scorer, seen, executions, full_mesh, mesh.name)
+
+
+def picked_view(spec: PickSpec, scorer: GraspScorer, seen: PickView, executions, full_mesh: Proposals | None,
+                name: str) -> ViewPicks:
+    """Each of ``spec.methods`` on one seen view: its grasps executed in rank order by ``executions`` (its
+    ``run(pool, index, pose)``), the network's drawn for the first ``spec.pictures`` views as ``name``."""
+    attempts, failures, pool = {}, {}, (0, 0)
     for method in spec.methods:
         if method == "oracle":
             outcomes, pool = _oracle(spec, seen.proposals, executions)
@@ -131,11 +138,12 @@ def _pick_view(spec: PickSpec, scorer: GraspScorer, world, mesh, view: int) -> V
             choice = choose(method, spec, scorer, seen, full_mesh)
             outcomes = [executions.run(choice.pool, i, pose)
                         for i, pose in zip(choice.indices, choice.poses, strict=True)]
-            if method == "network" and view < spec.pictures:
-                _draw(spec, scorer, mesh.name, seen, choice.ranked, outcomes)
+            if method == "network" and seen.view < spec.pictures:
+                _draw(spec, scorer, name, seen, choice.ranked, outcomes)
         attempts[method] = tuple(o.success for o in outcomes)
         failures[method] = tuple(o.failure for o in outcomes)
-    return ViewPicks(view, *geometry, len(seen.cloud), len(seen.proposals.poses), attempts, failures, *pool)
+    return ViewPicks(seen.view, seen.distance, seen.elevation_deg, len(seen.cloud), len(seen.proposals.poses),
+                     attempts, failures, *pool)
 
 
 def _needs_full_mesh(spec: PickSpec) -> bool:

@@ -6,7 +6,8 @@ whichever object it closes on (the one with the most of its true surface between
 protocol, the other standing beside it (sim.beside) in every trial.
 
 A pair's results are an ObjectPicks named "first+second", so the benchmark's summary and intervals (over pairs)
-read them as they read one object's."""
+read them as they read one object's (`onepiece pick --pairs`, PickSpec.pairs). Every chooser but those on the
+full mesh (one object's) runs on a pair; the oracle executes every candidate of the view."""
 
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ from onepiece_dist.core.frames import transform_points
 from onepiece_dist.core.mesh import enclosed_volume, sample_surface
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects import ObjectRef, load_object
-from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, choose, process_scorer
+from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, picked_view, process_scorer
 from onepiece_dist.picks.shape_check import CHECK_STREAM
 from onepiece_dist.picks.views import POOLS, PickView
 from onepiece_dist.plan.observation import MIN_POINTS, Observation
@@ -142,14 +143,15 @@ class PairExecutions:
         return self.done[key]
 
 
-def pick_pair(spec: PickSpec, refs: tuple[ObjectRef, ObjectRef], index: int) -> ObjectPicks:
-    """Every view of one pair; a bad object becomes a rejected result, never an exception."""
+def pick_pair(spec: PickSpec, refs: ObjectPair, index: int) -> ObjectPicks:
+    """Every view of one pair (named "first+second"); a bad object becomes a rejected result, never an
+    exception."""
     from onepiece_dist.sim.pick import pick_world
 
-    start, name = time.perf_counter(), "+".join(ref.name for ref in refs)
+    start, name = time.perf_counter(), refs.name
     scorer = process_scorer(spec)
     try:
-        pair = tuple(scene_object(spec, scorer.record, ref) for ref in refs)
+        pair = tuple(scene_object(spec, scorer.record, ref) for ref in (refs.first, refs.second))
     except MeshRejected as err:
         return ObjectPicks(index, name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
     world = pick_world(scorer.record.gripper)
@@ -160,20 +162,25 @@ def pick_pair(spec: PickSpec, refs: tuple[ObjectRef, ObjectRef], index: int) -> 
 def _pair_view(spec: PickSpec, scorer, world, pair, view: int) -> ViewPicks:
     scene = observe_pair(spec, scorer.record, world, pair, view)
     seen = scene.view
-    empty = {m: () for m in spec.methods}
     if seen.proposals is None:
+        empty = {m: () for m in spec.methods}
         return ViewPicks(view, seen.distance, seen.elevation_deg, len(seen.cloud), 0, empty, empty)
     executions = PairExecutions(spec, world, pair, scene, view)
-    attempts, failures = {}, {}
-    for method in spec.methods:
-        choice = choose(method, spec, scorer, seen, None)
-        outcomes = [executions.run(choice.pool, i, pose) for i, pose in zip(choice.indices, choice.poses, strict=True)]
-        attempts[method] = tuple(o.success for o in outcomes)
-        failures[method] = tuple(o.failure for o in outcomes)
-    return ViewPicks(view, seen.distance, seen.elevation_deg, len(seen.cloud), len(seen.proposals.poses), attempts,
-                     failures)
+    return picked_view(spec, scorer, seen, executions, None, f"{pair[0].name}+{pair[1].name}")
 
 
-def pairs_of(refs: list[ObjectRef]) -> list[tuple[ObjectRef, ObjectRef]]:
+@dataclass(frozen=True)
+class ObjectPair:
+    """Two objects of a source set on the table together: ``first`` settled at the centre, ``second`` beside it."""
+
+    first: ObjectRef
+    second: ObjectRef
+
+    @property
+    def name(self) -> str:
+        return f"{self.first.name}+{self.second.name}"
+
+
+def pairs_of(refs: list[ObjectRef]) -> list[ObjectPair]:
     """Each object with the next (the last with the first): every object stands in two pairs, once first."""
-    return [(refs[k], refs[(k + 1) % len(refs)]) for k in range(len(refs))] if len(refs) > 1 else []
+    return [ObjectPair(refs[k], refs[(k + 1) % len(refs)]) for k in range(len(refs))] if len(refs) > 1 else []

@@ -15,8 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.errors import SpecError
 from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
+from onepiece_dist.picks.pairs import pairs_of, pick_pair
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.runtime.actors import restartable_actor
 from onepiece_dist.runtime.crashes import CrashLog, crash_folder, running
@@ -122,17 +124,32 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
               progress: Callable[[ObjectPicks], None] | None = None) -> PickReport:
     """Run the benchmark: on an embedded Ray (default), the cluster at ``address``, or in this process; write
     ``picks.json`` into ``spec.output`` and return the report."""
-    refs = resolve_source(spec.objects)  # a bad source is a usage error, found before any Ray starts
-
+    units = pick_units(spec)  # a bad source is a usage error, found before any Ray starts
     GraspScorer(spec.checkpoint, spec.gripper, device="cpu")  # a bad checkpoint fails here, not in every worker
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     if in_process:
-        results = run_each_in_process(pick_object, spec, refs, progress)
+        results = run_each_in_process(pick_task(spec), spec, units, progress)
     else:
-        results = _run_on_ray(spec, refs, address, progress)
+        results = _run_on_ray(spec, units, address, progress)
     report = summarise(spec, results)
     (Path(spec.output) / REPORT_FILE).write_text(json.dumps(report.to_json(), indent=1) + "\n")
     return report
+
+
+def pick_units(spec: PickSpec) -> list:
+    """What the benchmark's tasks pick: the source's objects, or with ``spec.pairs`` their pairs."""
+    refs = resolve_source(spec.objects)
+    if not spec.pairs:
+        return refs
+    if len(refs) < 2:
+        raise SpecError(f"pairs: {spec.objects!r} holds {len(refs)} object; a pair needs two: name a source of two "
+                        "or more objects, or leave pairs off")
+    return pairs_of(refs)
+
+
+def pick_task(spec: PickSpec) -> Callable:
+    """The task that picks one unit (pick_units): one object, or one pair."""
+    return pick_pair if spec.pairs else pick_object
 
 
 def run_each_in_process(task: Callable, spec, refs: list[ObjectRef], progress=None) -> list:
@@ -160,7 +177,7 @@ class PickWorker:
         from onepiece_dist.runtime.ray_runner import node_id
 
         with running(self.crash_log, "pick", index):
-            picked = pick_object(self.spec, ref, index)
+            picked = pick_task(self.spec)(self.spec, ref, index)
         return dataclasses.replace(picked, node=node_id())
 
 
@@ -176,7 +193,7 @@ def pick_job_id(spec: PickSpec) -> str:
     return "pick-" + hashlib.blake2b(spec.model_dump_json().encode(), digest_size=6).hexdigest()
 
 
-def _run_on_ray(spec: PickSpec, refs: list[ObjectRef], address: str | None, progress) -> list[ObjectPicks]:
+def _run_on_ray(spec: PickSpec, refs: list, address: str | None, progress) -> list[ObjectPicks]:
     import ray
 
     from onepiece_dist.runtime.ray_runner import WorkerPool, worker_count
