@@ -219,3 +219,28 @@ def test_the_best_top_down_grasp_is_checked_beside_the_first_ones_only_when_aske
     sampled = propose(Observation(points, np.array(eye), "box"), scorer.record,
                       spec.model_copy(update={"top_down": False}), np.random.default_rng(0))
     assert best_top_down(sampled, scorer.score(sampled.crops), scorer.record) is None  # no top-down grasps
+
+
+@pytest.mark.sim
+def test_the_check_stops_where_the_first_grasp_held_every_draw_none_after_it_can_pass():
+    from onepiece_dist.picks.shape_check import checked, held_shares
+    from onepiece_dist.plan.planner import PlannedGrasp
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import shipped_network
+
+    gripper = GraspScorer(shipped_network(), device="cpu").gripper
+    points = seen_box()
+    good = top_down_grasps(points, np.array([0.0, 0.0, -1.0]), gripper)[1]  # across the wide axis
+    air = good.copy()
+    air[:3, 3] += [0.15, 0.0, 0.0]
+    shape = completed_shape(points, FLOOR)
+    assert held_shares(shape, good[None], gripper, PICK_SIM, 4, np.random.default_rng(0))[0] == 1.0
+    ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, score, 100)
+                   for k, (pose, score) in enumerate([(good, 0.9), (air, 0.8), (good, 0.7)]))
+    stopped, alone = np.random.default_rng(0), np.random.default_rng(0)
+    assert checked(ranked, shape, gripper, PICK_SIM, 4, stopped) == ranked
+    held_shares(shape, good[None], gripper, PICK_SIM, 4, alone)
+    assert stopped.random() == alone.random()  # only the first grasp's draws were taken from the stream
+    second_first = (ranked[1], ranked[0], ranked[2])  # the air grasp first: every grasp is executed, reordered
+    reordered = checked(second_first, shape, gripper, PICK_SIM, 4, np.random.default_rng(0))
+    assert [g.score for g in reordered][:2] in ([0.9, 0.7], [0.7, 0.9]) and reordered[2].score == 0.8
