@@ -145,8 +145,9 @@ def pick(
     seed: Annotated[int, typer.Option(help="Seed of drops, cameras and planning.")] = 0,
     spec_file: Annotated[Path | None, typer.Option("--spec", help="YAML pick spec (PickSpec); options given "
                                                                   "here override it.")] = None,
-    pairs: Annotated[bool, typer.Option("--pairs", help="Two objects on the table a view: each object with the "
-                                        "next; a grasp picks the one it closes on (docs/picks.md).")] = False,
+    clutter: Annotated[int, typer.Option(help="Objects on the table together a view: N > 1 sets each object "
+                                         "with the next N-1; a grasp picks the one it closes on (docs/picks.md).")
+                       ] = 1,
     address: Address = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
@@ -158,7 +159,7 @@ def pick(
 
     given = _spec_mapping(spec_file)
     given.update({"checkpoint": str(checkpoint), "objects": objects, "output": str(out), "views": views,
-                  "attempts": attempts, "seed": seed, **({"pairs": True} if pairs else {})})
+                  "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {})})
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))
         report = run_picks(spec, address=address, in_process=in_process,

@@ -17,8 +17,8 @@ import numpy as np
 
 from onepiece_dist.errors import SpecError
 from onepiece_dist.objects import ObjectRef, resolve_source
+from onepiece_dist.picks.clutter import groups_of, pick_scene
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
-from onepiece_dist.picks.pairs import pairs_of, pick_pair
 from onepiece_dist.plan.scorer import GraspScorer
 from onepiece_dist.runtime.actors import restartable_actor
 from onepiece_dist.runtime.crashes import CrashLog, crash_folder, running
@@ -137,19 +137,19 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
 
 
 def pick_units(spec: PickSpec) -> list:
-    """What the benchmark's tasks pick: the source's objects, or with ``spec.pairs`` their pairs."""
+    """What the benchmark's tasks pick: the source's objects, or with ``spec.clutter`` N > 1 its scenes of N."""
     refs = resolve_source(spec.objects)
-    if not spec.pairs:
+    if spec.clutter == 1:
         return refs
-    if len(refs) < 2:
-        raise SpecError(f"pairs: {spec.objects!r} holds {len(refs)} object; a pair needs two: name a source of two "
-                        "or more objects, or leave pairs off")
-    return pairs_of(refs)
+    if len(refs) < spec.clutter:
+        raise SpecError(f"clutter: {spec.objects!r} holds {len(refs)} objects; a scene of {spec.clutter} needs as "
+                        f"many: name a source of {spec.clutter} or more objects, or a smaller clutter")
+    return groups_of(refs, spec.clutter)
 
 
 def pick_task(spec: PickSpec) -> Callable:
-    """The task that picks one unit (pick_units): one object, or one pair."""
-    return pick_pair if spec.pairs else pick_object
+    """The task that picks one unit (pick_units): one object, or one scene."""
+    return pick_scene if spec.clutter > 1 else pick_object
 
 
 def run_each_in_process(task: Callable, spec, refs: list[ObjectRef], progress=None) -> list:

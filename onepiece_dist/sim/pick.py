@@ -97,18 +97,19 @@ class PickWorld(SimWorld):
                 break
         return resting
 
-    def settle_beside(self, rng: np.random.Generator, vertices: np.ndarray, gap: float) -> np.ndarray:
+    def settle_beside(self, rng: np.random.Generator, vertices: np.ndarray, gap: float,
+                      within: float = WORKSPACE) -> np.ndarray:
         """Drop the object in a seeded random orientation beside its neighbours (standing at their resting poses):
         along a seeded horizontal direction from the table centre, ``gap`` (m) beyond their farthest point that
         way, and let it and them come to rest; dropped again (up to DROPS times, the neighbours back at rest)
-        while any of them leaves the workspace. Returns its mesh-frame world pose (the neighbours':
-        ``beside.poses``)."""
+        while any of them rests off the table or further than ``within`` (m, along x or y) from its centre.
+        Returns its mesh-frame world pose (the neighbours': ``beside.poses``)."""
         for _ in range(DROPS):
             self.carry_payload(None)
             self.beside.reset(self.client)
             resting = self._drop(rng, vertices, gap)
             poses = [resting, *self.beside.poses(self.client)]
-            if all(np.all(np.abs(p[:2, 3]) < WORKSPACE) and p[2, 3] > -TABLE_THICKNESS for p in poses):
+            if all(np.all(np.abs(p[:2, 3]) < within) and p[2, 3] > -TABLE_THICKNESS for p in poses):
                 break
         return resting
 
@@ -176,9 +177,10 @@ def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, ca
 
 
 def observe_scene(vertices: np.ndarray, faces: np.ndarray, centre: np.ndarray, camera: Camera,
-                  rng: np.random.Generator, depth_noise: float = 0.0) -> np.ndarray:
+                  rng: np.random.Generator, depth_noise: float = 0.0, half: float = WORKSPACE) -> np.ndarray:
     """(m, 3) world points the camera sees of the triangles ``vertices`` (world frame; every object of the scene)
-    and ``faces`` on the table, kept within WORKSPACE of ``centre`` (3,), with Gaussian ``depth_noise`` (m)."""
+    and ``faces`` on the table, kept within ``half`` (m, along x and y) of ``centre`` (3,), with Gaussian
+    ``depth_noise`` (m)."""
     table = (np.array([TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2]), np.array([0.0, 0.0, -TABLE_THICKNESS / 2]))
     depth = depth_images(vertices, faces, [camera], table)[0]
     points = back_project(depth, camera)
@@ -186,7 +188,7 @@ def observe_scene(vertices: np.ndarray, faces: np.ndarray, centre: np.ndarray, c
         rays = points - camera.pose[:3, 3]
         rays /= np.linalg.norm(rays, axis=1, keepdims=True)
         points = points + rays * rng.normal(0, depth_noise, (len(points), 1))
-    near = np.all(np.abs(points[:, :2] - centre[:2]) < WORKSPACE, axis=1) & (points[:, 2] > -0.005)
+    near = np.all(np.abs(points[:, :2] - centre[:2]) < half, axis=1) & (points[:, 2] > -0.005)
     return points[near]
 
 

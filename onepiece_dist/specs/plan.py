@@ -93,7 +93,7 @@ class CameraSpec(Frozen):
 PICK_SIM = SimSpec(label_trials=4, success="every_trial")
 METHODS = ("network", "random", "analytic", "top_down", "network_full_mesh", "random_full_mesh", "oracle")
 Method = Literal["network", "random", "analytic", "top_down", "network_full_mesh", "random_full_mesh", "oracle"]
-PAIR_METHODS = ("network", "random", "analytic", "top_down", "oracle")  # the full-mesh ones need one object's mesh
+CLUTTER_METHODS = ("network", "random", "analytic", "top_down", "oracle")  # full-mesh ones need one object's mesh
 
 
 class PickSpec(Frozen):
@@ -124,10 +124,11 @@ class PickSpec(Frozen):
                          "every_trial: a pick succeeds when all K hold).")
     sampler: SamplerSpec = SamplerSpec()
     max_file_bytes: int = Field(64 * 2**20, gt=0, description="Mesh and URDF files larger than this are rejected.")
-    pairs: bool = Field(False, description="Two objects on the table a view: each object of the source with the "
-                        "next (the last with the first), the second settled 1-5 cm beyond the first, one camera "
-                        "aimed between them; a grasp picks the object it closes on (docs/picks.md). Its methods "
-                        "default to all but the full-mesh ones, which need one object's mesh.")
+    clutter: int = Field(1, ge=1, le=8, description="Objects on the table together in a view: 1, each object alone; "
+                         "N, each object of the source with the next N-1 (wrapping round), each dropped 1-5 cm "
+                         "beyond those already there, one camera aimed at their middle; a grasp picks the object it "
+                         "closes on (docs/picks.md). With N > 1 the methods default to all but the full-mesh ones, "
+                         "which need one object's mesh.")
 
     @field_validator("gripper", mode="before")
     @classmethod
@@ -136,17 +137,17 @@ class PickSpec(Frozen):
 
     @model_validator(mode="before")
     @classmethod
-    def _pair_methods(cls, data: Any) -> Any:
-        if isinstance(data, dict) and data.get("pairs") and "methods" not in data:
-            return {**data, "methods": PAIR_METHODS}
+    def _clutter_methods(cls, data: Any) -> Any:
+        if isinstance(data, dict) and int(data.get("clutter") or 1) > 1 and "methods" not in data:
+            return {**data, "methods": CLUTTER_METHODS}
         return data
 
     @model_validator(mode="after")
-    def _pairs_have_no_full_mesh(self) -> PickSpec:
-        wrong = [m for m in self.methods if self.pairs and m not in PAIR_METHODS]
+    def _clutter_has_no_full_mesh(self) -> PickSpec:
+        wrong = [m for m in self.methods if self.clutter > 1 and m not in CLUTTER_METHODS]
         if wrong:
-            raise ValueError(f"methods {', '.join(wrong)} sample one object's full mesh and have no meaning for "
-                             f"pairs: leave them out (pairs run {', '.join(PAIR_METHODS)})")
+            raise ValueError(f"methods {', '.join(wrong)} sample one object's full mesh and have no meaning with "
+                             f"clutter {self.clutter}: leave them out (clutter runs {', '.join(CLUTTER_METHODS)})")
         return self
 
     def object_job(self, gripper: GripperSpec, voxel: VoxelSpec) -> JobSpec:

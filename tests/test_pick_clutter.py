@@ -1,6 +1,6 @@
-"""Two objects on the pick world's table (docs/picks.md; sim.beside, picks.pairs): the second settles beside the
-first, a neighbour stands in every trial, a grasp is executed on the object it closes on, and the planner can take
-the whole cloud for one object."""
+"""Several objects on the pick world's table (docs/picks.md; sim.beside, picks.clutter): each next one settles
+beside those there, a neighbour stands in every trial, a grasp is executed on the object it closes on, and the
+planner can take the whole cloud for one object."""
 
 from __future__ import annotations
 
@@ -115,25 +115,25 @@ def pair_spec(tmp_path_factory):
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     return PickSpec(objects="primitives[0:2]", checkpoint=str(shipped_network()), views=1, attempts=2,
-                    output=str(tmp_path_factory.mktemp("pairs")), methods=("network", "random", "top_down"),
-                    pictures=0, plan=PlanSpec(check_draws=1))
+                    output=str(tmp_path_factory.mktemp("clutter")), methods=("network", "random", "top_down"),
+                    pictures=0, plan=PlanSpec(check_draws=1), clutter=2)
 
 
 def test_a_grasp_is_executed_on_the_object_it_closes_on(pair_spec):
     from onepiece_dist.core.cloud.top_down import top_down_grasps
     from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.clutter import SceneExecutions, groups_of, observe_scene_view, scene_object
     from onepiece_dist.picks.object_picks import process_scorer
-    from onepiece_dist.picks.pairs import PairExecutions, observe_pair, pairs_of, scene_object
     from onepiece_dist.sim.pick import execute_pick, pick_world
     from onepiece_dist.sim.trials import LabelNoise
 
     record = process_scorer(pair_spec).record
-    refs = pairs_of(resolve_source(pair_spec.objects))[0]
-    pair = tuple(scene_object(pair_spec, record, ref) for ref in (refs.first, refs.second))
+    group = groups_of(resolve_source(pair_spec.objects), 2)[0]
+    pair = tuple(scene_object(pair_spec, record, ref) for ref in group.refs)
     world = pick_world(record.gripper)
-    scene = observe_pair(pair_spec, record, world, pair, 0)
+    scene = observe_scene_view(pair_spec, record, world, pair, 0)
     assert len(scene.view.proposals.apart) == 2  # the view holds both, told apart
-    executions = PairExecutions(pair_spec, world, pair, scene, 0)
+    executions = SceneExecutions(pair_spec, world, pair, scene, 0)
     down, noise = np.array([0.0, 0.0, -1.0]), LabelNoise.from_spec(pair_spec.sim)
     for k, pose in enumerate(scene.resting):
         on_it = top_down_grasps(transform_points(pair[k].surface, pose), down, record.gripper)[0]
@@ -148,12 +148,12 @@ def test_a_grasp_is_executed_on_the_object_it_closes_on(pair_spec):
 
 def test_a_pair_is_picked_by_every_chooser_the_same_twice(pair_spec):
     from onepiece_dist.objects import resolve_source
-    from onepiece_dist.picks.pairs import pairs_of, pick_pair
+    from onepiece_dist.picks.clutter import groups_of, pick_scene
 
-    refs = pairs_of(resolve_source(pair_spec.objects))
-    assert [(p.first.name, p.second.name) for p in refs] == [("box_40x30x60", "box_20x50x50"),
-                                                              ("box_20x50x50", "box_40x30x60")]
-    runs = [pick_pair(pair_spec, refs[0], 0) for _ in range(2)]
+    refs = groups_of(resolve_source(pair_spec.objects), 2)
+    assert [tuple(r.name for r in g.refs) for g in refs] == [("box_40x30x60", "box_20x50x50"),
+                                                             ("box_20x50x50", "box_40x30x60")]
+    runs = [pick_scene(pair_spec, refs[0], 0) for _ in range(2)]
     assert runs[0].views == runs[1].views and runs[0].status == "ok"
     assert runs[0].name == "box_40x30x60+box_20x50x50"
     view = runs[0].views[0]
@@ -179,46 +179,45 @@ def test_the_planner_takes_the_cloud_for_one_object_where_the_spec_says_so():
     assert np.array_equal(Seen.of(one).separate()[0], one.object_points)
 
 
-def _pairs_result(apart: list[int], as_one: list[int]) -> dict:
-    """Two pairs of one set, 8 views each: the shipped planner's first picks ``apart``, the one-object planner's
-    ``as_one``, the unchecked order's the same as the shipped."""
+def _clutter_result(apart: list[int], as_one: list[int]) -> dict:
+    """Scenes of 2 of one set, two of them, 8 views each: the shipped planner's first picks ``apart``, the
+    one-object planner's ``as_one``, the unchecked order's the same as the shipped."""
+    from benchmarks.experiments.pick_clutter import COMPARED, paired
+
     names = ["a+b", "b+a"]
+
     def run(methods: dict) -> dict:
         return {"methods": {m: {"first_attempt": sum(v) / 16, "interval": [0.1, 0.9], "within_3": 1.0, "views": 16,
                                 "failures": {"slipped_lifting": 16 - sum(v)}} for m, v in methods.items()},
-                "per_pair": {m: dict(zip(names, v, strict=True)) for m, v in methods.items()},
+                "per_scene": {m: dict(zip(names, v, strict=True)) for m, v in methods.items()},
                 "verdict": "a random collision-free grasp picks 25% at the first attempt: the picks can separate"}
+    scenes = {"sets": {"household": {"default": run({"network": apart, "random": [2, 2], "top_down": [4, 4]}),
+                                     "unchecked": run({"network": apart}),
+                                     "as_one": run({"network": as_one, "top_down": [0, 1]})}}}
+    scenes.update({key: paired(scenes, *how) for key, how in COMPARED.items()})
     return {"command": "c", "date": "d", "machine": "m", "views": 8, "attempts": 3,
             "runs": {"default": {"methods": ["network", "random", "top_down"]}, "unchecked": {"methods": ["network"]},
                      "as_one": {"methods": ["network", "top_down"]}},
-            "sets": {"household": {"default": run({"network": apart, "random": [2, 2], "top_down": [4, 4]}),
-                                   "unchecked": run({"network": apart}),
-                                   "as_one": run({"network": as_one, "top_down": [0, 1]})}},
-            "single": {"household": {"network": 0.8, "random": 0.3, "top_down": 0.7}}}
+            "scenes": {"2": scenes}, "single": {"household": {"network": 0.8, "random": 0.3, "top_down": 0.7}}}
 
 
-def test_the_pairs_page_says_a_part_helps_only_where_its_interval_over_pairs_lies_above_zero():
-    from benchmarks.experiments.pick_pairs import paired
-    from benchmarks.pages.pick_pairs_section import pairs_section, pooled_rate
+def test_the_clutter_page_says_a_part_helps_only_where_its_interval_over_scenes_lies_above_zero():
+    from benchmarks.pages.pick_clutter_section import clutter_section, pooled_rate
 
     for as_one, verdict in (([5, 6], "it helps"), ([8, 6], "not shown to help")):
-        result = _pairs_result([7, 8], as_one)
-        for key, run, method, base, base_method in (("apart_vs_as_one", "default", "network", "as_one", "network"),
-                                                    ("checked_vs_unchecked", "default", "network", "unchecked",
-                                                     "network"),
-                                                    ("network_vs_top_down", "default", "network", "default",
-                                                     "top_down")):
-            result[key] = paired(result, run, method, base, base_method)
-        assert result["network_vs_top_down"]["all pairs"]["mean"] == pytest.approx((3 + 4) / 16)
-        lines = pairs_section(result)
-        told_apart = next(line for line in lines if line.startswith("The objects told apart"))
-        assert told_apart.endswith(f"{verdict} (shown where the interval over all pairs lies above zero).")
-        assert "order alone, paired over pairs: household +0.0 points [+0.0, +0.0]" in "\n".join(lines)
-    assert pooled_rate(result, "default", "network") == {"rate": pytest.approx(15 / 16), "interval": [0.875, 1.0],
-                                                         "pairs": 2}
+        result = _clutter_result([7, 8], as_one)
+        assert result["scenes"]["2"]["network_vs_top_down"]["all scenes"]["mean"] == pytest.approx((3 + 4) / 16)
+        lines = clutter_section(result)
+        told_apart = next(line for line in lines if line.startswith("2 objects: the objects told apart"))
+        assert told_apart.endswith(f"{verdict} (shown where the interval over all scenes lies above zero).")
+        assert "order alone, paired over scenes: household +0.0 points [+0.0, +0.0]" in "\n".join(lines)
+    assert pooled_rate(result["scenes"]["2"], 8, "default", "network") == {
+        "rate": pytest.approx(15 / 16), "interval": [0.875, 1.0], "scenes": 2}
     table = "\n".join(lines)
-    assert "| household | top-down across the narrow axis of the whole cloud | 6% [10%, 90%] | 100% | - | 16 |" in table
-    assert "| household | network on the view (as shipped: objects told apart, first 3 checked) | 94%" in table
+    assert ("| 2 | household | top-down across the narrow axis of the whole cloud | 6% [10%, 90%] | 100% | - | 16 |"
+            in table)
+    assert "| 2 | household | network on the view (as shipped: objects told apart, first 3 checked) | 94%" in table
+    assert "2 objects a scene, over all 2 scenes: the shipped planner picks **94%**" in table
 
 
 def test_onepiece_grasp_one_object_plans_as_the_spec_that_takes_the_cloud_for_one_object(tmp_path):
@@ -247,24 +246,45 @@ def test_onepiece_grasp_one_object_plans_as_the_spec_that_takes_the_cloud_for_on
     assert not np.allclose(planned[()], planned[("--one-object",)], atol=1e-6)
 
 
-def test_a_pick_spec_of_pairs_leaves_out_the_full_mesh_methods_and_refuses_them_by_name(tmp_path):
+def test_a_pick_spec_of_clutter_leaves_out_the_full_mesh_methods_and_refuses_them_by_name(tmp_path):
     from onepiece_dist.errors import SpecError
     from onepiece_dist.picks.runner import pick_units
-    from onepiece_dist.specs.plan import METHODS, PAIR_METHODS, PickSpec, parse_pick_spec
+    from onepiece_dist.specs.plan import CLUTTER_METHODS, METHODS, PickSpec, parse_pick_spec
 
-    assert PickSpec(checkpoint="x", pairs=True).methods == PAIR_METHODS
+    assert PickSpec(checkpoint="x", clutter=3).methods == CLUTTER_METHODS
     assert PickSpec(checkpoint="x").methods == METHODS
     with pytest.raises(SpecError, match="network_full_mesh sample one object's full mesh"):
-        parse_pick_spec({"checkpoint": "x", "pairs": True, "methods": ["network", "network_full_mesh"]}, "pairs.yaml")
-    with pytest.raises(SpecError, match="holds 1 object; a pair needs two"):
-        pick_units(PickSpec(checkpoint="x", objects="primitives[0:1]", pairs=True))
-    assert [p.name for p in pick_units(PickSpec(checkpoint="x", objects="primitives[0:3]", pairs=True))] == [
+        parse_pick_spec({"checkpoint": "x", "clutter": 2, "methods": ["network", "network_full_mesh"]}, "c.yaml")
+    with pytest.raises(SpecError, match="holds 2 objects; a scene of 3 needs as many"):
+        pick_units(PickSpec(checkpoint="x", objects="primitives[0:2]", clutter=3))
+    assert [g.name for g in pick_units(PickSpec(checkpoint="x", objects="primitives[0:3]", clutter=2))] == [
         "box_40x30x60+box_20x50x50", "box_20x50x50+box_60x60x15", "box_60x60x15+box_40x30x60"]
+
+
+def test_three_objects_settle_one_beside_the_others_on_the_table(pair_spec):
+    from scipy.spatial import cKDTree
+
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.clutter import groups_of, observe_scene_view, scene_object
+    from onepiece_dist.picks.object_picks import process_scorer
+    from onepiece_dist.sim.pick import pick_world
+
+    spec = pair_spec.model_copy(update={"objects": "primitives[0:3]", "clutter": 3})
+    record = process_scorer(spec).record
+    group = groups_of(resolve_source(spec.objects), 3)[0]
+    objects = tuple(scene_object(spec, record, ref) for ref in group.refs)
+    scene = observe_scene_view(spec, record, pick_world(record.gripper), objects, 0)
+    surfaces = [transform_points(o.surface, pose) for o, pose in zip(objects, scene.resting, strict=True)]
+    assert all(s[:, 2].min() > -2e-3 for s in surfaces)  # on the table, not in it
+    for a in range(3):
+        for b in range(a + 1, 3):
+            assert cKDTree(surfaces[a]).query(surfaces[b])[0].min() > 1e-3  # none inside another
+    assert len(scene.view.proposals.apart) == 3  # the view holds all three, told apart
 
 
 @pytest.mark.slow
 @pytest.mark.ray
-def test_onepiece_pick_pairs_runs_in_process_and_on_the_embedded_ray_with_the_same_picks(tmp_path):
+def test_onepiece_pick_clutter_runs_in_process_and_on_the_embedded_ray_with_the_same_picks(tmp_path):
     import json
 
     from typer.testing import CliRunner
@@ -274,17 +294,19 @@ def test_onepiece_pick_pairs_runs_in_process_and_on_the_embedded_ray_with_the_sa
     from onepiece_dist.plan.shipped import shipped_network
     from onepiece_dist.specs.plan import PickSpec
 
-    spec_file = tmp_path / "pairs.yaml"
+    spec_file = tmp_path / "clutter.yaml"
     spec_file.write_text("methods: [network, random, top_down]\nplan: {candidates: 160, check_draws: 1}\n"
                          "pictures: 1\n")
-    ran = CliRunner().invoke(app, ["pick", str(shipped_network()), "--objects", "primitives[0:2]", "--views", "1",
-                                   "--attempts", "2", "--pairs", "--spec", str(spec_file), "--in-process", "--out",
-                                   str(tmp_path / "here"), "--json"])
+    ran = CliRunner().invoke(app, ["pick", str(shipped_network()), "--objects", "primitives[0:3]", "--views", "1",
+                                   "--attempts", "2", "--clutter", "3", "--spec", str(spec_file), "--in-process",
+                                   "--out", str(tmp_path / "here"), "--json"])
     assert ran.exit_code == 0, ran.output
     here = json.loads(ran.stdout)
-    assert [o["name"] for o in here["objects"]] == ["box_40x30x60+box_20x50x50", "box_20x50x50+box_40x30x60"]
-    assert [m["method"] for m in here["methods"]] == ["network", "random", "top_down"] and here["spec"]["pairs"]
-    assert (tmp_path / "here" / "pictures" / "box_40x30x60_box_20x50x50-view0.png").is_file()
+    assert [o["name"] for o in here["objects"]] == ["box_40x30x60+box_20x50x50+box_60x60x15",
+                                                    "box_20x50x50+box_60x60x15+box_40x30x60",
+                                                    "box_60x60x15+box_40x30x60+box_20x50x50"]
+    assert [m["method"] for m in here["methods"]] == ["network", "random", "top_down"] and here["spec"]["clutter"] == 3
+    assert (tmp_path / "here" / "pictures" / "box_40x30x60_box_20x50x50_box_60x60x15-view0.png").is_file()
     spec = PickSpec(**{**here["spec"], "output": str(tmp_path / "ray"), "pictures": 0, "workers": 2})
     on_ray = run_picks(spec)
     assert [[dict(v.attempts) for v in o.views] for o in on_ray.objects] == [

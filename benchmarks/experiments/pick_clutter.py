@@ -1,0 +1,109 @@
+"""Several objects on the table (docs/picks.md): the pick benchmark has one object on its table; a robot's table
+holds several. Scenes of 2 and of 4 objects, run as `onepiece pick --clutter N` runs them
+(onepiece_dist/picks/clutter.py, on the embedded Ray): each object of the household and unseen sets with the
+next N-1 of its set (wrapping round, so each object stands in N scenes), 8 seeded views a scene; each next object
+dropped 1-5 cm beyond those already there along a seeded direction, all settled, one camera aimed at their
+middle. A grasp picks when it lifts and holds the object it closes on, the others beside it in every trial.
+
+Runs (the same views, each candidate's outcome its own seeded execution, so the runs compare view for view):
+- ``default``: the planner as it ships (the view's objects told apart, its first 3 checked) beside a random
+  collision-free candidate, the antipodal score and top-down on the largest object;
+- ``unchecked``: the network's order alone (check_first=0);
+- ``as_one``: the planner that takes the whole cloud for one object (objects_apart=False), and top-down on it.
+
+    .venv/bin/python -m benchmarks.experiments.pick_clutter
+
+Results: benchmarks/results/pick_clutter.json, rendered into docs/picks.md.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from datetime import date
+
+import numpy as np
+
+from benchmarks.experiments.pick_curve import HERE, ROOT
+
+RESULTS = HERE / "results" / "pick_clutter.json"
+SIZES, VIEWS, ATTEMPTS = (2, 4), 8, 3
+RUNS = {"default": ({}, ("network", "random", "analytic", "top_down")),
+        "unchecked": ({"check_first": 0}, ("network",)),
+        "as_one": ({"objects_apart": False}, ("network", "top_down"))}
+COMPARED = {"checked_vs_unchecked": ("default", "network", "unchecked", "network"),
+            "apart_vs_as_one": ("default", "network", "as_one", "network"),
+            "network_vs_top_down": ("default", "network", "default", "top_down")}
+
+
+def _spec(name: str, objects: str, size: int, run: str):
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PickSpec, PlanSpec
+
+    plan, methods = RUNS[run]
+    return PickSpec(objects=objects, checkpoint=str(shipped_network()), clutter=size,
+                    output=str(ROOT / "data" / "pick_clutter" / name), views=VIEWS, attempts=ATTEMPTS, pictures=0,
+                    methods=methods, plan=PlanSpec(**plan), workers=2)
+
+
+def measure(name: str, objects: str, size: int, run: str) -> dict:
+    """One set's scenes of ``size`` in one run (`onepiece pick --clutter`, on the embedded Ray): its summary over
+    scenes and each scene's first picks per method."""
+    from onepiece_dist.picks.runner import run_picks
+
+    spec = _spec(name, objects, size, run)
+    start = time.perf_counter()
+    report = run_picks(spec)
+    return {"methods": {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),
+                                   "within_3": m.within_k, "views": m.views, "failures": m.first_failures}
+                        for m in report.methods},
+            "per_scene": {m: report.first_picks(m) for m in spec.methods},
+            "rejected": {p.name: p.reason for p in report.objects if p.status != "ok"},
+            "verdict": report.verdict, "seconds": round(time.perf_counter() - start, 1)}
+
+
+def paired(scenes: dict, run: str, method: str, base: str, base_method: str = "network") -> dict:
+    """``run``'s ``method`` against ``base``'s ``base_method`` on the same views of ``scenes`` (one size's sets),
+    first attempt, paired over scenes (each set and all pooled): the mean difference and its 95% bootstrap
+    interval."""
+    from onepiece_dist.stats.intervals import bootstrap_interval
+
+    per_set = {}
+    for name, runs in scenes["sets"].items():
+        tried, against = runs[run]["per_scene"][method], runs[base]["per_scene"][base_method]
+        per_set[name] = [(tried[p] - against[p]) / VIEWS for p in sorted(set(tried) & set(against))]
+    per_set["all scenes"] = [d for diffs in list(per_set.values()) for d in diffs]
+    return {name: {"mean": float(np.mean(d)) if d else 0.0, "interval": list(bootstrap_interval(np.array(d)))}
+            for name, d in per_set.items()}
+
+
+def single_rates() -> dict:
+    """Per set and method, the one-object benchmark's first attempt on the same objects (committed picks.json)."""
+    committed = json.loads((HERE / "results" / "picks.json").read_text())
+    return {s["name"]: {m["method"]: m["first_attempt"] for m in s["methods"]} for s in committed["sets"]}
+
+
+def measure_size(sets: dict, size: int) -> dict:
+    scenes = {"sets": {name: {run: measure(name, objects, size, run) for run in RUNS}
+                       for name, objects in sets.items()}}
+    return {**scenes, **{key: paired(scenes, *how) for key, how in COMPARED.items()}}
+
+
+def main() -> None:
+    from benchmarks.experiments.household import UNSEEN, household_objects
+
+    sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
+    result = {"command": ".venv/bin/python -m benchmarks.experiments.pick_clutter", "date": date.today().isoformat(),
+              "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "views": VIEWS,
+              "attempts": ATTEMPTS, "runs": {run: {"plan": plan, "methods": list(methods)}
+                                             for run, (plan, methods) in RUNS.items()},
+              "single": single_rates(), "scenes": {str(size): measure_size(sets, size) for size in SIZES}}
+    RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+    print({size: {name: {run: {m: round(v["first_attempt"], 3) for m, v in r["methods"].items()}
+                         for run, r in runs.items()} for name, runs in scenes["sets"].items()}
+           for size, scenes in result["scenes"].items()})
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,118 @@
+"""The several-objects section of docs/picks.md, from results/pick_clutter.json
+(benchmarks/experiments/pick_clutter.py): per scene size, each chooser's first attempt over scenes beside the same
+objects alone, how the first attempts ended, and the planner's parts judged on the same views (the check; telling
+the objects apart)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+# (run, method) -> what the row is
+ROWS = {("default", "network"): "network on the view (as shipped: objects told apart, first 3 checked)",
+        ("unchecked", "network"): "network on the view, its order alone (check_first=0)",
+        ("as_one", "network"): "network on the view, the cloud taken for one object (objects_apart=False)",
+        ("default", "random"): "random collision-free candidate",
+        ("default", "analytic"): "antipodal score on the view",
+        ("default", "top_down"): "top-down across the narrow axis of the largest object",
+        ("as_one", "top_down"): "top-down across the narrow axis of the whole cloud"}
+REASONS = ("start_collision", "no_contact", "slipped_lifting", "dropped_shaking", "no_grasp")
+RULE = "shown where the interval over all scenes lies above zero"
+
+
+def _pct(value: float) -> str:
+    return f"{100 * value:.0f}%"
+
+
+def _points(gain: dict) -> str:
+    low, high = gain["interval"]
+    return f"{100 * gain['mean']:+.1f} points [{100 * low:+.1f}, {100 * high:+.1f}]"
+
+
+def _rows(result: dict):
+    """Each (run, method) row present: its run and method."""
+    return [(run, method) for run, method in ROWS if method in result["runs"].get(run, {}).get("methods", ())]
+
+
+def pooled_rate(scenes: dict, views: int, run: str, method: str) -> dict:
+    """``run``'s ``method`` over the scenes of every set of one size: the mean of per-scene first-attempt rates
+    and its 95% bootstrap interval over scenes."""
+    from onepiece_dist.stats.intervals import bootstrap_interval
+
+    rates = np.array([picked / views for runs in scenes["sets"].values()
+                      for picked in runs[run]["per_scene"][method].values()])
+    return {"rate": float(rates.mean()) if len(rates) else 0.0, "interval": list(bootstrap_interval(rates)),
+            "scenes": len(rates)}
+
+
+def _table(result: dict, size: str) -> list[str]:
+    lines = []
+    for name, runs in result["scenes"][size]["sets"].items():
+        alone = result.get("single", {}).get(name, {})
+        for run, method in _rows(result):
+            m = runs[run]["methods"][method]
+            single = _pct(alone[method]) if method in alone and run == "default" else "-"
+            lines.append(f"| {size} | {name} | {ROWS[(run, method)]} | {_pct(m['first_attempt'])} "
+                         f"[{_pct(m['interval'][0])}, {_pct(m['interval'][1])}] | {_pct(m['within_3'])} | {single} | "
+                         f"{m['views']} |")
+    return lines
+
+
+def _failures(result: dict, size: str) -> list[str]:
+    lines = []
+    for name, runs in result["scenes"][size]["sets"].items():
+        for run, method in _rows(result):
+            m = runs[run]["methods"][method]
+            lost = sum(m["failures"].values())
+            lines.append(f"| {size} | {name} | {ROWS[(run, method)]} | {m['views'] - lost} | "
+                         + " | ".join(str(m["failures"].get(r, 0)) for r in REASONS) + " |")
+    return lines
+
+
+def _paired_line(size: str, what: str, gain: dict) -> str:
+    sets = "; ".join(f"{name} {_points(g)}" for name, g in gain.items())
+    verdict = "it helps" if gain["all scenes"]["interval"][0] > 0 else "not shown to help"
+    return f"{size} objects: {what}, paired over scenes: {sets}: {verdict} ({RULE})."
+
+
+def _headline(result: dict, size: str) -> str:
+    scenes = result["scenes"][size]
+    net, top = (pooled_rate(scenes, result["views"], "default", m) for m in ("network", "top_down"))
+    verdicts = " ".join(f"{name.capitalize()}: {runs['default']['verdict']}." for name, runs in scenes["sets"].items())
+    return (f"{size} objects a scene, over all {net['scenes']} scenes: the shipped planner picks "
+            f"**{_pct(net['rate'])}** [{_pct(net['interval'][0])}, {_pct(net['interval'][1])}] at the first attempt, "
+            f"top-down on the largest "
+            f"object {_pct(top['rate'])} [{_pct(top['interval'][0])}, {_pct(top['interval'][1])}]. {verdicts}")
+
+
+def clutter_section(result: dict) -> list[str]:
+    sizes = list(result["scenes"])
+    lines = [f"## Several objects on the table: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}. A robot's table holds more than one object: `onepiece pick "
+             "--clutter N` (`PickSpec.clutter`) sets N on it together. Each object of the household and unseen sets "
+             f"with the next N-1 of its set (wrapping round: each object stands in N scenes), {result['views']} "
+             "seeded views a scene: the first object dropped at the table centre and settled, each next one dropped "
+             "1-5 cm beyond those already there along a seeded direction, all settled again, one camera aimed at "
+             "their middle (as above; the cloud kept within 0.25 m of it). Every chooser plans on the cloud of them "
+             "all; a grasp picks when it lifts and holds the object it closes on (the one with the most of its true "
+             f"surface between the fingers) through the pick protocol, the others standing beside it in every trial; "
+             f"up to {result['attempts']} attempts from the scene at rest. Each candidate's execution has a "
+             "generator of its own, so the rows below compare view for view. A scene picks where any of its objects "
+             "is picked, so it can be easier than its objects alone: the planner chooses which to grasp.", ""]
+    lines += [_headline(result, size) for size in sizes]
+    lines += ["", "| objects | set | chooser | first attempt [95% CI over scenes] | within 3 | the same objects "
+              "alone, first attempt | views |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    lines += [row for size in sizes for row in _table(result, size)]
+    lines += ["", "First attempts by how they ended:", "",
+              "| objects | set | chooser | picked | " + " | ".join(r.replace("_", " ") for r in REASONS) + " |",
+              "| --- | --- | --- | --- | " + " | ".join("---" for _ in REASONS) + " |"]
+    lines += [row for size in sizes for row in _failures(result, size)]
+    lines.append("")
+    for size in sizes:
+        scenes = result["scenes"][size]
+        lines += [_paired_line(size, "the network's first 3 checked against its order alone",
+                               scenes["checked_vs_unchecked"]),
+                  _paired_line(size, "the objects told apart against the cloud taken for one object (the planner's "
+                               "check, contexts and top-down grasps)", scenes["apart_vs_as_one"]),
+                  _paired_line(size, "the shipped planner against top-down on the largest object",
+                               scenes["network_vs_top_down"])]
+    return lines
