@@ -74,14 +74,22 @@ def _paired_line(size: str, what: str, gain: dict) -> str:
     return f"{size} objects: {what}, paired over scenes: {sets}: {verdict} ({RULE})."
 
 
+HEURISTICS = {"random": "a random candidate", "analytic": "the antipodal score", "top_down": "top-down on the "
+              "largest object"}
+
+
 def _headline(result: dict, size: str) -> str:
     scenes = result["scenes"][size]
-    net, top = (pooled_rate(scenes, result["views"], "default", m) for m in ("network", "top_down"))
+    net = pooled_rate(scenes, result["views"], "default", "network")
+    tried = [m for m in HEURISTICS if m in result["runs"]["default"]["methods"]]
+    rates = {m: pooled_rate(scenes, result["views"], "default", m) for m in tried}
+    best = max(tried, key=lambda m: rates[m]["rate"])
+    others = ", ".join(f"{HEURISTICS[m]} {_pct(rates[m]['rate'])}" for m in tried)
     verdicts = " ".join(f"{name.capitalize()}: {runs['default']['verdict']}." for name, runs in scenes["sets"].items())
     return (f"{size} objects a scene, over all {net['scenes']} scenes: the shipped planner picks "
             f"**{_pct(net['rate'])}** [{_pct(net['interval'][0])}, {_pct(net['interval'][1])}] at the first attempt, "
-            f"top-down on the largest "
-            f"object {_pct(top['rate'])} [{_pct(top['interval'][0])}, {_pct(top['interval'][1])}]. {verdicts}")
+            f"{100 * (net['rate'] - rates[best]['rate']):+.0f} points over the best heuristic ({others}). "
+            f"{verdicts}")
 
 
 def clutter_section(result: dict) -> list[str]:
