@@ -81,6 +81,9 @@ def grasp(
                                              "convex hull), carved (that hull less what the camera saw through: "
                                              "openings stay open) or mirrored (with the points' half turn about "
                                              "their axis: a symmetric object's far side).")] = "hull",
+    target: Annotated[str | None, typer.Option(help="x,y,z: a point on the object to pick, in the frame of the "
+                                               "plan (the robot's base with --camera-pose); only grasps on the "
+                                               "object nearest it (docs/planning.md).")] = None,
     one_object: Annotated[bool, typer.Option("--one-object", help="Take the whole cloud above the table for one "
                                              "object; by default objects 1 cm or more apart are told apart, each "
                                              "with its own top-down grasps and checked shape (docs/planning.md).")
@@ -95,11 +98,12 @@ def grasp(
     from onepiece_dist.plan.shipped import shipped_summary
     from onepiece_dist.specs.plan import PlanSpec
 
-    view = _floats(viewpoint, 3, "--viewpoint")
+    view, aim = _floats(viewpoint, 3, "--viewpoint"), _floats(target, 3, "--target")
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check,
-                        check_shape=check_shape, objects_apart=not one_object)
+                        check_shape=check_shape, objects_apart=not one_object,
+                        target=None if aim is None else tuple(aim))
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, _gripper(gripper))
     except (OnePieceError, ValueError) as error:
@@ -124,10 +128,14 @@ def _print_plan(plan, json_path: Path, png: Path | None) -> None:
     if "check" in plan.seconds:
         err(f"the first grasps executed in simulation on the shape the view implies and reordered by how often they "
             f"held ({plan.seconds['check']:.2f} s; --check 0: the network's order alone)")
+    for o in plan.objects if len(plan.objects) > 1 else ():
+        err(f"  object {o.index}: {o.points} points, centre ({o.centre[0]:+.3f}, {o.centre[1]:+.3f}, "
+            f"{o.centre[2]:+.3f}) m")
     for g in plan.grasps:
         centre = g.pose[:3, 3]
-        err(f"  #{g.rank}  score {g.score:.3f}  palm at ({centre[0]:+.3f}, {centre[1]:+.3f}, {centre[2]:+.3f}) m  "
-            f"approach ({g.pose[0, 0]:+.2f}, {g.pose[1, 0]:+.2f}, {g.pose[2, 0]:+.2f})  {g.points} points")
+        err(f"  #{g.rank}  object {g.object}  score {g.score:.3f}  palm at ({centre[0]:+.3f}, {centre[1]:+.3f}, "
+            f"{centre[2]:+.3f}) m  approach ({g.pose[0, 0]:+.2f}, {g.pose[1, 0]:+.2f}, {g.pose[2, 0]:+.2f})  "
+            f"{g.points} points")
     if not plan.grasps:
         err("  no grasp: every candidate collided with the cloud or the plane, or held too few points")
     typer.echo(str(json_path))

@@ -30,6 +30,7 @@ from onepiece_dist.core.hand_frames import to_panda
 from onepiece_dist.errors import CloudRejected, SpecError
 from onepiece_dist.plan.observation import Observation
 from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
+from onepiece_dist.plan.targets import SeenObject, grasped_objects, seen_objects, target_object
 from onepiece_dist.specs.job import GripperSpec
 from onepiece_dist.specs.plan import PlanSpec
 
@@ -51,6 +52,7 @@ class PlannedGrasp:
     observed_width: float
     score: float
     points: int
+    object: int = 0  # the object told apart it closes on (GraspPlan.objects; 0: the one with the most points)
 
     def pregrasp(self) -> np.ndarray:
         """(4, 4) the Panda hand PREGRASP back along its approach (its z) from ``panda_pose``."""
@@ -60,7 +62,7 @@ class PlannedGrasp:
 
     def to_json(self) -> dict:
         pregrasp = self.pregrasp()
-        return {"rank": self.rank, "score": round(self.score, 6), "opening": self.opening,
+        return {"rank": self.rank, "object": self.object, "score": round(self.score, 6), "opening": self.opening,
                 "observed_width": round(self.observed_width, 6), "points": self.points,
                 "pose": np.round(self.pose, 9).tolist(), "panda_pose": np.round(self.panda_pose, 9).tolist(),
                 "position": np.round(self.panda_pose[:3, 3], 9).tolist(),
@@ -114,6 +116,7 @@ class GraspPlan:
     plane: SupportPlane | None
     seconds: dict[str, float]
     notes: tuple[str, ...] = ()
+    objects: tuple[SeenObject, ...] = ()  # the objects told apart (plan.targets), largest first
 
     def transformed(self, pose: np.ndarray) -> GraspPlan:
         """The same plan in another frame: ``pose`` (4, 4) maps the planning frame (a camera's) into it (a robot's
@@ -125,7 +128,7 @@ class GraspPlan:
         if self.plane is not None:
             normal = apply_rotation(pose[:3, :3], self.plane.normal)
             plane = SupportPlane(normal, self.plane.offset - float(dot3(normal, pose[:3, 3])), self.plane.inliers)
-        return dataclasses.replace(self, grasps=grasps, plane=plane)
+        return dataclasses.replace(self, grasps=grasps, plane=plane, objects=tuple(o.moved(pose) for o in self.objects))
 
     def to_json(self) -> dict:
         plane = None if self.plane is None else {"normal": np.round(self.plane.normal, 9).tolist(),
@@ -136,6 +139,7 @@ class GraspPlan:
                 "(x, y, z, w): the Franka Panda hand (z approach, x closing, origin at the hand base); pregrasp: "
                 "that hand 5 cm back along z",
                 "counts": self.counts.to_json(), "support_plane": plane, "notes": list(self.notes),
+                "objects": [o.to_json() for o in self.objects],
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "grasps": [g.to_json() for g in self.grasps]}
 
@@ -253,9 +257,10 @@ def rank(proposals: Proposals, scores: np.ndarray, record: CropRecord, spec: Pla
 def _planned(proposals: Proposals, scores: np.ndarray, gripper: GripperSpec, chosen) -> tuple[PlannedGrasp, ...]:
     """The proposals ``chosen`` (indices, best first) as planned grasps ranked 1, 2, ..."""
     panda = to_panda(proposals.poses[chosen], gripper.finger_length) if len(chosen) else np.zeros((0, 4, 4))
+    objects = grasped_objects(proposals.apart, proposals.poses[list(chosen)], gripper)
     return tuple(PlannedGrasp(rank + 1, proposals.poses[i], panda[rank], gripper.max_opening,
                               _observed_width(proposals.crops.points[i]), float(scores[i]),
-                              int(proposals.crops.counts[i])) for rank, i in enumerate(chosen))
+                              int(proposals.crops.counts[i]), int(objects[rank])) for rank, i in enumerate(chosen))
 
 
 def best_top_down(proposals: Proposals, scores: np.ndarray, record: CropRecord) -> PlannedGrasp | None:
@@ -323,9 +328,11 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     proposals = propose(observation, scorer.record, spec, rng)
     _refuse_plane_alone(observation, proposals)
     clock = time.perf_counter()
-    scores = scorer.score(proposals.crops, spec.batch_size)
+    scores = on_target(proposals, scorer.score(proposals.crops, spec.batch_size), scorer.gripper, spec,
+                       observation.source)
     scored = time.perf_counter()
     grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
+    grasps = tuple(g for g in grasps if np.isfinite(g.score))
     ranked = time.perf_counter()
     if spec.check_first:
         grasps = check_ranked(grasps, proposals, scores, scorer.record, spec, check)
@@ -335,7 +342,19 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
         seconds["check"] = time.perf_counter() - ranked
     seconds["total"] = sum(seconds.values())
     counts = dataclasses.replace(proposals.counts, scored=len(scores))
-    return GraspPlan(observation.source, grasps, counts, proposals.plane, seconds, notes + _unchecked(spec, proposals))
+    return GraspPlan(observation.source, grasps, counts, proposals.plane, seconds, notes + _unchecked(spec, proposals),
+                     seen_objects(proposals.apart))
+
+
+def on_target(proposals: Proposals, scores: np.ndarray, gripper: GripperSpec, spec: PlanSpec, source: str
+              ) -> np.ndarray:
+    """``scores`` with every proposal that does not close on ``spec.target``'s object made -inf (none without a
+    target)."""
+    if spec.target is None:
+        return scores
+    wanted = target_object(proposals.apart or (proposals.object_points,), np.asarray(spec.target), source)
+    mine = grasped_objects(proposals.apart, proposals.poses, gripper) == wanted
+    return np.where(mine, scores, -np.inf)
 
 
 def _unchecked(spec: PlanSpec, proposals: Proposals) -> tuple[str, ...]:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.frames import invert_poses, transform_points
 from onepiece_dist.plan.camera_files import (
     crop_to_workspace,
     depth_observation,
@@ -67,6 +68,9 @@ def plan_from_files(cloud: str | Path, checkpoint: str | Path | None = None, spe
     first ``spec.check_first`` reordered by ``check`` (planner.plan_grasps)."""
     spec = spec or PlanSpec()
     observation, pose = read_observation(cloud, intrinsics, depth_scale, viewpoint, camera_pose, workspace)
+    if pose is not None and spec.target is not None:  # the target is given in the base frame; planning is not
+        target = transform_points(np.array([spec.target]), invert_poses(pose[None])[0])[0]
+        spec = spec.model_copy(update={"target": tuple(float(v) for v in target)})
     scorer = GraspScorer(checkpoint or shipped_network(), gripper, spec.device)
     plan = plan_grasps(observation, scorer, spec, check)
     if pose is not None:

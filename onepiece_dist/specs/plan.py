@@ -62,6 +62,10 @@ class PlanSpec(Frozen):
         "into stays open; needs the camera's position, else the hull); or the hull of the points and their half "
         "turn about the vertical axis of the circle that best fits their footprint (mirrored: a symmetric object's "
         "far side).")
+    target: tuple[float, float, float] | None = Field(None, description="A point on the object to pick (m, in the "
+                                                      "frame the plan is returned in): only grasps that close on the "
+                                                      "object told apart nearest it are planned (refused where none "
+                                                      "lies within 5 cm).")
     objects_apart: bool = Field(True, description="Tell the view's objects apart (points whose 1 cm cells touch "
                                 "are one object: core.cloud.objects): each gets its own top-down grasps, a grasp's "
                                 "context reads the centre of the object it closes on and the check stands that "
