@@ -10,6 +10,7 @@ import numpy as np
 
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section, reranked_section
+from benchmarks.pages.pick_clearance_section import clearance_section
 from benchmarks.pages.pick_clutter_section import clutter_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
@@ -216,7 +217,7 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_clutter", "pick_ceiling", "pick_ranked_draws", "pick_reranked", "pick_robust_rank",
+SECTIONS = ("pick_clutter", "pick_clearance", "pick_ceiling", "pick_ranked_draws", "pick_reranked", "pick_robust_rank",
             "pick_rank_features", "pick_shape_check", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy",
             "pick_vessels", "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule",
             "pick_household_labels", "pick_outline", "pick_top_draws", "pick_rankings", "pick_pool_size")
@@ -240,7 +241,8 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_clutter": clutter_section, "pick_ceiling": lambda r: _ceiling(r, picks),
+    render = {"pick_clutter": clutter_section, "pick_clearance": clearance_section,
+              "pick_ceiling": lambda r: _ceiling(r, picks),
               "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_robust_rank": robust_rank_section, "pick_rank_features": rank_features_section,

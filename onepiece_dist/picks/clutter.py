@@ -104,10 +104,23 @@ def observe_scene_view(spec: PickSpec, record: CropRecord, world, objects: tuple
                        view: int) -> Scene:
     """View ``view`` of ``objects``: settled side by side, seen by one seeded camera aimed at their middle, and
     the planner's candidates on the cloud of them all."""
+    resting, rng = settled(spec, world, objects, view)
+    return Scene(resting, seen_scene(spec, record, objects, resting, rng, view))
+
+
+def settled(spec: PickSpec, world, objects: tuple[SceneObject, ...], view: int
+            ) -> tuple[tuple[np.ndarray, ...], np.random.Generator]:
+    """``objects`` settled for view ``view`` (settle_scene, from the view's own stream), and that stream."""
+    rng = np.random.default_rng([*scene_seed(spec, objects, view)[:-1], SCENE_STREAM + view])
+    return settle_scene(world, objects, rng), rng
+
+
+def seen_scene(spec: PickSpec, record: CropRecord, objects: tuple[SceneObject, ...],
+               resting: tuple[np.ndarray, ...], rng: np.random.Generator, view: int) -> PickView:
+    """``objects`` resting at ``resting`` seen by a camera drawn from ``rng``, aimed at their middle, and the
+    planner's candidates on the cloud (the view's checks seeded by the objects, the spec's seed and ``view``)."""
     from onepiece_dist.sim.pick import observe_scene, pick_camera
 
-    rng = np.random.default_rng([*scene_seed(spec, objects, view)[:-1], SCENE_STREAM + view])
-    resting = settle_scene(world, objects, rng)
     vertices = [transform_points(o.mesh.vertices, pose) for o, pose in zip(objects, resting, strict=True)]
     offsets = np.cumsum([0] + [len(o.mesh.vertices) for o in objects[:-1]])
     faces = np.vstack([o.mesh.faces + k for o, k in zip(objects, offsets, strict=True)])
@@ -118,9 +131,8 @@ def observe_scene_view(spec: PickSpec, record: CropRecord, world, objects: tuple
     eye = drawn.camera.pose[:3, 3]
     name = f"{scene_name(objects)} view {view}"
     proposals = propose(Observation(cloud, eye, name), record, spec.plan, rng) if len(cloud) >= MIN_POINTS else None
-    seen = PickView(view, resting[0], eye, drawn.distance, drawn.elevation_deg, cloud, proposals, rng,
+    return PickView(view, resting[0], eye, drawn.distance, drawn.elevation_deg, cloud, proposals, rng,
                     (*scene_seed(spec, objects, view), CHECK_STREAM))
-    return Scene(resting, seen)
 
 
 def scene_name(objects) -> str:
@@ -162,17 +174,22 @@ class SceneExecutions:
 def pick_scene(spec: PickSpec, group: ObjectGroup, index: int) -> ObjectPicks:
     """Every view of one scene (named "first+second+..."); a bad object becomes a rejected result, never an
     exception."""
-    from onepiece_dist.sim.pick import pick_world
-
     start = time.perf_counter()
-    scorer = process_scorer(spec)
     try:
-        objects = tuple(scene_object(spec, scorer.record, ref) for ref in group.refs)
+        scorer, world, objects = loaded_scene(spec, group)
     except MeshRejected as err:
         return ObjectPicks(index, group.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    world = pick_world(scorer.record.gripper)
     views = tuple(_scene_view(spec, scorer, world, objects, view) for view in range(spec.views))
     return ObjectPicks(index, group.name, "ok", views, seconds=time.perf_counter() - start)
+
+
+def loaded_scene(spec: PickSpec, group: ObjectGroup) -> tuple:
+    """This process's scorer and pick world, and ``group``'s objects loaded; MeshRejected for a bad object."""
+    from onepiece_dist.sim.pick import pick_world
+
+    scorer = process_scorer(spec)
+    objects = tuple(scene_object(spec, scorer.record, ref) for ref in group.refs)
+    return scorer, pick_world(scorer.record.gripper), objects
 
 
 def _scene_view(spec: PickSpec, scorer, world, objects, view: int) -> ViewPicks:

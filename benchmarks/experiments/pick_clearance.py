@@ -1,0 +1,91 @@
+"""Clearing the table (docs/picks.md): VGN's declutter protocol on scenes of 4 household objects
+(onepiece_dist/picks/clearance.py). Each object of the household and unseen sets with the next 3 of its set
+(wrapping round), settled as `onepiece pick --clutter 4` settles them, VIEWS seeded settles a scene; round after
+round a new camera sees what is left, the chooser's first grasp is executed, a picked object leaves; two failed
+rounds in a row end it. Per chooser: the share of objects cleared (declutter rate) and of rounds that picked
+(grasp success rate), each over scenes with a 95% bootstrap interval.
+
+    .venv/bin/python -m benchmarks.experiments.pick_clearance
+
+Results: benchmarks/results/pick_clearance.json, rendered into docs/picks.md.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from datetime import date
+from multiprocessing import get_context
+
+import numpy as np
+
+from benchmarks.experiments.pick_curve import HERE, ROOT
+
+RESULTS = HERE / "results" / "pick_clearance.json"
+SIZE, VIEWS = 4, 4
+METHODS = ("network", "random", "analytic", "top_down")
+
+
+def _spec(name: str, objects: str):
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PickSpec
+
+    return PickSpec(objects=objects, checkpoint=str(shipped_network()), clutter=SIZE, views=VIEWS, pictures=0,
+                    output=str(ROOT / "data" / "pick_clutter" / name), methods=METHODS)
+
+
+def _scene(task):
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.clearance import clear_scenes
+    from onepiece_dist.picks.clutter import groups_of
+
+    spec, index = task
+    return clear_scenes(spec, groups_of(resolve_source(spec.objects), spec.clutter)[index], index)
+
+
+def measure(name: str, objects: str, processes: int = 2) -> dict:
+    """Each scene of one set cleared by each chooser: per scene and method, objects cleared, objects, rounds."""
+    from onepiece_dist.objects import resolve_source
+
+    spec = _spec(name, objects)
+    start = time.perf_counter()
+    with get_context("spawn").Pool(processes) as pool:
+        found = sorted(pool.imap_unordered(_scene, [(spec, i) for i in range(len(resolve_source(objects)))]),
+                       key=lambda s: s.index)
+    scenes = {s.name: {m: {"cleared": sum(v.cleared(m) for v in s.views), "objects": sum(v.objects for v in s.views),
+                           "rounds": sum(len(v.rounds[m]) for v in s.views)} for m in METHODS}
+              for s in found if s.status == "ok"}
+    return {"scenes": scenes, "rejected": {s.name: s.reason for s in found if s.status != "ok"},
+            "seconds": round(time.perf_counter() - start, 1)}
+
+
+def rates(scenes: dict, method: str) -> dict:
+    """``method``'s declutter rate (objects cleared of objects) and grasp success rate (rounds that picked of
+    rounds), the means of per-scene rates with 95% bootstrap intervals over scenes."""
+    from onepiece_dist.stats.intervals import bootstrap_interval
+
+    out = {}
+    for key, over in (("declutter", "objects"), ("success", "rounds")):
+        per = np.array([s[method]["cleared"] / max(s[method][over], 1) for s in scenes.values()])
+        out[key] = {"rate": float(per.mean()) if len(per) else 0.0, "interval": list(bootstrap_interval(per))}
+    return out
+
+
+def main() -> None:
+    from benchmarks.experiments.household import UNSEEN, household_objects
+
+    sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
+    measured = {name: measure(name, objects) for name, objects in sets.items()}
+    every = {f"{name}/{scene}": r for name, m in measured.items() for scene, r in m["scenes"].items()}
+    result = {"command": ".venv/bin/python -m benchmarks.experiments.pick_clearance", "date": date.today().isoformat(),
+              "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "objects": SIZE, "views": VIEWS,
+              "methods": list(METHODS), "sets": measured,
+              "rates": {**{name: {m: rates(s["scenes"], m) for m in METHODS} for name, s in measured.items()},
+                        "all scenes": {m: rates(every, m) for m in METHODS}}}
+    RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+    print({name: {m: round(r["declutter"]["rate"], 3) for m, r in by.items()} for name, by in result["rates"].items()})
+
+
+if __name__ == "__main__":
+    main()
