@@ -190,3 +190,12 @@ def test_the_picks_page_says_whether_the_network_checked_and_what_the_check_cost
     slow = _checked_line({**plan, "median_checked_seconds": 0.56})
     assert "median 0.560 s a view (the 0.3 s target: **not met**" in slow
     assert "**met**" in _checked_line({**plan, "median_checked_seconds": 0.25})
+
+
+def test_the_picks_page_names_the_gripper_that_executes_the_picks():
+    from benchmarks.pages.picks_page import _gripper_words
+
+    box = _gripper_words({"gripper": "onepiece_box"})
+    assert "`onepiece_box`" in box and "not the Franka hand's meshes of the `panda` preset" in box
+    assert _gripper_words({"gripper": "franka_panda"}).endswith("trained for, `franka_panda`.")
+    assert _gripper_words({"checkpoint": "elsewhere.pt"}) == ""

@@ -106,7 +106,7 @@ def test_a_grasp_that_holds_the_completed_box_goes_before_one_that_closes_on_air
     from onepiece_dist.plan.scorer import GraspScorer
     from onepiece_dist.plan.shipped import shipped_network
 
-    gripper = GraspScorer(shipped_network(), device="cpu").gripper  # the Franka hand the shipped network plans for
+    gripper = GraspScorer(shipped_network(), device="cpu").gripper  # the gripper the shipped network plans for
     points = seen_box()
     good = top_down_grasps(points, np.array([0.0, 0.0, -1.0]), gripper)[0]
     air = good.copy()

@@ -47,10 +47,12 @@ def trained_checkpoint() -> tuple[Path, dict]:
 
 def shipped() -> tuple[Path, dict]:
     """The shipped network and its record."""
+    from onepiece_dist.plan.scorer import GraspScorer
     from onepiece_dist.plan.shipped import NETWORK, shipped_record
 
     record = shipped_record()
     return NETWORK, {"checkpoint": str(NETWORK.relative_to(ROOT)), "design": record.get("design"),
+                     "gripper": GraspScorer(NETWORK, device="cpu").gripper.name,
                      "labels": record.get("labels"), "training_objects": record.get("training_objects"),
                      **({"pool": record["pool"]} if record.get("pool") else {})}
 

@@ -283,6 +283,22 @@ def _check_words(plan: dict) -> str:
             f"view implies ({plan.get('check_shape', 'hull')}), reordered by how often they held (below).")
 
 
+def _gripper_words(training: dict) -> str:
+    """Which gripper executes the picks: the one the network was trained for (the shipped network's where the
+    results predate the field)."""
+    name = training.get("gripper")
+    if name is None and training.get("checkpoint") == "onepiece_dist/plan/networks/pick_view.pt":
+        from onepiece_dist.plan.scorer import GraspScorer
+        from onepiece_dist.plan.shipped import NETWORK
+
+        name = GraspScorer(NETWORK, device="cpu").gripper.name
+    if name is None:
+        return ""
+    what = (" (the default job's: a box palm and box fingers, 8 cm stroke; not the Franka hand's meshes of the "
+            "`panda` preset)" if name == "onepiece_box" else "")
+    return f" Every grasp is executed by the gripper the network was trained for, `{name}`{what}."
+
+
 def _how(picks: dict) -> str:
     t, spec = picks["training"], picks["sets"][0]["spec"]
     if t.get("design"):
@@ -295,7 +311,8 @@ def _how(picks: dict) -> str:
     else:
         trained = f"The network: `{t.get('checkpoint')}`."
     camera = spec["camera"]
-    return (f"{picks['date']}, {picks['machine']}. {trained}{_check_words(spec['plan'])} Each object dropped on a "
+    return (f"{picks['date']}, {picks['machine']}. {trained}{_gripper_words(t)}{_check_words(spec['plan'])} Each "
+            "object dropped on a "
             "table in a seeded orientation "
             f"and settled; {spec['views']} views per object from a camera {camera['distance'][0]}-"
             f"{camera['distance'][1]} m away at {camera['elevation_deg'][0]:.0f}-{camera['elevation_deg'][1]:.0f} "
