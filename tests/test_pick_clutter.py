@@ -312,3 +312,14 @@ def test_onepiece_pick_clutter_runs_in_process_and_on_the_embedded_ray_with_the_
     assert [[dict(v.attempts) for v in o.views] for o in on_ray.objects] == [
         [{m: tuple(a) for m, a in v["attempts"].items()} for v in o["views"]] for o in here["objects"]]
     assert all(o.node for o in on_ray.objects)  # ran in Ray workers
+
+
+def test_the_picks_page_points_to_the_clutter_figures_and_says_they_are_not_the_targets():
+    from benchmarks.pages.pick_clutter_section import clutter_pointer
+
+    line = clutter_pointer(_clutter_result([7, 8], [5, 6]), None)[-1]
+    assert "the shipped planner picks 94% of the views of 2 objects at the first attempt; there it chooses" in line
+    assert "do not stand in for the targets above" in line
+    cleared = {"objects": 4, "rates": {"all scenes": {"network": {"declutter": {"rate": 0.5}}}}}
+    assert "clears 50% of 4 objects round by round" in clutter_pointer(None, cleared)[-1]
+    assert clutter_pointer(None, None) == []

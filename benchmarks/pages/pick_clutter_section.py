@@ -124,3 +124,21 @@ def clutter_section(result: dict) -> list[str]:
                   _paired_line(size, "the shipped planner against top-down on the largest object",
                                scenes["network_vs_top_down"])]
     return lines
+
+
+def clutter_pointer(clutter: dict | None, clearance: dict | None) -> list[str]:
+    """One line under the targets: what the planner does with several objects on the table (the sections below),
+    and why those figures do not stand in for the targets."""
+    parts = []
+    if clutter is not None:
+        rates = {size: pooled_rate(scenes, clutter["views"], "default", "network")["rate"]
+                 for size, scenes in clutter["scenes"].items()}
+        parts.append("picks " + " and ".join(f"{_pct(r)} of the views of {size} objects" for size, r in rates.items())
+                     + " at the first attempt")
+    if clearance is not None:
+        cleared = clearance["rates"]["all scenes"]["network"]["declutter"]["rate"]
+        parts.append(f"clears {_pct(cleared)} of {clearance['objects']} objects round by round")
+    if not parts:
+        return []
+    return ["", f"With several objects on the table (below) the shipped planner {' and '.join(parts)}; there it "
+            "chooses which object to grasp, so those figures do not stand in for the targets above."]

@@ -11,7 +11,7 @@ import numpy as np
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section, reranked_section
 from benchmarks.pages.pick_clearance_section import clearance_section
-from benchmarks.pages.pick_clutter_section import clutter_section
+from benchmarks.pages.pick_clutter_section import clutter_pointer, clutter_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
 from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
 from benchmarks.pages.pick_trials_section import (
@@ -232,7 +232,8 @@ def render_picks_page() -> str:
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
-        lines += [*headline(picks), "", f"## How: `{picks['command']}`", "", _how(picks), ""]
+        lines += [*headline(picks), *clutter_pointer(load("pick_clutter"), load("pick_clearance")), "",
+                  f"## How: `{picks['command']}`", "", _how(picks), ""]
         for result in picks["sets"]:
             lines += [f"## {result['name'].capitalize()} objects: {result['source']}", "",
                       *method_table(result), "", result["verdict"][0].upper() + result["verdict"][1:] + ".", "",
