@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.cloud.completion import CompletedShape, completed_shape
-from onepiece_dist.core.cloud.objects import closed_on
 from onepiece_dist.core.cloud.swept_space import DepthRays
 from onepiece_dist.core.frames import compose_poses
 from onepiece_dist.plan.planner import GraspCheck, PlannedGrasp, Proposals, Seen
@@ -116,9 +115,7 @@ def _reordered_lazily(ranked: tuple[PlannedGrasp, ...], share: Callable[[int], f
     return _reordered(ranked, np.array([first, *(share(k) for k in range(1, len(ranked)))]))
 
 
-def _reordered(ranked: tuple[PlannedGrasp, ...], shares: np.ndarray | None) -> tuple[PlannedGrasp, ...]:
-    if shares is None:
-        return ranked
+def _reordered(ranked: tuple[PlannedGrasp, ...], shares: np.ndarray) -> tuple[PlannedGrasp, ...]:
     order = np.argsort(-shares, kind="stable")
     return tuple(dataclasses.replace(ranked[i], rank=k + 1) for k, i in enumerate(order))
 
@@ -135,8 +132,7 @@ def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator
         objects = seen.separate()
         if len(objects) == 1:  # one object: its shape from every observed point
             return checked(ranked, check_shape(seen, spec.check_shape), gripper, sim, spec.check_draws, rng)
-        mine = [closed_on(objects, g.pose, gripper.closing_depth, gripper.closing_width, gripper.closing_height)
-                for g in ranked]
+        mine = [g.object for g in ranked]  # the object each closes on, found as it was planned
         shapes = {k: check_shape(seen, spec.check_shape, objects[k]) for k in sorted(set(mine))}  # those grasped
         return checked_apart(ranked, [shapes[k] for k in mine], gripper, sim, spec.check_draws, rng)
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from onepiece_dist.core.cloud.objects import closed_on
+from onepiece_dist.core.cloud.objects import closed_on_each
 from onepiece_dist.core.frames import transform_points
 from onepiece_dist.core.grasp_context import object_centre
 from onepiece_dist.errors import CloudRejected
@@ -42,10 +42,8 @@ def seen_objects(apart: tuple[np.ndarray, ...] | None) -> tuple[SeenObject, ...]
 
 def grasped_objects(apart: tuple[np.ndarray, ...] | None, poses: np.ndarray, gripper: GripperSpec) -> np.ndarray:
     """(n,) int: the object of ``apart`` each of ``poses`` closes on (closed_on); 0 for all where one or none."""
-    if apart is None or len(apart) < 2:
-        return np.zeros(len(poses), dtype=np.int64)
-    return np.array([closed_on(list(apart), pose, gripper.closing_depth, gripper.closing_width,
-                               gripper.closing_height) for pose in poses], dtype=np.int64).reshape(len(poses))
+    return closed_on_each(list(apart or ()), poses, gripper.closing_depth, gripper.closing_width,
+                          gripper.closing_height)
 
 
 def target_object(apart: tuple[np.ndarray, ...] | None, target: np.ndarray, source: str) -> int:

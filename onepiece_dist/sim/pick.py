@@ -131,7 +131,6 @@ class PickWorld(SimWorld):
                 break
         return self.object_pose()
 
-
     def _beside_place(self, rng: np.random.Generator, footprint: np.ndarray, gap: float) -> np.ndarray:
         """(2,) where to put the mesh origin of an object whose turned vertices (about that origin) span
         ``footprint`` (n, 2): along a seeded horizontal direction, ``gap`` beyond the neighbours' farthest point

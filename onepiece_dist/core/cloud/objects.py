@@ -75,11 +75,20 @@ def closed_on(objects: list[np.ndarray], pose: np.ndarray, depth: float, width: 
     return int(np.argmax(inside)) if max(inside) > 0 else int(np.argmin(nearest))
 
 
+def closed_on_each(objects: list[np.ndarray], poses: np.ndarray, depth: float, width: float, height: float
+                   ) -> np.ndarray:
+    """(n,) int: the one of ``objects`` each of ``poses`` closes on (closed_on); 0 for all where there is one."""
+    if len(objects) < 2:
+        return np.zeros(len(poses), dtype=np.int64)
+    return np.array([closed_on(objects, pose, depth, width, height) for pose in poses],
+                    dtype=np.int64).reshape(len(poses))
+
+
 def grasped_centres(objects: list[np.ndarray], poses: np.ndarray, depth: float, width: float, height: float
                     ) -> np.ndarray:
     """The observed object's centre (core.grasp_context.object_centre) of the one of ``objects``
     (separate_objects), (3,); of several, each of ``poses``' own object's centre (closed_on), (n, 3)."""
     if len(objects) == 1:
         return object_centre(objects[0])
-    centres = [object_centre(o) for o in objects]
-    return np.array([centres[closed_on(objects, pose, depth, width, height)] for pose in poses]).reshape(-1, 3)
+    centres = np.array([object_centre(o) for o in objects])
+    return centres[closed_on_each(objects, poses, depth, width, height)].reshape(-1, 3)
