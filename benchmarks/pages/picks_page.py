@@ -6,14 +6,23 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section, reranked_section
 from benchmarks.pages.pick_clearance_section import clearance_section
 from benchmarks.pages.pick_clutter_section import clutter_pointer, clutter_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
+from benchmarks.pages.pick_panda_section import panda_section
 from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
+from benchmarks.pages.pick_sets import (
+    HOUSEHOLD_SETS,
+    LABELS,
+    failure_table,
+    interval,
+    method_table,
+    pct,
+    pooled,
+    target_rows,
+)
 from benchmarks.pages.pick_trials_section import (
     both_section,
     household_labels_section,
@@ -30,95 +39,22 @@ from benchmarks.pages.pick_trials_section import (
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGE = ROOT / "docs" / "picks.md"
-LABELS = {"network": "network on the view", "random": "random collision-free candidate",
-          "analytic": "antipodal score on the view", "top_down": "top-down across the narrow axis",
-          "network_full_mesh": "network on full-mesh candidates", "random_full_mesh": "random full-mesh candidate",
-          "oracle": "oracle: every view candidate executed"}
-HEURISTICS = ("random", "analytic", "top_down")
-REASONS = ("start_collision", "no_contact", "slipped_lifting", "dropped_shaking", "no_grasp")
-
-
-def _pct(value: float) -> str:
-    return f"{100 * value:.0f}%"
-
-
-def _interval(pair) -> str:
-    return f"[{_pct(pair[0])}, {_pct(pair[1])}]"
-
-
-def _method(result: dict, name: str) -> dict:
-    return next(m for m in result["methods"] if m["method"] == name)
-
-
-def _met(ok: bool) -> str:
-    return "**met**" if ok else "**not met**"
-
-
-HOUSEHOLD_SETS = ("household", "unseen")  # real household meshes: the set designs were chosen on, and one never
-
-
-def pooled(sets: list[dict], method: str) -> dict:
-    """``method`` over every object of ``sets`` that loaded: its first-attempt rate (the mean of per-object rates,
-    as each set's), the 95% bootstrap interval over those objects, and how many objects and views."""
-    from onepiece_dist.stats.intervals import bootstrap_interval
-
-    rates = np.array([np.mean([bool(v["attempts"][method][:1] == [True]) for v in o["views"]])
-                      for s in sets for o in s["objects"] if o["status"] == "ok" and o["views"]])
-    return {"method": method, "first_attempt": float(rates.mean()) if len(rates) else 0.0,
-            "first_attempt_interval": bootstrap_interval(rates), "objects": len(rates),
-            "views": sum(len(o["views"]) for s in sets for o in s["objects"] if o["status"] == "ok")}
 
 
 def headline(picks: dict) -> list[str]:
     sets = [s for s in picks["sets"] if s["name"] in HOUSEHOLD_SETS]
     unseen = next((s for s in sets if s["name"] == "unseen"), None)
-    procedural = next((s for s in picks["sets"] if s["name"] == "procedural"), None)
-    targets = picks["targets"]
-    net, full = pooled(sets, "network"), pooled(sets, "network_full_mesh")
-    rate = net["first_attempt"]
-    methods = {m["method"] for m in sets[0]["methods"]}
-    best = max((pooled(sets, h) for h in HEURISTICS if h in methods), key=lambda m: m["first_attempt"])
-    gap = full["first_attempt"] - rate
+    net = pooled(sets, "network")
     where = (f"{net['objects']} real household meshes ({len(sets[0]['objects'])} on which every design was chosen "
              f"and {len(unseen['objects'])} unseen, on which nothing was)" if unseen else
              f"{net['objects']} real household meshes")
     check = sets[0]["spec"]["plan"].get("check_first", 0)
     checked = f", its first {check} grasps checked in simulation," if check else ""
-    lines = [f"On {where}, the network (`{picks['training']['checkpoint']}`){checked} picks **{_pct(rate)}** "
-             f"{_interval(net['first_attempt_interval'])} at the first attempt from one depth view ({net['views']} "
-             "views).", "", "| target | figure | |", "| --- | --- | --- |",
-             f"| household first attempt >= {_pct(targets['first_attempt'])} ({net['objects']} objects) | "
-             f"{_pct(rate)} | {_met(rate >= targets['first_attempt'])} |"]
-    if unseen is not None:
-        alone = _method(unseen, "network")
-        lines.append(f"| the same on the unseen set alone ({alone['views']} views) | {_pct(alone['first_attempt'])} "
-                     f"{_interval(alone['first_attempt_interval'])} | "
-                     f"{_met(alone['first_attempt'] >= targets['first_attempt'])} |")
-    lines.append(f"| >= {100 * targets['above_heuristics']:.0f} points above the best heuristic "
-                 f"({LABELS[best['method']]}, {_pct(best['first_attempt'])}) | "
-                 f"{100 * (rate - best['first_attempt']):+.0f} points | "
-                 f"{_met(rate - best['first_attempt'] >= targets['above_heuristics'])} |")
-    if procedural is not None:
-        p_rate = _method(procedural, "network")["first_attempt"]
-        lines.append(f"| procedural first attempt >= {_pct(targets['procedural'])} | {_pct(p_rate)} | "
-                     f"{_met(p_rate >= targets['procedural'])} |")
-    lines += [f"| within {100 * targets['full_mesh_gap']:.0f} points of the network on full-mesh candidates "
-              f"({_pct(full['first_attempt'])}) | {100 * -gap:+.0f} points | "
-              f"{_met(gap <= targets['full_mesh_gap'])} |", "",
-              *(f"{s['name'].capitalize()} set: {s['verdict']}." for s in sets)]
-    return lines
-
-
-def failure_table(result: dict) -> list[str]:
-    """Each chooser's first attempts by how they failed."""
-    rows = []
-    for m in result["methods"]:
-        failures = m.get("first_failures", {})
-        picked = m["views"] - sum(failures.values())
-        rows.append(f"| {LABELS[m['method']]} | {picked} | " + " | ".join(str(failures.get(r, 0)) for r in REASONS)
-                    + " |")
-    return ["| chooser | picked | start in collision | closed on nothing | slipped when lifted | dropped when "
-            "shaken | no grasp |", "| --- | --- | --- | --- | --- | --- | --- |", *rows]
+    return [f"On {where}, the network (`{picks['training']['checkpoint']}`){checked} picks "
+            f"**{pct(net['first_attempt'])}** {interval(net['first_attempt_interval'])} at the first attempt from one "
+            f"depth view ({net['views']} views).", "", "| target | figure | |", "| --- | --- | --- |",
+            *target_rows(picks["sets"], picks["targets"]), "",
+            *(f"{s['name'].capitalize()} set: {s['verdict']}." for s in sets)]
 
 
 def pool_line(result: dict) -> str:
@@ -131,22 +67,14 @@ def pool_line(result: dict) -> str:
     holding = sum(v["pool_picked"] > 0 for v in views)
     with_top_down = result["spec"]["plan"].get("top_down", False)
     line = (f"The oracle executed all {executed} candidates of {len(views)} views"
-            f"{' (the top-down grasps among them)' if with_top_down else ''}: {_pct(picked / executed)} of "
-            f"them pick, and {holding} of the {len(views)} views ({_pct(holding / len(views))}) hold at least one "
+            f"{' (the top-down grasps among them)' if with_top_down else ''}: {pct(picked / executed)} of "
+            f"them pick, and {holding} of the {len(views)} views ({pct(holding / len(views))}) hold at least one "
             "that picks: the pool's ceiling.")
     if all("top_down" in v["attempts"] for v in views) and not with_top_down:
         either = sum(v["pool_picked"] > 0 or v["attempts"]["top_down"][:1] == [True] for v in views)
         line += (f" With the top-down grasp added to the pool, {either} of the {len(views)} "
-                 f"({_pct(either / len(views))}).")
+                 f"({pct(either / len(views))}).")
     return line
-
-
-def method_table(result: dict) -> list[str]:
-    k = result["spec"]["attempts"]
-    rows = [f"| {LABELS[m['method']]} | {_pct(m['first_attempt'])} {_interval(m['first_attempt_interval'])} | "
-            f"{_pct(m['within_k'])} {_interval(m['within_k_interval'])} | {m['views']} |" for m in result["methods"]]
-    return ["| chooser | first attempt [95% CI over objects] | within " + str(k) + " | views |",
-            "| --- | --- | --- | --- |", *rows]
 
 
 def object_table(result: dict) -> list[str]:
@@ -217,7 +145,8 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_clutter", "pick_clearance", "pick_ceiling", "pick_ranked_draws", "pick_reranked", "pick_robust_rank",
+SECTIONS = ("pick_panda", "pick_clutter", "pick_clearance", "pick_ceiling", "pick_ranked_draws", "pick_reranked",
+            "pick_robust_rank",
             "pick_rank_features", "pick_shape_check", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy",
             "pick_vessels", "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule",
             "pick_household_labels", "pick_outline", "pick_top_draws", "pick_rankings", "pick_pool_size")
@@ -242,7 +171,8 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_clutter": clutter_section, "pick_clearance": clearance_section,
+    render = {"pick_panda": lambda r: panda_section(r, picks), "pick_clutter": clutter_section,
+              "pick_clearance": clearance_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
               "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),

@@ -1,0 +1,107 @@
+"""The hand that executes is the hand that labels (issue 55, what to build 4): the shipped network's recipe made
+again for the ``panda`` preset, whose physics and collision test carry the Franka hand's own collision mesh
+(pybullet_data franka_panda/meshes/collision/hand.obj, 20 cm across the closing axis, where the default
+job's box palm spans the 8 cm opening and its two 1 cm fingers). The same two label batches (the first executing
+the top-down grasps, the second at random; the same objects, views and seeds) are labelled with that hand,
+``context_balanced`` is fitted on them at each seed, and the pick benchmark judges each network beside every
+other chooser, all executed by that hand.
+
+    .venv/bin/python -m benchmarks.experiments.pick_panda [--seeds 0,1] [--sets household,unseen,procedural]
+
+Labels: data/pick_labels_panda*/ (skipped where they hold labels of the same spec); the network:
+data/pick_curve/panda/panda_s<seed>/best.pt; results: benchmarks/results/pick_panda.json (a run again judges only
+the sets not yet in it, and fits again only where the checkpoint is missing), rendered on docs/picks.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+from datetime import date
+
+from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, ROOT, fit, label_spec, labelled
+
+RESULTS = HERE / "results" / "pick_panda.json"
+PICKS = ROOT / "data" / "pick_panda"
+GRIPPER = "panda"
+DESIGN = "context_balanced"
+
+
+def panda_specs():
+    """The shipped network's two label batches' specs with the Franka hand: [(folder name, spec, shapes folder,
+    shapes seed)]; each differs from the box palm's only in its gripper and folder."""
+    made = []
+    for (objects, folder, shapes, seed), top_down in zip(BATCHES[:2], (True, False), strict=True):
+        name = f"{folder}_panda" + ("_top_down" if top_down else "")
+        spec = label_spec(objects, name)
+        spec = type(spec).model_validate({**spec.model_dump(), "gripper": GRIPPER,
+                                          "plan": {**spec.plan.model_dump(), "top_down": top_down}})
+        made.append((name, spec, shapes, seed))
+    return made
+
+
+def panda_batches():
+    """The batches of ``panda_specs`` labelled (here, unless their folders hold them): [(name, labels)]."""
+    return [(name, labelled(spec, shapes, seed)) for name, spec, shapes, seed in panda_specs()]
+
+
+def batch_record(name: str, labels) -> dict:
+    return {"folder": f"data/{name}", "objects": labels.attrs["spec"]["objects"], "labels": len(labels),
+            "success_rate": round(float(labels.success.mean()), 4),
+            "top_down": bool(labels.attrs["spec"]["plan"].get("top_down", False)),
+            "core_seconds": labels.attrs["core_seconds"]}
+
+
+def trained(joined, seed: int, before: dict | None) -> dict:
+    """``DESIGN`` fitted at ``seed`` on the ``joined`` labels (kept from ``before`` where its checkpoint is still
+    there)."""
+    if before and (ROOT / before["checkpoint"]).is_file():
+        return before
+    return fit(joined, len(joined), DESIGN, seed, OUT / "panda" / f"panda_s{seed}")
+
+
+def judged(point: dict, names: list[str], write) -> dict:
+    """``point`` (a seed's network and the sets judged so far) with the sets ``names`` judged too, each written
+    (``write``) as it lands."""
+    from benchmarks.experiments.picks import run_set, sets
+
+    for name in names:
+        if any(s["name"] == name for s in point["sets"]):
+            continue
+        objects, source = sets()[name]
+        result = run_set(name, objects(), source, ROOT / point["network"]["checkpoint"], PICKS / f"s{point['seed']}")
+        point["sets"] = sorted([*point["sets"], result], key=lambda s: list(sets()).index(s["name"]))
+        write()
+        print(point["seed"], name, {m["method"]: m["first_attempt"] for m in result["methods"]}, flush=True)
+    return point
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", default="0,1")
+    parser.add_argument("--sets", default="household,unseen,procedural")
+    args = parser.parse_args()
+    before = {p["seed"]: p for p in (json.loads(RESULTS.read_text())["points"] if RESULTS.is_file() else [])}
+    batches = panda_batches()
+    joined = batches[0][1]
+    for _, more in batches[1:]:
+        joined = joined.joined(more)
+    out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_panda", "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "gripper": GRIPPER,
+           "batches": [batch_record(name, labels) for name, labels in batches], "points": []}
+
+    def write() -> None:
+        RESULTS.write_text(json.dumps(out, indent=1) + "\n")
+
+    for seed in (int(s) for s in args.seeds.split(",")):
+        was = before.get(seed, {})
+        network = trained(joined, seed, was.get("network"))
+        point = {"seed": seed, "network": network, "sets": was.get("sets", []) if was.get("network") == network else []}
+        out["points"].append(point)
+        judged(point, args.sets.split(","), write)
+    write()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,85 @@
+"""The Franka hand's section of docs/picks.md, from results/pick_panda.json (benchmarks/experiments/pick_panda.py):
+a network labelled with the ``panda`` preset's hand and judged by picks that hand executes, every chooser beside it,
+the issue's targets on that hand and each chooser's figure beside the box palm's (results/picks.json)."""
+
+from __future__ import annotations
+
+from benchmarks.pages.pick_sets import (
+    HOUSEHOLD_SETS,
+    LABELS,
+    failure_table,
+    interval,
+    method_of,
+    pct,
+    pooled,
+    target_rows,
+)
+
+
+def _how(result: dict, point: dict) -> str:
+    batches = "; ".join(f"`{b['objects']}`{' executing the top-down grasps' if b['top_down'] else ''}: {b['labels']} "
+                        f"labels, {pct(b['success_rate'])} of them picked, {b['core_seconds'] / 3600:.1f} core-hours"
+                        for b in result["batches"])
+    net = point["network"]
+    spec = point["sets"][0]["spec"]
+    return (f"{result['date']}, {result['machine']}. The shipped network's recipe made again for the "
+            f"`{result['gripper']}` preset, whose physics and collision test carry the Franka hand's own collision "
+            "mesh (pybullet_data franka_panda/meshes/collision/hand.obj, 20 cm across the closing axis, where "
+            "the box palm spans the 8 cm opening and its two 1 cm fingers): the same two label batches labelled "
+            f"with that hand ({batches}); design "
+            f"`{net['design']}` fitted on all {net['labels']} labels; at seed {point['seed']} "
+            f"({net['fit_seconds'] / 60:.0f} min, best epoch {net['best_epoch']['epoch']}, held-out AP "
+            f"{net['best_epoch']['val_ap']:.3f}; `{net['checkpoint']}`) it is judged by the pick benchmark as above "
+            f"({spec['views']} views an object, first {spec['plan'].get('check_first', 0)} grasps checked), every "
+            "chooser's grasps executed by the Franka hand.")
+
+
+def _box_rates(picks: dict | None) -> dict[tuple[str, str], float]:
+    """(set, chooser) -> the box palm's first attempt on the committed benchmark."""
+    return {(s["name"], m["method"]): m["first_attempt"] for s in (picks or {}).get("sets", [])
+            for m in s["methods"]}
+
+
+def _comparison(point: dict, picks: dict | None) -> list[str]:
+    box = _box_rates(picks)
+    rows = [f"| {s['name']} | {LABELS[m['method']]} | {pct(m['first_attempt'])} "
+            f"{interval(m['first_attempt_interval'])} | {pct(m['within_k'])} | "
+            f"{pct(box[(s['name'], m['method'])]) if (s['name'], m['method']) in box else '-'} |"
+            for s in point["sets"] for m in s["methods"]]
+    return ["| set | chooser | Franka hand: first attempt [95% CI over objects] | within 3 | box palm (above) |",
+            "| --- | --- | --- | --- | --- |", *rows]
+
+
+def _seeds(result: dict) -> list[str]:
+    """Each seed's network on every set judged, and pooled over the household meshes, beside top-down's."""
+    names = [s["name"] for s in result["points"][0]["sets"]]
+    rows = []
+    for point in result["points"]:
+        rates = {s["name"]: method_of(s, "network")["first_attempt"] for s in point["sets"]}
+        both = [s for s in point["sets"] if s["name"] in HOUSEHOLD_SETS]
+        pooled_cells = (" | ".join(pct(pooled(both, m)["first_attempt"]) for m in ("network", "top_down"))
+                        if len(both) == len(HOUSEHOLD_SETS) else "- | -")
+        rows.append(f"| {point['seed']} | " + " | ".join(pct(rates[n]) if n in rates else "-" for n in names)
+                    + f" | {pooled_cells} |")
+    return [f"| seed | {' | '.join(names)} | household meshes pooled | top-down, pooled |",
+            "|" + " --- |" * (len(names) + 3), *rows]
+
+
+def panda_section(result: dict, picks: dict | None) -> list[str]:
+    lines = [f"## The Franka hand labels and picks: `{result['command']}`", ""]
+    point = result["points"][0] if result["points"] else {"sets": []}
+    if not point["sets"]:
+        return [*lines, "No set has been judged yet."]
+    lines += [_how(result, point), ""]
+    targets = (picks or {}).get("targets", {"first_attempt": 0.85, "above_heuristics": 0.20, "procedural": 0.80,
+                                            "full_mesh_gap": 0.05})
+    if set(HOUSEHOLD_SETS) <= {s["name"] for s in point["sets"]}:
+        lines += [f"The issue's targets on the Franka hand (seed {point['seed']}):", "", "| target | figure | |",
+                  "| --- | --- | --- |", *target_rows(point["sets"], targets), ""]
+    if len(result["points"]) > 1:
+        lines += ["Each seed's network, first attempt:", "", *_seeds(result), ""]
+    lines += [*_comparison(point, picks), ""]
+    for s in point["sets"]:
+        lines += [f"{s['name'].capitalize()}: {s['verdict']}. First attempts by how they ended:", "",
+                  *failure_table(s), ""]
+    return lines[:-1]

@@ -1,0 +1,61 @@
+"""The Franka hand's trial (issue 55, what to build 4): its labels are the shipped network's batches with only the
+hand changed, and its section judges the issue's targets on that hand beside the box palm's figures."""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_the_franka_hands_labels_are_the_shipped_batches_with_only_the_hand_changed():
+    from benchmarks.experiments.pick_curve import BATCHES, label_spec
+    from benchmarks.experiments.pick_panda import panda_specs
+
+    specs = panda_specs()
+    assert [spec.plan.top_down for _, spec, _, _ in specs] == [True, False]  # as the shipped network's batches
+    for (objects, folder, shapes, seed), (name, spec, panda_shapes, panda_seed) in zip(BATCHES, specs, strict=False):
+        box = label_spec(objects, folder)
+        assert spec.gripper.name == "franka_panda" and box.gripper.name == "onepiece_box"
+        assert spec.output == f"data/{name}" != box.output and (panda_shapes, panda_seed) == (shapes, seed)
+        differs = {k for k, v in spec.model_dump().items() if box.model_dump()[k] != v}
+        assert differs == {"gripper", "output", "plan"} if spec.plan.top_down else {"gripper", "output"}
+
+
+def _panda_result(picks: dict, network_rate: float) -> dict:
+    """A Franka hand result shaped as the experiment writes it, its sets the committed box palm's with the
+    network's first attempt of every view set to ``network_rate`` (all or none)."""
+    sets = copy.deepcopy([s for s in picks["sets"] if s["name"] in ("household", "unseen")])
+    for s in sets:
+        for o in s["objects"]:
+            for v in o["views"]:
+                v["attempts"]["network"] = [network_rate == 1.0]
+        next(m for m in s["methods"] if m["method"] == "network")["first_attempt"] = network_rate
+    network = {"design": "context_balanced", "options": {"seed": 0}, "labels": 80000, "fit_seconds": 600.0,
+               "best_epoch": {"epoch": 7, "val_ap": 0.8}, "checkpoint": "data/pick_curve/panda/panda_s0/best.pt"}
+    batch = {"objects": "o", "top_down": True, "labels": 40000, "success_rate": 0.3, "core_seconds": 3600.0}
+    return {"command": "c", "date": "d", "machine": "m", "gripper": "panda", "batches": [batch],
+            "points": [{"seed": 0, "network": network, "sets": sets}]}
+
+
+def test_the_franka_hands_section_judges_the_targets_on_that_hand_beside_the_box_palms_figures():
+    from benchmarks.pages.pick_panda_section import panda_section
+
+    picks = json.loads((ROOT / "benchmarks" / "results" / "picks.json").read_text())
+    every = panda_section(_panda_result(picks, 1.0), picks)
+    none = panda_section(_panda_result(picks, 0.0), picks)
+    target = next(line for line in every if line.startswith("| household first attempt >= 85%"))
+    assert "| 100% | **met** |" in target
+    assert "| 0% | **not met** |" in next(line for line in none if line.startswith("| household first attempt"))
+    box = next(m for s in picks["sets"] if s["name"] == "household" for m in s["methods"] if m["method"] == "network")
+    row = next(line for line in every if line.startswith("| household | network on the view |"))
+    assert row.startswith("| household | network on the view | 100% [")
+    assert row.endswith(f"| {100 * box['first_attempt']:.0f}% |")  # the box palm's figure beside it
+    assert "No set has been judged yet." in panda_section({**_panda_result(picks, 1.0), "points": []}, picks)
+    assert not any(line.startswith("| seed |") for line in every)  # one seed: no table of seeds
+    two = _panda_result(picks, 1.0)
+    two["points"].append({**_panda_result(picks, 0.0)["points"][0], "seed": 1})
+    seeds = panda_section(two, picks)
+    assert "| 0 | 100% | 100% | 100% |" in " ".join(seeds) and "| 1 | 0% | 0% | 0% |" in " ".join(seeds)
