@@ -129,3 +129,28 @@ def test_grasp_without_a_checkpoint_plans_with_the_shipped_network_and_says_whic
     assert "planning with the shipped network pick_view.pt" in result.output and "household" in result.output
     plan = json.loads((tmp_path / "out" / "grasps.json").read_text())
     assert plan["checkpoint"] == "shipped" and plan["grasps"]
+
+
+@pytest.mark.sim
+def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others_are_told_what_ships(tmp_path):
+    from onepiece_dist.gripper.presets import gripper_fields
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import NETWORK, shipped_network, shipped_record
+    from onepiece_dist.specs.job import GripperSpec
+
+    panda = GripperSpec.model_validate(gripper_fields("panda"))
+    assert shipped_network(panda) != NETWORK and shipped_network() == shipped_network(GripperSpec()) == NETWORK
+    assert GraspScorer(shipped_network(panda), panda, device="cpu").gripper == panda  # trained for this hand
+    assert shipped_record(panda)["gripper"] == "franka_panda" and shipped_record(panda)["labels"] > 0
+    np.save(tmp_path / "depth.npy", depth_millimetres().astype(np.float64) / 1000)
+    run = ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}"]
+    for preset in ("panda", "robotiq_2f85"):
+        (tmp_path / f"{preset}.yaml").write_text(f"preset: {preset}\n")
+    result = CliRunner().invoke(app, [*run, "--gripper", str(tmp_path / "panda.yaml"), "--out", str(tmp_path / "p")])
+    assert result.exit_code == 0, result.output
+    assert "planning with the shipped network pick_view_panda.pt" in result.output and "franka_panda" in result.output
+    assert json.loads((tmp_path / "p" / "grasps.json").read_text())["grasps"]
+    refused = CliRunner().invoke(app, [*run, "--gripper", str(tmp_path / "robotiq_2f85.yaml"), "--out",
+                                       str(tmp_path / "r")])
+    assert refused.exit_code != 0 and "no network ships for the gripper 'robotiq_2f_85'" in refused.output
+    assert "--checkpoint" in refused.output and not (tmp_path / "r" / "grasps.json").exists()

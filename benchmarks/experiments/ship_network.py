@@ -5,9 +5,10 @@ network (the top-down trial's, or of a trial judged against it that is kept: pic
 pick_top_down_both.json, pick_schedule.json, pick_outline.json, pick_top_draws.json; a seed is never chosen),
 copied into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark
 (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household figures into
-the record.
+the record. With --gripper panda it ships the Franka hand's network instead (pick_panda.json's seed 0, with the
+figures the benchmark gave it on that hand) as onepiece_dist/plan/networks/pick_view_panda.pt.
 
-    .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks]
+    .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks] [--gripper panda]
 """
 
 from __future__ import annotations
@@ -94,23 +95,30 @@ def ship_trial(name: str, point: dict) -> dict:
 
     objects = TRIAL_OBJECTS.get(name, "{0} (labels executing the top-down grasps) + {1}")
     return _ship(point, objects.format(BATCHES[0][0], BATCHES[1][0]), f"python -m benchmarks.experiments.{name}",
-                 point["with_pool"]["household"], f"benchmarks/results/{name}.json",
-                 pool="the view's sampled candidates and the three top-down grasps (plan.top_down)")
+                 point["with_pool"]["household"], f"benchmarks/results/{name}.json", pool=POOL)
 
 
-def _ship(point: dict, objects: str, made_by: str, household: dict, source: str, pool: str | None = None) -> dict:
-    from onepiece_dist.plan.shipped import NETWORK, RECORD
+POOL = "the view's sampled candidates and the three top-down grasps (plan.top_down)"
 
+
+def _ship(point: dict, objects: str, made_by: str, household: dict, source: str, pool: str | None = None,
+          network: Path | None = None) -> dict:
+    """``point``'s checkpoint copied to ``network`` (default: the default job's gripper's, plan.shipped.NETWORK)
+    with its record beside it."""
+    from onepiece_dist.plan.shipped import NETWORK
+
+    network = network or NETWORK
     saved = torch.load(ROOT / point["checkpoint"], map_location="cpu", weights_only=True)
-    NETWORK.parent.mkdir(parents=True, exist_ok=True)
-    torch.save({"model": saved["model"], "state_dict": saved["state_dict"], "crop": saved["crop"]}, NETWORK)
+    network.parent.mkdir(parents=True, exist_ok=True)
+    torch.save({"model": saved["model"], "state_dict": saved["state_dict"], "crop": saved["crop"]}, network)
+    gripper = saved["crop"]["gripper"]["name"]
     record = {"design": point["design"], "model": saved["model"], "labels": point["labels"],
               "training_objects": objects,
               "trained_by": f"{made_by}, then python -m benchmarks.experiments.ship_network",
-              **({"pool": pool} if pool else {}),
+              **({"pool": pool} if pool else {}), **({"gripper": gripper} if network != NETWORK else {}),
               "household_first_attempt": {"rate": household["first_attempt"], "interval": household["interval"],
                                           "views": None, "from": source}}
-    RECORD.write_text(json.dumps(record, indent=1) + "\n")
+    network.with_suffix(".json").write_text(json.dumps(record, indent=1) + "\n")
     return record
 
 
@@ -126,20 +134,55 @@ def record_picks() -> dict:
 
     record = json.loads(RECORD.read_text())
     picks = json.loads((HERE / "results" / "picks.json").read_text())
+    record.update(_figures(picks["sets"], "benchmarks/results/picks.json"))
+    RECORD.write_text(json.dumps(record, indent=1) + "\n")
+    return record
+
+
+def _figures(sets: list[dict], source: str) -> dict:
+    """The network's first attempts on the household and unseen ``sets`` (a pick benchmark's), as a record keeps
+    them."""
+    figures = {}
     for name, key in (("household", "household_first_attempt"), ("unseen", "unseen_first_attempt")):
-        found = next((s for s in picks["sets"] if s["name"] == name), None)
+        found = next((s for s in sets if s["name"] == name), None)
         if found is not None:
             network = next(m for m in found["methods"] if m["method"] == "network")
-            record[key] = {"rate": network["first_attempt"], "interval": network["first_attempt_interval"],
-                           "views": network["views"], "from": "benchmarks/results/picks.json"}
-    RECORD.write_text(json.dumps(record, indent=1) + "\n")
+            figures[key] = {"rate": network["first_attempt"], "interval": network["first_attempt_interval"],
+                            "views": network["views"], "from": source}
+    return figures
+
+
+def ship_panda() -> dict:
+    """The Franka hand's network (results/pick_panda.json at seed 0: a seed is never chosen) shipped for the panda
+    preset (plan.shipped.SHIPPED), with the figures the pick benchmark gave it on that hand."""
+    from onepiece_dist.gripper.presets import gripper_fields
+    from onepiece_dist.plan.shipped import network_path
+    from onepiece_dist.specs.job import GripperSpec
+
+    source = "benchmarks/results/pick_panda.json"
+    result = json.loads((ROOT / source).read_text())
+    point = next(p for p in result["points"] if p["seed"] == 0)
+    objects = " + ".join(b["objects"] + (" (labels executing the top-down grasps)" if b["top_down"] else "")
+                         for b in result["batches"])
+    figures = _figures(point["sets"], source)
+    household = figures["household_first_attempt"]
+    network = network_path(GripperSpec.model_validate(gripper_fields(result["gripper"])))
+    record = _ship(point["network"], objects, "python -m benchmarks.experiments.pick_panda",
+                   {"first_attempt": household["rate"], "interval": household["interval"]}, source, POOL, network)
+    record.update(figures)
+    network.with_suffix(".json").write_text(json.dumps(record, indent=1) + "\n")
     return record
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-picks", action="store_true")
+    parser.add_argument("--gripper", choices=("default", "panda"), default="default",
+                        help="panda: ship the Franka hand's network (benchmarks/experiments/pick_panda.py)")
     args = parser.parse_args()
+    if args.gripper == "panda":
+        print(ship_panda())
+        return
     if args.record_picks:
         print(record_picks())
         return

@@ -31,7 +31,9 @@ def _how(result: dict, point: dict) -> str:
             f"({net['fit_seconds'] / 60:.0f} min, best epoch {net['best_epoch']['epoch']}, held-out AP "
             f"{net['best_epoch']['val_ap']:.3f}; `{net['checkpoint']}`) it is judged by the pick benchmark as above "
             f"({spec['views']} views an object, first {spec['plan'].get('check_first', 0)} grasps checked), every "
-            "chooser's grasps executed by the Franka hand.")
+            "chooser's grasps executed by the Franka hand. Seed 0's network ships for the `panda` preset "
+            "(`onepiece_dist/plan/networks/pick_view_panda.pt`, `python -m benchmarks.experiments.ship_network "
+            "--gripper panda`; a seed is never chosen): `onepiece grasp --gripper` with that preset plans with it.")
 
 
 def _box_rates(picks: dict | None) -> dict[tuple[str, str], float]:

@@ -110,7 +110,7 @@ def grasp(
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
     if checkpoint is None:
-        err(shipped_summary())
+        err(shipped_summary(planned.gripper))
     extra = {"checkpoint": planned.checkpoint or "shipped", "output_frame": planned.frame}
     json_path, png = write_plan(planned.plan, planned.observation, planned.gripper, out, extra=extra)
     if as_json:

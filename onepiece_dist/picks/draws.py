@@ -155,7 +155,7 @@ def view_ceilings(spec: PickSpec, ref: ObjectRef, index: int, draws: CeilingDraw
     """Every view of one object (index, name, its ViewCeilings, a rejected object's reason): what a chooser that
     knew which candidates pick again reaches, measured rather than read off one draw: the oracle picks whatever
     won its one draw, and two executions of one grasp agree only about 90% of the time."""
-    record = GraspScorer(shipped_network(), spec.gripper, device="cpu").record  # the crops the planner cuts
+    record = GraspScorer(shipped_network(spec.gripper), spec.gripper, device="cpu").record  # the planner's crops
     try:
         world, loaded = simulated_object(spec, record, ref)
     except MeshRejected as err:

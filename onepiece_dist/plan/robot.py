@@ -71,7 +71,7 @@ def plan_from_files(cloud: str | Path, checkpoint: str | Path | None = None, spe
     if pose is not None and spec.target is not None:  # the target is given in the base frame; planning is not
         target = transform_points(np.array([spec.target]), invert_poses(pose[None])[0])[0]
         spec = spec.model_copy(update={"target": tuple(float(v) for v in target)})
-    scorer = GraspScorer(checkpoint or shipped_network(), gripper, spec.device)
+    scorer = GraspScorer(checkpoint or shipped_network(gripper), gripper, spec.device)
     plan = plan_grasps(observation, scorer, spec, check)
     if pose is not None:
         plan, observation = plan.transformed(pose), in_frame(observation, pose)

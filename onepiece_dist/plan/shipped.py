@@ -1,44 +1,64 @@
-"""The network shipped with the package (issue 56): ``onepiece grasp`` plans with it when no checkpoint is given.
-It and its record (how it was trained, what it picks) are package data in ``plan/networks/``, made by the committed
-command ``python -m benchmarks.experiments.ship_network`` (docs/picks.md)."""
+"""The networks shipped with the package (issue 56): ``onepiece grasp`` plans with the one trained for its gripper
+when no checkpoint is given: the default job's box gripper's (``pick_view.pt``), or the Franka hand's for the
+``panda`` preset (``pick_view_panda.pt``, issue 55). Each and its record (how it was trained, what it picks) are
+package data in ``plan/networks/``, made by the committed command ``python -m benchmarks.experiments.ship_network``
+(docs/picks.md)."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
-from onepiece_dist.errors import CloudRejected
+from onepiece_dist.errors import CheckpointRejected, CloudRejected
+from onepiece_dist.specs.job import GripperSpec
 
 FOLDER = Path(__file__).resolve().parent / "networks"
 NETWORK = FOLDER / "pick_view.pt"
 RECORD = FOLDER / "pick_view.json"
+SHIPPED = {"onepiece_box": "pick_view", "franka_panda": "pick_view_panda"}  # gripper name -> the files' stem
 
 
-def shipped_network() -> Path:
-    """The shipped checkpoint's path; :class:`CloudRejected` with the fix when this install lacks it."""
-    if not NETWORK.is_file():
-        raise CloudRejected(f"{NETWORK}: the shipped network is missing from this install: give --checkpoint "
+def network_path(gripper: GripperSpec | None = None) -> Path:
+    """Where the network shipped for ``gripper`` (None: the default job's) lies; :class:`CheckpointRejected`
+    naming the grippers networks ship for where none ships for this one."""
+    name = (gripper or GripperSpec()).name
+    if name not in SHIPPED:
+        raise CheckpointRejected(f"no network ships for the gripper {name!r}: networks ship for "
+                                 f"{', '.join(SHIPPED)} (gripper preset panda); train one for this gripper "
+                                 "(python -m benchmarks.experiments.pick_panda shows how) and give --checkpoint")
+    return FOLDER / f"{SHIPPED[name]}.pt"
+
+
+def shipped_network(gripper: GripperSpec | None = None) -> Path:
+    """The checkpoint shipped for ``gripper`` (network_path); :class:`CloudRejected` with the fix when this install
+    lacks it."""
+    path = network_path(gripper)
+    if not path.is_file():
+        raise CloudRejected(f"{path}: the shipped network is missing from this install: give --checkpoint "
                             "(a best.pt), or reinstall the package")
-    return NETWORK
+    return path
 
 
-def shipped_record() -> dict:
-    """What the shipped network is: its training and its pick figures ({} when the record is missing)."""
-    return json.loads(RECORD.read_text()) if RECORD.is_file() else {}
+def shipped_record(gripper: GripperSpec | None = None) -> dict:
+    """What the network shipped for ``gripper`` is: its training and its pick figures ({} when the record is
+    missing)."""
+    record = network_path(gripper).with_suffix(".json")
+    return json.loads(record.read_text()) if record.is_file() else {}
 
 
-def shipped_summary() -> str:
-    """One line for the user: which network plans and what it picks."""
-    record = shipped_record()
+def shipped_summary(gripper: GripperSpec | None = None) -> str:
+    """One line for the user: which network plans for ``gripper`` and what it picks."""
+    record, name = shipped_record(gripper), network_path(gripper).name
     if not record:
-        return f"planning with the shipped network {NETWORK.name}"
+        return f"planning with the shipped network {name}"
     picks, unseen = record["household_first_attempt"], record.get("unseen_first_attempt")
     views = f"{picks['views']} " if picks.get("views") else ""
+    hand = f", executed by the {record['gripper']} gripper" if record.get("gripper") else ""
     also = (f", {_rate(unseen)} of {unseen['views']} views of household objects it was never chosen on"
             if unseen else "")
-    return (f"planning with the shipped network {NETWORK.name} ({record['design']}, {record['labels']} pick labels "
+    return (f"planning with the shipped network {name} ({record['design']}, {record['labels']} pick labels "
             f"on {record['training_objects']}): it picks {_rate(picks)} of {views}household views at the first "
-            f"attempt in simulation{also} (docs/picks.md)")
+            f"attempt in simulation{hand}{also} (docs/picks.md)")
 
 
 def _rate(figure: dict) -> str:
