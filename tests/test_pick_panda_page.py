@@ -59,3 +59,27 @@ def test_the_franka_hands_section_judges_the_targets_on_that_hand_beside_the_box
     two["points"].append({**_panda_result(picks, 0.0)["points"][0], "seed": 1})
     seeds = panda_section(two, picks)
     assert "| 0 | 100% | 100% | 100% |" in " ".join(seeds) and "| 1 | 0% | 0% | 0% |" in " ".join(seeds)
+
+
+def test_the_franka_hand_at_the_table_is_named_and_only_the_runs_made_are_compared():
+    from benchmarks.pages.pick_clearance_section import clearance_section
+    from benchmarks.pages.pick_clutter_section import clutter_section
+
+    results = ROOT / "benchmarks" / "results"
+    clutter = json.loads((results / "pick_clutter.json").read_text())
+    box_lines = clutter_section(clutter)
+    clutter = {**clutter, "gripper": "panda", "runs": {"default": clutter["runs"]["default"]}}
+    for scenes in clutter["scenes"].values():
+        for key in ("checked_vs_unchecked", "apart_vs_as_one"):
+            del scenes[key]
+        for runs in scenes["sets"].values():
+            for run in ("unchecked", "as_one"):
+                del runs[run]
+    lines = clutter_section(clutter)
+    assert lines[0].startswith("## Several objects on the table, the Franka hand: `")
+    assert "executed by the `panda` preset's hand" in lines[2] and "Franka" not in box_lines[0] + box_lines[2]
+    assert sum("paired over scenes" in line for line in lines) == len(clutter["scenes"])  # top-down alone
+    assert not any("its order alone" in line or "taken for one object" in line for line in lines)
+    clearance = json.loads((results / "pick_clearance.json").read_text())
+    assert clearance_section({**clearance, "gripper": "panda"})[0].startswith("## Clearing the table, the Franka hand")
+    assert "Franka" not in clearance_section(clearance)[0] + clearance_section(clearance)[2]

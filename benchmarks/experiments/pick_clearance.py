@@ -5,13 +5,15 @@ round a new camera sees what is left, the chooser's first grasp is executed, a p
 rounds in a row end it. Per chooser: the share of objects cleared (declutter rate) and of rounds that picked
 (grasp success rate), each over scenes with a 95% bootstrap interval.
 
-    .venv/bin/python -m benchmarks.experiments.pick_clearance
+    .venv/bin/python -m benchmarks.experiments.pick_clearance [--gripper panda]
 
-Results: benchmarks/results/pick_clearance.json, rendered into docs/picks.md.
+Results: benchmarks/results/pick_clearance.json, rendered into docs/picks.md; with --gripper panda (the network
+shipped for the Franka hand planning, every grasp executed by that hand) pick_clearance_panda.json.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import platform
 import time
@@ -27,12 +29,14 @@ SIZE, VIEWS = 4, 4
 METHODS = ("network", "random", "analytic", "top_down")
 
 
-def _spec(name: str, objects: str):
-    from onepiece_dist.plan.shipped import shipped_network
+def _spec(name: str, objects: str, gripper: str | None = None):
+    from benchmarks.experiments.pick_clutter import shipped_for
     from onepiece_dist.specs.plan import PickSpec
 
-    return PickSpec(objects=objects, checkpoint=str(shipped_network()), clutter=SIZE, views=VIEWS, pictures=0,
-                    output=str(ROOT / "data" / "pick_clutter" / name), methods=METHODS)
+    network, hand = shipped_for(gripper)
+    folder = "pick_clutter" + (f"_{gripper}" if gripper else "")
+    return PickSpec(objects=objects, checkpoint=str(network), gripper=hand, clutter=SIZE, views=VIEWS, pictures=0,
+                    output=str(ROOT / "data" / folder / name), methods=METHODS)
 
 
 def _scene(task):
@@ -44,11 +48,12 @@ def _scene(task):
     return clear_scenes(spec, groups_of(resolve_source(spec.objects), spec.clutter)[index], index)
 
 
-def measure(name: str, objects: str, processes: int = 2) -> dict:
-    """Each scene of one set cleared by each chooser: per scene and method, objects cleared, objects, rounds."""
+def measure(name: str, objects: str, processes: int = 2, gripper: str | None = None) -> dict:
+    """Each scene of one set cleared by each chooser (``gripper``: a preset, its shipped network planning): per
+    scene and method, objects cleared, objects, rounds."""
     from onepiece_dist.objects import resolve_source
 
-    spec = _spec(name, objects)
+    spec = _spec(name, objects, gripper)
     start = time.perf_counter()
     with get_context("spawn").Pool(processes) as pool:
         found = sorted(pool.imap_unordered(_scene, [(spec, i) for i in range(len(resolve_source(objects)))]),
@@ -75,15 +80,22 @@ def rates(scenes: dict, method: str) -> dict:
 def main() -> None:
     from benchmarks.experiments.household import UNSEEN, household_objects
 
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gripper", choices=("panda",), default=None,
+                        help="the preset whose shipped network plans and whose hand executes")
+    args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
-    measured = {name: measure(name, objects) for name, objects in sets.items()}
+    measured = {name: measure(name, objects, gripper=args.gripper) for name, objects in sets.items()}
     every = {f"{name}/{scene}": r for name, m in measured.items() for scene, r in m["scenes"].items()}
-    result = {"command": ".venv/bin/python -m benchmarks.experiments.pick_clearance", "date": date.today().isoformat(),
+    command = ".venv/bin/python -m benchmarks.experiments.pick_clearance" + (f" --gripper {args.gripper}"
+                                                                              if args.gripper else "")
+    result = {"command": command, "date": date.today().isoformat(),
               "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "objects": SIZE, "views": VIEWS,
-              "methods": list(METHODS), "sets": measured,
+              **({"gripper": args.gripper} if args.gripper else {}), "methods": list(METHODS), "sets": measured,
               "rates": {**{name: {m: rates(s["scenes"], m) for m in METHODS} for name, s in measured.items()},
                         "all scenes": {m: rates(every, m) for m in METHODS}}}
-    RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+    path = RESULTS if args.gripper is None else HERE / "results" / f"pick_clearance_{args.gripper}.json"
+    path.write_text(json.dumps(result, indent=1) + "\n")
     print({name: {m: round(r["declutter"]["rate"], 3) for m, r in by.items()} for name, by in result["rates"].items()})
 
 

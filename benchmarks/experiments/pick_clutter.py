@@ -11,13 +11,16 @@ Runs (the same views, each candidate's outcome its own seeded execution, so the 
 - ``unchecked``: the network's order alone (check_first=0);
 - ``as_one``: the planner that takes the whole cloud for one object (objects_apart=False), and top-down on it.
 
-    .venv/bin/python -m benchmarks.experiments.pick_clutter
+    .venv/bin/python -m benchmarks.experiments.pick_clutter [--gripper panda]
 
-Results: benchmarks/results/pick_clutter.json, rendered into docs/picks.md.
+Results: benchmarks/results/pick_clutter.json, rendered into docs/picks.md. With --gripper panda, the ``default``
+run alone with the network shipped for the Franka hand, every grasp executed by that hand:
+benchmarks/results/pick_clutter_panda.json.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import platform
 import time
@@ -37,22 +40,33 @@ COMPARED = {"checked_vs_unchecked": ("default", "network", "unchecked", "network
             "network_vs_top_down": ("default", "network", "default", "top_down")}
 
 
-def _spec(name: str, objects: str, size: int, run: str):
+def shipped_for(gripper: str | None):
+    """The network shipped for the preset ``gripper`` (None: the default job's gripper's) and that gripper."""
+    from onepiece_dist.gripper.presets import gripper_fields
     from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.job import GripperSpec
+
+    hand = None if gripper is None else GripperSpec.model_validate(gripper_fields(gripper))
+    return shipped_network(hand), hand
+
+
+def _spec(name: str, objects: str, size: int, run: str, gripper: str | None = None):
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     plan, methods = RUNS[run]
-    return PickSpec(objects=objects, checkpoint=str(shipped_network()), clutter=size,
-                    output=str(ROOT / "data" / "pick_clutter" / name), views=VIEWS, attempts=ATTEMPTS, pictures=0,
+    network, hand = shipped_for(gripper)
+    folder = "pick_clutter" + (f"_{gripper}" if gripper else "")
+    return PickSpec(objects=objects, checkpoint=str(network), gripper=hand, clutter=size,
+                    output=str(ROOT / "data" / folder / name), views=VIEWS, attempts=ATTEMPTS, pictures=0,
                     methods=methods, plan=PlanSpec(**plan), workers=2)
 
 
-def measure(name: str, objects: str, size: int, run: str) -> dict:
-    """One set's scenes of ``size`` in one run (`onepiece pick --clutter`, on the embedded Ray): its summary over
-    scenes and each scene's first picks per method."""
+def measure(name: str, objects: str, size: int, run: str, gripper: str | None = None) -> dict:
+    """One set's scenes of ``size`` in one run (`onepiece pick --clutter`, on the embedded Ray; ``gripper``: a
+    preset, its shipped network planning): its summary over scenes and each scene's first picks per method."""
     from onepiece_dist.picks.runner import run_picks
 
-    spec = _spec(name, objects, size, run)
+    spec = _spec(name, objects, size, run, gripper)
     start = time.perf_counter()
     report = run_picks(spec)
     return {"methods": {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),
@@ -78,28 +92,42 @@ def paired(scenes: dict, run: str, method: str, base: str, base_method: str = "n
             for name, d in per_set.items()}
 
 
-def single_rates() -> dict:
-    """Per set and method, the one-object benchmark's first attempt on the same objects (committed picks.json)."""
-    committed = json.loads((HERE / "results" / "picks.json").read_text())
-    return {s["name"]: {m["method"]: m["first_attempt"] for m in s["methods"]} for s in committed["sets"]}
+def single_rates(gripper: str | None = None) -> dict:
+    """Per set and method, the one-object benchmark's first attempt on the same objects (committed picks.json;
+    with ``gripper`` panda, the Franka hand's seed-0 network's, pick_panda.json)."""
+    if gripper is None:
+        sets = json.loads((HERE / "results" / "picks.json").read_text())["sets"]
+    else:
+        sets = json.loads((HERE / "results" / f"pick_{gripper}.json").read_text())["points"][0]["sets"]
+    return {s["name"]: {m["method"]: m["first_attempt"] for m in s["methods"]} for s in sets}
 
 
-def measure_size(sets: dict, size: int) -> dict:
-    scenes = {"sets": {name: {run: measure(name, objects, size, run) for run in RUNS}
+def measure_size(sets: dict, size: int, runs: tuple[str, ...], gripper: str | None = None) -> dict:
+    scenes = {"sets": {name: {run: measure(name, objects, size, run, gripper) for run in runs}
                        for name, objects in sets.items()}}
-    return {**scenes, **{key: paired(scenes, *how) for key, how in COMPARED.items()}}
+    return {**scenes, **{key: paired(scenes, *how) for key, how in COMPARED.items()
+                         if how[0] in runs and how[2] in runs}}
 
 
 def main() -> None:
     from benchmarks.experiments.household import UNSEEN, household_objects
 
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gripper", choices=("panda",), default=None,
+                        help="the preset whose shipped network plans and whose hand executes (the default run alone)")
+    args = parser.parse_args()
+    runs = tuple(RUNS) if args.gripper is None else ("default",)
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
-    result = {"command": ".venv/bin/python -m benchmarks.experiments.pick_clutter", "date": date.today().isoformat(),
+    command = ".venv/bin/python -m benchmarks.experiments.pick_clutter" + (f" --gripper {args.gripper}"
+                                                                            if args.gripper else "")
+    result = {"command": command, "date": date.today().isoformat(),
               "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "views": VIEWS,
-              "attempts": ATTEMPTS, "runs": {run: {"plan": plan, "methods": list(methods)}
-                                             for run, (plan, methods) in RUNS.items()},
-              "single": single_rates(), "scenes": {str(size): measure_size(sets, size) for size in SIZES}}
-    RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+              "attempts": ATTEMPTS, **({"gripper": args.gripper} if args.gripper else {}),
+              "runs": {run: {"plan": RUNS[run][0], "methods": list(RUNS[run][1])} for run in runs},
+              "single": single_rates(args.gripper),
+              "scenes": {str(size): measure_size(sets, size, runs, args.gripper) for size in SIZES}}
+    path = RESULTS if args.gripper is None else HERE / "results" / f"pick_clutter_{args.gripper}.json"
+    path.write_text(json.dumps(result, indent=1) + "\n")
     print({size: {name: {run: {m: round(v["first_attempt"], 3) for m, v in r["methods"].items()}
                          for run, r in runs.items()} for name, runs in scenes["sets"].items()}
            for size, scenes in result["scenes"].items()})

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from benchmarks.pages.pick_clutter_section import hand_words
+
 LABELS = {"network": "network on the view (as shipped)", "random": "random collision-free candidate",
           "analytic": "antipodal score on the view",
           "top_down": "top-down across the narrow axis of the largest object"}
@@ -22,8 +24,10 @@ def clearance_section(result: dict) -> list[str]:
     heuristics = [m for m in methods if m != "network"]
     best = max(heuristics, key=lambda m: pooled[m]["declutter"]["rate"]) if heuristics else None
     scenes = sum(len(s["scenes"]) for s in result["sets"].values())
-    lines = [f"## Clearing the table: `{result['command']}`", "",
-             f"{result['date']}, {result['machine']}. VGN's declutter protocol on scenes of {result['objects']} "
+    hand = ", the Franka hand" if result.get("gripper") else ""
+    lines = [f"## Clearing the table{hand}: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}.{hand_words(result)} VGN's declutter protocol on scenes of "
+             f"{result['objects']} "
              f"objects (each household and unseen object with the next {result['objects'] - 1} of its set, settled "
              f"as `--clutter {result['objects']}` settles them; {result['views']} settles a scene, {scenes} scenes): "
              "round after round a new seeded camera sees what is left, the chooser's first grasp is executed by the "

@@ -92,10 +92,20 @@ def _headline(result: dict, size: str) -> str:
             f"{verdicts}")
 
 
+def hand_words(result: dict) -> str:
+    """Which hand executes and which network plans, where a result names a gripper preset (else nothing)."""
+    if not result.get("gripper"):
+        return ""
+    return (f" Every grasp here is executed by the `{result['gripper']}` preset's hand (the Franka hand's own "
+            "collision mesh), and the network is the one shipped for it (`pick_view_panda.pt`, above).")
+
+
 def clutter_section(result: dict) -> list[str]:
     sizes = list(result["scenes"])
-    lines = [f"## Several objects on the table: `{result['command']}`", "",
-             f"{result['date']}, {result['machine']}. A robot's table holds more than one object: `onepiece pick "
+    hand = ", the Franka hand" if result.get("gripper") else ""
+    lines = [f"## Several objects on the table{hand}: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}.{hand_words(result)} A robot's table holds more than one "
+             "object: `onepiece pick "
              "--clutter N` (`PickSpec.clutter`) sets N on it together. Each object of the household and unseen sets "
              f"with the next N-1 of its set (wrapping round: each object stands in N scenes), {result['views']} "
              "seeded views a scene: the first object dropped at the table centre and settled, each next one dropped "
@@ -115,14 +125,13 @@ def clutter_section(result: dict) -> list[str]:
               "| --- | --- | --- | --- | " + " | ".join("---" for _ in REASONS) + " |"]
     lines += [row for size in sizes for row in _failures(result, size)]
     lines.append("")
+    compared = {"checked_vs_unchecked": "the network's first 3 checked against its order alone",
+                "apart_vs_as_one": "the objects told apart against the cloud taken for one object (the planner's "
+                                   "check, contexts and top-down grasps)",
+                "network_vs_top_down": "the shipped planner against top-down on the largest object"}
     for size in sizes:
         scenes = result["scenes"][size]
-        lines += [_paired_line(size, "the network's first 3 checked against its order alone",
-                               scenes["checked_vs_unchecked"]),
-                  _paired_line(size, "the objects told apart against the cloud taken for one object (the planner's "
-                               "check, contexts and top-down grasps)", scenes["apart_vs_as_one"]),
-                  _paired_line(size, "the shipped planner against top-down on the largest object",
-                               scenes["network_vs_top_down"])]
+        lines += [_paired_line(size, what, scenes[key]) for key, what in compared.items() if key in scenes]
     return lines
 
 

@@ -145,7 +145,8 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_panda", "pick_clutter", "pick_clearance", "pick_ceiling", "pick_ranked_draws", "pick_reranked",
+SECTIONS = ("pick_panda", "pick_clutter_panda", "pick_clearance_panda", "pick_clutter", "pick_clearance",
+            "pick_ceiling", "pick_ranked_draws", "pick_reranked",
             "pick_robust_rank",
             "pick_rank_features", "pick_shape_check", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy",
             "pick_vessels", "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule",
@@ -171,7 +172,8 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_panda": lambda r: panda_section(r, picks), "pick_clutter": clutter_section,
+    render = {"pick_panda": lambda r: panda_section(r, picks), "pick_clutter_panda": clutter_section,
+              "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
               "pick_ranked_draws": ranked_draws_section,
