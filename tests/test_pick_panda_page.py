@@ -59,6 +59,7 @@ def test_the_franka_hands_section_judges_the_targets_on_that_hand_beside_the_box
     two["points"].append({**_panda_result(picks, 0.0)["points"][0], "seed": 1})
     seeds = panda_section(two, picks)
     assert "| 0 | 100% | 100% | 100% |" in " ".join(seeds) and "| 1 | 0% | 0% | 0% |" in " ".join(seeds)
+    assert "| mean | 50% | 50% | 50% |" in " ".join(seeds)  # the seeds weigh alike
 
 
 def test_the_franka_hand_at_the_table_is_named_and_only_the_runs_made_are_compared():

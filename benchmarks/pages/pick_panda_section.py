@@ -52,19 +52,27 @@ def _comparison(point: dict, picks: dict | None) -> list[str]:
             "| --- | --- | --- | --- | --- |", *rows]
 
 
+def _seed_rates(point: dict) -> dict[str, float]:
+    """One seed's network: its first attempt on each set judged, and pooled over the household meshes beside
+    top-down's ("pooled", "top_down pooled") where both household sets were judged."""
+    rates = {s["name"]: method_of(s, "network")["first_attempt"] for s in point["sets"]}
+    both = [s for s in point["sets"] if s["name"] in HOUSEHOLD_SETS]
+    if len(both) == len(HOUSEHOLD_SETS):
+        rates.update(pooled=pooled(both, "network")["first_attempt"],
+                     top_down_pooled=pooled(both, "top_down")["first_attempt"])
+    return rates
+
+
 def _seeds(result: dict) -> list[str]:
-    """Each seed's network on every set judged, and pooled over the household meshes, beside top-down's."""
-    names = [s["name"] for s in result["points"][0]["sets"]]
-    rows = []
-    for point in result["points"]:
-        rates = {s["name"]: method_of(s, "network")["first_attempt"] for s in point["sets"]}
-        both = [s for s in point["sets"] if s["name"] in HOUSEHOLD_SETS]
-        pooled_cells = (" | ".join(pct(pooled(both, m)["first_attempt"]) for m in ("network", "top_down"))
-                        if len(both) == len(HOUSEHOLD_SETS) else "- | -")
-        rows.append(f"| {point['seed']} | " + " | ".join(pct(rates[n]) if n in rates else "-" for n in names)
-                    + f" | {pooled_cells} |")
-    return [f"| seed | {' | '.join(names)} | household meshes pooled | top-down, pooled |",
-            "|" + " --- |" * (len(names) + 3), *rows]
+    """Each seed's network on every set judged and pooled over the household meshes, beside top-down's, and their
+    mean over the seeds."""
+    columns = [s["name"] for s in result["points"][0]["sets"]] + ["pooled", "top_down_pooled"]
+    every = [(str(point["seed"]), _seed_rates(point)) for point in result["points"]]
+    mean = {c: sum(r[c] for _, r in every) / len(every) for c in columns if all(c in r for _, r in every)}
+    rows = [f"| {seed} | " + " | ".join(pct(rates[c]) if c in rates else "-" for c in columns) + " |"
+            for seed, rates in [*every, ("mean", mean)]]
+    names = columns[:-2] + ["household meshes pooled", "top-down, pooled"]
+    return [f"| seed | {' | '.join(names)} |", "|" + " --- |" * (len(names) + 1), *rows]
 
 
 def panda_section(result: dict, picks: dict | None) -> list[str]:
