@@ -244,3 +244,31 @@ def test_the_check_stops_where_the_first_grasp_held_every_draw_none_after_it_can
     second_first = (ranked[1], ranked[0], ranked[2])  # the air grasp first: every grasp is executed, reordered
     reordered = checked(second_first, shape, gripper, PICK_SIM, 4, np.random.default_rng(0))
     assert [g.score for g in reordered][:2] in ([0.9, 0.7], [0.7, 0.9]) and reordered[2].score == 0.8
+
+
+def test_the_last_grasp_checked_stops_drawing_once_its_place_is_settled_and_every_order_stays_the_same():
+    import itertools
+
+    from onepiece_dist.picks.shape_check import drawn, reordered_lazily, settled_against, share_of
+    from onepiece_dist.plan.planner import PlannedGrasp
+
+    pose = np.eye(4)
+    ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, 0.9 - 0.1 * k, 100) for k in range(3))
+    draws, saved = 4, 0
+    for bits in itertools.product((False, True), repeat=3 * draws):
+        patterns = [bits[k * draws:(k + 1) * draws] for k in range(3)]
+        full = [sum(p) / draws for p in patterns]
+        taken = []
+
+        def share(k, earlier, patterns=patterns, taken=taken):
+            outcomes = iter(patterns[k])
+            got = drawn(lambda outcomes=outcomes: next(outcomes), draws, settled_against(earlier, draws))
+            taken.append(len(got))
+            return share_of(got, draws)
+
+        lazily = reordered_lazily(ranked, share)
+        expected = ranked if full[0] == 1.0 else tuple(ranked[i] for i in np.argsort(-np.array(full), kind="stable"))
+        assert [g.score for g in lazily] == [g.score for g in expected], patterns
+        assert taken[:-1] == [draws] * (len(taken) - 1)  # only the last grasp's draws are ever left out
+        saved += draws * len(taken) - sum(taken)
+    assert saved > 0

@@ -54,9 +54,10 @@ def held_draws(shape: CompletedShape | None, poses: np.ndarray, gripper: Gripper
 
 
 def shape_draws(shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec, draws: int,
-                rng: np.random.Generator) -> Callable[[np.ndarray], list[bool]] | None:
+                rng: np.random.Generator) -> Callable[..., list[bool]] | None:
     """``shape`` loaded on this process's check world, and what executes one pose (4, 4; the cloud's frame) on it
-    ``draws`` times from ``rng`` (whether each held); None where there is no shape."""
+    up to ``draws`` times from ``rng`` (whether each held; fewer where its ``settled`` says the draws so far
+    decide: settled_against); None where there is no shape."""
     from onepiece_dist.sim.pick import execute_pick
     from onepiece_dist.sim.trials import LabelNoise
 
@@ -66,11 +67,33 @@ def shape_draws(shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec
     world.load_object(list(shape.pieces), shape.volume, sim.density)
     noise, rest = LabelNoise.from_spec(sim), np.eye(4)
 
-    def held(pose: np.ndarray) -> list[bool]:
+    def held(pose: np.ndarray, settled: Callable[[list[bool]], bool] | None = None) -> list[bool]:
         placed = compose_poses(shape.to_plane, pose)
-        return [execute_pick(world, placed, rest, noise, rng).success for _ in range(draws)]
+        return drawn(lambda: execute_pick(world, placed, rest, noise, rng).success, draws, settled)
 
     return held
+
+
+def drawn(draw: Callable[[], bool], draws: int, settled: Callable[[list[bool]], bool] | None = None) -> list[bool]:
+    """``draw()``'s outcomes, ``draws`` of them, or fewer where ``settled`` says those so far decide."""
+    outcomes: list[bool] = []
+    while len(outcomes) < draws and not (settled is not None and settled(outcomes)):
+        outcomes.append(draw())
+    return outcomes
+
+
+def settled_against(earlier: np.ndarray | None, draws: int) -> Callable[[list[bool]], bool] | None:
+    """None (every draw) unless ``earlier`` holds the shares of the grasps ranked before the last one checked:
+    then whether the draws so far settle its place among them (it passes a grasp only by holding more often,
+    ties keep the network's order), so the rest cannot move it."""
+    if earlier is None:
+        return None
+
+    def settled(outcomes: list[bool]) -> bool:
+        low, high = sum(outcomes) / draws, (sum(outcomes) + draws - len(outcomes)) / draws
+        return all(low > share or high <= share for share in earlier)
+
+    return settled
 
 
 def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: GripperSpec, sim: SimSpec, draws: int,
@@ -83,36 +106,54 @@ def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: Grippe
 def checked(ranked: tuple[PlannedGrasp, ...], shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec,
             draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
     """``ranked`` reordered by how often each held on ``shape`` (the network's order on ties), ranks numbered
-    again; unchanged where there is no shape to check on (lazily: ``_reordered_lazily``)."""
+    again; unchanged where there is no shape to check on (lazily: ``reordered_lazily``)."""
     if len(ranked) < 2:
         return ranked
     held = shape_draws(shape, gripper, sim, draws, rng)
-    return ranked if held is None else _reordered_lazily(ranked, lambda k: float(np.mean(held(ranked[k].pose))))
+    if held is None:
+        return ranked
+
+    def share(k: int, earlier: np.ndarray | None) -> float:
+        return share_of(held(ranked[k].pose, settled_against(earlier, draws)), draws)
+
+    return reordered_lazily(ranked, share)
 
 
 def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape | None], gripper: GripperSpec,
                   sim: SimSpec, draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
     """``ranked`` reordered by how often each held on its own shape (``shapes``, one a grasp: the object it closes
     on), the network's order on ties; unchanged where a grasp has no shape to check on (lazily:
-    ``_reordered_lazily``)."""
+    ``reordered_lazily``)."""
     if len(ranked) < 2 or any(shape is None for shape in shapes):
         return ranked
 
-    def share(k: int) -> float:
-        return float(held_shares(shapes[k], ranked[k].pose[None], gripper, sim, draws, rng)[0])
+    def share(k: int, earlier: np.ndarray | None) -> float:
+        held = shape_draws(shapes[k], gripper, sim, draws, rng)
+        return share_of(held(ranked[k].pose, settled_against(earlier, draws)), draws)
 
-    return _reordered_lazily(ranked, share)
+    return reordered_lazily(ranked, share)
 
 
-def _reordered_lazily(ranked: tuple[PlannedGrasp, ...], share: Callable[[int], float]) -> tuple[PlannedGrasp, ...]:
-    """``ranked`` reordered by ``share(k)`` of each, asked in rank order, stopping where the first held every
-    draw: no later grasp can pass it (ties keep the network's order), so the rest keep the network's order too
-    and the check costs a third of its draws (the first place is what it would have been had every grasp been
-    executed: the draws of the first come first from the stream)."""
-    first = share(0)
+def share_of(outcomes: list[bool], draws: int) -> float:
+    """The share of ``draws`` that held, a draw not taken counted as failed (where settled_against stopped, this
+    keeps every comparison the draws settled)."""
+    return sum(outcomes) / draws
+
+
+def reordered_lazily(ranked: tuple[PlannedGrasp, ...], share: Callable[[int, np.ndarray | None], float]
+                     ) -> tuple[PlannedGrasp, ...]:
+    """``ranked`` reordered by ``share(k, earlier)`` of each, asked in rank order. It stops where the first held
+    every draw: no later grasp can pass it (ties keep the network's order), so the rest keep the network's order
+    too and the check costs a third of its draws. The last grasp is given the ``earlier`` shares and stops drawing
+    once its place among them is settled. Either way the order is what executing every draw would give: each
+    grasp's draws come from the stream in rank order, and only draws after every other grasp's are left out."""
+    first = share(0, None)
     if first >= 1.0:
         return ranked
-    return _reordered(ranked, np.array([first, *(share(k) for k in range(1, len(ranked)))]))
+    shares = [first]
+    for k in range(1, len(ranked)):
+        shares.append(share(k, np.array(shares) if k == len(ranked) - 1 else None))
+    return _reordered(ranked, np.array(shares))
 
 
 def _reordered(ranked: tuple[PlannedGrasp, ...], shares: np.ndarray) -> tuple[PlannedGrasp, ...]:
