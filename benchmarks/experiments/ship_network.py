@@ -61,8 +61,8 @@ def weights(model: str) -> int:
 def ship(point: dict, curve: dict) -> dict:
     """The curve's ``point`` shipped."""
     return _ship(point, " + ".join(spec["objects"] for spec in trained_on(point, curve)),
-                 "python -m benchmarks.experiments.pick_curve", point["picks"]["methods"]["network"],
-                 "benchmarks/results/pick_curve.json")
+                 "python -m benchmarks.experiments.pick_curve",
+                 _household(point["picks"]["methods"]["network"], "benchmarks/results/pick_curve.json"))
 
 
 # trials judged against the top-down trial's networks, fitted on or beside its labels
@@ -95,16 +95,23 @@ def ship_trial(name: str, point: dict) -> dict:
 
     objects = TRIAL_OBJECTS.get(name, "{0} (labels executing the top-down grasps) + {1}")
     return _ship(point, objects.format(BATCHES[0][0], BATCHES[1][0]), f"python -m benchmarks.experiments.{name}",
-                 point["with_pool"]["household"], f"benchmarks/results/{name}.json", pool=POOL)
+                 _household(point["with_pool"]["household"], f"benchmarks/results/{name}.json"), pool=POOL)
 
 
 POOL = "the view's sampled candidates and the three top-down grasps (plan.top_down)"
 
 
-def _ship(point: dict, objects: str, made_by: str, household: dict, source: str, pool: str | None = None,
+def _household(household: dict, source: str) -> dict:
+    """A trial's household first attempt (``first_attempt``, ``interval``; its views not kept) as a record keeps
+    it."""
+    return {"household_first_attempt": {"rate": household["first_attempt"], "interval": household["interval"],
+                                         "views": None, "from": source}}
+
+
+def _ship(point: dict, objects: str, made_by: str, figures: dict, pool: str | None = None,
           network: Path | None = None) -> dict:
     """``point``'s checkpoint copied to ``network`` (default: the default job's gripper's, plan.shipped.NETWORK)
-    with its record beside it."""
+    with its record beside it, its pick ``figures`` (_household, _figures) in it."""
     from onepiece_dist.plan.shipped import NETWORK
 
     network = network or NETWORK
@@ -115,9 +122,7 @@ def _ship(point: dict, objects: str, made_by: str, household: dict, source: str,
     record = {"design": point["design"], "model": saved["model"], "labels": point["labels"],
               "training_objects": objects,
               "trained_by": f"{made_by}, then python -m benchmarks.experiments.ship_network",
-              **({"pool": pool} if pool else {}), **({"gripper": gripper} if network != NETWORK else {}),
-              "household_first_attempt": {"rate": household["first_attempt"], "interval": household["interval"],
-                                          "views": None, "from": source}}
+              **({"pool": pool} if pool else {}), **({"gripper": gripper} if network != NETWORK else {}), **figures}
     network.with_suffix(".json").write_text(json.dumps(record, indent=1) + "\n")
     return record
 
@@ -164,14 +169,9 @@ def ship_panda() -> dict:
     point = next(p for p in result["points"] if p["seed"] == 0)
     objects = " + ".join(b["objects"] + (" (labels executing the top-down grasps)" if b["top_down"] else "")
                          for b in result["batches"])
-    figures = _figures(point["sets"], source)
-    household = figures["household_first_attempt"]
     network = network_path(GripperSpec.model_validate(gripper_fields(result["gripper"])))
-    record = _ship(point["network"], objects, "python -m benchmarks.experiments.pick_panda",
-                   {"first_attempt": household["rate"], "interval": household["interval"]}, source, POOL, network)
-    record.update(figures)
-    network.with_suffix(".json").write_text(json.dumps(record, indent=1) + "\n")
-    return record
+    return _ship(point["network"], objects, "python -m benchmarks.experiments.pick_panda",
+                 _figures(point["sets"], source), POOL, network)
 
 
 def main() -> None:

@@ -110,13 +110,7 @@ def checked(ranked: tuple[PlannedGrasp, ...], shape: CompletedShape | None, grip
     if len(ranked) < 2:
         return ranked
     held = shape_draws(shape, gripper, sim, draws, rng)
-    if held is None:
-        return ranked
-
-    def share(k: int, earlier: np.ndarray | None) -> float:
-        return share_of(held(ranked[k].pose, settled_against(earlier, draws)), draws)
-
-    return reordered_lazily(ranked, share)
+    return ranked if held is None else _checked_with(ranked, lambda k: held, draws)
 
 
 def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape | None], gripper: GripperSpec,
@@ -126,10 +120,15 @@ def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape 
     ``reordered_lazily``)."""
     if len(ranked) < 2 or any(shape is None for shape in shapes):
         return ranked
+    return _checked_with(ranked, lambda k: shape_draws(shapes[k], gripper, sim, draws, rng), draws)
+
+
+def _checked_with(ranked: tuple[PlannedGrasp, ...], held_of: Callable[[int], Callable[..., list[bool]]],
+                  draws: int) -> tuple[PlannedGrasp, ...]:
+    """``ranked`` reordered lazily (reordered_lazily) by the draws ``held_of(k)`` executes of each grasp k."""
 
     def share(k: int, earlier: np.ndarray | None) -> float:
-        held = shape_draws(shapes[k], gripper, sim, draws, rng)
-        return share_of(held(ranked[k].pose, settled_against(earlier, draws)), draws)
+        return share_of(held_of(k)(ranked[k].pose, settled_against(earlier, draws)), draws)
 
     return reordered_lazily(ranked, share)
 

@@ -13,9 +13,9 @@ from onepiece_dist.errors import CheckpointRejected, CloudRejected
 from onepiece_dist.specs.job import GripperSpec
 
 FOLDER = Path(__file__).resolve().parent / "networks"
-NETWORK = FOLDER / "pick_view.pt"
-RECORD = FOLDER / "pick_view.json"
 SHIPPED = {"onepiece_box": "pick_view", "franka_panda": "pick_view_panda"}  # gripper name -> the files' stem
+NETWORK = FOLDER / f"{SHIPPED[GripperSpec().name]}.pt"  # the default job's gripper's
+RECORD = NETWORK.with_suffix(".json")
 
 
 def network_path(gripper: GripperSpec | None = None) -> Path:
