@@ -11,13 +11,15 @@ and judged at one: 87.5% of the household views; a diagnostic then found most vi
 at 16 draws of 16, so that version's chooser, not the pool, set its figure. The pool is the shipped network's
 (the view's sampled candidates and the three top-down grasps).
 
-    .venv/bin/python -m benchmarks.experiments.pick_ceiling
+    .venv/bin/python -m benchmarks.experiments.pick_ceiling [--gripper panda]
 
-Results: benchmarks/results/pick_ceiling.json, rendered into docs/picks.md.
+Results: benchmarks/results/pick_ceiling.json, rendered into docs/picks.md; with --gripper panda (the pool of the
+network shipped for that preset, every execution by its hand): pick_ceiling_panda.json.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import platform
 import time
@@ -34,12 +36,14 @@ RESULTS = HERE / "results" / "pick_ceiling.json"
 DRAWS_USED = {"screen": 4, "selection": 12, "shortlist": 8, "judge": 4}
 
 
-def _spec(name: str, objects: str):
-    from onepiece_dist.plan.shipped import shipped_network
+def _spec(name: str, objects: str, gripper: str | None = None):
+    from benchmarks.experiments.pick_clutter import shipped_for
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
-    return PickSpec(objects=objects, checkpoint=str(shipped_network()),
-                    output=str(ROOT / "data" / "pick_ceiling" / name), views=8, attempts=3, pictures=0,
+    network, hand = shipped_for(gripper)
+    folder = "pick_ceiling" + (f"_{gripper}" if gripper else "")
+    return PickSpec(objects=objects, checkpoint=str(network), gripper=hand,
+                    output=str(ROOT / "data" / folder / name), views=8, attempts=3, pictures=0,
                     methods=("network",), plan=PlanSpec(top_down=True, check_first=0))
 
 
@@ -51,12 +55,13 @@ def _object(task) -> tuple:
     return view_ceilings(spec, resolve_source(spec.objects)[index], index, CeilingDraws(**DRAWS_USED))
 
 
-def measure(name: str, objects: str, processes: int = 2) -> dict:
-    """One set's views against fresh draws, per object and pooled (a bootstrap interval over objects)."""
+def measure(name: str, objects: str, processes: int = 2, gripper: str | None = None) -> dict:
+    """One set's views against fresh draws, per object and pooled (a bootstrap interval over objects); ``gripper``:
+    a preset, the pool of the network shipped for it and every execution by its hand."""
     from onepiece_dist.objects import resolve_source
     from onepiece_dist.stats.intervals import bootstrap_interval
 
-    spec = _spec(name, objects)
+    spec = _spec(name, objects, gripper)
     start = time.perf_counter()
     with get_context("spawn").Pool(processes) as pool:
         found = sorted(pool.imap_unordered(_object, [(spec, i) for i in range(len(resolve_source(objects)))]))
@@ -79,12 +84,19 @@ def measure(name: str, objects: str, processes: int = 2) -> dict:
 def main() -> None:
     from benchmarks.experiments.household import UNSEEN, household_objects
 
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gripper", choices=("panda",), default=None,
+                        help="a preset: its shipped network's pool, every grasp executed by its hand")
+    args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
-    measured = {name: measure(name, objects) for name, objects in sets.items()}
-    RESULTS.write_text(json.dumps({
-        "command": ".venv/bin/python -m benchmarks.experiments.pick_ceiling", "date": date.today().isoformat(),
-        "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **DRAWS_USED,
-        "sets": measured}, indent=1) + "\n")
+    measured = {name: measure(name, objects, gripper=args.gripper) for name, objects in sets.items()}
+    command = ".venv/bin/python -m benchmarks.experiments.pick_ceiling" + (f" --gripper {args.gripper}"
+                                                                           if args.gripper else "")
+    path = RESULTS if args.gripper is None else HERE / "results" / f"pick_ceiling_{args.gripper}.json"
+    path.write_text(json.dumps({
+        "command": command, "date": date.today().isoformat(),
+        "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
+        **({"gripper": args.gripper} if args.gripper else {}), **DRAWS_USED, "sets": measured}, indent=1) + "\n")
     print({name: {k: m[k]["rate"] for k in ("one_draw", "repeated", "first_held_out", "best_held_out")}
            for name, m in measured.items()})
 
