@@ -84,3 +84,22 @@ def test_the_franka_hand_at_the_table_is_named_and_only_the_runs_made_are_compar
     clearance = json.loads((results / "pick_clearance.json").read_text())
     assert clearance_section({**clearance, "gripper": "panda"})[0].startswith("## Clearing the table, the Franka hand")
     assert "Franka" not in clearance_section(clearance)[0] + clearance_section(clearance)[2]
+
+
+def test_the_franka_hands_ceiling_is_judged_against_that_hands_network_and_top_down():
+    from benchmarks.pages import picks_page
+    from benchmarks.pages.pick_sets import HOUSEHOLD_SETS, pooled
+
+    results = ROOT / "benchmarks" / "results"
+    ceiling = json.loads((results / "pick_ceiling.json").read_text())
+    panda = json.loads((results / "pick_panda.json").read_text())
+    franka = picks_page._panda_picks(panda)
+    assert franka["sets"] == panda["points"][0]["sets"]  # seed 0: the network shipped for the preset
+    lines = picks_page._ceiling({**ceiling, "gripper": "panda"}, franka)
+    assert lines[0].startswith("## The pool's ceiling without the draw, the Franka hand: `")
+    assert "executed by the `panda` preset's hand" in lines[2]
+    top_down = pooled([s for s in franka["sets"] if s["name"] in HOUSEHOLD_SETS], "top_down")["first_attempt"]
+    assert f"top-down ({100 * top_down:.1f}%) needs {100 * (top_down + 0.2):.1f}%" in lines[-1]
+    network = next(m for m in franka["sets"][0]["methods"] if m["method"] == "network")["first_attempt"]
+    assert lines[6].endswith(f"| {100 * network:.1f}% |")  # the household row's network is the Franka hand's
+    assert "Franka" not in "".join(picks_page._ceiling(ceiling, json.loads((results / "picks.json").read_text())))

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from benchmarks.pages.pick_clutter_section import hand_words
 from onepiece_dist.stats.intervals import bootstrap_interval
 
 
@@ -50,17 +51,18 @@ def ceiling_section(result: dict, picks: dict | None, pooled_top_down: float | N
         words.append(f"{100 * above:.0f} points above top-down ({_pct(pooled_top_down)}) needs {_pct(needed)}, "
                      f"{'within' if needed <= rate else 'above'} it"
                      f"{' and its interval' if needed > high else ''}")
-    return [f"## The pool's ceiling without the draw: `{result['command']}`", "",
-            f"{result['date']}, {result['machine']}. The oracle above counts a view as picked where any of its "
-            "candidates won the one draw every chooser meets; no chooser sees that draw (two executions of one "
-            "grasp agree about 90% of the time: docs/studies/pick_labels). Here every candidate of each view (the "
-            "shipped network's pool) is executed at draw 0 (so the one-draw share is the oracle's again), those "
-            f"that picked again at draws 1 to {screen - 1}; of those that picked at all {screen}, the first "
-            f"{shortlist} (index order) are drawn until they fail, up to draw {selection - 1}, and the one that held "
-            f"longest (the first on ties) is judged at draws {selection} to {selection + judge - 1}, which no choice "
-            "saw: its share of them is what a chooser that knew which grasps pick again reaches at the first "
-            f"attempt. Beside it, the first candidate (index order) that passed the {screen} draws, judged at draws "
-            f"{screen} to {screen + judge - 1}.", "",
+    hand = ", the Franka hand" if result.get("gripper") else ""
+    return [f"## The pool's ceiling without the draw{hand}: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}.{hand_words(result)} The oracle above counts a view as picked "
+            "where any of its candidates won the one draw every chooser meets; no chooser sees that draw (two "
+            "executions of one grasp agree about 90% of the time: docs/studies/pick_labels). Here every candidate "
+            "of each view (the shipped network's pool) is executed at draw 0 (so the one-draw share is the "
+            f"oracle's again), those that picked again at draws 1 to {screen - 1}; of those that picked at all "
+            f"{screen}, the first {shortlist} (index order) are drawn until they fail, up to draw {selection - 1}, "
+            f"and the one that held longest (the first on ties) is judged at draws {selection} to "
+            f"{selection + judge - 1}, which no choice saw: its share of them is what a chooser that knew which "
+            "grasps pick again reaches at the first attempt. Beside it, the first candidate (index order) that "
+            f"passed the {screen} draws, judged at draws {screen} to {screen + judge - 1}.", "",
             f"| set | views | candidates | one draw (the oracle) | picked at all {screen} draws | the first of "
             f"those, {judge} draws | the best of {shortlist} of those, {judge} draws no choice saw [95% CI over "
             "objects] | the network, first attempt |", "| --- | --- | --- | --- | --- | --- | --- | --- |", *rows,

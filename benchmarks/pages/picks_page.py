@@ -145,8 +145,8 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_panda", "pick_clutter_panda", "pick_clearance_panda", "pick_clutter", "pick_clearance",
-            "pick_ceiling", "pick_ranked_draws", "pick_reranked",
+SECTIONS = ("pick_panda", "pick_clutter_panda", "pick_clearance_panda", "pick_ceiling_panda", "pick_clutter",
+            "pick_clearance", "pick_ceiling", "pick_ranked_draws", "pick_reranked",
             "pick_robust_rank",
             "pick_rank_features", "pick_shape_check", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy",
             "pick_vessels", "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule",
@@ -176,6 +176,7 @@ def render_picks_page() -> str:
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
+              "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda"))),
               "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_robust_rank": robust_rank_section, "pick_rank_features": rank_features_section,
@@ -205,6 +206,14 @@ def _ceiling(result: dict, picks: dict | None) -> list[str]:
     sets = [s for s in (picks or {}).get("sets", []) if s["name"] in HOUSEHOLD_SETS]
     top_down = pooled(sets, "top_down")["first_attempt"] if sets else None
     return ceiling_section(result, picks, top_down, (picks or {}).get("targets"))
+
+
+def _panda_picks(result: dict | None) -> dict | None:
+    """The Franka hand's shipped network (seed 0) judged by the pick benchmark, shaped as results/picks.json's
+    sets and targets, for the sections that compare with it."""
+    if result is None or not result["points"]:
+        return None
+    return {"sets": result["points"][0]["sets"], "targets": (load("picks") or {}).get("targets")}
 
 
 def _check_words(plan: dict) -> str:
