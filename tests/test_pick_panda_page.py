@@ -97,7 +97,9 @@ def test_the_franka_hands_ceiling_is_judged_against_that_hands_network_and_top_d
     assert franka["sets"] == panda["points"][0]["sets"]  # seed 0: the network shipped for the preset
     lines = picks_page._ceiling({**ceiling, "gripper": "panda"}, franka)
     assert lines[0].startswith("## The pool's ceiling without the draw, the Franka hand: `")
-    assert "executed by the `panda` preset's hand" in lines[2]
+    assert "executed by the `panda` preset's hand" in lines[2] and "solver iterations" not in lines[2]
+    stepped = picks_page._ceiling({**ceiling, "gripper": "panda", "solver_iterations": 88}, franka)[2]
+    assert "its grip stepped at 88 solver iterations" in stepped  # where the result records them
     top_down = pooled([s for s in franka["sets"] if s["name"] in HOUSEHOLD_SETS], "top_down")["first_attempt"]
     assert f"top-down ({100 * top_down:.1f}%) needs {100 * (top_down + 0.2):.1f}%" in lines[-1]
     network = next(m for m in franka["sets"][0]["methods"] if m["method"] == "network")["first_attempt"]

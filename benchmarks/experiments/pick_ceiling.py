@@ -28,6 +28,7 @@ from multiprocessing import get_context
 
 import numpy as np
 
+from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import HERE, ROOT
 
 RESULTS = HERE / "results" / "pick_ceiling.json"
@@ -96,7 +97,7 @@ def main() -> None:
     path.write_text(json.dumps({
         "command": command, "date": date.today().isoformat(),
         "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
-        **({"gripper": args.gripper} if args.gripper else {}), **DRAWS_USED, "sets": measured}, indent=1) + "\n")
+        **hand_record(args.gripper), **DRAWS_USED, "sets": measured}, indent=1) + "\n")
     print({name: {k: m[k]["rate"] for k in ("one_draw", "repeated", "first_held_out", "best_held_out")}
            for name, m in measured.items()})
 

@@ -22,6 +22,7 @@ from multiprocessing import get_context
 
 import numpy as np
 
+from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import HERE, ROOT
 
 RESULTS = HERE / "results" / "pick_clearance.json"
@@ -91,7 +92,7 @@ def main() -> None:
                                                                               if args.gripper else "")
     result = {"command": command, "date": date.today().isoformat(),
               "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "objects": SIZE, "views": VIEWS,
-              **({"gripper": args.gripper} if args.gripper else {}), "methods": list(METHODS), "sets": measured,
+              **hand_record(args.gripper), "methods": list(METHODS), "sets": measured,
               "rates": {**{name: {m: rates(s["scenes"], m) for m in METHODS} for name, s in measured.items()},
                         "all scenes": {m: rates(every, m) for m in METHODS}}}
     path = RESULTS if args.gripper is None else HERE / "results" / f"pick_clearance_{args.gripper}.json"

@@ -50,6 +50,16 @@ def shipped_for(gripper: str | None):
     return shipped_network(hand), hand
 
 
+def hand_record(gripper: str | None) -> dict:
+    """What a result records of the preset ``gripper`` (nothing for the default job's gripper): its name and the
+    solver iterations its worlds step with (sim.world.physics_for: more for a stronger grip)."""
+    from onepiece_dist.sim.world import physics_for
+
+    if gripper is None:
+        return {}
+    return {"gripper": gripper, "solver_iterations": physics_for(shipped_for(gripper)[1]).solver_iterations}
+
+
 def _spec(name: str, objects: str, size: int, run: str, gripper: str | None = None):
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
@@ -122,7 +132,7 @@ def main() -> None:
                                                                             if args.gripper else "")
     result = {"command": command, "date": date.today().isoformat(),
               "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "views": VIEWS,
-              "attempts": ATTEMPTS, **({"gripper": args.gripper} if args.gripper else {}),
+              "attempts": ATTEMPTS, **hand_record(args.gripper),
               "runs": {run: {"plan": RUNS[run][0], "methods": list(RUNS[run][1])} for run in runs},
               "single": single_rates(args.gripper),
               "scenes": {str(size): measure_size(sets, size, runs, args.gripper) for size in SIZES}}

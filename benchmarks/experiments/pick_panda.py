@@ -20,6 +20,7 @@ import json
 import platform
 from datetime import date
 
+from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, ROOT, fit, label_spec, labelled
 
 RESULTS = HERE / "results" / "pick_panda.json"
@@ -88,7 +89,7 @@ def main() -> None:
     for _, more in batches[1:]:
         joined = joined.joined(more)
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_panda", "date": date.today().isoformat(),
-           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "gripper": GRIPPER,
+           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **hand_record(GRIPPER),
            "batches": [batch_record(name, labels) for name, labels in batches], "points": []}
 
     def write() -> None:

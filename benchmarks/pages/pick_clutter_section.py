@@ -97,7 +97,16 @@ def hand_words(result: dict) -> str:
     if not result.get("gripper"):
         return ""
     return (f" Every grasp here is executed by the `{result['gripper']}` preset's hand (the Franka hand's own "
-            "collision mesh), and the network is the one shipped for it (`pick_view_panda.pt`, above).")
+            f"collision mesh{solver_words(result)}), and the network is the one shipped for it "
+            "(`pick_view_panda.pt`, above).")
+
+
+def solver_words(result: dict) -> str:
+    """The solver iterations a result's hand was stepped with, where it records them (sim.world.physics_for)."""
+    if "solver_iterations" not in result:
+        return ""
+    return (f"; its grip stepped at {result['solver_iterations']} solver iterations, the default gripper's 50 scaled "
+            "by its force (docs/trials.md)")
 
 
 def clutter_section(result: dict) -> list[str]:

@@ -4,6 +4,7 @@ the issue's targets on that hand and each chooser's figure beside the box palm's
 
 from __future__ import annotations
 
+from benchmarks.pages.pick_clutter_section import solver_words
 from benchmarks.pages.pick_sets import (
     HOUSEHOLD_SETS,
     LABELS,
@@ -25,7 +26,8 @@ def _how(result: dict, point: dict) -> str:
     return (f"{result['date']}, {result['machine']}. The shipped network's recipe made again for the "
             f"`{result['gripper']}` preset, whose physics and collision test carry the Franka hand's own collision "
             "mesh (pybullet_data franka_panda/meshes/collision/hand.obj, 20 cm across the closing axis, where "
-            "the box palm spans the 8 cm opening and its two 1 cm fingers): the same two label batches labelled "
+            f"the box palm spans the 8 cm opening and its two 1 cm fingers{solver_words(result)}): the same two "
+            "label batches labelled "
             f"with that hand ({batches}); design "
             f"`{net['design']}` fitted on all {net['labels']} labels; at seed {point['seed']} "
             f"({net['fit_seconds'] / 60:.0f} min, best epoch {net['best_epoch']['epoch']}, held-out AP "
