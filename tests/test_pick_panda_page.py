@@ -105,3 +105,18 @@ def test_the_franka_hands_ceiling_is_judged_against_that_hands_network_and_top_d
     network = next(m for m in franka["sets"][0]["methods"] if m["method"] == "network")["first_attempt"]
     assert lines[6].endswith(f"| {100 * network:.1f}% |")  # the household row's network is the Franka hand's
     assert "Franka" not in "".join(picks_page._ceiling(ceiling, json.loads((results / "picks.json").read_text())))
+
+
+def test_the_franka_hands_section_sets_each_chooser_beside_its_figure_at_50_solver_iterations():
+    from benchmarks.pages.pick_panda_section import panda_section
+
+    picks = json.loads((ROOT / "benchmarks" / "results" / "picks.json").read_text())
+    before, now = _panda_result(picks, 0.0), {**_panda_result(picks, 1.0), "solver_iterations": 88}
+    lines = panda_section(now, picks, before)
+    assert any(line.startswith("Before the worlds' solver iterations grew with the grip") for line in lines)
+    assert "| household | network on the view | 0% | 100% |" in lines
+    paired = next(line for line in lines if line.startswith("Paired over the"))
+    assert paired.startswith(f"Paired over the {sum(len(s['objects']) for s in now['points'][0]['sets'])} household")
+    assert "network on the view +100.0 points [+100.0, +100.0]" in paired
+    assert "top-down across the narrow axis +0.0 points" in paired  # top-down's attempts are the same in both
+    assert panda_section(now, picks, {**before, "solver_iterations": 88}) == panda_section(now, picks)  # not before

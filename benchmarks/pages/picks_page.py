@@ -157,8 +157,8 @@ def render_picks_page() -> str:
     picks, plan = load("picks"), load("plan")
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
-             f"benchmarks/results/picks.json, {', '.join(f'{name}.json' for name in SECTIONS)} and plan.json: do "
-             "not edit by hand. -->", ""]
+             f"benchmarks/results/picks.json, {', '.join(f'{name}.json' for name in SECTIONS)}, "
+             "pick_panda_50_iterations.json and plan.json: do not edit by hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -172,7 +172,8 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_panda": lambda r: panda_section(r, picks), "pick_clutter_panda": clutter_section,
+    render = {"pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations")),
+              "pick_clutter_panda": clutter_section,
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
