@@ -120,3 +120,7 @@ def test_the_franka_hands_section_sets_each_chooser_beside_its_figure_at_50_solv
     assert "network on the view +100.0 points [+100.0, +100.0]" in paired
     assert "top-down across the narrow axis +0.0 points" in paired  # top-down's attempts are the same in both
     assert panda_section(now, picks, {**before, "solver_iterations": 88}) == panda_section(now, picks)  # not before
+    then = {"command": "c", "solver_iterations": 88, "sets": before["points"][0]["sets"]}  # judged alike: none
+    judged = panda_section(now, picks, before, then)
+    line = next(line for line in judged if line.startswith("The network labelled at 50 iterations judged at 88"))
+    assert "household 0%; unseen 0%" in line and "made again against it: +100.0 points" in line

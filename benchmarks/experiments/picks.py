@@ -66,12 +66,14 @@ def training_summary(status) -> dict:
             "epochs": training.epochs if training else None}
 
 
-def run_set(name: str, objects: str, source: str, checkpoint: Path, folder: Path) -> dict:
+def run_set(name: str, objects: str, source: str, checkpoint: Path, folder: Path,
+            methods: tuple[str, ...] | None = None) -> dict:
+    """One set judged by the pick benchmark (``methods``: the choosers, default every one)."""
     from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.specs.plan import PickSpec
 
     spec = PickSpec(objects=objects, checkpoint=str(checkpoint), output=str(folder / name), views=VIEWS,
-                    attempts=ATTEMPTS, pictures=PICTURES)
+                    attempts=ATTEMPTS, pictures=PICTURES, **({"methods": methods} if methods else {}))
     start = time.perf_counter()
     report = run_picks(spec)
     return {**report.to_json(), "name": name, "source": source, "seconds": round(time.perf_counter() - start, 1)}

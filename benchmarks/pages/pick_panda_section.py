@@ -95,9 +95,10 @@ def _paired(before: list[dict], after: list[dict], method: str) -> tuple[float, 
     return float(differences.mean()), bootstrap_interval(differences), len(differences)
 
 
-def before_the_solver(before: dict, point: dict) -> list[str]:
+def before_the_solver(before: dict, point: dict, then: dict | None = None) -> list[str]:
     """The same recipe labelled, fitted and judged where the worlds stepped the 70 N grip at the default gripper's
-    50 solver iterations (``before``, results/pick_panda_50_iterations.json), beside ``point`` (the same seed)."""
+    50 solver iterations (``before``, results/pick_panda_50_iterations.json), beside ``point`` (the same seed);
+    ``then``: that network judged at the grip's iterations (results/pick_panda_then.json)."""
     was = next((p for p in before["points"] if p["seed"] == point["seed"]), None)
     if was is None or "solver_iterations" in before:
         return []
@@ -115,10 +116,24 @@ def before_the_solver(before: dict, point: dict) -> list[str]:
             "where the 70 N grip's shake dropped light objects no real hand drops "
             f"(`{before['command']}` then; results/pick_panda_50_iterations.json). Seed {point['seed']}, first "
             "attempt:", "", "| set | chooser | at 50 iterations | now |", "| --- | --- | --- | --- |", *rows, "",
-            f"Paired over the {objects} household meshes, now against then: " + "; ".join(words) + "."]
+            f"Paired over the {objects} household meshes, now against then: " + "; ".join(words) + ".",
+            *_then_judged_now(then, point)]
 
 
-def panda_section(result: dict, picks: dict | None, before: dict | None = None) -> list[str]:
+def _then_judged_now(then: dict | None, point: dict) -> list[str]:
+    """The network labelled at 50 iterations judged by picks at the grip's (``then``) against ``point``'s, whose
+    labels were made again at those iterations: both judged alike."""
+    if not then or not then["sets"]:
+        return []
+    rates = "; ".join(f"{s['name']} {pct(method_of(s, 'network')['first_attempt'])}" for s in then["sets"])
+    change, (low, high), objects = _paired(then["sets"], point["sets"], "network")
+    return ["", f"The network labelled at 50 iterations judged at {then['solver_iterations']} (`{then['command']}`, "
+            f"the network chooser alone): {rates}. Paired over the {objects} household meshes, the network of the "
+            f"labels made again against it: {100 * change:+.1f} points [{100 * low:+.1f}, {100 * high:+.1f}]."]
+
+
+def panda_section(result: dict, picks: dict | None, before: dict | None = None, then: dict | None = None
+                  ) -> list[str]:
     lines = [f"## The Franka hand labels and picks: `{result['command']}`", ""]
     point = result["points"][0] if result["points"] else {"sets": []}
     if not point["sets"]:
@@ -131,8 +146,8 @@ def panda_section(result: dict, picks: dict | None, before: dict | None = None) 
                   "| --- | --- | --- |", *target_rows(point["sets"], targets), ""]
     if len(result["points"]) > 1:
         lines += ["Each seed's network, first attempt:", "", *_seeds(result), ""]
-    then = before_the_solver(before, point) if before is not None else []
-    lines += [*then, ""] if then else []
+    earlier = before_the_solver(before, point, then) if before is not None else []
+    lines += [*earlier, ""] if earlier else []
     lines += [*_comparison(point, picks), ""]
     for s in point["sets"]:
         lines += [f"{s['name'].capitalize()}: {s['verdict']}. First attempts by how they ended:", "",

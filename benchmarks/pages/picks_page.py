@@ -158,7 +158,7 @@ def render_picks_page() -> str:
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
              f"benchmarks/results/picks.json, {', '.join(f'{name}.json' for name in SECTIONS)}, "
-             "pick_panda_50_iterations.json and plan.json: do not edit by hand. -->", ""]
+             "pick_panda_50_iterations.json, pick_panda_then.json and plan.json: do not edit by hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -172,7 +172,8 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations")),
+    render = {"pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
+                                                    load("pick_panda_then")),
               "pick_clutter_panda": clutter_section,
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section,
