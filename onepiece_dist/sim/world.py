@@ -62,8 +62,8 @@ class PhysicsSettings:
 def physics_for(gripper: GripperSpec) -> PhysicsSettings:
     """The default settings with solver iterations for ``gripper``'s closing force: SOLVER_ITERATIONS up to
     REFERENCE_FORCE, in proportion above it. At 50 iterations the solver does not converge on a light object
-    squeezed by a stronger grip: the Franka hand's 70 N dropped a 50 g butter box when shaken in 14 of 32 draws, a
-    slip no real hand has; 88 iterations hold it as 40 N at 50 do (docs/trials.md)."""
+    squeezed by a stronger grip: the Franka hand's 70 N dropped the 50 g household butter box when shaken at 22 of
+    32 top-down draws, a slip no real hand has; 88 iterations drop it once, as 40 N at 50 do (docs/trials.md)."""
     iterations = max(SOLVER_ITERATIONS, math.ceil(SOLVER_ITERATIONS * gripper.closing_force / REFERENCE_FORCE))
     return PhysicsSettings(solver_iterations=iterations)
 
