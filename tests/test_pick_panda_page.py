@@ -93,7 +93,7 @@ def test_the_franka_hands_ceiling_is_judged_against_that_hands_network_and_top_d
     results = ROOT / "benchmarks" / "results"
     ceiling = json.loads((results / "pick_ceiling.json").read_text())
     panda = json.loads((results / "pick_panda.json").read_text())
-    franka = picks_page._panda_picks(panda)
+    franka = picks_page._panda_picks(panda, json.loads((results / "picks.json").read_text()))
     assert franka["sets"] == panda["points"][0]["sets"]  # seed 0: the network shipped for the preset
     lines = picks_page._ceiling({**ceiling, "gripper": "panda"}, franka)
     assert lines[0].startswith("## The pool's ceiling without the draw, the Franka hand: `")

@@ -11,6 +11,7 @@ from benchmarks.pages.pick_sets import (
     failure_table,
     interval,
     method_of,
+    object_rates,
     pct,
     pooled,
     target_rows,
@@ -77,12 +78,6 @@ def _seeds(result: dict) -> list[str]:
     return [f"| seed | {' | '.join(names)} |", "|" + " --- |" * (len(names) + 1), *rows]
 
 
-def _object_rates(sets: list[dict], method: str) -> dict[tuple[str, str], float]:
-    """(set, object) -> ``method``'s first-attempt share of that object's views."""
-    return {(s["name"], o["name"]): sum(v["attempts"][method][:1] == [True] for v in o["views"]) / len(o["views"])
-            for s in sets for o in s["objects"] if o["status"] == "ok" and o["views"]}
-
-
 def _paired(before: list[dict], after: list[dict], method: str) -> tuple[float, tuple[float, float], int]:
     """``method``'s first attempt after minus before, over the household meshes both judged: the mean of the
     per-object differences, its 95% bootstrap interval over objects, and how many objects."""
@@ -90,7 +85,7 @@ def _paired(before: list[dict], after: list[dict], method: str) -> tuple[float, 
 
     from onepiece_dist.stats.intervals import bootstrap_interval
 
-    was, now = (_object_rates([s for s in sets if s["name"] in HOUSEHOLD_SETS], method) for sets in (before, after))
+    was, now = (object_rates([s for s in sets if s["name"] in HOUSEHOLD_SETS], method) for sets in (before, after))
     differences = np.array([now[k] - was[k] for k in sorted(set(was) & set(now))])
     return float(differences.mean()), bootstrap_interval(differences), len(differences)
 

@@ -32,13 +32,19 @@ def met(ok: bool) -> str:
 HOUSEHOLD_SETS = ("household", "unseen")  # real household meshes: the set designs were chosen on, and one never
 
 
+def object_rates(sets: list[dict], method: str) -> dict[tuple[str, str], float]:
+    """(set, object) -> ``method``'s first-attempt share of that object's views, every object of ``sets`` that
+    loaded."""
+    return {(s["name"], o["name"]): sum(v["attempts"][method][:1] == [True] for v in o["views"]) / len(o["views"])
+            for s in sets for o in s["objects"] if o["status"] == "ok" and o["views"]}
+
+
 def pooled(sets: list[dict], method: str) -> dict:
     """``method`` over every object of ``sets`` that loaded: its first-attempt rate (the mean of per-object rates,
     as each set's), the 95% bootstrap interval over those objects, and how many objects and views."""
     from onepiece_dist.stats.intervals import bootstrap_interval
 
-    rates = np.array([np.mean([bool(v["attempts"][method][:1] == [True]) for v in o["views"]])
-                      for s in sets for o in s["objects"] if o["status"] == "ok" and o["views"]])
+    rates = np.array(list(object_rates(sets, method).values()))
     return {"method": method, "first_attempt": float(rates.mean()) if len(rates) else 0.0,
             "first_attempt_interval": bootstrap_interval(rates), "objects": len(rates),
             "views": sum(len(o["views"]) for s in sets for o in s["objects"] if o["status"] == "ok")}

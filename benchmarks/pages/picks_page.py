@@ -178,7 +178,7 @@ def render_picks_page() -> str:
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
-              "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda"))),
+              "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda"), picks)),
               "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_robust_rank": robust_rank_section, "pick_rank_features": rank_features_section,
@@ -210,12 +210,12 @@ def _ceiling(result: dict, picks: dict | None) -> list[str]:
     return ceiling_section(result, picks, top_down, (picks or {}).get("targets"))
 
 
-def _panda_picks(result: dict | None) -> dict | None:
+def _panda_picks(result: dict | None, picks: dict | None) -> dict | None:
     """The Franka hand's shipped network (seed 0) judged by the pick benchmark, shaped as results/picks.json's
-    sets and targets, for the sections that compare with it."""
+    sets with ``picks``' targets, for the sections that compare with it."""
     if result is None or not result["points"]:
         return None
-    return {"sets": result["points"][0]["sets"], "targets": (load("picks") or {}).get("targets")}
+    return {"sets": result["points"][0]["sets"], "targets": (picks or {}).get("targets")}
 
 
 def _check_words(plan: dict) -> str:
