@@ -9,9 +9,10 @@ from benchmarks.pages.pick_sets import (
     HOUSEHOLD_SETS,
     LABELS,
     failure_table,
+    first_attempt_share,
     interval,
+    loaded_objects,
     method_of,
-    object_rates,
     pct,
     pooled,
     target_rows,
@@ -85,7 +86,8 @@ def _paired(before: list[dict], after: list[dict], method: str) -> tuple[float, 
 
     from onepiece_dist.stats.intervals import bootstrap_interval
 
-    was, now = (object_rates([s for s in sets if s["name"] in HOUSEHOLD_SETS], method) for sets in (before, after))
+    was, now = ({(s["name"], o["name"]): first_attempt_share(o, method) for s, o in loaded_objects(sets)
+                 if s["name"] in HOUSEHOLD_SETS} for sets in (before, after))
     differences = np.array([now[k] - was[k] for k in sorted(set(was) & set(now))])
     return float(differences.mean()), bootstrap_interval(differences), len(differences)
 

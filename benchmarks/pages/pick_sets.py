@@ -32,11 +32,14 @@ def met(ok: bool) -> str:
 HOUSEHOLD_SETS = ("household", "unseen")  # real household meshes: the set designs were chosen on, and one never
 
 
-def object_rates(sets: list[dict], method: str) -> dict[tuple[str, str], float]:
-    """(set, object) -> ``method``'s first-attempt share of that object's views, every object of ``sets`` that
-    loaded."""
-    return {(s["name"], o["name"]): sum(v["attempts"][method][:1] == [True] for v in o["views"]) / len(o["views"])
-            for s in sets for o in s["objects"] if o["status"] == "ok" and o["views"]}
+def loaded_objects(sets: list[dict]) -> list[tuple[dict, dict]]:
+    """(set, object) for every object of ``sets`` that loaded and has views, in their order."""
+    return [(s, o) for s in sets for o in s["objects"] if o["status"] == "ok" and o["views"]]
+
+
+def first_attempt_share(obj: dict, method: str) -> float:
+    """``method``'s first-attempt share of one object's views."""
+    return sum(v["attempts"][method][:1] == [True] for v in obj["views"]) / len(obj["views"])
 
 
 def pooled(sets: list[dict], method: str) -> dict:
@@ -44,7 +47,7 @@ def pooled(sets: list[dict], method: str) -> dict:
     as each set's), the 95% bootstrap interval over those objects, and how many objects and views."""
     from onepiece_dist.stats.intervals import bootstrap_interval
 
-    rates = np.array(list(object_rates(sets, method).values()))
+    rates = np.array([first_attempt_share(o, method) for _, o in loaded_objects(sets)])
     return {"method": method, "first_attempt": float(rates.mean()) if len(rates) else 0.0,
             "first_attempt_interval": bootstrap_interval(rates), "objects": len(rates),
             "views": sum(len(o["views"]) for s in sets for o in s["objects"] if o["status"] == "ok")}
