@@ -129,6 +129,34 @@ def test_a_grasp_that_holds_the_completed_box_goes_before_one_that_closes_on_air
 
 
 @pytest.mark.sim
+def test_the_check_executes_the_nominal_trial_once_and_draws_what_the_protocol_draws():
+    from onepiece_dist.core.frames import compose_poses
+    from onepiece_dist.picks.shape_check import check_world, protocol_draws
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.sim.pick import execute_pick
+    from onepiece_dist.sim.trials import LabelNoise
+
+    gripper = GraspScorer(shipped_network(), device="cpu").gripper
+    points = seen_box()
+    shape = completed_shape(points, FLOOR)
+    world = check_world(gripper)
+    world.load_object(list(shape.pieces), shape.volume, PICK_SIM.density)
+    noise, rest, seen = LabelNoise.from_spec(PICK_SIM), np.eye(4), []
+    across = top_down_grasps(points, np.array([0.0, 0.0, -1.0]), gripper)[0]
+    for height in (0.0, 0.03, 0.04):  # fingers low on the box, near its top, above it (the nominal trial fails)
+        pose = across.copy()
+        pose[:3, 3] += [0.0, 0.0, height]
+        placed = compose_poses(shape.to_plane, pose)
+        whole, once = np.random.default_rng(0), np.random.default_rng(0)
+        by_protocol = [execute_pick(world, placed, rest, noise, whole).success for _ in range(8)]
+        assert protocol_draws(world, placed, rest, noise, once, 8) == by_protocol
+        assert once.random() == whole.random()  # the same draws taken from the stream
+        seen += by_protocol
+    assert any(seen) and not all(seen)
+
+
+@pytest.mark.sim
 def test_the_api_checks_the_first_grasps_and_the_bare_planner_refuses_to_pretend_it_did(tmp_path):
     from onepiece_dist.api import plan_grasps
     from onepiece_dist.errors import SpecError

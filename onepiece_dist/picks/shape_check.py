@@ -58,7 +58,6 @@ def shape_draws(shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec
     """``shape`` loaded on this process's check world, and what executes one pose (4, 4; the cloud's frame) on it
     up to ``draws`` times from ``rng`` (whether each held; fewer where its ``settled`` says the draws so far
     decide: settled_against); None where there is no shape."""
-    from onepiece_dist.sim.pick import execute_pick
     from onepiece_dist.sim.trials import LabelNoise
 
     if shape is None:
@@ -68,10 +67,29 @@ def shape_draws(shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec
     noise, rest = LabelNoise.from_spec(sim), np.eye(4)
 
     def held(pose: np.ndarray, settled: Callable[[list[bool]], bool] | None = None) -> list[bool]:
-        placed = compose_poses(shape.to_plane, pose)
-        return drawn(lambda: execute_pick(world, placed, rest, noise, rng).success, draws, settled)
+        return protocol_draws(world, compose_poses(shape.to_plane, pose), rest, noise, rng, draws, settled)
 
     return held
+
+
+def protocol_draws(world, grasp: np.ndarray, resting: np.ndarray, noise, rng: np.random.Generator, draws: int,
+                   settled: Callable[[list[bool]], bool] | None = None) -> list[bool]:
+    """Whether each of ``draws`` executions of ``grasp`` by the pick protocol (sim.pick.execute_pick) held, fewer
+    where ``settled`` says those so far decide. Where every trial must hold, the nominal trial (the same at every
+    draw: nothing is drawn for it) is executed once: where it fails, no draw can hold; where it holds, each draw
+    executes the perturbed trials alone, until one fails, drawing what execute_pick draws."""
+    from onepiece_dist.sim.pick import execute_pick, execute_trial
+
+    if not noise.every_trial:
+        return drawn(lambda: execute_pick(world, grasp, resting, noise, rng).success, draws, settled)
+    if execute_trial(world, grasp, resting, noise, rng, perturbed=False):
+        return [False] * draws
+
+    def perturbed_held() -> bool:
+        return all(execute_trial(world, grasp, resting, noise, rng, perturbed=True) == ""
+                   for _ in range(noise.trials - 1))
+
+    return drawn(perturbed_held, draws, settled)
 
 
 def drawn(draw: Callable[[], bool], draws: int, settled: Callable[[list[bool]], bool] | None = None) -> list[bool]:

@@ -218,19 +218,27 @@ def execute_pick(world: PickWorld, grasp: np.ndarray, resting: np.ndarray, noise
     (docs/studies/pick_labels), judging 24 networks instead of 16 on the same views changed 1 of 96 outcomes of
     the same random candidates. The same executions in the same order give the same bytes."""
     held, failure = 0, ""
-    base_friction = world.spec.friction
     for trial in range(noise.trials):
-        pose = grasp if trial == 0 else perturb_pose(grasp, rng, noise.translation, noise.rotation)
-        friction = base_friction if trial == 0 else base_friction * max(0.05, 1 + rng.normal(0, noise.friction))
-        world.set_finger_friction(friction)
-        try:
-            failure = _one_pick(world, pose, resting)
-        finally:
-            world.set_finger_friction(base_friction)
+        failure = execute_trial(world, grasp, resting, noise, rng, perturbed=trial > 0)
         held += failure == ""
         if failure and (noise.every_trial or trial == 0):
             return PickOutcome(False, held, trial + 1, failure)
     return PickOutcome(True, held, noise.trials, "")
+
+
+def execute_trial(world: PickWorld, grasp: np.ndarray, resting: np.ndarray, noise: LabelNoise,
+                  rng: np.random.Generator, perturbed: bool) -> str:
+    """One trial of the pick protocol from the object at rest: '' when it held, else why not. ``perturbed``: at a
+    pose and finger friction drawn from ``noise`` and ``rng`` (the protocol's trials after the first), else the
+    nominal one (nothing drawn)."""
+    base_friction = world.spec.friction
+    pose = perturb_pose(grasp, rng, noise.translation, noise.rotation) if perturbed else grasp
+    friction = base_friction * max(0.05, 1 + rng.normal(0, noise.friction)) if perturbed else base_friction
+    world.set_finger_friction(friction)
+    try:
+        return _one_pick(world, pose, resting)
+    finally:
+        world.set_finger_friction(base_friction)
 
 
 def _one_pick(world: PickWorld, pose: np.ndarray, resting: np.ndarray) -> str:
