@@ -199,3 +199,36 @@ def test_the_picks_page_names_the_gripper_that_executes_the_picks():
     assert "`onepiece_box`" in box and "not the Franka hand's meshes of the `panda` preset" in box
     assert _gripper_words({"gripper": "franka_panda"}).endswith("trained for, `franka_panda`.")
     assert _gripper_words({"checkpoint": "elsewhere.pt"}) == ""
+
+
+def _check_row(name: str, trials_agree: bool) -> dict:
+    """A view whose second grasp picks surely and first half the time: the protocol's check finds it (4 draws,
+    1 s); single trials (1 ms each) find it too, or favour the first."""
+    protocol = [{"held": [True, False, True, False], "seconds": 1.0}, {"held": [True] * 4, "seconds": 1.0},
+                {"held": [False] * 4, "seconds": 1.0}]
+    good, bad = [True] * 16, [False] * 16
+    trials = [{"nominal": True, "held": bad if trials_agree else good, "seconds": [0.001] * 17},
+              {"nominal": True, "held": good if trials_agree else bad, "seconds": [0.001] * 17},
+              {"nominal": False, "held": [], "seconds": [0.001]}]
+    return {"object": name, "shares": [0.5, 1.0, 0.0], "protocol": protocol, "trials": trials}
+
+
+def test_a_check_by_single_trials_replaces_the_protocols_only_where_as_good_and_cheaper():
+    from benchmarks.experiments.pick_check_trials import COUNTS, measured, protocol_seconds, trial_shares
+    from benchmarks.pages.pick_check_section import check_trials_section
+
+    row = _check_row("a", True)
+    assert trial_shares(row, 2) == [0.0, 1.0, -1.0] and trial_shares(row, 0) == [0.0, 0.0, -1.0]
+    assert protocol_seconds(row) == 3.0  # its first held 2 of 4 draws: every grasp is checked
+    assert protocol_seconds({**row, "protocol": row["protocol"][1:]}) == 1.0  # the first held every draw
+
+    def section(agree: bool) -> str:
+        rows = [_check_row(name, agree) for name in "abcd"]
+        sets = {"household": measured(rows[:2]), "unseen": measured(rows[2:]), "all objects": measured(rows)}
+        result = {"command": "c", "date": "d", "machine": "m", "seconds": 1.0, "checked": 3, "draws": 4,
+                  "counts": list(COUNTS), "sets": sets}
+        assert sets["all objects"]["protocol"]["gain"] == 0.5
+        return check_trials_section(result)[-1]
+
+    assert section(True).startswith("As good and cheaper: the nominal trial, then 1 perturbed")
+    assert "**not kept**" in section(False) and "As good, at the same cost or more: none" in section(False)

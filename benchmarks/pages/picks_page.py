@@ -8,6 +8,7 @@ from pathlib import Path
 
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section, reranked_section
+from benchmarks.pages.pick_check_section import check_trials_section
 from benchmarks.pages.pick_clearance_section import clearance_section
 from benchmarks.pages.pick_clutter_section import clutter_pointer, clutter_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
@@ -148,7 +149,8 @@ def _dense_line(plan: dict) -> str:
 SECTIONS = ("pick_panda", "pick_clutter_panda", "pick_clearance_panda", "pick_ceiling_panda", "pick_clutter",
             "pick_clearance", "pick_ceiling", "pick_ranked_draws", "pick_reranked",
             "pick_robust_rank",
-            "pick_rank_features", "pick_shape_check", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy",
+            "pick_rank_features", "pick_shape_check", "pick_check_trials", "pick_unseen", "pick_curve", "pick_space",
+            "pick_on_policy",
             "pick_vessels", "pick_top_down", "pick_points", "pick_top_down_both", "pick_schedule",
             "pick_household_labels", "pick_outline", "pick_top_draws", "pick_rankings", "pick_pool_size")
 
@@ -182,7 +184,7 @@ def render_picks_page() -> str:
               "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_robust_rank": robust_rank_section, "pick_rank_features": rank_features_section,
-              "pick_shape_check": shape_check_section,
+              "pick_shape_check": shape_check_section, "pick_check_trials": check_trials_section,
               "pick_unseen": lambda r: unseen_section(r, picks),
               "pick_curve": lambda r: curve_section(r, picks),
               "pick_space": space_section, "pick_on_policy": on_policy_section,

@@ -1,0 +1,58 @@
+"""The section of docs/picks.md on the planner's check drawn by single trials (results/pick_check_trials.json)."""
+
+from __future__ import annotations
+
+AS_GOOD = -0.02  # a check is as good as the protocol's where its paired interval over all objects lies above this
+CHEAPER = 0.75  # and it replaces it only where it costs at most this share of the protocol's seconds a view
+
+
+def _points(pair) -> str:
+    return f"[{100 * pair[0]:+.1f}, {100 * pair[1]:+.1f}]"
+
+
+def _name(key: str, result: dict) -> str:
+    if key == "protocol":
+        return f"the protocol's, {result['draws']} draws (the planner's)"
+    n = int(key.removeprefix("trials_"))
+    return "the nominal trial alone" if n == 0 else f"the nominal trial, then {n} perturbed"
+
+
+def _verdict(result: dict) -> str:
+    pooled = result["sets"]["all objects"]
+    base = pooled["protocol"]["seconds_a_view"]
+    kept = [f"trials_{n}" for n in result["counts"]
+            if pooled[f"trials_{n}"]["versus_protocol"]["interval"][0] > AS_GOOD
+            and pooled[f"trials_{n}"]["seconds_a_view"] <= CHEAPER * base]
+    rule = (f"(a check replaces the protocol's where its interval over all objects against it lies above "
+            f"{100 * AS_GOOD:+.0f} points and it costs at most {100 * CHEAPER:.0f}% of its seconds a view)")
+    if kept:
+        return f"As good and cheaper: {', '.join(_name(k, result) for k in kept)} {rule}."
+    good = [f"trials_{n}" for n in result["counts"]
+            if pooled[f"trials_{n}"]["versus_protocol"]["interval"][0] > AS_GOOD]
+    costs = ", ".join(f"{_name(k, result)}: {pooled[k]['seconds_a_view']:.3f} s" for k in good)
+    return (f"No check by single trials is as good as the protocol's and cheaper {rule}: **not kept**; the planner "
+            f"checks by the protocol's draws ({base:.3f} s a view here). As good, at the same cost or more: "
+            f"{costs or 'none'}.")
+
+
+def check_trials_section(result: dict) -> list[str]:
+    """Each check's first against the network's first and against the protocol's check, with its seconds."""
+    keys = ["protocol", *(f"trials_{n}" for n in result["counts"])]
+    rows = [f"| {_name(key, result)} | {which} | {100 * m[key]['checked']:.1f}% | {100 * m[key]['gain']:+.1f} "
+            f"{_points(m[key]['interval'])} | "
+            + (f"{100 * m[key]['versus_protocol']['mean']:+.1f} {_points(m[key]['versus_protocol']['interval'])}"
+               if key != "protocol" else "-")
+            + f" | {m[key]['seconds_a_view']:.3f} |" for key in keys for which, m in result["sets"].items()]
+    return [f"## The check drawn by single trials: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}, {result['seconds']:.0f} s. The check executes each of the "
+            f"network's first {result['checked']} grasps {result['draws']} times by the pick protocol: the nominal "
+            "trial, then perturbed trials until one fails. The nominal trial is the same at every draw, so the "
+            "check executes it once (`picks.shape_check.protocol_draws`: the same outcomes and draws from the "
+            "stream as every draw executing it). Drawn by single trials instead, the check would execute the "
+            "nominal trial once and then n perturbed trials, and order the grasps by how many held. Both run on "
+            "the same hull on the ranked-draws views (above), each judged by the share of 8 draws of the grasp it "
+            "puts first, paired over objects; the seconds are what each would execute in the planner's lazy order "
+            "(it stops where the first grasp held every draw), one worker of two.", "",
+            "| the check | set | the check's first | gain over the network's first [95% CI] "
+            "| against the protocol's check [95% CI] | seconds a view |",
+            "| --- | --- | --- | --- | --- | --- |", *rows, "", _verdict(result)]
