@@ -124,3 +124,27 @@ def test_the_franka_hands_section_sets_each_chooser_beside_its_figure_at_50_solv
     judged = panda_section(now, picks, before, then)
     line = next(line for line in judged if line.startswith("The network labelled at 50 iterations judged at 88"))
     assert "household 0%; unseen 0%" in line and "made again against it: +100.0 points" in line
+
+
+def test_the_top_down_grasp_checked_beside_is_kept_only_where_it_raises_the_franka_hands_picks():
+    from benchmarks.experiments.pick_panda_check import paired
+    from benchmarks.pages.pick_check_section import panda_top_down_check_section
+
+    picks = json.loads((ROOT / "benchmarks" / "results" / "picks.json").read_text())
+
+    def section(before: bool, rate: float) -> list[str]:
+        panda = _panda_result(picks, 0.0)
+        for s in panda["points"][0]["sets"]:  # in-memory reports hold tuples where JSON holds lists
+            for o in s["objects"]:
+                for v in o["views"]:
+                    v["attempts"]["network"] = (before,)
+        after = _panda_result(picks, rate)["points"][0]["sets"]
+        versus = {base: paired(after, panda["points"][0]["sets"], "network", base) for base in ("network", "top_down")}
+        return panda_top_down_check_section({"command": "c", "date": "d", "machine": "m", "seed": 0,
+                                             "sets": after, "versus": versus}, panda)
+
+    raised, same, lower = section(False, 1.0), section(True, 1.0), section(True, 0.0)
+    assert "+100.0 points [+100.0, +100.0] against the first 3 checked alone" in raised[-1]
+    assert "**kept**" in raised[-1] and any(line.startswith("| household | 100% | 0% |") for line in raised)
+    assert "+0.0 points" in same[-1] and "**not kept**" in same[-1]
+    assert "-100.0 points" in lower[-1] and "**not kept**" in lower[-1]

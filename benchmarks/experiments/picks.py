@@ -67,13 +67,15 @@ def training_summary(status) -> dict:
 
 
 def run_set(name: str, objects: str, source: str, checkpoint: Path, folder: Path,
-            methods: tuple[str, ...] | None = None) -> dict:
-    """One set judged by the pick benchmark (``methods``: the choosers, default every one)."""
+            methods: tuple[str, ...] | None = None, plan=None) -> dict:
+    """One set judged by the pick benchmark (``methods``: the choosers, default every one; ``plan``: the planner's
+    PlanSpec, default the planner's default)."""
     from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.specs.plan import PickSpec
 
     spec = PickSpec(objects=objects, checkpoint=str(checkpoint), output=str(folder / name), views=VIEWS,
-                    attempts=ATTEMPTS, pictures=PICTURES, **({"methods": methods} if methods else {}))
+                    attempts=ATTEMPTS, pictures=PICTURES, **({"methods": methods} if methods else {}),
+                    **({"plan": plan} if plan is not None else {}))
     start = time.perf_counter()
     report = run_picks(spec)
     return {**report.to_json(), "name": name, "source": source, "seconds": round(time.perf_counter() - start, 1)}

@@ -56,3 +56,34 @@ def check_trials_section(result: dict) -> list[str]:
             "| the check | set | the check's first | gain over the network's first [95% CI] "
             "| against the protocol's check [95% CI] | seconds a view |",
             "| --- | --- | --- | --- | --- | --- |", *rows, "", _verdict(result)]
+
+
+def panda_top_down_check_section(result: dict, panda: dict | None) -> list[str]:
+    """The Franka hand's network with its best top-down grasp checked beside its first ones
+    (results/pick_panda_check.json), against pick_panda's run of the same network and views."""
+    from benchmarks.pages.pick_sets import method_of, pct
+
+    point = next((p for p in (panda or {}).get("points", []) if p["seed"] == result["seed"]), None)
+    if point is None or "versus" not in result:
+        return []
+    before = {s["name"]: s for s in point["sets"]}
+    rows = [f"| {s['name']} | {pct(method_of(s, 'network')['first_attempt'])} | "
+            f"{pct(method_of(before[s['name']], 'network')['first_attempt'])} | "
+            f"{pct(method_of(before[s['name']], 'top_down')['first_attempt'])} |" for s in result["sets"]]
+    versus = result["versus"]
+    words = {base: f"{100 * v['mean']:+.1f} points [{100 * v['interval'][0]:+.1f}, {100 * v['interval'][1]:+.1f}]"
+             for base, v in versus.items()}
+    kept = versus["network"]["interval"][0] > 0
+    return [f"## The Franka hand's top-down grasp checked beside the network's: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. On the Franka hand top-down nearly matches the network, and "
+            "where one misses the other often picks. With `PlanSpec(check_top_down=True)` the best-scored top-down "
+            "grasp is checked beside the network's first 3 and comes first only where it held more often than "
+            f"each. The network shipped for the preset (seed {result['seed']}), the network chooser alone, the "
+            "same views and draws as the section above, first attempt:", "",
+            "| set | the first 3 and the best top-down grasp checked | the first 3 checked (above) "
+            "| top-down (above) |",
+            "| --- | --- | --- | --- |", *rows, "",
+            f"Paired over the {versus['network']['objects']} household meshes: {words['network']} against the "
+            f"first 3 checked alone, {words['top_down']} against top-down: "
+            + ("**kept**" if kept else "**not kept**")
+            + " (kept where the interval against the first 3 alone lies above zero); `check_top_down` stays off."]

@@ -39,7 +39,7 @@ def loaded_objects(sets: list[dict]) -> list[tuple[dict, dict]]:
 
 def first_attempt_share(obj: dict, method: str) -> float:
     """``method``'s first-attempt share of one object's views."""
-    return sum(v["attempts"][method][:1] == [True] for v in obj["views"]) / len(obj["views"])
+    return sum(list(v["attempts"][method][:1]) == [True] for v in obj["views"]) / len(obj["views"])
 
 
 def pooled(sets: list[dict], method: str) -> dict:
