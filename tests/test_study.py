@@ -1,12 +1,11 @@
-"""The study wing (onepiece_dist/study): its statistics, its decision, its refusals before any work, a small study
-end to end in process (the result against its published schema, the page rendered again from the JSON), a study
-killed mid-way that finishes with the same result, and the evaluate stage of a job."""
+"""The study wing run end to end (onepiece_dist/study): a small study in process (the result against its published
+schema, the page rendered again from the JSON), a study killed mid-way that finishes with the same result, and the
+evaluate stage of a job; its statistics, decision and refusals: tests/test_study_spec.py."""
 
 from __future__ import annotations
 
 import json
 import os
-import re
 import signal
 import subprocess
 import sys
@@ -16,145 +15,39 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from onepiece_dist.errors import SourceError, SpecError
-from onepiece_dist.study import stats
-from onepiece_dist.study.decide import ArmDraft, decide, finish_arms
-from onepiece_dist.study.result import ArmCost, HeldoutScore, Measure
-from onepiece_dist.study.spec import StudySpec, StudyTargets, load_study_spec
+from onepiece_dist.errors import SpecError
+from onepiece_dist.study.spec import StudySpec, load_study_spec
 from tests.factories import TINY_STUDY as TINY
 from tests.factories import comparable_study as comparable
 
 ROOT = Path(__file__).resolve().parents[1]
 ONEPIECE = [sys.executable, "-m", "onepiece_dist.cli"]
-def test_ap_over_thresholds_equals_the_usual_ap_without_ties_and_ignores_order_within_ties():
-    rng = np.random.default_rng(2)
-    scores, labels = rng.random(200), rng.random(200) < 0.3
-    assert stats.threshold_ap(scores, labels) == pytest.approx(stats.average_precision(scores, labels))
-    tied = np.round(scores, 1)
-    order = rng.permutation(200)
-    assert stats.threshold_ap(tied, labels) == pytest.approx(stats.threshold_ap(tied[order], labels[order]))
-    assert stats.average_precision(tied, labels) != pytest.approx(stats.average_precision(tied[order], labels[order]))
-    assert stats.threshold_ap(np.zeros(200), labels) == pytest.approx(labels.mean())
-    assert stats.threshold_ap(scores, np.zeros(200, bool)) == 0.0
 
 
-def test_the_interval_holds_the_mean_and_narrows_with_a_lower_confidence():
-    per_object = (np.random.default_rng(1).random(40) < 0.6).astype(float)
-    wide, narrow = (stats.bootstrap_interval(per_object, confidence=c) for c in (0.95, 0.8))
-    assert wide[0] <= narrow[0] <= per_object.mean() <= narrow[1] <= wide[1] and narrow != wide
 
 
-def test_the_share_decided_is_the_lift_over_the_floor_scaled_by_the_headroom():
-    assert stats.share_decided(0.8, 0.6, 1.0) == pytest.approx(0.5)
-    assert stats.share_decided(0.6, 0.6, 1.0) == 0 and stats.share_decided(None, 0.6, 1.0) is None
-    assert stats.share_decided(0.7, 0.6, 0.6) is None  # no headroom above the floor: nothing to decide
 
 
-def score(top1: float, ap: float, spread: float = 0.05) -> HeldoutScore:
-    def m(v: float) -> Measure:
-        return Measure(mean=v, std=0.0, interval=(v - spread, v + spread))
-
-    return HeldoutScore(top1=m(top1), top5=m(top1), ap=m(ap), accuracy=m(0.7), learning_rate=1e-3, seeds=[])
 
 
-def cost(seconds: float, labelled: int) -> ArmCost:
-    return ArmCost(core_seconds=seconds, stages={"extract": seconds}, label_trials=4 * labelled,
-                   labelled_grasps=labelled, labelled_bytes=100 * labelled, dataset_bytes=200 * labelled,
-                   delivered_bytes=120 * labelled)
 
 
-def arms(b_top1: float = 0.78):
-    return finish_arms([ArmDraft("A", "A", cost(100, 1000), score(0.8, 0.7)),
-                        ArmDraft("B r0", "B", cost(20, 100), score(b_top1, 0.69), radius=0, unique_codes=100),
-                        ArmDraft("R 0.05", "R", cost(5, 50), score(0.70, 0.60), share=0.05),
-                        ArmDraft("R 0.1", "R", cost(10, 100), score(0.79, 0.68), share=0.1),
-                        ArmDraft("R ~B r0", "R", cost(10, 100), score(0.77, 0.69), radius=0)])
 
 
-def test_the_decision_is_the_cheapest_arm_inside_a_s_intervals_with_targets_from_the_spec():
-    decided = decide(arms(), StudyTargets(time_ratio=8.0))
-    assert decided.cheapest == "R 0.1" and decided.cheapest_time_ratio == 10.0 and decided.time_met
-    assert decided.best_b == "B r0" and decided.b_beats_random == {"B r0": True}
-    assert not decide(arms(), StudyTargets(time_ratio=12.0)).time_met  # the target is the spec's, not the code's
-    assert decide(arms(b_top1=0.70), StudyTargets()).best_b is None  # below A's interval
-    assert decide(arms(b_top1=0.76), StudyTargets()).b_beats_random == {"B r0": False}  # below R of its size
 
 
-def test_the_adaptive_arm_meets_its_targets_only_inside_a_s_intervals_at_its_share_of_a_s_cost():
-    def with_u(seconds: float, top1: float, ap: float):
-        return finish_arms([ArmDraft("A", "A", cost(100, 1000), score(0.8, 0.7)),
-                            ArmDraft("R 0.05", "R", cost(5, 50), score(0.70, 0.60), share=0.05),
-                            ArmDraft("R 0.1", "R", cost(10, 100), score(0.79, 0.68), share=0.1),
-                            ArmDraft("U", "U", cost(seconds, 80), score(top1, ap)),
-                            ArmDraft("R ~U", "R", cost(8, 80), score(0.7, 0.6))])
-
-    cheap = decide(with_u(9, 0.79, 0.69), StudyTargets(adaptive_share=0.1))
-    assert cheap.u_met and cheap.u_cost_share == 0.09 and cheap.r_labels_at_u_ap is None  # no R reaches its AP
-    assert not decide(with_u(9, 0.79, 0.69), StudyTargets(adaptive_share=0.05)).u_met  # the spec's share
-    assert not decide(with_u(9, 0.70, 0.69), StudyTargets()).u_met  # outside A's top-1 interval
-    assert decide(with_u(9, 0.79, 0.60), StudyTargets()).r_labels_at_u_ap == 50  # R 0.05 reaches AP 0.60
 
 
-def test_a_study_with_views_crops_every_job_from_depth_views_and_refuses_keys_of_the_full_surface():
-    spec = StudySpec(**{**TINY, "views": 8})
-    jobs = [spec.job_spec(spec.train, 4, 0, "a.zarr"), spec.job_spec(spec.heldout, 4, 1, "h.zarr")]
-    assert all(job.views.crop == "partial" and job.views.count == 8 for job in jobs)
-    assert all(job.views.sampling == "view" for job in jobs)  # proposed as the planner proposes (issue 51)
-    mesh = StudySpec(**{**TINY, "views": 8, "view_sampling": "mesh"}).job_spec(spec.train, 4, 0, "a.zarr")
-    assert mesh.views.sampling == "mesh" and mesh.views.crop == "partial"
-    assert StudySpec(**TINY).job_spec(spec.train, 4, 0, "a.zarr").views.crop == "full"
-    with pytest.raises(SpecError, match="keys are computed from crops of the full surface"):
-        load_study_spec(None, {**TINY, "views": 8, "keys": [{"name": "k", "kind": "occupancy"}]})
 
 
-def test_a_study_spec_names_the_field_it_refuses(tmp_path):
-    with pytest.raises(SpecError, match=r"budgets"):
-        load_study_spec(None, {"budgets": [0.0]})
-    bad = tmp_path / "study.yaml"
-    bad.write_text("radii: [0, 0]\n")
-    with pytest.raises(SpecError, match=rf"{bad}: invalid study\n  radii"):
-        load_study_spec(bad, {})
-    assert load_study_spec(None, {"train": "x"}, quick=True).training.model == "voxel"
 
 
-@pytest.mark.parametrize("path", sorted((ROOT / "examples" / "studies").glob("*.yaml")), ids=lambda p: p.stem)
-def test_every_example_study_is_a_valid_study(path):
-    spec = load_study_spec(path, {})
-    assert spec.train and spec.heldout and spec.train != spec.heldout
 
 
-def test_quick_is_the_quick_example_study():
-    given = {"train": "pybullet:random_urdfs[0:8]", "heldout": "pybullet:random_urdfs[500:508]"}
-    assert load_study_spec(None, given, quick=True) == load_study_spec(ROOT / "examples/studies/quick.yaml", {})
 
 
-def test_a_stage_the_pipeline_does_not_run_is_refused_by_the_spec():
-    from onepiece_dist.job import pipeline
-    from onepiece_dist.specs.job import STAGES, parse_job_spec
-
-    with pytest.raises(SpecError, match=r"stages\.1 = \"report\""):
-        parse_job_spec({"stages": ["ingest", "report"]})
-    run = set(re.findall(r'stage\(status, "(\w+)"', Path(pipeline.__file__).read_text()))
-    assert run == set(STAGES)  # every name the spec takes is a stage the pipeline runs
 
 
-@pytest.mark.sim
-def test_bad_input_is_refused_before_any_work_and_names_the_objects(tmp_path):
-    from onepiece_dist.study.runner import Where, run_study
-
-    overlap = StudySpec(**{**TINY, "heldout": "pybullet:random_urdfs[2:5]"})
-    with pytest.raises(SourceError, match=r"2 held-out objects are also train objects.*random_urdfs/002"):
-        run_study(overlap, tmp_path / "a", Where(in_process=True))
-    assert not (tmp_path / "a").exists()  # nothing written
-    (tmp_path / "bad").mkdir()
-    (tmp_path / "bad" / "nan.obj").write_text("v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
-    rejected = StudySpec(**{**TINY, "train": str(tmp_path / "bad")})
-    with pytest.raises(SourceError, match=r"all 1 objects were rejected:\n  nan.obj: .*not finite"):
-        run_study(rejected, tmp_path / "b", Where(in_process=True))
-    (tmp_path / "c").mkdir()
-    (tmp_path / "c" / "study.spec.json").write_text(StudySpec(**{**TINY, "seed": 5}).model_dump_json())
-    with pytest.raises(SpecError, match=r"holds another study's results"):
-        run_study(StudySpec(**TINY), tmp_path / "c", Where(in_process=True))
 
 
 @pytest.mark.sim
@@ -381,68 +274,16 @@ def test_a_job_that_trains_also_evaluates_on_unseen_objects_and_says_so(tmp_path
     assert len(heldout["grasps/success"]) == evaluation["grasps"]
 
 
-def rendered_again(name: str, folder: Path):
-    """The committed study ``docs/studies/NAME``'s result, its page rendered again in ``folder``, and its spec as
-    the example of the same name gives it."""
-    import shutil
-
-    from onepiece_dist.study.runner import report_study
-
-    committed = ROOT / "docs" / "studies" / name
-    shutil.copy(committed / "study.json", folder / "study.json")
-    result = report_study(folder)
-    assert (folder / "study.md").read_text() == (committed / "study.md").read_text()
-    assert result.spec == load_study_spec(ROOT / "examples" / "studies" / f"{name}.yaml", {})
-    return result
 
 
-def test_the_committed_quick_study_page_is_the_rendering_of_its_result(tmp_path):
-    result = rendered_again("quick", tmp_path)
-    assert {arm.kind for arm in result.arms} == {"A", "B", "R"} and result.wall_seconds < 600
 
 
-def test_the_committed_force_closure_study_is_the_paper_force_closure_example_and_its_page_its_rendering(tmp_path):
-    """Issue 40: the full-size study under force closure, committed with its premise, lookup and label figures."""
-    result = rendered_again("paper_force_closure", tmp_path)
-    assert result.train_objects == 64 and result.heldout.objects == 64 and len(result.premise) == 3
-    assert result.label_fit is not None and result.lookup is not None
 
 
-def test_the_committed_key_study_is_its_example_and_measures_every_key_beside_the_jobs_own_code(tmp_path):
-    """Issue 38 item 6: the key study as a study configuration, committed with every key's lookup."""
-    result = rendered_again("key_study", tmp_path)
-    assert [key.name for key in result.keys] == [key.name for key in result.spec.keys] and len(result.keys) == 8
-    own = result.keys[0]
-    assert own.lookup == result.lookup  # the job's 10 mm code, recomputed from the settled crops
-    assert result.train_objects == 64 and result.heldout.objects == 48
 
 
-def test_the_committed_key_study_extended_with_u_reused_the_key_studys_work_and_says_its_targets(tmp_path):
-    """Issue 39 under the physics label, at the key study's size: `--extend` on the committed key study's folder."""
-    result = rendered_again("key_study_adaptive", tmp_path)
-    keys = json.loads((ROOT / "docs" / "studies" / "key_study" / "study.json").read_text())
-    assert set(result.reused_jobs) == {"heldout", "A", "B r0"} and result.reused_runs >= 20
-    shared = {arm["name"]: arm["heldout"] for arm in keys["arms"]}
-    assert {arm.name for arm in result.arms} & set(shared) >= {"A", "B r0"}  # all() over none would pass
-    assert all(arm.heldout.model_dump(mode="json") == shared[arm.name] for arm in result.arms if arm.name in shared)
-    assert result.adaptive and result.decision.u_met is not None
-    assert "Target for U" in (tmp_path / "study.md").read_text()
 
 
-def test_the_picks_table_says_how_the_held_out_candidates_were_made():
-    """Issue 58: the committed picks study proposes its candidates on views; its page said the full mesh."""
-    from onepiece_dist.study.page import picks_table
-    from onepiece_dist.study.result import StudyResult
-
-    result = StudyResult.model_validate_json((ROOT / "docs" / "studies" / "picks" / "study.json").read_text())
-    assert result.spec.views and result.spec.view_sampling == "view"
-
-    def table(**spec: object) -> str:
-        return "\n".join(picks_table(result.model_copy(update={"spec": result.spec.model_copy(update=spec)})))
-
-    assert "proposed on each held-out view's cloud" in table() and "mesh" not in table()
-    assert "each cropped from its nearest view" in table(view_sampling="mesh")
-    assert "candidates sampled on the full mesh" in table(views=0)
 
 
 def test_the_adaptive_arm_starts_with_one_candidate_per_code_then_asks_where_the_network_is_least_sure():
@@ -532,26 +373,3 @@ def test_a_stored_run_keeps_its_key_when_step_runs_gain_fields_at_their_defaults
     assert store.key(dataclasses.replace(run, warm_start="round-0.pt")) != store.key(run)
 
 
-def test_the_committed_picks_study_answers_by_picks_and_against_the_label_ceiling_first(tmp_path):
-    """Issue 51: the committed study on held-out household meshes, judged by picks and by candidates; its page's
-    first lines give the cheapest plan inside A by pick success, by how much, and where A stands against the
-    label's ceiling. Its spec is the example's but for the held-out objects (a folder of this machine's)."""
-    import shutil
-
-    from onepiece_dist.study.runner import report_study
-
-    committed = ROOT / "docs" / "studies" / "picks"
-    shutil.copy(committed / "study.json", tmp_path / "study.json")
-    result = report_study(tmp_path)
-    page = (tmp_path / "study.md").read_text()
-    assert page == (committed / "study.md").read_text()
-    spec = result.spec
-    assert spec == load_study_spec(ROOT / "examples" / "studies" / "picks.yaml", {"heldout": spec.heldout})
-    assert "household" in spec.heldout and result.heldout.objects >= 32 and result.train_objects >= 60
-    first = page.splitlines()[2]
-    assert first.startswith("**Judged by picks.**") and f"is **{result.picks.cheapest}**" in first
-    assert result.picks.cheapest == "A" or "points)" in first  # by how much
-    first_lines = page.split("## Arms")[0].splitlines()
-    assert any("**" in line and "of the way from the floor to the ceiling" in line for line in first_lines)
-    assert any(line.startswith("**Labels to reach a pick level**") for line in first_lines)
-    assert {arm.name for arm in result.picks.arms} == {arm.name for arm in result.arms}
