@@ -126,9 +126,9 @@ def test_the_franka_hands_section_sets_each_chooser_beside_its_figure_at_50_solv
     assert "household 0%; unseen 0%" in line and "made again against it: +100.0 points" in line
 
 
-def test_the_top_down_grasp_checked_beside_is_kept_only_where_it_raises_the_franka_hands_picks():
+def test_the_franka_hands_network_planned_otherwise_is_judged_against_its_first_three_checked():
     from benchmarks.experiments.pick_panda_check import paired
-    from benchmarks.pages.pick_check_section import panda_top_down_check_section
+    from benchmarks.pages.pick_check_section import panda_check_section
 
     picks = json.loads((ROOT / "benchmarks" / "results" / "picks.json").read_text())
 
@@ -140,11 +140,18 @@ def test_the_top_down_grasp_checked_beside_is_kept_only_where_it_raises_the_fran
                     v["attempts"]["network"] = (before,)
         after = _panda_result(picks, rate)["points"][0]["sets"]
         versus = {base: paired(after, panda["points"][0]["sets"], "network", base) for base in ("network", "top_down")}
-        return panda_top_down_check_section({"command": "c", "date": "d", "machine": "m", "seed": 0,
-                                             "sets": after, "versus": versus}, panda)
+        return panda_check_section({"command": "c", "date": "d", "machine": "m", "seed": 0, "variants": {
+            "top_down": {"sets": after, "versus": versus}, "unchecked": {"sets": after, "versus": versus}}}, panda)
+
+    def verdicts(lines: list[str]) -> tuple[str, str]:
+        return (next(line for line in lines if "With the best top-down grasp" in line),
+                next(line for line in lines if "Without the check" in line))
 
     raised, same, lower = section(False, 1.0), section(True, 1.0), section(True, 0.0)
-    assert "+100.0 points [+100.0, +100.0] against the first 3 checked alone" in raised[-1]
-    assert "**kept**" in raised[-1] and any(line.startswith("| household | 100% | 0% |") for line in raised)
-    assert "+0.0 points" in same[-1] and "**not kept**" in same[-1]
-    assert "-100.0 points" in lower[-1] and "**not kept**" in lower[-1]
+    assert "+100.0 points [+100.0, +100.0] against the first 3 checked alone" in verdicts(raised)[0]
+    assert "**kept**" in verdicts(raised)[0] and "the check hurts on this hand" in verdicts(raised)[1]
+    assert any(line.startswith("| household | 100% | 100% | 0% |") for line in raised)
+    assert "+0.0 points" in verdicts(same)[0] and "**not kept**" in verdicts(same)[0]
+    assert "cannot tell whether the check helps" in verdicts(same)[1]
+    assert "-100.0 points" in verdicts(lower)[0] and "**not kept**" in verdicts(lower)[0]
+    assert "the check helps on this hand" in verdicts(lower)[1]

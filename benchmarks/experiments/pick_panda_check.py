@@ -6,9 +6,13 @@ first 3 and comes first only where it held more often than each. The network cho
 unseen sets, as pick_panda judges it (8 views an object, the same views and draws), paired over objects against
 that run's network (the check without the top-down grasp) and its top-down chooser.
 
-    .venv/bin/python -m benchmarks.experiments.pick_panda_check
+The same run without the check (``check_first`` = 0, the network's order alone) asks whether the check, kept on the
+box palm's measure, helps on this hand too.
 
-The network: pick_panda's seed 0 (the one shipped for the preset). Results: benchmarks/results/pick_panda_check.json.
+    .venv/bin/python -m benchmarks.experiments.pick_panda_check [--variants top_down,unchecked]
+
+The network: pick_panda's seed 0 (the one shipped for the preset). Results: benchmarks/results/pick_panda_check.json
+(a variant run again replaces its own results only).
 """
 
 from __future__ import annotations
@@ -40,25 +44,42 @@ def paired(after: list[dict], before: list[dict], method: str, base: str) -> dic
             "objects": len(differences)}
 
 
-def main() -> None:
+VARIANTS = {"top_down": {"check_top_down": True}, "unchecked": {"check_first": 0}}  # PlanSpec fields changed
+
+
+def variant(name: str, point: dict) -> dict:
+    """The network of ``point`` judged with the planner's spec changed as VARIANTS[name] says, and paired against
+    ``point``'s network and top-down choosers."""
     from benchmarks.experiments.picks import run_set, sets
     from onepiece_dist.specs.plan import PlanSpec
 
+    found = {"plan": VARIANTS[name], "sets": []}
+    for set_name in SETS:
+        objects, source = sets()[set_name]
+        found["sets"].append(run_set(set_name, objects(), source, ROOT / point["network"]["checkpoint"],
+                                     ROOT / "data" / "pick_panda_check" / name, ("network",),
+                                     PlanSpec(**VARIANTS[name])))
+        print(name, set_name, found["sets"][-1]["methods"][0]["first_attempt"], flush=True)
+    before = [s for s in point["sets"] if s["name"] in SETS]
+    found["versus"] = {base: paired(found["sets"], before, "network", base) for base in ("network", "top_down")}
+    return found
+
+
+def main() -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--variants", default=",".join(VARIANTS))
+    args = parser.parse_args()
     point = json.loads(PANDA.read_text())["points"][0]
-    checkpoint = ROOT / point["network"]["checkpoint"]
+    kept = json.loads(RESULTS.read_text())["variants"] if RESULTS.is_file() else {}
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_panda_check", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **hand_record("panda"),
-           "checkpoint": point["network"]["checkpoint"], "seed": point["seed"], "sets": []}
-    for name in SETS:
-        objects, source = sets()[name]
-        out["sets"].append(run_set(name, objects(), source, checkpoint, ROOT / "data" / "pick_panda_check",
-                                   ("network",), PlanSpec(check_top_down=True)))
+           "checkpoint": point["network"]["checkpoint"], "seed": point["seed"], "variants": kept}
+    for name in args.variants.split(","):
+        out["variants"][name] = variant(name, point)
         RESULTS.write_text(json.dumps(out, indent=1) + "\n")
-        print(name, out["sets"][-1]["methods"][0]["first_attempt"], flush=True)
-    before = [s for s in point["sets"] if s["name"] in SETS]
-    out["versus"] = {base: paired(out["sets"], before, "network", base) for base in ("network", "top_down")}
-    RESULTS.write_text(json.dumps(out, indent=1) + "\n")
-    print(json.dumps(out["versus"], indent=1))
+    print(json.dumps({name: v["versus"] for name, v in out["variants"].items()}, indent=1))
 
 
 if __name__ == "__main__":

@@ -58,32 +58,54 @@ def check_trials_section(result: dict) -> list[str]:
             "| --- | --- | --- | --- | --- | --- |", *rows, "", _verdict(result)]
 
 
-def panda_top_down_check_section(result: dict, panda: dict | None) -> list[str]:
-    """The Franka hand's network with its best top-down grasp checked beside its first ones
-    (results/pick_panda_check.json), against pick_panda's run of the same network and views."""
+def _points_words(v: dict) -> str:
+    return f"{100 * v['mean']:+.1f} points [{100 * v['interval'][0]:+.1f}, {100 * v['interval'][1]:+.1f}]"
+
+
+def _variant_verdict(name: str, v: dict) -> str:
+    """What a variant's pairing against the first 3 checked says."""
+    versus = v["versus"]["network"]
+    if name == "top_down":
+        kept = versus["interval"][0] > 0
+        return (f"With the best top-down grasp checked beside: {_points_words(versus)} against the first 3 checked "
+                f"alone, {_points_words(v['versus']['top_down'])} against top-down: "
+                + ("**kept**" if kept else "**not kept**")
+                + " (kept where the interval against the first 3 alone lies above zero); `check_top_down` stays off.")
+    shown = ("the check helps on this hand" if versus["interval"][1] < 0 else
+             "the check hurts on this hand" if versus["interval"][0] > 0 else
+             "these views cannot tell whether the check helps on this hand")
+    return (f"Without the check (the network's order alone): {_points_words(versus)} against the first 3 checked, "
+            f"{_points_words(v['versus']['top_down'])} against top-down: {shown}.")
+
+
+VARIANT_NAMES = {"top_down": "the first 3 and the best top-down grasp checked", "unchecked": "no check"}
+
+
+def panda_check_section(result: dict, panda: dict | None) -> list[str]:
+    """The Franka hand's network planned otherwise (results/pick_panda_check.json): with its best top-down grasp
+    checked beside its first ones, and without the check, against pick_panda's run of the same network and views."""
     from benchmarks.pages.pick_sets import method_of, pct
 
     point = next((p for p in (panda or {}).get("points", []) if p["seed"] == result["seed"]), None)
-    if point is None or "versus" not in result:
+    variants = {name: v for name, v in result.get("variants", {}).items() if "versus" in v}
+    if point is None or not variants:
         return []
     before = {s["name"]: s for s in point["sets"]}
-    rows = [f"| {s['name']} | {pct(method_of(s, 'network')['first_attempt'])} | "
-            f"{pct(method_of(before[s['name']], 'network')['first_attempt'])} | "
-            f"{pct(method_of(before[s['name']], 'top_down')['first_attempt'])} |" for s in result["sets"]]
-    versus = result["versus"]
-    words = {base: f"{100 * v['mean']:+.1f} points [{100 * v['interval'][0]:+.1f}, {100 * v['interval'][1]:+.1f}]"
-             for base, v in versus.items()}
-    kept = versus["network"]["interval"][0] > 0
-    return [f"## The Franka hand's top-down grasp checked beside the network's: `{result['command']}`", "",
+    rates = {name: {s["name"]: method_of(s, "network")["first_attempt"] for s in v["sets"]}
+             for name, v in variants.items()}
+    rows = [f"| {name} | " + " | ".join(pct(rates[v][name]) if name in rates[v] else "-" for v in variants)
+            + f" | {pct(method_of(s, 'network')['first_attempt'])} | {pct(method_of(s, 'top_down')['first_attempt'])} |"
+            for name, s in before.items() if any(name in r for r in rates.values())]
+    columns = " | ".join(VARIANT_NAMES[v] for v in variants)
+    return [f"## The Franka hand's network planned otherwise: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. On the Franka hand top-down nearly matches the network, and "
             "where one misses the other often picks. With `PlanSpec(check_top_down=True)` the best-scored top-down "
             "grasp is checked beside the network's first 3 and comes first only where it held more often than "
-            f"each. The network shipped for the preset (seed {result['seed']}), the network chooser alone, the "
-            "same views and draws as the section above, first attempt:", "",
-            "| set | the first 3 and the best top-down grasp checked | the first 3 checked (above) "
-            "| top-down (above) |",
-            "| --- | --- | --- | --- |", *rows, "",
-            f"Paired over the {versus['network']['objects']} household meshes: {words['network']} against the "
-            f"first 3 checked alone, {words['top_down']} against top-down: "
-            + ("**kept**" if kept else "**not kept**")
-            + " (kept where the interval against the first 3 alone lies above zero); `check_top_down` stays off."]
+            "each; with `check_first=0` nothing is checked (the check was kept on the box palm's measure). The "
+            f"network shipped for the preset (seed {result['seed']}), the network chooser alone, the same views and "
+            "draws as the section above, first attempt:", "",
+            f"| set | {columns} | the first 3 checked (above) | top-down (above) |",
+            "| --- |" + " --- |" * (len(variants) + 2), *rows, "",
+            *(line for name, v in variants.items()
+              for line in (f"Paired over the {v['versus']['network']['objects']} household meshes. "
+                           + _variant_verdict(name, v), ""))][:-1]

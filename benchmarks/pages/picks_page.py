@@ -8,7 +8,7 @@ from pathlib import Path
 
 from benchmarks.pages.committed import load
 from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section, reranked_section
-from benchmarks.pages.pick_check_section import check_trials_section, panda_top_down_check_section
+from benchmarks.pages.pick_check_section import check_trials_section, panda_check_section
 from benchmarks.pages.pick_clearance_section import clearance_section
 from benchmarks.pages.pick_clutter_section import clutter_pointer, clutter_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
@@ -176,7 +176,7 @@ def render_picks_page() -> str:
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
     render = {"pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
                                                     load("pick_panda_then")),
-              "pick_panda_check": lambda r: panda_top_down_check_section(r, load("pick_panda")),
+              "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda")),
               "pick_clutter_panda": clutter_section,
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section,
