@@ -151,6 +151,7 @@ def test_the_franka_hands_network_planned_otherwise_is_judged_against_its_first_
     assert "+100.0 points [+100.0, +100.0] against the first 3 checked alone" in verdicts(raised)[0]
     assert "**kept**" in verdicts(raised)[0] and "the check hurts on this hand" in verdicts(raised)[1]
     assert any(line.startswith("| household | 100% | 100% | 0% |") for line in raised)
+    assert any(line.startswith("| household meshes pooled | 100% | 100% | 0% |") for line in raised)
     assert "+0.0 points" in verdicts(same)[0] and "**not kept**" in verdicts(same)[0]
     assert "cannot tell whether the check helps" in verdicts(same)[1]
     assert "-100.0 points" in verdicts(lower)[0] and "**not kept**" in verdicts(lower)[0]

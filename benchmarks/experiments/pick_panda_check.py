@@ -7,9 +7,9 @@ unseen sets, as pick_panda judges it (8 views an object, the same views and draw
 that run's network (the check without the top-down grasp) and its top-down chooser.
 
 The same run without the check (``check_first`` = 0, the network's order alone) asks whether the check, kept on the
-box palm's measure, helps on this hand too.
+box palm's measure, helps on this hand too; with the first 5 checked, whether more of them help here.
 
-    .venv/bin/python -m benchmarks.experiments.pick_panda_check [--variants top_down,unchecked]
+    .venv/bin/python -m benchmarks.experiments.pick_panda_check [--variants top_down,unchecked,check_5]
 
 The network: pick_panda's seed 0 (the one shipped for the preset). Results: benchmarks/results/pick_panda_check.json
 (a variant run again replaces its own results only).
@@ -44,7 +44,8 @@ def paired(after: list[dict], before: list[dict], method: str, base: str) -> dic
             "objects": len(differences)}
 
 
-VARIANTS = {"top_down": {"check_top_down": True}, "unchecked": {"check_first": 0}}  # PlanSpec fields changed
+VARIANTS = {"top_down": {"check_top_down": True}, "unchecked": {"check_first": 0},  # PlanSpec fields changed
+            "check_5": {"check_first": 5}}
 
 
 def variant(name: str, point: dict) -> dict:

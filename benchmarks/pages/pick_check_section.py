@@ -62,15 +62,22 @@ def _points_words(v: dict) -> str:
     return f"{100 * v['mean']:+.1f} points [{100 * v['interval'][0]:+.1f}, {100 * v['interval'][1]:+.1f}]"
 
 
+KEPT_VARIANTS = {"top_down": ("With the best top-down grasp checked beside", "`check_top_down` stays off",
+                              "`check_top_down` is turned on"),
+                 "check_5": ("With the first 5 checked", "`check_first` stays 3", "`check_first` becomes 5")}
+
+
 def _variant_verdict(name: str, v: dict) -> str:
     """What a variant's pairing against the first 3 checked says."""
     versus = v["versus"]["network"]
-    if name == "top_down":
+    if name in KEPT_VARIANTS:
+        words, stays, becomes = KEPT_VARIANTS[name]
         kept = versus["interval"][0] > 0
-        return (f"With the best top-down grasp checked beside: {_points_words(versus)} against the first 3 checked "
-                f"alone, {_points_words(v['versus']['top_down'])} against top-down: "
+        return (f"{words}: {_points_words(versus)} against the first 3 checked alone, "
+                f"{_points_words(v['versus']['top_down'])} against top-down: "
                 + ("**kept**" if kept else "**not kept**")
-                + " (kept where the interval against the first 3 alone lies above zero); `check_top_down` stays off.")
+                + " (kept where the interval against the first 3 alone lies above zero); "
+                + f"{becomes if kept else stays}.")
     shown = ("the check helps on this hand" if versus["interval"][1] < 0 else
              "the check hurts on this hand" if versus["interval"][0] > 0 else
              "these views cannot tell whether the check helps on this hand")
@@ -78,13 +85,14 @@ def _variant_verdict(name: str, v: dict) -> str:
             f"{_points_words(v['versus']['top_down'])} against top-down: {shown}.")
 
 
-VARIANT_NAMES = {"top_down": "the first 3 and the best top-down grasp checked", "unchecked": "no check"}
+VARIANT_NAMES = {"top_down": "the first 3 and the best top-down grasp checked", "unchecked": "no check",
+                 "check_5": "the first 5 checked"}
 
 
 def panda_check_section(result: dict, panda: dict | None) -> list[str]:
     """The Franka hand's network planned otherwise (results/pick_panda_check.json): with its best top-down grasp
     checked beside its first ones, and without the check, against pick_panda's run of the same network and views."""
-    from benchmarks.pages.pick_sets import method_of, pct
+    from benchmarks.pages.pick_sets import method_of, pct, pooled
 
     point = next((p for p in (panda or {}).get("points", []) if p["seed"] == result["seed"]), None)
     variants = {name: v for name, v in result.get("variants", {}).items() if "versus" in v}
@@ -96,12 +104,17 @@ def panda_check_section(result: dict, panda: dict | None) -> list[str]:
     rows = [f"| {name} | " + " | ".join(pct(rates[v][name]) if name in rates[v] else "-" for v in variants)
             + f" | {pct(method_of(s, 'network')['first_attempt'])} | {pct(method_of(s, 'top_down')['first_attempt'])} |"
             for name, s in before.items() if any(name in r for r in rates.values())]
+    both = [s for s in point["sets"] if s["name"] in rates[next(iter(variants))]]
+    rows.append("| household meshes pooled | "
+                + " | ".join(pct(pooled(v["sets"], "network")["first_attempt"]) for v in variants.values())
+                + "".join(f" | {pct(pooled(both, m)['first_attempt'])}" for m in ("network", "top_down")) + " |")
     columns = " | ".join(VARIANT_NAMES[v] for v in variants)
     return [f"## The Franka hand's network planned otherwise: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. On the Franka hand top-down nearly matches the network, and "
             "where one misses the other often picks. With `PlanSpec(check_top_down=True)` the best-scored top-down "
             "grasp is checked beside the network's first 3 and comes first only where it held more often than "
-            "each; with `check_first=0` nothing is checked (the check was kept on the box palm's measure). The "
+            "each; with `check_first=0` nothing is checked (the check was kept on the box palm's measure); with "
+            "`check_first=5` the first 5 are. The "
             f"network shipped for the preset (seed {result['seed']}), the network chooser alone, the same views and "
             "draws as the section above, first attempt:", "",
             f"| set | {columns} | the first 3 checked (above) | top-down (above) |",
