@@ -140,8 +140,11 @@ def test_the_franka_hands_network_planned_otherwise_is_judged_against_its_first_
                     v["attempts"]["network"] = (before,)
         after = _panda_result(picks, rate)["points"][0]["sets"]
         versus = {base: paired(after, panda["points"][0]["sets"], "network", base) for base in ("network", "top_down")}
+        more = {"check_3_32_views": paired(after, panda["points"][0]["sets"], "network", "network")}
         return panda_check_section({"command": "c", "date": "d", "machine": "m", "seed": 0, "variants": {
-            "top_down": {"sets": after, "versus": versus}, "unchecked": {"sets": after, "versus": versus}}}, panda)
+            "top_down": {"sets": after, "versus": versus}, "unchecked": {"sets": after, "versus": versus},
+            "check_3_32_views": {"views": 32, "sets": panda["points"][0]["sets"]},
+            "check_5_32_views": {"views": 32, "sets": after, "versus": more}}}, panda)
 
     def verdicts(lines: list[str]) -> tuple[str, str]:
         return (next(line for line in lines if "With the best top-down grasp" in line),
@@ -156,3 +159,7 @@ def test_the_franka_hands_network_planned_otherwise_is_judged_against_its_first_
     assert "cannot tell whether the check helps" in verdicts(same)[1]
     assert "-100.0 points" in verdicts(lower)[0] and "**not kept**" in verdicts(lower)[0]
     assert "the check helps on this hand" in verdicts(lower)[1]
+    at_32 = [next(line for line in lines if line.startswith("The same at 32 views")) for lines in (raised, same)]
+    assert "the first 5 against the first 3: +100.0 points [+100.0, +100.0]: on this hand the first 5 pick more" \
+        in at_32[0]
+    assert "+0.0 points [+0.0, +0.0]: **not kept**" in at_32[1] and "household meshes pooled 100%" in at_32[1]

@@ -7,9 +7,11 @@ unseen sets, as pick_panda judges it (8 views an object, the same views and draw
 that run's network (the check without the top-down grasp) and its top-down chooser.
 
 The same run without the check (``check_first`` = 0, the network's order alone) asks whether the check, kept on the
-box palm's measure, helps on this hand too; with the first 5 checked, whether more of them help here.
+box palm's measure, helps on this hand too; with the first 5 checked, whether more of them help here, and the same
+at 32 views an object against the first 3 checked at as many (one draw a view is a noisy judge of a reordering).
 
     .venv/bin/python -m benchmarks.experiments.pick_panda_check [--variants top_down,unchecked,check_5]
+    .venv/bin/python -m benchmarks.experiments.pick_panda_check --variants check_3_32_views,check_5_32_views
 
 The network: pick_panda's seed 0 (the one shipped for the preset). Results: benchmarks/results/pick_panda_check.json
 (a variant run again replaces its own results only).
@@ -45,24 +47,30 @@ def paired(after: list[dict], before: list[dict], method: str, base: str) -> dic
 
 
 VARIANTS = {"top_down": {"check_top_down": True}, "unchecked": {"check_first": 0},  # PlanSpec fields changed
-            "check_5": {"check_first": 5}}
+            "check_5": {"check_first": 5}, "check_3_32_views": {}, "check_5_32_views": {"check_first": 5}}
+MORE_VIEWS = 32  # the views an object of the variants named "..._32_views" (the first 8 the benchmark's)
+AGAINST = {"check_5_32_views": "check_3_32_views"}  # a variant judged against another, not against pick_panda
 
 
-def variant(name: str, point: dict) -> dict:
+def variant(name: str, point: dict, done: dict) -> dict:
     """The network of ``point`` judged with the planner's spec changed as VARIANTS[name] says, and paired against
-    ``point``'s network and top-down choosers."""
-    from benchmarks.experiments.picks import run_set, sets
+    ``point``'s network and top-down choosers, or against the variant AGAINST[name] names (``done``)."""
+    from benchmarks.experiments.picks import VIEWS, run_set, sets
     from onepiece_dist.specs.plan import PlanSpec
 
-    found = {"plan": VARIANTS[name], "sets": []}
+    views = MORE_VIEWS if name.endswith("_32_views") else VIEWS
+    found = {"plan": VARIANTS[name], "views": views, "sets": []}
     for set_name in SETS:
         objects, source = sets()[set_name]
         found["sets"].append(run_set(set_name, objects(), source, ROOT / point["network"]["checkpoint"],
                                      ROOT / "data" / "pick_panda_check" / name, ("network",),
-                                     PlanSpec(**VARIANTS[name])))
+                                     PlanSpec(**VARIANTS[name]), views))
         print(name, set_name, found["sets"][-1]["methods"][0]["first_attempt"], flush=True)
-    before = [s for s in point["sets"] if s["name"] in SETS]
-    found["versus"] = {base: paired(found["sets"], before, "network", base) for base in ("network", "top_down")}
+    if name in AGAINST:
+        found["versus"] = {AGAINST[name]: paired(found["sets"], done[AGAINST[name]]["sets"], "network", "network")}
+    elif views == VIEWS:
+        before = [s for s in point["sets"] if s["name"] in SETS]
+        found["versus"] = {base: paired(found["sets"], before, "network", base) for base in ("network", "top_down")}
     return found
 
 
@@ -78,9 +86,9 @@ def main() -> None:
            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **hand_record("panda"),
            "checkpoint": point["network"]["checkpoint"], "seed": point["seed"], "variants": kept}
     for name in args.variants.split(","):
-        out["variants"][name] = variant(name, point)
+        out["variants"][name] = variant(name, point, out["variants"])
         RESULTS.write_text(json.dumps(out, indent=1) + "\n")
-    print(json.dumps({name: v["versus"] for name, v in out["variants"].items()}, indent=1))
+    print(json.dumps({name: v.get("versus") for name, v in out["variants"].items()}, indent=1))
 
 
 if __name__ == "__main__":

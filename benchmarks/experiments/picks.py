@@ -67,13 +67,13 @@ def training_summary(status) -> dict:
 
 
 def run_set(name: str, objects: str, source: str, checkpoint: Path, folder: Path,
-            methods: tuple[str, ...] | None = None, plan=None) -> dict:
+            methods: tuple[str, ...] | None = None, plan=None, views: int = VIEWS) -> dict:
     """One set judged by the pick benchmark (``methods``: the choosers, default every one; ``plan``: the planner's
-    PlanSpec, default the planner's default)."""
+    PlanSpec, default the planner's default; ``views`` an object, the first VIEWS the benchmark's)."""
     from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.specs.plan import PickSpec
 
-    spec = PickSpec(objects=objects, checkpoint=str(checkpoint), output=str(folder / name), views=VIEWS,
+    spec = PickSpec(objects=objects, checkpoint=str(checkpoint), output=str(folder / name), views=views,
                     attempts=ATTEMPTS, pictures=PICTURES, **({"methods": methods} if methods else {}),
                     **({"plan": plan} if plan is not None else {}))
     start = time.perf_counter()

@@ -95,7 +95,8 @@ def panda_check_section(result: dict, panda: dict | None) -> list[str]:
     from benchmarks.pages.pick_sets import method_of, pct, pooled
 
     point = next((p for p in (panda or {}).get("points", []) if p["seed"] == result["seed"]), None)
-    variants = {name: v for name, v in result.get("variants", {}).items() if "versus" in v}
+    variants = {name: v for name, v in result.get("variants", {}).items()
+                if "versus" in v and "network" in v["versus"] and v.get("views", 8) == 8}
     if point is None or not variants:
         return []
     before = {s["name"]: s for s in point["sets"]}
@@ -121,4 +122,28 @@ def panda_check_section(result: dict, panda: dict | None) -> list[str]:
             "| --- |" + " --- |" * (len(variants) + 2), *rows, "",
             *(line for name, v in variants.items()
               for line in (f"Paired over the {v['versus']['network']['objects']} household meshes. "
-                           + _variant_verdict(name, v), ""))][:-1]
+                           + _variant_verdict(name, v), "")), *_more_views(result)][:-1]
+
+
+def _more_views(result: dict) -> list[str]:
+    """The first 5 checked against the first 3 at more views an object (the ``..._32_views`` variants)."""
+    from benchmarks.pages.pick_sets import method_of, pct, pooled
+
+    variants = result.get("variants", {})
+    five, three = variants.get("check_5_32_views"), variants.get("check_3_32_views")
+    if not five or not three or "versus" not in five:
+        return []
+
+    def rates(v: dict) -> str:
+        return ", ".join([*(f"{s['name']} {pct(method_of(s, 'network')['first_attempt'])}" for s in v["sets"]),
+                          f"household meshes pooled {pct(pooled(v['sets'], 'network')['first_attempt'])}"])
+
+    versus = five["versus"]["check_3_32_views"]
+    kept = versus["interval"][0] > 0
+    return [f"The same at {five['views']} views an object (the first 8 the section above's; one draw a view): the "
+            f"first 3 checked {rates(three)}; the first 5 checked {rates(five)}. Paired over the "
+            f"{versus['objects']} household meshes, the first 5 against the first 3: {_points_words(versus)}: "
+            + ("on this hand the first 5 pick more (the interval lies above zero). The planner's default stays 3, "
+               "chosen on the box palm's measure and the same for every hand: `onepiece grasp --check 5` "
+               "(`PlanSpec(check_first=5)`) plans so on this hand" if kept else
+               "**not kept** (kept where the interval lies above zero)") + ".", ""]
