@@ -179,6 +179,20 @@ def test_the_top_down_grasp_beside_the_check_is_judged_against_the_check_alone()
     assert "all objects +0.0 points" in more_views_lines(more)[-1] and "**not kept**" in more_views_lines(more)[-1]
 
 
+def test_more_grasps_checked_are_judged_against_the_planners_default_number():
+    from benchmarks.pages.pick_rank_section import more_views_lines
+
+    more = _more_views([1, 1, 2, 1, 0, 1])
+    runs = more["sets"]["household"]
+    runs["5"] = {**runs["3"], "per_object": {o: n + 1 for o, n in runs["3"]["per_object"].items()}}
+    lines = more_views_lines(more)
+    against = next(line for line in lines if line.startswith("The first 5 checked against the first 3"))
+    assert "household +25.0 points" in against and "**kept** in its place" in against
+    runs["5"] = runs["3"]
+    against = next(line for line in more_views_lines(more) if line.startswith("The first 5 checked against"))
+    assert "all objects +0.0 points" in against and "**not kept** in its place" in against
+
+
 def test_the_picks_page_says_whether_the_network_checked_and_what_the_check_costs_against_the_target():
     from benchmarks.pages.picks_page import _check_words, _checked_line
 

@@ -253,8 +253,8 @@ def main() -> None:
 
 def more_views(sets: dict[str, str], checks: list[int], views: int, top_down: bool = False) -> None:
     """The benchmark's one draw at ``views`` an object, each number in ``checks`` checked with the planner's default
-    draws (with ``top_down``: the best top-down grasp checked beside them, added to the runs at as many views); kept
-    beside the committed results (``more_views``)."""
+    draws (with ``top_down``: the best top-down grasp checked beside them); kept beside the committed results
+    (``more_views``), added to the runs kept at as many views and draws."""
     from onepiece_dist.specs.plan import PlanSpec
 
     draws = PlanSpec().check_draws
@@ -262,14 +262,14 @@ def more_views(sets: dict[str, str], checks: list[int], views: int, top_down: bo
     found = {which: {f"{k}{suffix}": judge(which, objects, k, views=views, draws=draws, top_down=top_down)
                      for k in checks if k or not top_down} for which, objects in sets.items()}
     def keep(result: dict) -> None:
-        if not top_down:
-            result["more_views"] = {"views": views, "check_draws": draws, "sets": found}
-            return
-        kept = result["more_views"]
-        if kept["views"] != views or kept["check_draws"] != draws:
+        kept = result.get("more_views")
+        if kept and (kept["views"], kept["check_draws"]) == (views, draws):  # more runs beside those at as many
+            for which, runs in found.items():
+                kept["sets"][which].update(runs)
+        elif top_down:
             raise SystemExit(f"--check-top-down judges against the runs at {views} views: run --views {views} first")
-        for which, runs in found.items():
-            kept["sets"][which].update(runs)
+        else:
+            result["more_views"] = {"views": views, "check_draws": draws, "sets": found}
 
     _beside(keep)
 

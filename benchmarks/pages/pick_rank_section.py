@@ -192,8 +192,27 @@ def more_views_lines(more: dict | None) -> list[str]:
                + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in m), ""]
     runs = list(next(iter(sets.values())))
     lines += [_more_views_verdict(more, k) for k in runs if k.isdigit() and k != "0"]
+    lines += [_against_default(more, k) for k in runs if k.isdigit() and k not in ("0", _default_key(runs))]
     lines += [_top_down_verdict(more, k) for k in runs if k.endswith(TOP_DOWN)]
     return lines
+
+
+def _default_key(runs: list[str]) -> str | None:
+    from onepiece_dist.specs.plan import PlanSpec
+
+    return str(PlanSpec().check_first) if str(PlanSpec().check_first) in runs else None
+
+
+def _against_default(more: dict, k: str) -> str:
+    """The first ``k`` checked against the planner's default number, paired over objects."""
+    from benchmarks.experiments.pick_shape_check import paired_check
+    from onepiece_dist.specs.plan import PlanSpec
+
+    default = PlanSpec().check_first
+    gain = paired_check(more, k, base=str(default))
+    return (f"The first {k} checked against the first {default} (the planner's default) at {more['views']} views an "
+            f"object: {_gain_words(gain)} (paired over objects): **{gain['verdict']}** in its place (kept where its "
+            f"interval over all objects lies above zero); `PlanSpec.check_first` = {default}.")
 
 
 def _run_name(key: str) -> str:
