@@ -114,31 +114,35 @@ def trial_seconds(row: dict, n: int) -> float:
     return cost[0] if first["nominal"] and all(first["held"][:n]) else sum(cost)
 
 
-def summary(rows: list[dict], shares_of) -> dict:
-    """The share of 8 draws of the grasp the check puts first (the network's order on ties) against the network's
-    first, paired over objects."""
-    from onepiece_dist.stats.intervals import bootstrap_interval
-
-    gain, chosen = {}, []
-    for row in rows:
-        first = int(np.argmax(shares_of(row)))
-        chosen.append(row["shares"][first])
-        gain.setdefault(row["object"], []).append(row["shares"][first] - row["shares"][0])
-    per_object = np.array([np.mean(v) for _, v in sorted(gain.items())])
-    return {"checked": float(np.mean(chosen)), "gain": float(per_object.mean()),
-            "interval": list(bootstrap_interval(per_object))}
-
-
-def versus(rows: list[dict], shares_of, base_of) -> dict:
-    """The check ``shares_of``'s first against ``base_of``'s, by shares of 8 draws, paired over objects."""
+def _paired_gain(rows: list[dict], first_of, base_of) -> tuple[float, list[float]]:
+    """The share of 8 draws of the grasp ``first_of(row)`` names less that of ``base_of(row)``'s, paired over
+    objects: the mean and its 95% bootstrap interval."""
     from onepiece_dist.stats.intervals import bootstrap_interval
 
     gain = {}
     for row in rows:
-        a, b = int(np.argmax(shares_of(row))), int(np.argmax(base_of(row)))
-        gain.setdefault(row["object"], []).append(row["shares"][a] - row["shares"][b])
+        gain.setdefault(row["object"], []).append(row["shares"][first_of(row)] - row["shares"][base_of(row)])
     per_object = np.array([np.mean(v) for _, v in sorted(gain.items())])
-    return {"mean": float(per_object.mean()), "interval": list(bootstrap_interval(per_object))}
+    return float(per_object.mean()), list(bootstrap_interval(per_object))
+
+
+def _first(shares_of):
+    """Which grasp the check ``shares_of`` puts first (the network's order on ties)."""
+    return lambda row: int(np.argmax(shares_of(row)))
+
+
+def summary(rows: list[dict], shares_of) -> dict:
+    """The share of 8 draws of the grasp the check puts first (the network's order on ties) against the network's
+    first, paired over objects."""
+    gain, interval = _paired_gain(rows, _first(shares_of), lambda row: 0)
+    return {"checked": float(np.mean([row["shares"][_first(shares_of)(row)] for row in rows])), "gain": gain,
+            "interval": interval}
+
+
+def versus(rows: list[dict], shares_of, base_of) -> dict:
+    """The check ``shares_of``'s first against ``base_of``'s, by shares of 8 draws, paired over objects."""
+    mean, interval = _paired_gain(rows, _first(shares_of), _first(base_of))
+    return {"mean": mean, "interval": interval}
 
 
 def measured(rows: list[dict]) -> dict:

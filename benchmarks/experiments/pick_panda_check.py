@@ -26,24 +26,10 @@ from datetime import date
 from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.experiments.pick_panda import RESULTS as PANDA
+from benchmarks.pages.pick_sets import paired_first_attempts as paired
 
 RESULTS = HERE / "results" / "pick_panda_check.json"
 SETS = ("household", "unseen")
-
-
-def paired(after: list[dict], before: list[dict], method: str, base: str) -> dict:
-    """``method`` in ``after`` against ``base`` in ``before`` (the same views), first attempt, over the objects of
-    both: the mean per-object difference and its 95% bootstrap interval."""
-    import numpy as np
-
-    from benchmarks.pages.pick_sets import first_attempt_share, loaded_objects
-    from onepiece_dist.stats.intervals import bootstrap_interval
-
-    now = {(s["name"], o["name"]): first_attempt_share(o, method) for s, o in loaded_objects(after)}
-    was = {(s["name"], o["name"]): first_attempt_share(o, base) for s, o in loaded_objects(before)}
-    differences = np.array([now[k] - was[k] for k in sorted(set(now) & set(was))])
-    return {"mean": float(differences.mean()), "interval": list(bootstrap_interval(differences)),
-            "objects": len(differences)}
 
 
 VARIANTS = {"top_down": {"check_top_down": True}, "unchecked": {"check_first": 0},  # PlanSpec fields changed

@@ -59,7 +59,7 @@ def check_trials_section(result: dict) -> list[str]:
 
 
 def _points_words(v: dict) -> str:
-    return f"{100 * v['mean']:+.1f} points [{100 * v['interval'][0]:+.1f}, {100 * v['interval'][1]:+.1f}]"
+    return f"{100 * v['mean']:+.1f} points {_points(v['interval'])}"
 
 
 KEPT_VARIANTS = {"top_down": ("With the best top-down grasp checked beside", "`check_top_down` stays off",

@@ -9,10 +9,9 @@ from benchmarks.pages.pick_sets import (
     HOUSEHOLD_SETS,
     LABELS,
     failure_table,
-    first_attempt_share,
     interval,
-    loaded_objects,
     method_of,
+    paired_first_attempts,
     pct,
     pooled,
     target_rows,
@@ -79,17 +78,12 @@ def _seeds(result: dict) -> list[str]:
     return [f"| seed | {' | '.join(names)} |", "|" + " --- |" * (len(names) + 1), *rows]
 
 
-def _paired(before: list[dict], after: list[dict], method: str) -> tuple[float, tuple[float, float], int]:
+def _paired(before: list[dict], after: list[dict], method: str) -> tuple[float, list[float], int]:
     """``method``'s first attempt after minus before, over the household meshes both judged: the mean of the
     per-object differences, its 95% bootstrap interval over objects, and how many objects."""
-    import numpy as np
-
-    from onepiece_dist.stats.intervals import bootstrap_interval
-
-    was, now = ({(s["name"], o["name"]): first_attempt_share(o, method) for s, o in loaded_objects(sets)
-                 if s["name"] in HOUSEHOLD_SETS} for sets in (before, after))
-    differences = np.array([now[k] - was[k] for k in sorted(set(was) & set(now))])
-    return float(differences.mean()), bootstrap_interval(differences), len(differences)
+    household = ([s for s in sets if s["name"] in HOUSEHOLD_SETS] for sets in (after, before))
+    change = paired_first_attempts(*household, method)
+    return change["mean"], change["interval"], change["objects"]
 
 
 def before_the_solver(before: dict, point: dict, then: dict | None = None) -> list[str]:

@@ -178,6 +178,7 @@ def more_views_lines(more: dict | None) -> list[str]:
     """The check judged by the benchmark's one draw at more views an object (results' more_views): the runs, each
     gain paired over objects, and whether the planner checks by default."""
     from benchmarks.experiments.pick_shape_check import TOP_DOWN
+    from onepiece_dist.specs.plan import PlanSpec
 
     if not more:
         return []
@@ -192,15 +193,11 @@ def more_views_lines(more: dict | None) -> list[str]:
                + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in m), ""]
     runs = list(next(iter(sets.values())))
     lines += [_more_views_verdict(more, k) for k in runs if k.isdigit() and k != "0"]
-    lines += [_against_default(more, k) for k in runs if k.isdigit() and k not in ("0", _default_key(runs))]
+    default = str(PlanSpec().check_first)
+    if default in runs:  # each other number checked against the planner's
+        lines += [_against_default(more, k) for k in runs if k.isdigit() and k not in ("0", default)]
     lines += [_top_down_verdict(more, k) for k in runs if k.endswith(TOP_DOWN)]
     return lines
-
-
-def _default_key(runs: list[str]) -> str | None:
-    from onepiece_dist.specs.plan import PlanSpec
-
-    return str(PlanSpec().check_first) if str(PlanSpec().check_first) in runs else None
 
 
 def _against_default(more: dict, k: str) -> str:

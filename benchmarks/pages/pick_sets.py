@@ -42,6 +42,19 @@ def first_attempt_share(obj: dict, method: str) -> float:
     return sum(list(v["attempts"][method][:1]) == [True] for v in obj["views"]) / len(obj["views"])
 
 
+def paired_first_attempts(after: list[dict], before: list[dict], method: str, base: str | None = None) -> dict:
+    """``method``'s first attempt in ``after`` less ``base``'s (default the same chooser) in ``before``, over the
+    objects both judged (the same views): the mean per-object difference, its 95% bootstrap interval, and how
+    many objects."""
+    from onepiece_dist.stats.intervals import bootstrap_interval
+
+    now = {(s["name"], o["name"]): first_attempt_share(o, method) for s, o in loaded_objects(after)}
+    was = {(s["name"], o["name"]): first_attempt_share(o, base or method) for s, o in loaded_objects(before)}
+    differences = np.array([now[k] - was[k] for k in sorted(set(now) & set(was))])
+    return {"mean": float(differences.mean()), "interval": list(bootstrap_interval(differences)),
+            "objects": len(differences)}
+
+
 def pooled(sets: list[dict], method: str) -> dict:
     """``method`` over every object of ``sets`` that loaded: its first-attempt rate (the mean of per-object rates,
     as each set's), the 95% bootstrap interval over those objects, and how many objects and views."""
