@@ -70,3 +70,50 @@ def test_the_batched_collision_check_equals_the_per_pose_one():
                              for lo, hi in gripper_boxes(GRIPPER)) for pose in poses])
     assert 0 < expected.sum() < len(poses)
     assert np.array_equal(collides(points, poses, GRIPPER), expected)
+
+
+@pytest.mark.parametrize("preset", ["box", "panda"])
+def test_poses_above_the_table_tried_on_the_points_above_it_alone_get_every_points_answer(preset):
+    from onepiece_dist.core.cloud.grasps import PLANE_CLEARANCE, Blockers, SupportPlane, above_plane
+    from onepiece_dist.core.frames import pose_from_axes
+    from onepiece_dist.gripper.presets import PRESETS
+
+    gripper = GRIPPER if preset == "box" else GripperSpec(**PRESETS[preset])
+    rng = np.random.default_rng(3)
+    table = np.column_stack([rng.uniform(-0.15, 0.15, (6000, 2)), rng.uniform(-0.004, 0.004, 6000)])
+    box = rng.uniform([-0.015, -0.025, 0.0], [0.015, 0.025, 0.08], (1500, 3))
+    points = rng.permutation(np.vstack([table, box]))
+    plane = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.abs(points[:, 2]) < 0.004)
+    # a top-down hand whose fingertips stop 0.5 mm above the clearance, over a table point 2.6 mm up
+    tip = np.array([0.1, 0.1, PLANE_CLEARANCE + 0.0005])
+    above_the_point = pose_from_axes((tip + [0, 0, gripper.finger_length])[None], np.array([[0.0, 0, -1]]),
+                                     np.array([[0.0, 1, 0]]))
+    finger = tip + [0, gripper.max_opening / 2 + gripper.finger_thickness / 2, 0.0001]
+    poses = np.concatenate([above_the_point, pose_from_axes(rng.uniform([-0.08, -0.08, 0.0], [0.08, 0.08, 0.15],
+                                                                        (600, 3)),
+                                                            rng.normal(size=(600, 3)), rng.normal(size=(600, 3)))])
+    points = np.vstack([points, finger])
+    every_point = collides(points, poses, gripper)
+    above = above_plane(poses, gripper, plane)
+    blockers = Blockers.of(points, plane)
+
+    hit_points, hit = blockers.blocked(poses, gripper)
+    assert len(blockers.high) < len(points) / 2  # the table's points, but for those above the clearance, left out
+    assert above[0] and every_point[0] and hit_points[0]  # a point above the clearance still blocks
+    assert 0 < np.sum(every_point & above) < np.sum(above) < len(poses)
+    assert np.array_equal(hit_points, every_point) and np.array_equal(hit, every_point | ~above)
+    some_hit_points, same_hit = blockers.blocked(poses, gripper, every=False)
+    assert np.array_equal(same_hit, hit) and np.array_equal(some_hit_points, every_point & above)
+
+
+def test_the_planes_inliers_are_counted_as_the_per_plane_products_count_them():
+    from onepiece_dist.core.cloud.grasps import dot3, near_plane_counts
+
+    rng = np.random.default_rng(8)
+    points = np.vstack([rng.uniform(-0.2, 0.2, (4000, 3)), np.round(rng.uniform(-0.2, 0.2, (4000, 3)), 3)])
+    anchors, normals = points[rng.integers(0, len(points), 50)], rng.normal(size=(50, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    normals[:10] = [0.0, 0.0, 1.0]  # on the rounded points' millimetre steps, the boundary cases
+    expected = [int(np.sum(np.abs(dot3(points - p, n)) < 0.004)) for n, p in zip(normals, anchors, strict=True)]
+    assert len(set(expected)) > 10
+    assert near_plane_counts(points, normals, anchors, 0.004) == expected
