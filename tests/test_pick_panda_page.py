@@ -163,3 +163,28 @@ def test_the_franka_hands_network_planned_otherwise_is_judged_against_its_first_
     assert "the first 5 against the first 3: +100.0 points [+100.0, +100.0]: on this hand the first 5 pick more" \
         in at_32[0]
     assert "+0.0 points [+0.0, +0.0]: **not kept**" in at_32[1] and "household meshes pooled 100%" in at_32[1]
+
+
+def test_the_first_fives_gain_is_said_to_hold_for_the_second_network_only_where_its_interval_lies_above_zero():
+    from benchmarks.experiments.pick_panda_check import paired
+    from benchmarks.pages.pick_check_section import panda_check_section
+
+    picks = json.loads((ROOT / "benchmarks" / "results" / "picks.json").read_text())
+    panda = _panda_result(picks, 0.0)
+    low, high = panda["points"][0]["sets"], _panda_result(picks, 1.0)["points"][0]["sets"]
+
+    def second(five_sets: list) -> str:
+        more = {"check_3_32_views": paired(high, low, "network", "network")}
+        s1 = {"check_3_32_views_s1": paired(five_sets, low, "network", "network")}
+        lines = panda_check_section({"command": "c", "date": "d", "machine": "m", "seed": 0, "variants": {
+            "unchecked": {"sets": high, "versus": {b: paired(high, low, "network", b) for b in ("network", "top_down")}},
+            "check_3_32_views": {"views": 32, "sets": low}, "check_5_32_views": {"views": 32, "sets": high,
+                                                                                 "versus": more},
+            "check_3_32_views_s1": {"views": 32, "seed": 1, "sets": low},
+            "check_5_32_views_s1": {"views": 32, "seed": 1, "sets": five_sets, "versus": s1}}}, panda)
+        return next(line for line in lines if line.startswith("The same at 32 views"))
+
+    holds, fails = second(high), second(low)
+    assert "With the network of seed 1" in holds and "household meshes pooled 0% with the first 3 checked" in holds
+    assert "+100.0 points [+100.0, +100.0]: the first 5 pick more with this network too" in holds
+    assert "+0.0 points [+0.0, +0.0]: with this network the interval does not lie above zero" in fails

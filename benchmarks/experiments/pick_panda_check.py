@@ -12,9 +12,11 @@ at 32 views an object against the first 3 checked at as many (one draw a view is
 
     .venv/bin/python -m benchmarks.experiments.pick_panda_check [--variants top_down,unchecked,check_5]
     .venv/bin/python -m benchmarks.experiments.pick_panda_check --variants check_3_32_views,check_5_32_views
+    .venv/bin/python -m benchmarks.experiments.pick_panda_check --variants check_3_32_views_s1,check_5_32_views_s1
 
-The network: pick_panda's seed 0 (the one shipped for the preset). Results: benchmarks/results/pick_panda_check.json
-(a variant run again replaces its own results only).
+The network: pick_panda's seed 0 (the one shipped for the preset); the variants ending in ``_s1`` judge its seed 1
+(a second network fitted on the same labels: does the first 5's gain hold for another network?). Results:
+benchmarks/results/pick_panda_check.json (a variant run again replaces its own results only).
 """
 
 from __future__ import annotations
@@ -33,9 +35,12 @@ SETS = ("household", "unseen")
 
 
 VARIANTS = {"top_down": {"check_top_down": True}, "unchecked": {"check_first": 0},  # PlanSpec fields changed
-            "check_5": {"check_first": 5}, "check_3_32_views": {}, "check_5_32_views": {"check_first": 5}}
-MORE_VIEWS = 32  # the views an object of the variants named "..._32_views" (the first 8 the benchmark's)
-AGAINST = {"check_5_32_views": "check_3_32_views"}  # a variant judged against another, not against pick_panda
+            "check_5": {"check_first": 5}, "check_3_32_views": {}, "check_5_32_views": {"check_first": 5},
+            "check_3_32_views_s1": {}, "check_5_32_views_s1": {"check_first": 5}}
+MORE_VIEWS = 32  # the views an object of the variants named "..._32_views..." (the first 8 the benchmark's)
+AGAINST = {"check_5_32_views": "check_3_32_views",  # a variant judged against another, not against pick_panda
+           "check_5_32_views_s1": "check_3_32_views_s1"}
+NETWORK_SEED = {"check_3_32_views_s1": 1, "check_5_32_views_s1": 1}  # pick_panda's network judged (default 0)
 
 
 def variant(name: str, point: dict, done: dict) -> dict:
@@ -44,8 +49,10 @@ def variant(name: str, point: dict, done: dict) -> dict:
     from benchmarks.experiments.picks import VIEWS, run_set, sets
     from onepiece_dist.specs.plan import PlanSpec
 
-    views = MORE_VIEWS if name.endswith("_32_views") else VIEWS
+    views = MORE_VIEWS if "_32_views" in name else VIEWS
     found = {"plan": VARIANTS[name], "views": views, "sets": []}
+    if name in NETWORK_SEED:
+        found.update(seed=point["seed"], checkpoint=point["network"]["checkpoint"])
     for set_name in SETS:
         objects, source = sets()[set_name]
         found["sets"].append(run_set(set_name, objects(), source, ROOT / point["network"]["checkpoint"],
@@ -71,8 +78,10 @@ def main() -> None:
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_panda_check", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **hand_record("panda"),
            "checkpoint": point["network"]["checkpoint"], "seed": point["seed"], "variants": kept}
+    points = json.loads(PANDA.read_text())["points"]
     for name in args.variants.split(","):
-        out["variants"][name] = variant(name, point, out["variants"])
+        mine = next(p for p in points if p["seed"] == NETWORK_SEED.get(name, point["seed"]))
+        out["variants"][name] = variant(name, mine, out["variants"])
         RESULTS.write_text(json.dumps(out, indent=1) + "\n")
     print(json.dumps({name: v.get("versus") for name, v in out["variants"].items()}, indent=1))
 

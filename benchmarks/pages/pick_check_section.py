@@ -146,4 +146,21 @@ def _more_views(result: dict) -> list[str]:
             + ("on this hand the first 5 pick more (the interval lies above zero). The planner's default stays 3, "
                "chosen on the box palm's measure and the same for every hand: `onepiece grasp --check 5` "
                "(`PlanSpec(check_first=5)`) plans so on this hand" if kept else
-               "**not kept** (kept where the interval lies above zero)") + ".", ""]
+               "**not kept** (kept where the interval lies above zero)") + "." + _second_network(variants), ""]
+
+
+def _second_network(variants: dict) -> str:
+    """The first 5 against the first 3 at 32 views with pick_panda's second network (the ``..._s1`` variants)."""
+    from benchmarks.pages.pick_sets import pct, pooled
+
+    five, three = variants.get("check_5_32_views_s1"), variants.get("check_3_32_views_s1")
+    if not five or not three or "versus" not in five:
+        return ""
+    versus = five["versus"]["check_3_32_views_s1"]
+    holds = versus["interval"][0] > 0
+    return (f" With the network of seed {five['seed']} (fitted on the same labels), the same views: household meshes "
+            f"pooled {pct(pooled(three['sets'], 'network')['first_attempt'])} with the first 3 checked, "
+            f"{pct(pooled(five['sets'], 'network')['first_attempt'])} with the first 5; paired "
+            f"{_points_words(versus)}: " + ("the first 5 pick more with this network too" if holds else
+                                             "with this network the interval does not lie above zero, so the gain "
+                                             "is not shown to hold beyond the network it was measured on") + ".")
