@@ -176,8 +176,9 @@ def test_the_first_fives_gain_is_said_to_hold_for_the_second_network_only_where_
     def second(five_sets: list) -> str:
         more = {"check_3_32_views": paired(high, low, "network", "network")}
         s1 = {"check_3_32_views_s1": paired(five_sets, low, "network", "network")}
+        versus = {b: paired(high, low, "network", b) for b in ("network", "top_down")}
         lines = panda_check_section({"command": "c", "date": "d", "machine": "m", "seed": 0, "variants": {
-            "unchecked": {"sets": high, "versus": {b: paired(high, low, "network", b) for b in ("network", "top_down")}},
+            "unchecked": {"sets": high, "versus": versus},
             "check_3_32_views": {"views": 32, "sets": low}, "check_5_32_views": {"views": 32, "sets": high,
                                                                                  "versus": more},
             "check_3_32_views_s1": {"views": 32, "seed": 1, "sets": low},
