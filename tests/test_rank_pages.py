@@ -206,6 +206,18 @@ def test_the_picks_page_says_whether_the_network_checked_and_what_the_check_cost
     assert "**met**" in _checked_line({**plan, "median_checked_seconds": 0.25})
 
 
+def test_the_picks_page_judges_each_hands_planning_with_its_check_against_the_same_target():
+    from benchmarks.pages.picks_page import _hands_line
+
+    plan = {"targets": {"cpu_seconds_per_view": 0.3}}
+    assert _hands_line(plan) == ""  # a run before other hands were timed
+    hand = {"hand": "panda", "gripper": "franka_panda", "rows": [{"check_first": 3}], "median_seconds_per_view": 0.05}
+    slow = _hands_line({**plan, "hands": [{**hand, "median_checked_seconds": 0.36}]})
+    assert "The `panda` preset (franka_panda" in slow and "0.050 s a view without the check" in slow
+    assert "0.360 s with its first 3 checked (the 0.3 s target: **not met**)" in slow
+    assert "(the 0.3 s target: **met**)" in _hands_line({**plan, "hands": [{**hand, "median_checked_seconds": 0.29}]})
+
+
 def test_the_picks_page_names_the_gripper_that_executes_the_picks():
     from benchmarks.pages.picks_page import _gripper_words
 

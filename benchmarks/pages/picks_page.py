@@ -115,7 +115,18 @@ def latency_section(plan: dict) -> list[str]:
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |" + (" --- |" if checks else ""), *rows, "",
             f"Median per view: {median:.3f} s against {plan['median_baseline_seconds']:.3f} s one at a time. Target "
             f"{target} s on one core: **{'met' if median <= target else 'not met'}**. {_dense_line(plan)}"
-            f"{_checked_line(plan)}{gpu_line}"]
+            f"{_checked_line(plan)}{_hands_line(plan)}{gpu_line}"]
+
+
+def _hands_line(plan: dict) -> str:
+    """The same views planned for other hands (bench_plan.HANDS), each with the network shipped for it."""
+    target = plan["targets"]["cpu_seconds_per_view"]
+    return "".join(
+        f"The `{h['hand']}` preset ({h['gripper']}: its own collision test, and its own hand in the check's pick "
+        f"world) on the same views with the network shipped for it: median {h['median_seconds_per_view']:.3f} s a "
+        f"view without the check, {h['median_checked_seconds']:.3f} s with its first {h['rows'][0]['check_first']} "
+        f"checked (the {target} s target: **{'met' if h['median_checked_seconds'] <= target else 'not met'}**). "
+        for h in plan.get("hands", []))
 
 
 def _check_cell(row: dict) -> str:

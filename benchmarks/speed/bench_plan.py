@@ -8,7 +8,8 @@ Scenes: each object of SCENES settled on the pick benchmark's table and seen fro
 degrees), as `onepiece pick` sees it; and one of them made a 2-million-point cloud (each point repeated with 0.5 mm
 jitter), thinned by the planner first. The network is the shipped one (onepiece_dist/plan/networks/; PointNet
 width 32 with the grasp's context, 128 points per crop), or that architecture with fresh weights where the package
-has none: latency does not depend on what it learnt. Torch and BLAS on one thread. Targets: at most 0.3 s per
+has none: latency does not depend on what it learnt; the Franka hand (the panda preset: HANDS) plans the same views
+with the network shipped for it. Torch and BLAS on one thread. Targets: at most 0.3 s per
 view on one core; at most 1 s for the 2-million-point cloud; at most 30 ms of scoring on a GPU (measured only where
 one is present). Results: benchmarks/results/plan.json, rendered into
 docs/picks.md by benchmarks/pages/report.py.
@@ -27,6 +28,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parents[1]
 SCENES = "primitives[3:6]+pybullet:named[0:3]"
 CANDIDATES, REPEATS = 500, 3
+HANDS = ("panda",)  # gripper presets planned on the same views beside the default job's gripper
 TARGETS = {"cpu_seconds_per_view": 0.3, "gpu_score_seconds": 0.03, "dense_seconds": 1.0}
 
 
@@ -112,7 +114,30 @@ def measure(folder: Path) -> dict:
                      "seconds": {k: round(v, 4) for k, v in best.seconds.items()},
                      "baseline_seconds": round(baseline + best.seconds["sample"], 4),
                      **(check_seconds(observation, net, spec) if len(observation.points) < 1_000_000 else {})})
-    return {"rows": rows, "gpu": gpu_scoring(folder)}
+    return {"rows": rows, "gpu": gpu_scoring(folder), "hands": [hand_seconds(seen, hand) for hand in HANDS]}
+
+
+def hand_seconds(seen, hand: str) -> dict:
+    """The same views planned for the gripper preset ``hand`` with the network shipped for it (its own collision
+    test and, in the check, its own hand in the pick world): the seconds of each without and with the planner's
+    default check, and their medians."""
+    from onepiece_dist.gripper.presets import gripper_fields
+    from onepiece_dist.plan.planner import plan_grasps
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.job import GripperSpec
+    from onepiece_dist.specs.plan import PlanSpec
+
+    gripper = GripperSpec.model_validate(gripper_fields(hand))
+    net, spec, rows = GraspScorer(shipped_network(gripper), gripper, "cpu"), PlanSpec(candidates=CANDIDATES,
+                                                                                     check_first=0), []
+    for name, observation in seen:
+        best = min((plan_grasps(observation, net, spec) for _ in range(REPEATS)), key=lambda p: p.seconds["total"])
+        rows.append({"object": name, "total_seconds": round(best.seconds["total"], 4),
+                     **check_seconds(observation, net, spec)})
+    return {"hand": hand, "gripper": gripper.name, "rows": rows,
+            "median_seconds_per_view": float(np.median([r["total_seconds"] for r in rows])),
+            "median_checked_seconds": float(np.median([r["total_seconds"] + r["check_seconds"] for r in rows]))}
 
 
 def check_seconds(observation, net, spec) -> dict:
