@@ -1,4 +1,5 @@
-"""`onepiece grasp` (grasps planned on a camera's cloud) and `onepiece pick` (the simulated pick benchmark)."""
+"""`onepiece grasp` (grasps planned on a camera's cloud), `onepiece scene` (a depth camera's files of objects on a
+simulated table) and `onepiece pick` (the simulated pick benchmark)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,14 @@ from typing import Annotated
 import typer
 
 from onepiece_dist.cli.common import EXIT_USAGE, Address, err
-from onepiece_dist.errors import CheckpointRejected, CloudRejected, OnePieceError, SourceError, SpecError
+from onepiece_dist.errors import (
+    CheckpointRejected,
+    CloudRejected,
+    MeshRejected,
+    OnePieceError,
+    SourceError,
+    SpecError,
+)
 from onepiece_dist.gripper.presets import gripper_fields
 
 
@@ -42,7 +50,30 @@ def _gripper(path: Path | None):
 
 def register(app: typer.Typer) -> None:
     app.command()(grasp)
+    app.command()(scene)
     app.command()(pick)
+
+
+def scene(
+    objects: Annotated[str, typer.Argument(help="The objects: built-in set, folder or glob (the first --count).")],
+    out: Annotated[Path, typer.Option(help="Folder for depth.png, intrinsics.json, camera_pose.json and "
+                                           "scene.json.")] = Path("onepiece-scene"),
+    count: Annotated[int, typer.Option(min=1, max=8, help="Objects on the table, side by side.")] = 1,
+    seed: Annotated[int, typer.Option(min=0, help="Seed of the drops and the camera.")] = 0,
+    units: Annotated[str, typer.Option(help="Units of mesh files: m, cm or mm.")] = "m",
+) -> None:
+    """A depth camera's own files of objects settled on a simulated table: a 16-bit depth PNG, its intrinsics and
+    the camera's pose in the table's frame, to try `onepiece grasp` without a camera (docs/planning.md)."""
+    from onepiece_dist.picks.scene_files import write_scene
+    from onepiece_dist.specs.job import JobSpec
+
+    try:
+        written = write_scene(objects, out, count, seed, job=JobSpec(objects=objects, units=units))
+    except (SourceError, MeshRejected, ValueError) as error:
+        err(f"error: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+    err(f"{' + '.join(written.objects)} on the table; plan on it with:\n  {written.grasp_command()}")
+    typer.echo(str(written.folder))
 
 
 def grasp(

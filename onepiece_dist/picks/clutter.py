@@ -30,6 +30,7 @@ from onepiece_dist.plan.observation import MIN_POINTS, Observation
 from onepiece_dist.plan.planner import propose
 from onepiece_dist.plan.scorer import CropRecord
 from onepiece_dist.sim.collision import convex_pieces
+from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.specs.plan import PickSpec
 
 GAPS = (0.01, 0.05)  # m: each next object dropped this far (uniform) beyond those there along its direction
@@ -64,11 +65,17 @@ class SceneObject:
 
 def scene_object(spec: PickSpec, record: CropRecord, ref: ObjectRef) -> SceneObject:
     """``ref`` loaded as ``spec`` asks for ``record``'s gripper and voxel grid; a bad object raises MeshRejected."""
-    loaded = load_object(ref, spec.object_job(record.gripper, record.voxel))
+    return loaded_object(ref, spec.object_job(record.gripper, record.voxel), Path(spec.output) / "collision")
+
+
+def loaded_object(ref: ObjectRef, job: JobSpec, collision: Path) -> SceneObject:
+    """``ref`` loaded as ``job`` asks (its physics: ``job.sim``), its convex pieces cached under ``collision``; a
+    bad object raises MeshRejected."""
+    loaded = load_object(ref, job)
     mesh, volume = loaded.mesh, enclosed_volume(loaded.mesh)
-    pieces = convex_pieces(mesh, Path(spec.output) / "collision", spec.sim.collision)
+    pieces = convex_pieces(mesh, collision, job.sim.collision)
     surface, _ = sample_surface(mesh, SURFACE_POINTS, np.random.default_rng(int(mesh.content_id[:16], 16)))
-    return SceneObject(mesh.name, mesh, tuple(pieces), volume, loaded.density(spec.sim.density, volume),
+    return SceneObject(mesh.name, mesh, tuple(pieces), volume, loaded.density(job.sim.density, volume),
                        loaded.friction, surface)
 
 

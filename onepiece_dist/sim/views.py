@@ -117,10 +117,9 @@ def depth_image(pb, client: int, camera: Camera) -> np.ndarray:
 
 def back_project(depth: np.ndarray, camera: Camera) -> np.ndarray:
     """(M, 3) float64 object-frame points of the pixels that hit the object. depth (size, size) buffer."""
-    size, near, far = camera.size, camera.near, camera.far
+    size = camera.size
     rows, cols = np.nonzero(depth < 1.0 - 1e-6)
-    z_ndc = 2.0 * depth[rows, cols].astype(np.float64) - 1.0
-    distance = 2.0 * near * far / (far + near - z_ndc * (far - near))
+    distance = _buffer_distance(depth[rows, cols], camera)
     half = float(portable.tan(np.radians(camera.fov_deg) / 2))
     # TinyRenderer samples pixel (row, col) at the lower-left corner of the pixel with rows flipped:
     # x = col, y = size - 1 - row in window coordinates (measured: exact to 1e-6 m on a box).
@@ -128,6 +127,20 @@ def back_project(depth: np.ndarray, camera: Camera) -> np.ndarray:
     y = (1.0 - 2.0 * (rows + 1.0) / size) * half * distance
     local = np.stack([x, y, -distance], axis=1)
     return transform_points(local, camera.pose)  # fixed-order products: the same points on every CPU
+
+
+def linear_depth(buffer: np.ndarray, camera: Camera) -> np.ndarray:
+    """(size, size) float64 depth (m) along the camera's axis of each pixel of a depth ``buffer``, 0 where it saw
+    nothing: what a depth camera writes (pixel (row, col) as :func:`back_project` places it)."""
+    hit = buffer < 1.0 - 1e-6
+    return np.where(hit, _buffer_distance(np.where(hit, buffer, 0.0), camera), 0.0)
+
+
+def _buffer_distance(values: np.ndarray, camera: Camera) -> np.ndarray:
+    """Depth along the camera's axis (m) of pybullet depth-buffer ``values`` in [0, 1)."""
+    near, far = camera.near, camera.far
+    z_ndc = 2.0 * values.astype(np.float64) - 1.0
+    return 2.0 * near * far / (far + near - z_ndc * (far - near))
 
 
 @dataclass(frozen=True)
