@@ -11,11 +11,13 @@ Runs (the same views, each candidate's outcome its own seeded execution, so the 
 - ``unchecked``: the network's order alone (check_first=0);
 - ``as_one``: the planner that takes the whole cloud for one object (objects_apart=False), and top-down on it.
 
-    .venv/bin/python -m benchmarks.experiments.pick_clutter [--gripper panda]
+    .venv/bin/python -m benchmarks.experiments.pick_clutter [--gripper panda] [--pile]
 
 Results: benchmarks/results/pick_clutter.json, rendered into docs/picks.md. With --gripper panda, the ``default``
 run alone with the network shipped for the Franka hand, every grasp executed by that hand:
-benchmarks/results/pick_clutter_panda.json.
+benchmarks/results/pick_clutter_panda.json. With --pile, the ``default`` run alone on scenes where each next
+object is dropped onto those already there (its middle within 3 cm of theirs: `onepiece pick --pile`):
+benchmarks/results/pick_clutter_pile.json (pick_clutter_panda_pile.json with --gripper panda).
 """
 
 from __future__ import annotations
@@ -60,23 +62,24 @@ def hand_record(gripper: str | None) -> dict:
     return {"gripper": gripper, "solver_iterations": physics_for(shipped_for(gripper)[1]).solver_iterations}
 
 
-def _spec(name: str, objects: str, size: int, run: str, gripper: str | None = None):
+def _spec(name: str, objects: str, size: int, run: str, gripper: str | None = None, pile: bool = False):
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     plan, methods = RUNS[run]
     network, hand = shipped_for(gripper)
-    folder = "pick_clutter" + (f"_{gripper}" if gripper else "")
+    folder = "pick_clutter" + (f"_{gripper}" if gripper else "") + ("_pile" if pile else "")
     return PickSpec(objects=objects, checkpoint=str(network), gripper=hand, clutter=size,
                     output=str(ROOT / "data" / folder / name), views=VIEWS, attempts=ATTEMPTS, pictures=0,
-                    methods=methods, plan=PlanSpec(**plan), workers=2)
+                    methods=methods, plan=PlanSpec(**plan), workers=2, pile=pile)
 
 
-def measure(name: str, objects: str, size: int, run: str, gripper: str | None = None) -> dict:
+def measure(name: str, objects: str, size: int, run: str, gripper: str | None = None, pile: bool = False) -> dict:
     """One set's scenes of ``size`` in one run (`onepiece pick --clutter`, on the embedded Ray; ``gripper``: a
-    preset, its shipped network planning): its summary over scenes and each scene's first picks per method."""
+    preset, its shipped network planning; ``pile``: each next object dropped onto those there): its summary over
+    scenes and each scene's first picks per method."""
     from onepiece_dist.picks.runner import run_picks
 
-    spec = _spec(name, objects, size, run, gripper)
+    spec = _spec(name, objects, size, run, gripper, pile)
     start = time.perf_counter()
     report = run_picks(spec)
     return {"methods": {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),
@@ -112,8 +115,9 @@ def single_rates(gripper: str | None = None) -> dict:
     return {s["name"]: {m["method"]: m["first_attempt"] for m in s["methods"]} for s in sets}
 
 
-def measure_size(sets: dict, size: int, runs: tuple[str, ...], gripper: str | None = None) -> dict:
-    scenes = {"sets": {name: {run: measure(name, objects, size, run, gripper) for run in runs}
+def measure_size(sets: dict, size: int, runs: tuple[str, ...], gripper: str | None = None, pile: bool = False
+                 ) -> dict:
+    scenes = {"sets": {name: {run: measure(name, objects, size, run, gripper, pile) for run in runs}
                        for name, objects in sets.items()}}
     return {**scenes, **{key: paired(scenes, *how) for key, how in COMPARED.items()
                          if how[0] in runs and how[2] in runs}}
@@ -125,18 +129,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--gripper", choices=("panda",), default=None,
                         help="the preset whose shipped network plans and whose hand executes (the default run alone)")
+    parser.add_argument("--pile", action="store_true",
+                        help="each next object dropped onto those there (the default run alone)")
     args = parser.parse_args()
-    runs = tuple(RUNS) if args.gripper is None else ("default",)
+    runs = tuple(RUNS) if args.gripper is None and not args.pile else ("default",)
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
-    command = ".venv/bin/python -m benchmarks.experiments.pick_clutter" + (f" --gripper {args.gripper}"
-                                                                            if args.gripper else "")
+    command = (".venv/bin/python -m benchmarks.experiments.pick_clutter" + (f" --gripper {args.gripper}"
+                                                                             if args.gripper else "")
+               + (" --pile" if args.pile else ""))
     result = {"command": command, "date": date.today().isoformat(),
               "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "views": VIEWS,
-              "attempts": ATTEMPTS, **hand_record(args.gripper),
+              "attempts": ATTEMPTS, **hand_record(args.gripper), **({"pile": True} if args.pile else {}),
               "runs": {run: {"plan": RUNS[run][0], "methods": list(RUNS[run][1])} for run in runs},
               "single": single_rates(args.gripper),
-              "scenes": {str(size): measure_size(sets, size, runs, args.gripper) for size in SIZES}}
-    path = RESULTS if args.gripper is None else HERE / "results" / f"pick_clutter_{args.gripper}.json"
+              "scenes": {str(size): measure_size(sets, size, runs, args.gripper, args.pile) for size in SIZES}}
+    path = HERE / "results" / ("pick_clutter" + (f"_{args.gripper}" if args.gripper else "")
+                               + ("_pile" if args.pile else "") + ".json")
     path.write_text(json.dumps(result, indent=1) + "\n")
     print({size: {name: {run: {m: round(v["first_attempt"], 3) for m, v in r["methods"].items()}
                          for run, r in runs.items()} for name, runs in scenes["sets"].items()}

@@ -61,6 +61,8 @@ def scene(
     count: Annotated[int, typer.Option(min=1, max=8, help="Objects on the table, side by side.")] = 1,
     seed: Annotated[int, typer.Option(min=0, help="Seed of the drops and the camera.")] = 0,
     units: Annotated[str, typer.Option(help="Units of mesh files: m, cm or mm.")] = "m",
+    pile: Annotated[bool, typer.Option("--pile", help="Drop each next object onto those there (a pile), not "
+                                                      "beside them.")] = False,
 ) -> None:
     """A depth camera's own files of objects settled on a simulated table: a 16-bit depth PNG, its intrinsics and
     the camera's pose in the table's frame, to try `onepiece grasp` without a camera (docs/planning.md)."""
@@ -68,7 +70,7 @@ def scene(
     from onepiece_dist.specs.job import JobSpec
 
     try:
-        written = write_scene(objects, out, count, seed, job=JobSpec(objects=objects, units=units))
+        written = write_scene(objects, out, count, seed, job=JobSpec(objects=objects, units=units), pile=pile)
     except (SourceError, MeshRejected, ValueError) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
@@ -187,6 +189,8 @@ def pick(
     clutter: Annotated[int, typer.Option(help="Objects on the table together a view: N > 1 sets each object "
                                          "with the next N-1; a grasp picks the one it closes on (docs/picks.md).")
                        ] = 1,
+    pile: Annotated[bool, typer.Option("--pile", help="With --clutter N: each next object dropped onto those "
+                                                      "there (a pile), not beside them.")] = False,
     address: Address = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
@@ -198,7 +202,8 @@ def pick(
 
     given = _spec_mapping(spec_file)
     given.update({"checkpoint": str(checkpoint), "objects": objects, "output": str(out), "views": views,
-                  "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {})})
+                  "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {}),
+                  **({"pile": True} if pile else {})})
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))
         report = run_picks(spec, address=address, in_process=in_process,

@@ -34,6 +34,7 @@ from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.specs.plan import PickSpec
 
 GAPS = (0.01, 0.05)  # m: each next object dropped this far (uniform) beyond those there along its direction
+PILE_SPREAD = 0.03  # m: in a pile, each next object's middle dropped within this of theirs (along x and y)
 SURFACE_POINTS = 2000  # true surface samples a grasp is matched to its object by
 SCENE_STREAM = 300  # a scene's view streams (300 + view), apart from one object's (100 + view)
 WORKSPACE = 0.25  # m: the cloud kept around the scene's centre (several objects spread wider than one)
@@ -92,17 +93,20 @@ class Scene:
     view: PickView
 
 
-def settle_scene(world, objects: tuple[SceneObject, ...], rng: np.random.Generator) -> tuple[np.ndarray, ...]:
-    """``objects`` dropped one by one, each next beside those already there, all settled: their resting poses."""
+def settle_scene(world, objects: tuple[SceneObject, ...], rng: np.random.Generator, pile: bool = False
+                 ) -> tuple[np.ndarray, ...]:
+    """``objects`` dropped one by one, each next beside those already there (or, in a ``pile``, onto them), all
+    settled: their resting poses."""
     first = objects[0]
     first.load_into(world)
     resting = [world.settle(rng, first.mesh.vertices)]
     for nxt in objects[1:]:
-        gap = float(rng.uniform(*GAPS))
+        gap = None if pile else float(rng.uniform(*GAPS))
         nxt.load_into(world)
         world.set_neighbours(tuple(o.neighbour(pose) for o, pose in zip(objects[:len(resting)], resting,
                                                                           strict=True)))
-        placed = world.settle_beside(rng, nxt.mesh.vertices, gap, WORKSPACE)
+        placed = (world.settle_onto(rng, nxt.mesh.vertices, PILE_SPREAD, WORKSPACE) if pile else
+                  world.settle_beside(rng, nxt.mesh.vertices, gap, WORKSPACE))
         resting = [*world.beside.poses(world.client), placed]
     return tuple(resting)
 
@@ -119,7 +123,7 @@ def settled(spec: PickSpec, world, objects: tuple[SceneObject, ...], view: int
             ) -> tuple[tuple[np.ndarray, ...], np.random.Generator]:
     """``objects`` settled for view ``view`` (settle_scene, from the view's own stream), and that stream."""
     rng = np.random.default_rng([*scene_seed(spec, objects, view)[:-1], SCENE_STREAM + view])
-    return settle_scene(world, objects, rng), rng
+    return settle_scene(world, objects, rng, spec.pile), rng
 
 
 def seen_scene(spec: PickSpec, record: CropRecord, objects: tuple[SceneObject, ...],

@@ -1,6 +1,7 @@
 """A depth camera's own files of objects on a table, made in simulation (`onepiece scene`): what a robot's camera
 would write, to try `onepiece grasp` end to end without a camera, or to check a camera set-up against. The objects
-are settled on the pick benchmark's table (one, or several side by side as `onepiece pick --clutter` settles them),
+are settled on the pick benchmark's table (one, or several side by side or piled as `onepiece pick --clutter`
+settles them),
 seen by one seeded camera as the benchmark draws it, and written as:
 
 - ``depth.png``: 16-bit millimetres along the camera's axis, 0 where it saw nothing;
@@ -54,8 +55,9 @@ class SceneFiles:
 
 
 def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0, camera: CameraSpec | None = None,
-                job: JobSpec | None = None) -> SceneFiles:
-    """The first ``count`` objects of the source ``objects`` settled on the table (seeded by ``seed``), seen by
+                job: JobSpec | None = None, pile: bool = False) -> SceneFiles:
+    """The first ``count`` objects of the source ``objects`` settled on the table (seeded by ``seed``; side by
+    side, or in a ``pile``: picks.clutter.settle_scene), seen by
     one camera drawn as ``camera`` says (default: the pick benchmark's), written to ``folder`` (module doc).
     Objects load as ``job`` asks (units, scale, physics; default JobSpec's); a bad one raises MeshRejected, too
     few SourceError."""
@@ -70,7 +72,7 @@ def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0,
     world = PickWorld(GripperSpec())  # the gripper waits above the table
     try:
         rng = np.random.default_rng([seed, SCENE_STREAM])
-        resting = settle_scene(world, scene, rng)
+        resting = settle_scene(world, scene, rng, pile)
     finally:
         world.close()
     vertices = [transform_points(o.mesh.vertices, pose) for o, pose in zip(scene, resting, strict=True)]
@@ -82,7 +84,7 @@ def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0,
     written = SceneFiles(folder, tuple(o.name for o in scene), tuple(float(v) for v in centre))
     _write_json(folder / "scene.json", {
         "objects": [{"name": o.name, "resting_pose": pose.tolist()} for o, pose in zip(scene, resting, strict=True)],
-        "seed": seed, "camera": camera.model_dump(mode="json"), "grasp": written.grasp_command()})
+        "seed": seed, "pile": pile, "camera": camera.model_dump(mode="json"), "grasp": written.grasp_command()})
     return written
 
 

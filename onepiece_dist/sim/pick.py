@@ -113,7 +113,25 @@ class PickWorld(SimWorld):
                 break
         return resting
 
-    def _drop(self, rng: np.random.Generator, vertices: np.ndarray, gap: float | None = None) -> np.ndarray:
+    def settle_onto(self, rng: np.random.Generator, vertices: np.ndarray, spread: float,
+                    within: float = WORKSPACE) -> np.ndarray:
+        """Drop the object in a seeded random orientation onto its neighbours (a pile: they stand at their resting
+        poses): its lowest point DROP_CLEARANCE above their highest, its centre at a seeded place within
+        ``spread`` (m, along x and y) of their middle, and let it and them come to rest; dropped again (up to
+        DROPS times, the neighbours back at rest) while any of them rests off the table or further than
+        ``within`` (m, along x or y) from its centre. Returns its mesh-frame world pose (the neighbours':
+        ``beside.poses``)."""
+        for _ in range(DROPS):
+            self.carry_payload(None)
+            self.beside.reset(self.client)
+            resting = self._drop(rng, vertices, onto=spread)
+            poses = [resting, *self.beside.poses(self.client)]
+            if all(np.all(np.abs(p[:2, 3]) < within) and p[2, 3] > -TABLE_THICKNESS for p in poses):
+                break
+        return resting
+
+    def _drop(self, rng: np.random.Generator, vertices: np.ndarray, gap: float | None = None,
+              onto: float | None = None) -> np.ndarray:
         self.park()
         pose = np.eye(4)
         pose[:3, :3] = _random_rotation(rng)
@@ -121,6 +139,8 @@ class PickWorld(SimWorld):
         pose[2, 3] = DROP_CLEARANCE - float(turned[:, 2].min())
         if gap is not None:
             pose[:2, 3] = self._beside_place(rng, turned[:, :2], gap)
+        if onto is not None:
+            pose[:3, 3] += self._onto_place(rng, turned, onto)
         self.set_object_pose(pose)
         pb.setGravity(0, 0, -9.81, physicsClientId=self.client)
         for _ in range(int(SETTLE_SECONDS / self.physics.time_step / SETTLE_CHECK)):
@@ -140,6 +160,17 @@ class PickWorld(SimWorld):
         far = max((float(np.max(transform_points(np.vstack(n.pieces), n.resting)[:, :2] @ way))
                    for n in self.beside.neighbours), default=0.0)
         return way * (far + gap - float(np.min(footprint @ way)))
+
+
+    def _onto_place(self, rng: np.random.Generator, turned: np.ndarray, spread: float) -> np.ndarray:
+        """(3,) where to move an object whose turned vertices (about its mesh origin, lowest at z = 0) are
+        ``turned`` (n, 3) so that it lies above the neighbours: its vertices' middle at a seeded place within
+        ``spread`` of theirs (along x and y), its lowest point at their highest."""
+        stood = np.vstack([transform_points(np.vstack(n.pieces), n.resting) for n in self.beside.neighbours])
+        middle = (stood[:, :2].min(axis=0) + stood[:, :2].max(axis=0)) / 2
+        mine = (turned[:, :2].min(axis=0) + turned[:, :2].max(axis=0)) / 2
+        place = middle + rng.uniform(-spread, spread, 2) - mine
+        return np.array([place[0], place[1], float(stood[:, 2].max())])
 
 
 def _random_rotation(rng: np.random.Generator) -> np.ndarray:

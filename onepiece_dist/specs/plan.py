@@ -133,6 +133,9 @@ class PickSpec(Frozen):
                          "beyond those already there, one camera aimed at their middle; a grasp picks the object it "
                          "closes on (docs/picks.md). With N > 1 the methods default to all but the full-mesh ones, "
                          "which need one object's mesh.")
+    pile: bool = Field(False, description="With clutter N > 1: each next object dropped onto those already there "
+                       "(its middle within 3 cm of theirs, a pile that touches and leans) instead of 1-5 cm beside "
+                       "them.")
 
     @field_validator("gripper", mode="before")
     @classmethod
@@ -152,6 +155,8 @@ class PickSpec(Frozen):
         if wrong:
             raise ValueError(f"methods {', '.join(wrong)} sample one object's full mesh and have no meaning with "
                              f"clutter {self.clutter}: leave them out (clutter runs {', '.join(CLUTTER_METHODS)})")
+        if self.pile and self.clutter < 2:
+            raise ValueError("pile drops each next object onto those there: it needs clutter 2 or more")
         return self
 
     def object_job(self, gripper: GripperSpec, voxel: VoxelSpec) -> JobSpec:

@@ -1,0 +1,52 @@
+"""Objects piled on the table (`onepiece pick --clutter N --pile`, `onepiece scene --pile`; sim.pick.settle_onto):
+each next object dropped onto those there instead of beside them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from onepiece_dist.core.frames import transform_points
+
+pytestmark = pytest.mark.sim
+
+
+def _lowest(objects, resting) -> list[float]:
+    return [float(transform_points(o.mesh.vertices, p)[:, 2].min()) for o, p in zip(objects, resting, strict=True)]
+
+
+def test_a_plate_dropped_onto_a_plate_rests_on_it_where_beside_it_rests_on_the_table(tmp_path):
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.clutter import loaded_object, settle_scene
+    from onepiece_dist.sim.pick import PickWorld
+    from onepiece_dist.specs.job import GripperSpec, JobSpec
+
+    plates = tuple(loaded_object(ref, JobSpec(), Path(tmp_path)) for ref in resolve_source("primitives[2:3]") * 2)
+    world = PickWorld(GripperSpec())  # box_60x60x15: 15 mm tall
+    piled = [_lowest(plates, settle_scene(world, plates, np.random.default_rng(seed), pile=True)) for seed in range(4)]
+    apart = [_lowest(plates, settle_scene(world, plates, np.random.default_rng(seed))) for seed in range(4)]
+    world.close()
+    assert all(first < 0.003 for first, _ in piled + apart)  # the first on the table either way
+    assert sum(second > 0.014 for _, second in piled) >= 3  # on the first plate (one may slide off its edge)
+    assert all(second < 0.003 for _, second in apart)
+
+
+def test_a_pile_needs_two_objects_or_more_and_the_scene_files_say_it_was_piled(tmp_path):
+    import json
+
+    from onepiece_dist.objects import load_object, resolve_source
+    from onepiece_dist.picks.scene_files import write_scene
+    from onepiece_dist.specs.job import JobSpec
+    from onepiece_dist.specs.plan import PickSpec
+
+    with pytest.raises(ValueError, match="pile drops each next object onto those there: it needs clutter 2"):
+        PickSpec(checkpoint="net.pt", pile=True)
+    assert PickSpec(checkpoint="net.pt", clutter=2, pile=True).pile
+    write_scene("primitives[2:3]+primitives[2:3]", tmp_path, count=2, pile=True)
+    scene = json.loads((tmp_path / "scene.json").read_text())
+    assert scene["pile"] is True
+    plate = load_object(resolve_source("primitives[2:3]")[0], JobSpec()).mesh.vertices
+    lowest = [transform_points(plate, np.array(o["resting_pose"]))[:, 2].min() for o in scene["objects"]]
+    assert lowest[0] < 0.003 and lowest[1] > 0.014  # the second on the first
