@@ -50,3 +50,16 @@ def test_a_pile_needs_two_objects_or_more_and_the_scene_files_say_it_was_piled(t
     plate = load_object(resolve_source("primitives[2:3]")[0], JobSpec()).mesh.vertices
     lowest = [transform_points(plate, np.array(o["resting_pose"]))[:, 2].min() for o in scene["objects"]]
     assert lowest[0] < 0.003 and lowest[1] > 0.014  # the second on the first
+
+
+def test_the_pile_section_says_the_objects_were_piled_and_the_beside_section_does_not():
+    from benchmarks.pages.pick_clutter_section import clutter_section
+    from tests.test_pick_clutter import _clutter_result
+
+    beside, piled = _clutter_result([7, 8], [5, 6]), {**_clutter_result([7, 8], [5, 6]), "pile": True}
+    assert clutter_section(beside)[0].startswith("## Several objects on the table: ")
+    assert clutter_section(piled)[0].startswith("## Objects piled on the table: ")
+    assert "--clutter N --pile` (`PickSpec.pile`) piles N on it" in clutter_section(piled)[2]
+    assert "onto those already there" in clutter_section(piled)[2]
+    words = clutter_section(beside)[2]
+    assert "onto" not in words and "1-5 cm beyond those already there" in words

@@ -109,16 +109,23 @@ def solver_words(result: dict) -> str:
             "by its force (docs/trials.md)")
 
 
+LAYOUTS = {False: ("Several objects on the table", "--clutter N` (`PickSpec.clutter`) sets N on it together",
+                   "each next one dropped 1-5 cm beyond those already there along a seeded direction"),
+           True: ("Objects piled on the table", "--clutter N --pile` (`PickSpec.pile`) piles N on it",
+                  "each next one dropped in a seeded orientation onto those already there (its lowest point 5 mm "
+                  "above their highest, its middle within 3 cm of theirs), so they touch and lean")}
+
+
 def clutter_section(result: dict) -> list[str]:
     sizes = list(result["scenes"])
     hand = ", the Franka hand" if result.get("gripper") else ""
-    lines = [f"## Several objects on the table{hand}: `{result['command']}`", "",
+    title, option, layout = LAYOUTS[bool(result.get("pile"))]
+    lines = [f"## {title}{hand}: `{result['command']}`", "",
              f"{result['date']}, {result['machine']}.{hand_words(result)} A robot's table holds more than one "
-             "object: `onepiece pick "
-             "--clutter N` (`PickSpec.clutter`) sets N on it together. Each object of the household and unseen sets "
+             f"object: `onepiece pick {option}. Each object of the household and unseen sets "
              f"with the next N-1 of its set (wrapping round: each object stands in N scenes), {result['views']} "
-             "seeded views a scene: the first object dropped at the table centre and settled, each next one dropped "
-             "1-5 cm beyond those already there along a seeded direction, all settled again, one camera aimed at "
+             f"seeded views a scene: the first object dropped at the table centre and settled, {layout}, all "
+             "settled again, one camera aimed at "
              "their middle (as above; the cloud kept within 0.25 m of it). Every chooser plans on the cloud of them "
              "all; a grasp picks when it lifts and holds the object it closes on (the one with the most of its true "
              f"surface between the fingers) through the pick protocol, the others standing beside it in every trial; "

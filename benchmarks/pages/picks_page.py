@@ -157,8 +157,9 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_panda", "pick_panda_check", "pick_clutter_panda", "pick_clearance_panda", "pick_ceiling_panda",
-            "pick_clutter", "pick_clearance", "pick_ceiling", "pick_ranked_draws", "pick_reranked",
+SECTIONS = ("pick_panda", "pick_panda_check", "pick_clutter_panda", "pick_clutter_panda_pile",
+            "pick_clearance_panda", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
+            "pick_ceiling", "pick_ranked_draws", "pick_reranked",
             "pick_robust_rank",
             "pick_rank_features", "pick_shape_check", "pick_check_trials", "pick_unseen", "pick_curve", "pick_space",
             "pick_on_policy",
@@ -188,7 +189,8 @@ def render_picks_page() -> str:
     render = {"pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
                                                     load("pick_panda_then")),
               "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda")),
-              "pick_clutter_panda": clutter_section,
+              "pick_clutter_panda": clutter_section, "pick_clutter_panda_pile": clutter_section,
+              "pick_clutter_pile": clutter_section,
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
