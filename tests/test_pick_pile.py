@@ -63,3 +63,25 @@ def test_the_pile_section_says_the_objects_were_piled_and_the_beside_section_doe
     assert "onto those already there" in clutter_section(piled)[2]
     words = clutter_section(beside)[2]
     assert "onto" not in words and "1-5 cm beyond those already there" in words
+
+
+def test_in_a_pile_what_leaned_on_a_picked_object_falls_and_what_leaves_the_table_leaves_the_scene(tmp_path):
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.clearance import on_table, resettled
+    from onepiece_dist.picks.clutter import loaded_object, settle_scene
+    from onepiece_dist.sim.pick import PickWorld
+    from onepiece_dist.specs.job import GripperSpec, JobSpec
+
+    plates = tuple(loaded_object(ref, JobSpec(), Path(tmp_path)) for ref in resolve_source("primitives[2:3]") * 2)
+    world = PickWorld(GripperSpec())
+    resting = list(settle_scene(world, plates, np.random.default_rng(0), pile=True))
+    assert _lowest(plates, resting)[1] > 0.014  # the second plate on the first
+    kept = resettled(world, plates, resting, [0, 1])  # nothing taken: the pile stays as it stood
+    assert np.allclose(kept[1][:3, 3], resting[1][:3, 3], atol=0.002)
+    fallen = resettled(world, plates, resting, [1])  # the first taken away
+    world.close()
+    assert _lowest(plates, fallen)[1] < 0.003 and np.array_equal(fallen[0], resting[0])
+    assert on_table(fallen[1])
+    off = np.eye(4)
+    off[:3, 3] = [0.6, 0.0, -0.2]
+    assert not on_table(off)

@@ -5,10 +5,12 @@ round a new camera sees what is left, the chooser's first grasp is executed, a p
 rounds in a row end it. Per chooser: the share of objects cleared (declutter rate) and of rounds that picked
 (grasp success rate), each over scenes with a 95% bootstrap interval.
 
-    .venv/bin/python -m benchmarks.experiments.pick_clearance [--gripper panda]
+    .venv/bin/python -m benchmarks.experiments.pick_clearance [--gripper panda] [--pile]
 
 Results: benchmarks/results/pick_clearance.json, rendered into docs/picks.md; with --gripper panda (the network
-shipped for the Franka hand planning, every grasp executed by that hand) pick_clearance_panda.json.
+shipped for the Franka hand planning, every grasp executed by that hand) pick_clearance_panda.json; with --pile
+(the objects piled as `onepiece pick --pile` piles them; what is left settles again after each pick)
+pick_clearance_pile.json.
 """
 
 from __future__ import annotations
@@ -30,14 +32,14 @@ SIZE, VIEWS = 4, 4
 METHODS = ("network", "random", "analytic", "top_down")
 
 
-def _spec(name: str, objects: str, gripper: str | None = None):
+def _spec(name: str, objects: str, gripper: str | None = None, pile: bool = False):
     from benchmarks.experiments.pick_clutter import shipped_for
     from onepiece_dist.specs.plan import PickSpec
 
     network, hand = shipped_for(gripper)
-    folder = "pick_clutter" + (f"_{gripper}" if gripper else "")
+    folder = "pick_clutter" + (f"_{gripper}" if gripper else "") + ("_pile" if pile else "")
     return PickSpec(objects=objects, checkpoint=str(network), gripper=hand, clutter=SIZE, views=VIEWS, pictures=0,
-                    output=str(ROOT / "data" / folder / name), methods=METHODS)
+                    output=str(ROOT / "data" / folder / name), methods=METHODS, pile=pile)
 
 
 def _scene(task):
@@ -49,12 +51,12 @@ def _scene(task):
     return clear_scenes(spec, groups_of(resolve_source(spec.objects), spec.clutter)[index], index)
 
 
-def measure(name: str, objects: str, processes: int = 2, gripper: str | None = None) -> dict:
-    """Each scene of one set cleared by each chooser (``gripper``: a preset, its shipped network planning): per
-    scene and method, objects cleared, objects, rounds."""
+def measure(name: str, objects: str, processes: int = 2, gripper: str | None = None, pile: bool = False) -> dict:
+    """Each scene of one set cleared by each chooser (``gripper``: a preset, its shipped network planning;
+    ``pile``: the objects piled): per scene and method, objects cleared, objects, rounds."""
     from onepiece_dist.objects import resolve_source
 
-    spec = _spec(name, objects, gripper)
+    spec = _spec(name, objects, gripper, pile)
     start = time.perf_counter()
     with get_context("spawn").Pool(processes) as pool:
         found = sorted(pool.imap_unordered(_scene, [(spec, i) for i in range(len(resolve_source(objects)))]),
@@ -84,18 +86,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--gripper", choices=("panda",), default=None,
                         help="the preset whose shipped network plans and whose hand executes")
+    parser.add_argument("--pile", action="store_true", help="the objects piled (onepiece pick --pile)")
     args = parser.parse_args()
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
-    measured = {name: measure(name, objects, gripper=args.gripper) for name, objects in sets.items()}
+    measured = {name: measure(name, objects, gripper=args.gripper, pile=args.pile) for name, objects in sets.items()}
     every = {f"{name}/{scene}": r for name, m in measured.items() for scene, r in m["scenes"].items()}
-    command = ".venv/bin/python -m benchmarks.experiments.pick_clearance" + (f" --gripper {args.gripper}"
-                                                                              if args.gripper else "")
+    command = (".venv/bin/python -m benchmarks.experiments.pick_clearance" + (f" --gripper {args.gripper}"
+                                                                               if args.gripper else "")
+               + (" --pile" if args.pile else ""))
     result = {"command": command, "date": date.today().isoformat(),
               "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "objects": SIZE, "views": VIEWS,
-              **hand_record(args.gripper), "methods": list(METHODS), "sets": measured,
+              **hand_record(args.gripper), **({"pile": True} if args.pile else {}), "methods": list(METHODS),
+              "sets": measured,
               "rates": {**{name: {m: rates(s["scenes"], m) for m in METHODS} for name, s in measured.items()},
                         "all scenes": {m: rates(every, m) for m in METHODS}}}
-    path = RESULTS if args.gripper is None else HERE / "results" / f"pick_clearance_{args.gripper}.json"
+    path = HERE / "results" / ("pick_clearance" + (f"_{args.gripper}" if args.gripper else "")
+                               + ("_pile" if args.pile else "") + ".json")
     path.write_text(json.dumps(result, indent=1) + "\n")
     print({name: {m: round(r["declutter"]["rate"], 3) for m, r in by.items()} for name, by in result["rates"].items()})
 

@@ -3,8 +3,10 @@ settled once; then, round after round, a new seeded camera sees what is left, th
 executed by the pick protocol on the object it closes on, and a picked object leaves the table. It ends when the
 table is clear, after MAX_FAILURES failed rounds in a row, or after MAX_ROUNDS rounds per object.
 
-What is left stays where it rested: a pick does not push its neighbours, and a failed pick leaves the scene as it
-was (each trial of the protocol starts from rest). Per chooser: the objects cleared and the rounds' outcomes."""
+Laid apart, what is left stays where it rested: a pick does not push its neighbours, and a failed pick leaves the
+scene as it was (each trial of the protocol starts from rest). In a pile (``PickSpec.pile``) what is left settles
+again after each object picked, so what leaned on it falls; an object that comes to rest off the table leaves the
+scene uncleared. Per chooser: the objects cleared and the rounds' outcomes."""
 
 from __future__ import annotations
 
@@ -73,7 +75,7 @@ def clear_scenes(spec: PickSpec, group: ObjectGroup, index: int) -> SceneClearan
 
 def _cleared(spec: PickSpec, scorer, world, objects, resting, view: int, method: str) -> tuple[bool, ...]:
     """Each round's outcome of ``method`` clearing ``objects`` resting at ``resting``."""
-    left, outcomes, failures = list(range(len(objects))), [], 0
+    left, outcomes, failures, resting = list(range(len(objects))), [], 0, list(resting)
     rng = np.random.default_rng([*scene_seed(spec, objects, view), ROUNDS_A_VIEW])  # the rounds' cameras
     while left and failures < MAX_FAILURES and len(outcomes) < MAX_ROUNDS * len(objects):
         here = tuple(objects[k] for k in left)
@@ -91,4 +93,26 @@ def _cleared(spec: PickSpec, scorer, world, objects, resting, view: int, method:
         failures = 0 if picked else failures + 1
         if picked:
             left.pop(aimed)
+            if spec.pile and left:
+                resting = resettled(world, objects, resting, left)
+                left = [k for k in left if on_table(resting[k])]
     return tuple(outcomes)
+
+
+def resettled(world, objects, resting: list[np.ndarray], left: list[int]) -> list[np.ndarray]:
+    """``resting`` with the objects ``left`` come to rest again where they stood (the picked one gone)."""
+    first, *others = left
+    objects[first].load_into(world)
+    world.set_neighbours(tuple(objects[k].neighbour(resting[k]) for k in others))
+    placed = world.settle_in_place(resting[first])
+    now = list(resting)
+    for k, pose in zip(left, [placed, *world.beside.poses(world.client)], strict=True):
+        now[k] = pose
+    return now
+
+
+def on_table(pose: np.ndarray) -> bool:
+    """Whether an object whose mesh frame rests at ``pose`` (4, 4) is still on the table."""
+    from onepiece_dist.sim.pick import TABLE_HALF, TABLE_THICKNESS
+
+    return bool(np.all(np.abs(pose[:2, 3]) < TABLE_HALF) and pose[2, 3] > -TABLE_THICKNESS)

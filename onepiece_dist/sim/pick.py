@@ -142,6 +142,19 @@ class PickWorld(SimWorld):
         if onto is not None:
             pose[:3, 3] += self._onto_place(rng, turned, onto)
         self.set_object_pose(pose)
+        return self._come_to_rest()
+
+    def settle_in_place(self, resting: np.ndarray) -> np.ndarray:
+        """The loaded object put at ``resting`` (4, 4) at rest among its neighbours (at theirs), and let it and
+        them come to rest (gravity on, the gripper parked): what leaned on an object taken away falls. Returns
+        its mesh-frame world pose (the neighbours': ``beside.poses``)."""
+        self.carry_payload(None)
+        self.park()
+        self.set_object_pose(resting)
+        return self._come_to_rest()
+
+    def _come_to_rest(self) -> np.ndarray:
+        """Step with gravity until the object and its neighbours are at rest (SETTLE_SECONDS at most): its pose."""
         pb.setGravity(0, 0, -9.81, physicsClientId=self.client)
         for _ in range(int(SETTLE_SECONDS / self.physics.time_step / SETTLE_CHECK)):
             for _ in range(SETTLE_CHECK):
