@@ -47,3 +47,7 @@ def test_the_clearance_page_names_the_best_heuristic_and_every_rate_with_its_int
                "+56 points over the best heuristic (top-down across the narrow axis of the largest object, 38%)"
                in line for line in lines)
     assert "| household | network on the view (as shipped) | 94% [88%, 100%] | 89% [78%, 100%] |" in lines
+    assert lines[0].startswith("## Clearing the table: ") and "does not push its neighbours" in lines[2]
+    piled = clearance_section({**result, "pile": True})
+    assert piled[0].startswith("## Clearing a pile: ") and "`--clutter 4 --pile`" in piled[2]
+    assert "so what leaned on it falls" in piled[2] and "does not push" not in piled[2]

@@ -10,6 +10,12 @@ LABELS = {"network": "network on the view (as shipped)", "random": "random colli
           "top_down": "top-down across the narrow axis of the largest object"}
 
 
+PILED = {False: ("Clearing the table", "", "What is left stays where it rested: a pick does not push its neighbours."),
+         True: ("Clearing a pile", " --pile", "After each object picked what is left comes to rest again, so what "
+                "leaned on it falls; an object that rests off the table leaves the scene uncleared. A failed pick "
+                "leaves the pile as it was.")}
+
+
 def _pct(value: float) -> str:
     return f"{100 * value:.0f}%"
 
@@ -25,15 +31,16 @@ def clearance_section(result: dict) -> list[str]:
     best = max(heuristics, key=lambda m: pooled[m]["declutter"]["rate"]) if heuristics else None
     scenes = sum(len(s["scenes"]) for s in result["sets"].values())
     hand = ", the Franka hand" if result.get("gripper") else ""
-    lines = [f"## Clearing the table{hand}: `{result['command']}`", "",
+    title, option, left = PILED[bool(result.get("pile"))]
+    lines = [f"## {title}{hand}: `{result['command']}`", "",
              f"{result['date']}, {result['machine']}.{hand_words(result)} VGN's declutter protocol on scenes of "
              f"{result['objects']} "
              f"objects (each household and unseen object with the next {result['objects'] - 1} of its set, settled "
-             f"as `--clutter {result['objects']}` settles them; {result['views']} settles a scene, {scenes} scenes): "
-             "round after round a new seeded camera sees what is left, the chooser's first grasp is executed by the "
-             "pick protocol on the object it closes on, and a picked object leaves the table; two failed rounds in a "
-             "row, or two rounds an object, end it (onepiece_dist/picks/clearance.py). What is left stays where it "
-             "rested: a pick does not push its neighbours. Declutter rate: objects cleared of objects; grasp "
+             f"as `--clutter {result['objects']}{option}` settles them; {result['views']} settles a scene, {scenes} "
+             "scenes): round after round a new seeded camera sees what is left, the chooser's first grasp is "
+             "executed by the pick protocol on the object it closes on, and a picked object leaves the table; two "
+             "failed rounds in a row, or two rounds an object, end it (onepiece_dist/picks/clearance.py). "
+             f"{left} Declutter rate: objects cleared of objects; grasp "
              "success rate: rounds that picked of rounds; each the mean over scenes with its 95% interval.", ""]
     if best is not None:
         net, other = pooled["network"]["declutter"]["rate"], pooled[best]["declutter"]["rate"]
