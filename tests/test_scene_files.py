@@ -55,9 +55,9 @@ def test_a_scenes_depth_png_read_back_in_the_base_frame_is_the_benchmarks_cloud_
 @pytest.mark.sim
 def test_onepiece_grasp_plans_on_the_files_onepiece_scene_writes_grasps_above_its_table(tmp_path):
     runner = CliRunner()
-    made = runner.invoke(app, ["scene", "primitives[3:6]", "--count", "2", "--out", str(tmp_path / "s")])
+    made = runner.invoke(app, ["scene", "primitives[3:6]", "--count", "2", "--out", str(tmp_path / "my scene")])
     assert made.exit_code == 0, made.output
-    command = json.loads((tmp_path / "s" / "scene.json").read_text())["grasp"]
+    command = json.loads((tmp_path / "my scene" / "scene.json").read_text())["grasp"]
     assert command in made.output
     args = shlex.split(command)[1:]
     planned = runner.invoke(app, [*args, "--out", str(tmp_path / "g"), "--json"])

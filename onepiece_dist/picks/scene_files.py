@@ -1,8 +1,7 @@
 """A depth camera's own files of objects on a table, made in simulation (`onepiece scene`): what a robot's camera
 would write, to try `onepiece grasp` end to end without a camera, or to check a camera set-up against. The objects
 are settled on the pick benchmark's table (one, or several side by side or piled as `onepiece pick --clutter`
-settles them),
-seen by one seeded camera as the benchmark draws it, and written as:
+settles them), seen by one seeded camera as the benchmark draws it, and written as:
 
 - ``depth.png``: 16-bit millimetres along the camera's axis, 0 where it saw nothing;
 - ``intrinsics.json``: the pinhole ``K`` (pixels) that puts each pixel where the renderer saw it;
@@ -17,6 +16,7 @@ millimetre the PNG keeps."""
 from __future__ import annotations
 
 import json
+import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,18 +49,17 @@ class SceneFiles:
         """The `onepiece grasp` command that plans on these files, in the base frame, within the scene's box."""
         x, y, _ = self.centre
         box = ",".join(f"{v:.2f}" for v in (x - WORKSPACE, y - WORKSPACE, -0.02, x + WORKSPACE, y + WORKSPACE, 0.4))
-        f = self.folder
-        return (f"onepiece grasp {f / 'depth.png'} --intrinsics {f / 'intrinsics.json'} --camera-pose "
-                f"{f / 'camera_pose.json'} --workspace {box}")
+        depth, intrinsics, pose = (shlex.quote(str(self.folder / name))
+                                   for name in ("depth.png", "intrinsics.json", "camera_pose.json"))
+        return f"onepiece grasp {depth} --intrinsics {intrinsics} --camera-pose {pose} --workspace {box}"
 
 
 def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0, camera: CameraSpec | None = None,
                 job: JobSpec | None = None, pile: bool = False) -> SceneFiles:
     """The first ``count`` objects of the source ``objects`` settled on the table (seeded by ``seed``; side by
-    side, or in a ``pile``: picks.clutter.settle_scene), seen by
-    one camera drawn as ``camera`` says (default: the pick benchmark's), written to ``folder`` (module doc).
-    Objects load as ``job`` asks (units, scale, physics; default JobSpec's); a bad one raises MeshRejected, too
-    few SourceError."""
+    side, or in a ``pile``: picks.clutter.settle_scene), seen by one camera drawn as ``camera`` says (default: the
+    pick benchmark's), written to ``folder`` (module doc). Objects load as ``job`` asks (units, scale, physics;
+    default JobSpec's); a bad one raises MeshRejected, too few SourceError."""
     camera, job = camera or CameraSpec(), job or JobSpec()
 
     refs = resolve_source(objects)[:count]
