@@ -67,3 +67,17 @@ def test_onepiece_grasp_plans_on_the_files_onepiece_scene_writes_grasps_above_it
     assert len(plan["objects"]) == 2  # both objects seen, told apart
     too_many = runner.invoke(app, ["scene", "primitives[3:4]", "--count", "2", "--out", str(tmp_path / "x")])
     assert too_many.exit_code == 2 and "1 object(s) found, 2 asked for" in too_many.output
+
+
+@pytest.mark.sim
+def test_a_scenes_depth_noise_moves_each_seen_pixel_by_about_its_deviation_and_no_empty_one(tmp_path):
+    from onepiece_dist.picks.scene_files import write_scene
+    from onepiece_dist.plan.camera_files import read_depth
+    from onepiece_dist.specs.plan import CameraSpec
+
+    write_scene("primitives[3:4]", tmp_path / "clean", seed=1)
+    write_scene("primitives[3:4]", tmp_path / "noisy", seed=1, camera=CameraSpec(depth_noise=0.002))
+    clean, noisy = read_depth(tmp_path / "clean" / "depth.png"), read_depth(tmp_path / "noisy" / "depth.png")
+    seen = clean > 0
+    assert np.array_equal(seen, noisy > 0)  # the same pixels saw something
+    assert 0.0018 < float(np.std(noisy[seen] - clean[seen])) < 0.0023  # 2 mm, and the PNG's millimetre steps

@@ -63,14 +63,18 @@ def scene(
     units: Annotated[str, typer.Option(help="Units of mesh files: m, cm or mm.")] = "m",
     pile: Annotated[bool, typer.Option("--pile", help="Drop each next object onto those there (a pile), not "
                                                       "beside them.")] = False,
+    depth_noise: Annotated[float, typer.Option(min=0.0, max=0.05, help="Gaussian depth noise (m) on every "
+                                                                      "pixel, as a real camera's.")] = 0.0,
 ) -> None:
     """A depth camera's own files of objects settled on a simulated table: a 16-bit depth PNG, its intrinsics and
     the camera's pose in the table's frame, to try `onepiece grasp` without a camera (docs/planning.md)."""
     from onepiece_dist.picks.scene_files import write_scene
     from onepiece_dist.specs.job import JobSpec
+    from onepiece_dist.specs.plan import CameraSpec
 
     try:
-        written = write_scene(objects, out, count, seed, job=JobSpec(objects=objects, units=units), pile=pile)
+        written = write_scene(objects, out, count, seed, CameraSpec(depth_noise=depth_noise),
+                              JobSpec(objects=objects, units=units), pile)
     except (SourceError, MeshRejected, ValueError) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
