@@ -1,0 +1,35 @@
+"""The depth-noise section of docs/picks.md (benchmarks/pages/pick_noise_section.py): each level's chooser rates
+beside the run without noise, and a change said only where its interval over objects excludes zero."""
+
+from __future__ import annotations
+
+
+def _set(name: str, network: list[bool], top_down: list[bool]) -> dict:
+    """A pick benchmark set of one view per object: each object's first attempt per chooser."""
+    objects = [{"name": f"o{k}", "status": "ok", "views": [{"attempts": {"network": (n,), "top_down": (t,)}}]}
+               for k, (n, t) in enumerate(zip(network, top_down, strict=True))]
+    rate = {m: sum(v) / len(v) for m, v in (("network", network), ("top_down", top_down))}
+    return {"name": name, "objects": objects,
+            "methods": [{"method": m, "first_attempt": r, "first_attempt_interval": [r, r]} for m, r in rate.items()]}
+
+
+def test_the_noise_section_pairs_each_level_against_no_noise_and_says_a_change_only_where_it_is_shown():
+    from benchmarks.experiments.pick_depth_noise import paired_first_attempts
+    from benchmarks.pages.pick_noise_section import noise_section
+
+    clean = [_set("household", [True] * 8, [False] * 8)]
+    same, worse = _set("household", [True] * 8, [False] * 8), _set("household", [False] * 8, [False] * 8)
+
+    def level(noise: float, judged: dict) -> dict:
+        return {"noise": noise, "sets": [judged],
+                "versus_clean": {m: paired_first_attempts([judged], clean, m) for m in ("network", "top_down")},
+                "network_vs_top_down": paired_first_attempts([judged], [judged], "network", "top_down")}
+
+    lines = noise_section({"command": "c", "date": "d", "machine": "m",
+                           "levels": [level(0.001, same), level(0.004, worse)]}, {"sets": clean})
+    assert "| 1 mm | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% |" in lines
+    assert "| 4 mm | household | 0% [0%, 0%] | 0% [0%, 0%] | 100% |" in lines
+    one = next(line for line in lines if line.startswith("1 mm:"))
+    four = next(line for line in lines if line.startswith("4 mm:"))
+    assert "+0.0 points [+0.0, +0.0] (not shown to differ)" in one and "the network over top-down +100.0" in one
+    assert "-100.0 points [-100.0, -100.0] (lower)" in four and "paired over the 8 meshes" in four
