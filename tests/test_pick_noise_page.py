@@ -14,7 +14,7 @@ def _set(name: str, network: list[bool], top_down: list[bool]) -> dict:
 
 
 def test_the_noise_section_pairs_each_level_against_no_noise_and_says_a_change_only_where_it_is_shown():
-    from benchmarks.experiments.pick_depth_noise import paired_first_attempts
+    from benchmarks.experiments.pick_depth_noise import BASELINE, against_baseline, paired_first_attempts
     from benchmarks.pages.pick_noise_section import noise_section
 
     clean = [_set("household", [True] * 8, [False] * 8)]
@@ -22,11 +22,12 @@ def test_the_noise_section_pairs_each_level_against_no_noise_and_says_a_change_o
 
     def level(noise: float, judged: dict) -> dict:
         return {"noise": noise, "sets": [judged],
-                "versus_clean": {m: paired_first_attempts([judged], clean, m) for m in ("network", "top_down")},
                 "network_vs_top_down": paired_first_attempts([judged], [judged], "network", "top_down")}
 
-    lines = noise_section({"command": "c", "date": "d", "machine": "m",
-                           "levels": [level(0.001, same), level(0.004, worse)]}, {"sets": clean})
+    levels = against_baseline([level(BASELINE, clean[0]), level(0.001, same), level(0.004, worse)])
+    assert "versus_baseline" not in levels[0]
+    lines = noise_section({"command": "c", "date": "d", "machine": "m", "levels": levels}, {"sets": clean})
+    assert next(line for line in lines if line.startswith("0.001 mm:")).endswith("+100.0 points [+100.0, +100.0].")
     assert "| 1 mm | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% |" in lines
     assert "| 4 mm | household | 0% [0%, 0%] | 0% [0%, 0%] | 100% |" in lines
     one = next(line for line in lines if line.startswith("1 mm:"))
