@@ -7,7 +7,11 @@ BASELINE, noise of a micrometre: the same objects, settles and cameras, and the 
 noise is drawn from its stream, so a run without noise would plan and check from other draws, a difference of its
 own of about 4 points at one draw a view).
 
+With the planner's ``denoise`` (PlanSpec, core.cloud.denoise: the noise measured under the support plane and
+taken out of the view) at ``auto``, its default, and at ``none``, each level paired against the other too.
+
     .venv/bin/python -m benchmarks.experiments.pick_depth_noise [--noises 0.000001,0.001,0.002,0.004]
+        [--denoise auto|none]
 
 Results: benchmarks/results/pick_depth_noise.json (a level run again replaces its own results), rendered into
 docs/picks.md.
@@ -30,48 +34,61 @@ NOISES = (BASELINE, 0.001, 0.002, 0.004)
 SETS, METHODS = ("household", "unseen"), ("network", "top_down")
 
 
-def level(noise: float) -> dict:
-    """Both sets judged with ``noise`` (m) on the camera's depth."""
+def level(noise: float, denoise: str) -> dict:
+    """Both sets judged with ``noise`` (m) on the camera's depth, the planner's ``denoise`` as given."""
     from benchmarks.experiments.picks import ATTEMPTS, VIEWS, sets
     from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.plan.shipped import NETWORK
-    from onepiece_dist.specs.plan import CameraSpec, PickSpec
+    from onepiece_dist.specs.plan import CameraSpec, PickSpec, PlanSpec
 
     judged = []
     for name in SETS:
         objects, source = sets()[name]
         spec = PickSpec(objects=objects(), checkpoint=str(NETWORK), views=VIEWS, attempts=ATTEMPTS, pictures=0,
-                        methods=METHODS, camera=CameraSpec(depth_noise=noise),
-                        output=str(ROOT / "data" / "pick_depth_noise" / f"{noise:g}" / name))
+                        methods=METHODS, camera=CameraSpec(depth_noise=noise), plan=PlanSpec(denoise=denoise),
+                        output=str(ROOT / "data" / "pick_depth_noise" / f"{noise:g}_{denoise}" / name))
         start = time.perf_counter()
         report = run_picks(spec)
         judged.append({**report.to_json(), "name": name, "source": source,
                        "seconds": round(time.perf_counter() - start, 1)})
-        print(noise, name, {m["method"]: m["first_attempt"] for m in judged[-1]["methods"]}, flush=True)
-    return {"noise": noise, "sets": judged,
+        print(noise, denoise, name, {m["method"]: m["first_attempt"] for m in judged[-1]["methods"]}, flush=True)
+    return {"noise": noise, "denoise": denoise, "sets": judged,
             "network_vs_top_down": paired_first_attempts(judged, judged, "network", "top_down")}
 
 
 def against_baseline(levels: list[dict]) -> list[dict]:
-    """``levels`` each with its choosers paired over objects against the BASELINE level's (where it is run)."""
-    base = next((lv for lv in levels if lv["noise"] == BASELINE), None)
-    return [{**lv, "versus_baseline": {m: paired_first_attempts(lv["sets"], base["sets"], m) for m in METHODS}}
-            if base is not None and lv is not base else lv for lv in levels]
+    """``levels`` each with its choosers paired over objects against the BASELINE level's of the same denoise
+    (where it is run), and the network with ``denoise`` auto against none at the same noise (where both are)."""
+    def found(noise: float, denoise: str) -> dict | None:
+        return next((lv for lv in levels if (lv["noise"], lv["denoise"]) == (noise, denoise)), None)
+
+    out = []
+    for lv in levels:
+        base, other = found(BASELINE, lv["denoise"]), found(lv["noise"], "none")
+        extra = {}
+        if base is not None and base is not lv:
+            extra["versus_baseline"] = {m: paired_first_attempts(lv["sets"], base["sets"], m) for m in METHODS}
+        if lv["denoise"] == "auto" and other is not None:
+            extra["versus_none"] = paired_first_attempts(lv["sets"], other["sets"], "network")
+        out.append({**{k: v for k, v in lv.items() if k not in ("versus_baseline", "versus_none")}, **extra})
+    return out
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--noises", default=",".join(f"{n:g}" for n in NOISES))
+    parser.add_argument("--denoise", choices=("auto", "none"), default="auto")
     args = parser.parse_args()
     kept = json.loads(RESULTS.read_text())["levels"] if RESULTS.is_file() else []
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_depth_noise", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "levels": kept}
     for noise in (float(n) for n in args.noises.split(",")):
-        found = level(noise)
-        out["levels"] = against_baseline(sorted([lv for lv in out["levels"] if lv["noise"] != noise] + [found],
-                                                key=lambda lv: lv["noise"]))
+        made = level(noise, args.denoise)
+        kept = [lv for lv in out["levels"] if (lv["noise"], lv["denoise"]) != (noise, args.denoise)]
+        out["levels"] = against_baseline(sorted([*kept, made], key=lambda lv: (lv["denoise"], lv["noise"])))
         RESULTS.write_text(json.dumps(out, indent=1) + "\n")
-    print(json.dumps({lv["noise"]: lv.get("versus_baseline") for lv in out["levels"]}, indent=1))
+    print(json.dumps([{k: lv.get(k) for k in ("noise", "denoise", "versus_baseline", "versus_none")}
+                      for lv in out["levels"]], indent=1))
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from onepiece_dist.core.cloud.denoise import NOISE_FLOOR, plane_noise, smoothed, widened
 from onepiece_dist.core.cloud.grasps import (
     CloudCandidates,
     SupportPlane,
@@ -21,7 +22,7 @@ from onepiece_dist.core.cloud.grasps import (
 )
 from onepiece_dist.core.cloud.objects import grasped_centres, separate_objects
 from onepiece_dist.core.cloud.outline import OUTLINE_MODELS, outline
-from onepiece_dist.core.cloud.support_check import support_plane
+from onepiece_dist.core.cloud.support_check import PLANE_TOLERANCE, support_plane
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, DepthRays, hand_grid, swept_space
 from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
@@ -151,11 +152,15 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     points, gripper = observation.points, record.gripper
     if len(points) > THIN_ABOVE:  # millions of points: thinned to about a depth camera's density first
         points = _thin(points, THIN_CELL)
-    plane = None
+    plane, noise = None, 0.0
     if spec.support_plane == "auto":
         up = None if observation.viewpoint is None else observation.viewpoint - points.mean(axis=0)
         plane = support_plane(points, rng, towards=up, up=observation.up)
+    if plane is not None and spec.denoise == "auto":
+        noise = plane_noise(points, plane)
+        plane = widened(points, plane, noise, PLANE_TOLERANCE) if noise >= NOISE_FLOOR else plane
     objects = points[~plane.inliers] if plane is not None else points
+    objects = smoothed(objects) if noise >= NOISE_FLOOR else objects
     table = points[plane.inliers] if plane is not None else np.zeros((0, 3))
     thin, thin_table = _thin(objects, spec.downsample), _thin(table, spec.downsample)
     found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,

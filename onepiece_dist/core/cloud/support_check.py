@@ -14,6 +14,8 @@ ABOVE = 0.004  # m: off the plane
 MIN_SHARE = 0.5  # of the points off the plane that must stand above it
 MAX_TILT_DEG = 45.0  # between a table's normal and the frame's up
 
+PLANE_TOLERANCE = 0.004  # m: a point this near the support plane is the table's
+
 
 def holds_objects(points: np.ndarray, plane: SupportPlane, up: np.ndarray | None = None) -> bool:
     """Whether most of ``points`` (m, 3) off ``plane`` lie above it and, with ``up`` (3,) the frame's known up,
@@ -27,7 +29,7 @@ def holds_objects(points: np.ndarray, plane: SupportPlane, up: np.ndarray | None
 
 
 def support_plane(points: np.ndarray, rng: np.random.Generator, towards: np.ndarray | None = None,
-                  up: np.ndarray | None = None, tolerance: float = 0.004) -> SupportPlane | None:
+                  up: np.ndarray | None = None, tolerance: float = PLANE_TOLERANCE) -> SupportPlane | None:
     """The plane the objects stand on: the dominant plane (core.cloud.grasps.fit_support_plane, its normal along
     ``towards``, the camera's side) checked by :func:`holds_objects`; when it holds nothing, the dominant plane of
     the points off it, once; None when neither does."""

@@ -1,0 +1,43 @@
+"""A depth camera's noise taken out of a view before planning (PlanSpec.denoise; docs/planning.md). The networks
+learn from exact renders; a real camera moves each point 1-2 mm along its ray. Nothing stands below a table, so
+the points just under the support plane are noise alone: their spread measures it. Where it is above
+NOISE_FLOOR (a renderer's depth steps are far below), the table takes every point within 3 deviations of it (the
+noise no longer leaves table points standing as specks of an object), and each object point is moved onto the
+least-squares plane of its SMOOTH_NEIGHBOURS nearest (the fuzz off a surface, its shape kept). Pure numpy and
+scipy's exact k-d tree, fixed-order products: the same bits on every CPU."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from onepiece_dist.core.cloud.grasps import SupportPlane, dot3, neighbour_indices
+from onepiece_dist.core.sampling import plane_normals
+
+NOISE_FLOOR = 0.0005  # m: a deviation below this is taken for exact depth and leaves the view as it is
+BELOW = 0.02  # m: the points this far under the plane, at most, measure the noise
+SMOOTH_NEIGHBOURS = 16
+HALF_NORMAL_MAD = 1.4826  # a half-normal's deviation over its median (1 / 0.6745)
+
+
+def plane_noise(points: np.ndarray, plane: SupportPlane) -> float:
+    """The depth noise's deviation (m) as the points up to BELOW under ``plane`` show it: HALF_NORMAL_MAD times
+    their median distance under it (0 where none lies there)."""
+    distance = plane.distance(points)
+    under = -distance[(distance < 0) & (distance > -BELOW)]
+    return float(HALF_NORMAL_MAD * np.median(under)) if len(under) else 0.0
+
+
+def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float) -> SupportPlane:
+    """``plane`` with every point within ``tolerance`` or 3 ``noise`` deviations of it its own."""
+    return SupportPlane(plane.normal, plane.offset, np.abs(plane.distance(points)) < max(tolerance, 3 * noise))
+
+
+def smoothed(points: np.ndarray, neighbours: int = SMOOTH_NEIGHBOURS) -> np.ndarray:
+    """(m, 3) each of ``points`` moved onto the least-squares plane of its ``neighbours`` nearest (itself among
+    them)."""
+    if len(points) < 3:
+        return points
+    near = points[neighbour_indices(points, points, neighbours)]
+    centre = near.mean(axis=1)
+    normal = plane_normals(near - centre[:, None, :])
+    return points - dot3(points - centre, normal)[:, None] * normal
