@@ -20,17 +20,24 @@ def test_the_noise_section_pairs_each_level_against_no_noise_and_says_a_change_o
     clean = [_set("household", [True] * 8, [False] * 8)]
     same, worse = _set("household", [True] * 8, [False] * 8), _set("household", [False] * 8, [False] * 8)
 
-    def level(noise: float, judged: dict) -> dict:
-        return {"noise": noise, "sets": [judged],
+    def level(noise: float, judged: dict, denoise: str = "none") -> dict:
+        return {"noise": noise, "denoise": denoise, "sets": [judged],
                 "network_vs_top_down": paired_first_attempts([judged], [judged], "network", "top_down")}
 
-    levels = against_baseline([level(BASELINE, clean[0]), level(0.001, same), level(0.004, worse)])
-    assert "versus_baseline" not in levels[0]
+    levels = against_baseline([level(BASELINE, clean[0]), level(0.001, same), level(0.004, worse),
+                               level(BASELINE, clean[0], "auto"), level(0.004, same, "auto")])
+    assert "versus_baseline" not in levels[0] and "versus_none" not in levels[2]
     lines = noise_section({"command": "c", "date": "d", "machine": "m", "levels": levels}, {"sets": clean})
-    assert next(line for line in lines if line.startswith("0.001 mm:")).endswith("+100.0 points [+100.0, +100.0].")
-    assert "| 1 mm | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% |" in lines
-    assert "| 4 mm | household | 0% [0%, 0%] | 0% [0%, 0%] | 100% |" in lines
-    one = next(line for line in lines if line.startswith("1 mm:"))
-    four = next(line for line in lines if line.startswith("4 mm:"))
+    assert next(line for line in lines if line.startswith("0.001 mm, denoise none:")).endswith(
+        "+100.0 points [+100.0, +100.0].")
+    assert "| 1 mm | none | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% [100%, 100%] |" in lines
+    assert "| 4 mm | none | household | 0% [0%, 0%] | 0% [0%, 0%] | 100% [100%, 100%] |" in lines
+    one = next(line for line in lines if line.startswith("1 mm, denoise none:"))
+    four = next(line for line in lines if line.startswith("4 mm, denoise none:"))
     assert "+0.0 points [+0.0, +0.0] (not shown to differ)" in one and "the network over top-down +100.0" in one
     assert "-100.0 points [-100.0, -100.0] (lower)" in four and "paired over the 8 meshes" in four
+    mended = next(line for line in lines if line.startswith("4 mm, denoise auto:"))
+    assert "against `denoise: none` +100.0 points [+100.0, +100.0] (higher)" in mended
+    assert "`denoise: auto` is **kept** as the planner's default" in lines[-1]
+    hurt = against_baseline([level(0.004, same), level(0.004, worse, "auto")])
+    assert "**not kept**" in noise_section({"command": "c", "date": "d", "machine": "m", "levels": hurt}, None)[-1]

@@ -15,7 +15,7 @@ from onepiece_dist.core.sampling import plane_normals
 
 NOISE_FLOOR = 0.0005  # m: a deviation below this is taken for exact depth and leaves the view as it is
 BELOW = 0.02  # m: the points this far under the plane, at most, measure the noise
-SMOOTH_NEIGHBOURS = 16
+SMOOTH_NEIGHBOURS = 32  # about 5 mm at a depth camera's 1.7 mm spacing: 2-4 mm of noise chose it (docs/picks.md)
 HALF_NORMAL_MAD = 1.4826  # a half-normal's deviation over its median (1 / 0.6745)
 
 

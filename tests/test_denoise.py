@@ -1,0 +1,62 @@
+"""A depth camera's noise taken out of a view before planning (core.cloud.denoise, PlanSpec.denoise): measured under
+the support plane, the table widened to it and the object's fuzz smoothed; an exact view planned as it came."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from onepiece_dist.core.cloud.denoise import NOISE_FLOOR, plane_noise, smoothed, widened
+from onepiece_dist.core.cloud.support_check import PLANE_TOLERANCE, support_plane
+
+
+def _table_and_box(noise: float, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """(points, is_table): a 30 cm table at z = 0 seen from above and a 6 x 4 x 5 cm box's top and two sides on it,
+    each point moved along z by Gaussian ``noise`` (m)."""
+    rng = np.random.default_rng(seed)
+    table = np.column_stack([rng.uniform(-0.15, 0.15, (12000, 2)), np.zeros(12000)])
+    table = table[~((np.abs(table[:, 0]) < 0.03) & (np.abs(table[:, 1]) < 0.02))]
+    top = np.column_stack([rng.uniform(-0.03, 0.03, 1500), rng.uniform(-0.02, 0.02, 1500), np.full(1500, 0.05)])
+    side = np.column_stack([np.full(800, 0.03), rng.uniform(-0.02, 0.02, 800), rng.uniform(0.0, 0.05, 800)])
+    points = np.vstack([table, top, side])
+    points[:, 2] += rng.normal(0.0, noise, len(points)) if noise else 0.0
+    return points, np.arange(len(points)) < len(table)
+
+
+def _plane(points: np.ndarray):
+    return support_plane(points, np.random.default_rng(1), up=np.array([0.0, 0.0, 1.0]))
+
+
+def test_the_noise_under_the_table_is_measured_and_an_exact_view_reads_as_exact():
+    exact, _ = _table_and_box(0.0)
+    assert plane_noise(exact, _plane(exact)) < NOISE_FLOOR
+    for noise in (0.001, 0.002, 0.004):
+        points, _ = _table_and_box(noise)
+        assert 0.8 * noise < plane_noise(points, _plane(points)) < 1.2 * noise
+
+
+def test_a_noisy_table_is_taken_whole_and_the_objects_fuzz_is_smoothed_its_shape_kept():
+    points, is_table = _table_and_box(0.002)
+    plane = _plane(points)
+    noise = plane_noise(points, plane)
+    wide = widened(points, plane, noise, PLANE_TOLERANCE)
+    assert plane.inliers[is_table].mean() < 0.96 and wide.inliers[is_table].mean() > 0.995  # no specks left
+    objects = points[~wide.inliers]
+    top = (objects[:, 2] > 0.04) & (np.abs(objects[:, 0]) < 0.025) & (np.abs(objects[:, 1]) < 0.015)
+    flat = smoothed(objects)
+    assert np.std(flat[top, 2]) < 0.5 * np.std(objects[top, 2])  # the box's top face twice as flat
+    assert abs(np.mean(flat[top, 2]) - 0.05) < 0.001  # and where it was
+
+
+def test_an_exact_view_is_planned_the_same_with_denoise_and_without():
+    from onepiece_dist.plan.observation import Observation
+    from onepiece_dist.plan.planner import propose
+    from onepiece_dist.plan.scorer import CropRecord
+    from onepiece_dist.specs.job import GripperSpec, VoxelSpec
+    from onepiece_dist.specs.plan import PlanSpec
+
+    record = CropRecord(GripperSpec(), VoxelSpec(), 128, "pointnet_context")
+    exact = Observation(_table_and_box(0.0)[0], np.array([0.3, 0.0, 0.6]), "exact")
+    made = [propose(exact, record, PlanSpec(candidates=100, denoise=d), np.random.default_rng(0))
+            for d in ("auto", "none")]
+    assert len(made[0].poses) > 0 and np.array_equal(made[0].poses, made[1].poses)
+    assert np.array_equal(made[0].object_points, made[1].object_points)
