@@ -60,3 +60,23 @@ def test_an_exact_view_is_planned_the_same_with_denoise_and_without():
             for d in ("auto", "none")]
     assert len(made[0].poses) > 0 and np.array_equal(made[0].poses, made[1].poses)
     assert np.array_equal(made[0].object_points, made[1].object_points)
+
+
+def test_onepiece_grasp_takes_the_noise_out_unless_told_not_to(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from onepiece_dist.cli.main import app
+    from tests.test_robot_io import CX, CY, FX, FY, depth_millimetres
+
+    depth = depth_millimetres().astype(np.float64) / 1000
+    np.save(tmp_path / "depth.npy", depth + np.random.default_rng(0).normal(0.0, 0.003, depth.shape))
+    plans = []
+    for flag in ("--denoise", "--no-denoise"):
+        result = CliRunner().invoke(app, ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}",
+                                          "--check", "0", "--out", str(tmp_path / flag), "--json", flag])
+        assert result.exit_code == 0, result.output
+        plans.append(json.loads(result.stdout))
+    assert plans[0]["grasps"] and plans[1]["grasps"]
+    assert [g["pose"] for g in plans[0]["grasps"]] != [g["pose"] for g in plans[1]["grasps"]]

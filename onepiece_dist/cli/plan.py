@@ -114,6 +114,9 @@ def grasp(
                                        "(its points and their shadows on the table) and reorder them by how often "
                                        "they held (kept by the pick benchmark: docs/picks.md); 0: the network's "
                                        "order alone.")] = 3,
+    denoise: Annotated[bool, typer.Option("--denoise/--no-denoise", help="Take a depth camera's noise out of the "
+                                          "view first, where the points under the table show it "
+                                          "(docs/planning.md); an exact view is left as it is.")] = True,
     check_shape: Annotated[str, typer.Option(help="The shape checked on: hull (the points and their shadows as one "
                                              "convex hull), carved (that hull less what the camera saw through: "
                                              "openings stay open) or mirrored (with the points' half turn about "
@@ -139,7 +142,7 @@ def grasp(
     try:
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check,
-                        check_shape=check_shape, objects_apart=not one_object,
+                        check_shape=check_shape, objects_apart=not one_object, denoise="auto" if denoise else "none",
                         target=None if aim is None else tuple(aim))
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, _gripper(gripper))
