@@ -11,10 +11,11 @@ With the planner's ``denoise`` (PlanSpec, core.cloud.denoise: the noise measured
 taken out of the view) at ``auto``, its default, and at ``none``, each level paired against the other too.
 
     .venv/bin/python -m benchmarks.experiments.pick_depth_noise [--noises 0.000001,0.001,0.002,0.004]
-        [--denoise auto|none]
+        [--denoise auto|none] [--gripper panda]
 
 Results: benchmarks/results/pick_depth_noise.json (a level run again replaces its own results), rendered into
-docs/picks.md.
+docs/picks.md; with --gripper panda (the network shipped for the Franka hand planning, every grasp executed by that
+hand) pick_depth_noise_panda.json.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import platform
 import time
 from datetime import date
 
+from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.pages.pick_sets import paired_first_attempts
 
@@ -34,19 +36,22 @@ NOISES = (BASELINE, 0.001, 0.002, 0.004)
 SETS, METHODS = ("household", "unseen"), ("network", "top_down")
 
 
-def level(noise: float, denoise: str) -> dict:
-    """Both sets judged with ``noise`` (m) on the camera's depth, the planner's ``denoise`` as given."""
+def level(noise: float, denoise: str, gripper: str | None = None) -> dict:
+    """Both sets judged with ``noise`` (m) on the camera's depth, the planner's ``denoise`` as given (``gripper``:
+    a preset, its shipped network planning)."""
+    from benchmarks.experiments.pick_clutter import shipped_for
     from benchmarks.experiments.picks import ATTEMPTS, VIEWS, sets
     from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.plan.shipped import NETWORK
     from onepiece_dist.specs.plan import CameraSpec, PickSpec, PlanSpec
 
     judged = []
     for name in SETS:
         objects, source = sets()[name]
-        spec = PickSpec(objects=objects(), checkpoint=str(NETWORK), views=VIEWS, attempts=ATTEMPTS, pictures=0,
-                        methods=METHODS, camera=CameraSpec(depth_noise=noise), plan=PlanSpec(denoise=denoise),
-                        output=str(ROOT / "data" / "pick_depth_noise" / f"{noise:g}_{denoise}" / name))
+        network, hand = shipped_for(gripper)
+        folder = ROOT / "data" / ("pick_depth_noise" + (f"_{gripper}" if gripper else "")) / f"{noise:g}_{denoise}"
+        spec = PickSpec(objects=objects(), checkpoint=str(network), gripper=hand, views=VIEWS, attempts=ATTEMPTS,
+                        pictures=0, methods=METHODS, camera=CameraSpec(depth_noise=noise),
+                        plan=PlanSpec(denoise=denoise), output=str(folder / name))
         start = time.perf_counter()
         report = run_picks(spec)
         judged.append({**report.to_json(), "name": name, "source": source,
@@ -78,15 +83,21 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--noises", default=",".join(f"{n:g}" for n in NOISES))
     parser.add_argument("--denoise", choices=("auto", "none"), default="auto")
+    parser.add_argument("--gripper", choices=("panda",), default=None,
+                        help="the preset whose shipped network plans and whose hand executes")
     args = parser.parse_args()
-    kept = json.loads(RESULTS.read_text())["levels"] if RESULTS.is_file() else []
-    out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_depth_noise", "date": date.today().isoformat(),
-           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "levels": kept}
+    path = RESULTS if args.gripper is None else RESULTS.with_name(f"pick_depth_noise_{args.gripper}.json")
+    kept = json.loads(path.read_text())["levels"] if path.is_file() else []
+    command = ".venv/bin/python -m benchmarks.experiments.pick_depth_noise" + (f" --gripper {args.gripper}"
+                                                                               if args.gripper else "")
+    out = {"command": command, "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **hand_record(args.gripper),
+           "levels": kept}
     for noise in (float(n) for n in args.noises.split(",")):
-        made = level(noise, args.denoise)
+        made = level(noise, args.denoise, args.gripper)
         kept = [lv for lv in out["levels"] if (lv["noise"], lv["denoise"]) != (noise, args.denoise)]
         out["levels"] = against_baseline(sorted([*kept, made], key=lambda lv: (lv["denoise"], lv["noise"])))
-        RESULTS.write_text(json.dumps(out, indent=1) + "\n")
+        path.write_text(json.dumps(out, indent=1) + "\n")
     print(json.dumps([{k: lv.get(k) for k in ("noise", "denoise", "versus_baseline", "versus_none")}
                       for lv in out["levels"]], indent=1))
 

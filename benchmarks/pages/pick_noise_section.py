@@ -4,6 +4,7 @@ paired over objects against noise of a micrometre, and the planner's ``denoise``
 
 from __future__ import annotations
 
+from benchmarks.pages.pick_clutter_section import hand_words
 from benchmarks.pages.pick_sets import interval, method_of, pct, pooled
 
 
@@ -33,8 +34,10 @@ def noise_section(result: dict, picks: dict | None) -> list[str]:
     rows = [f"| {_mm(lv['noise'])} | {lv.get('denoise', 'none')} | {s['name']} | {_rate(s, 'network')} | "
             f"{_rate(s, 'top_down')} | {_rate(clean[s['name']], 'network') if s['name'] in clean else '-'} |"
             for lv in levels for s in lv["sets"]]
-    lines = [f"## The planner under a depth camera's noise: `{result['command']}`", "",
-             f"{result['date']}, {result['machine']}. The benchmark renders exact depth; a real depth camera's is "
+    hand = ", the Franka hand" if result.get("gripper") else ""
+    lines = [f"## The planner under a depth camera's noise{hand}: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}.{hand_words(result)} The benchmark renders exact depth; a real "
+             "depth camera's is "
              "noisy, about 1-2 mm at 0.5-0.8 m (more at range and on dark or shiny surfaces). The household and "
              "unseen sets judged as above (8 views an object, the shipped network and the planner's defaults, beside "
              "top-down), every pixel of the camera moved along its ray by Gaussian noise (`onepiece pick` spec "

@@ -160,9 +160,9 @@ def _dense_line(plan: dict) -> str:
 # results rendered after the benchmark's, in this order
 SECTIONS = ("pick_panda", "pick_panda_check", "pick_clutter_panda", "pick_clutter_panda_pile", "pick_clearance_panda",
             "pick_clearance_panda_pile", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
-            "pick_clearance_pile", "pick_depth_noise", "pick_ceiling", "pick_ranked_draws", "pick_reranked",
-            "pick_robust_rank", "pick_rank_features", "pick_shape_check", "pick_check_trials", "pick_unseen",
-            "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down", "pick_points",
+            "pick_clearance_pile", "pick_depth_noise", "pick_depth_noise_panda", "pick_ceiling", "pick_ranked_draws",
+            "pick_reranked", "pick_robust_rank", "pick_rank_features", "pick_shape_check", "pick_check_trials",
+            "pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down", "pick_points",
             "pick_top_down_both", "pick_schedule", "pick_household_labels", "pick_outline", "pick_top_draws",
             "pick_rankings", "pick_pool_size")
 
@@ -195,6 +195,7 @@ def render_picks_page() -> str:
               "pick_clearance": clearance_section, "pick_clearance_pile": clearance_section,
               "pick_clearance_panda_pile": clearance_section,
               "pick_depth_noise": lambda r: noise_section(r, picks),
+              "pick_depth_noise_panda": lambda r: noise_section(r, _panda_picks(load("pick_panda"), picks)),
               "pick_ceiling": lambda r: _ceiling(r, picks),
               "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda"), picks)),
               "pick_ranked_draws": ranked_draws_section,
