@@ -67,9 +67,9 @@ def test_the_pile_section_says_the_objects_were_piled_and_the_beside_section_doe
 
 def test_in_a_pile_what_leaned_on_a_picked_object_falls_and_what_leaves_the_table_leaves_the_scene(tmp_path):
     from onepiece_dist.objects import resolve_source
-    from onepiece_dist.picks.clearance import on_table, resettled
+    from onepiece_dist.picks.clearance import resettled
     from onepiece_dist.picks.clutter import loaded_object, settle_scene
-    from onepiece_dist.sim.pick import PickWorld
+    from onepiece_dist.sim.pick import PickWorld, on_table
     from onepiece_dist.specs.job import GripperSpec, JobSpec
 
     plates = tuple(loaded_object(ref, JobSpec(), Path(tmp_path)) for ref in resolve_source("primitives[2:3]") * 2)

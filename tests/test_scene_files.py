@@ -20,7 +20,7 @@ def test_a_scenes_depth_png_read_back_in_the_base_frame_is_the_benchmarks_cloud_
     from onepiece_dist.picks.clutter import WORKSPACE
     from onepiece_dist.picks.scene_files import OPENCV, write_scene
     from onepiece_dist.plan.robot import read_observation
-    from onepiece_dist.sim.pick import TABLE_HALF, TABLE_THICKNESS
+    from onepiece_dist.sim.pick import TABLE_BOX
     from onepiece_dist.sim.views import back_project, camera_at, depth_images
     from onepiece_dist.specs.job import JobSpec
     from onepiece_dist.specs.plan import CameraSpec
@@ -38,8 +38,7 @@ def test_a_scenes_depth_png_read_back_in_the_base_frame_is_the_benchmarks_cloud_
     eye, centre = np.array(json.loads((f / "camera_pose.json").read_text())["matrix"])[:3, 3], np.array(written.centre)
     view = camera_at(eye, centre, camera.image_size, camera.fov_deg)
     assert np.allclose(view.pose @ OPENCV, pose)
-    table_box = (np.array([TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2]), np.array([0.0, 0.0, -TABLE_THICKNESS / 2]))
-    truth = back_project(depth_images(transform_points(mesh.vertices, resting), mesh.faces, [view], table_box)[0],
+    truth = back_project(depth_images(transform_points(mesh.vertices, resting), mesh.faces, [view], TABLE_BOX)[0],
                          view)
     assert len(seen) == len(truth)
     assert np.abs(seen - truth).max() < 0.001  # the half millimetre the PNG keeps, along a slanted ray

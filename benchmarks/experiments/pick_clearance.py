@@ -33,13 +33,12 @@ METHODS = ("network", "random", "analytic", "top_down")
 
 
 def _spec(name: str, objects: str, gripper: str | None = None, pile: bool = False):
-    from benchmarks.experiments.pick_clutter import shipped_for
+    from benchmarks.experiments.pick_clutter import scene_folder, shipped_for
     from onepiece_dist.specs.plan import PickSpec
 
     network, hand = shipped_for(gripper)
-    folder = "pick_clutter" + (f"_{gripper}" if gripper else "") + ("_pile" if pile else "")
     return PickSpec(objects=objects, checkpoint=str(network), gripper=hand, clutter=SIZE, views=VIEWS, pictures=0,
-                    output=str(ROOT / "data" / folder / name), methods=METHODS, pile=pile)
+                    output=str(ROOT / "data" / scene_folder(gripper, pile) / name), methods=METHODS, pile=pile)
 
 
 def _scene(task):

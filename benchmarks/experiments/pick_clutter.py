@@ -62,15 +62,20 @@ def hand_record(gripper: str | None) -> dict:
     return {"gripper": gripper, "solver_iterations": physics_for(shipped_for(gripper)[1]).solver_iterations}
 
 
+def scene_folder(gripper: str | None, pile: bool) -> str:
+    """The data folder (under data/) of the scenes' runs for the preset ``gripper`` (None: the default job's),
+    laid apart or in a ``pile``."""
+    return "pick_clutter" + (f"_{gripper}" if gripper else "") + ("_pile" if pile else "")
+
+
 def _spec(name: str, objects: str, size: int, run: str, gripper: str | None = None, pile: bool = False):
     from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     plan, methods = RUNS[run]
     network, hand = shipped_for(gripper)
-    folder = "pick_clutter" + (f"_{gripper}" if gripper else "") + ("_pile" if pile else "")
     return PickSpec(objects=objects, checkpoint=str(network), gripper=hand, clutter=size,
-                    output=str(ROOT / "data" / folder / name), views=VIEWS, attempts=ATTEMPTS, pictures=0,
-                    methods=methods, plan=PlanSpec(**plan), workers=2, pile=pile)
+                    output=str(ROOT / "data" / scene_folder(gripper, pile) / name), views=VIEWS, attempts=ATTEMPTS,
+                    pictures=0, methods=methods, plan=PlanSpec(**plan), workers=2, pile=pile)
 
 
 def measure(name: str, objects: str, size: int, run: str, gripper: str | None = None, pile: bool = False) -> dict:

@@ -55,9 +55,9 @@ def variant(name: str, point: dict, done: dict) -> dict:
         found.update(seed=point["seed"], checkpoint=point["network"]["checkpoint"])
     for set_name in SETS:
         objects, source = sets()[set_name]
-        found["sets"].append(run_set(set_name, objects(), source, ROOT / point["network"]["checkpoint"],
-                                     ROOT / "data" / "pick_panda_check" / name, ("network",),
-                                     PlanSpec(**VARIANTS[name]), views))
+        found["sets"].append(slim(run_set(set_name, objects(), source, ROOT / point["network"]["checkpoint"],
+                                          ROOT / "data" / "pick_panda_check" / name, ("network",),
+                                          PlanSpec(**VARIANTS[name]), views)))
         print(name, set_name, found["sets"][-1]["methods"][0]["first_attempt"], flush=True)
     if name in AGAINST:
         found["versus"] = {AGAINST[name]: paired(found["sets"], done[AGAINST[name]]["sets"], "network", "network")}
@@ -65,6 +65,18 @@ def variant(name: str, point: dict, done: dict) -> dict:
         before = [s for s in point["sets"] if s["name"] in SETS]
         found["versus"] = {base: paired(found["sets"], before, "network", base) for base in ("network", "top_down")}
     return found
+
+
+VIEW_KEPT = ("view", "attempts", "failures")  # what the pairings and the page read of a view
+OBJECT_KEPT = ("index", "name", "status", "reason", "views")
+
+
+def slim(judged: dict) -> dict:
+    """A set's report with each object and view cut to what is read of them (VIEW_KEPT, OBJECT_KEPT): the
+    variants' many views would otherwise take megabytes of camera and pool figures nothing reads."""
+    objects = [{**{k: o[k] for k in OBJECT_KEPT if k in o}, "views": [{k: v[k] for k in VIEW_KEPT} for v in o["views"]]}
+               for o in judged["objects"]]
+    return {**judged, "objects": objects}
 
 
 def main() -> None:

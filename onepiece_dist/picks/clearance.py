@@ -75,6 +75,8 @@ def clear_scenes(spec: PickSpec, group: ObjectGroup, index: int) -> SceneClearan
 
 def _cleared(spec: PickSpec, scorer, world, objects, resting, view: int, method: str) -> tuple[bool, ...]:
     """Each round's outcome of ``method`` clearing ``objects`` resting at ``resting``."""
+    from onepiece_dist.sim.pick import on_table
+
     left, outcomes, failures, resting = list(range(len(objects))), [], 0, list(resting)
     rng = np.random.default_rng([*scene_seed(spec, objects, view), ROUNDS_A_VIEW])  # the rounds' cameras
     while left and failures < MAX_FAILURES and len(outcomes) < MAX_ROUNDS * len(objects):
@@ -95,7 +97,7 @@ def _cleared(spec: PickSpec, scorer, world, objects, resting, view: int, method:
             left.pop(aimed)
             if spec.pile and left:
                 resting = resettled(world, objects, resting, left)
-                left = [k for k in left if on_table(resting[k])]
+                left = [k for k in left if on_table(resting[k])]  # what fell off leaves the scene uncleared
     return tuple(outcomes)
 
 
@@ -111,8 +113,3 @@ def resettled(world, objects, resting: list[np.ndarray], left: list[int]) -> lis
     return now
 
 
-def on_table(pose: np.ndarray) -> bool:
-    """Whether an object whose mesh frame rests at ``pose`` (4, 4) is still on the table."""
-    from onepiece_dist.sim.pick import TABLE_HALF, TABLE_THICKNESS
-
-    return bool(np.all(np.abs(pose[:2, 3]) < TABLE_HALF) and pose[2, 3] > -TABLE_THICKNESS)

@@ -132,9 +132,7 @@ def seen_scene(spec: PickSpec, record: CropRecord, objects: tuple[SceneObject, .
     planner's candidates on the cloud (the view's checks seeded by the objects, the spec's seed and ``view``)."""
     from onepiece_dist.sim.pick import observe_scene, pick_camera
 
-    vertices = [transform_points(o.mesh.vertices, pose) for o, pose in zip(objects, resting, strict=True)]
-    offsets = np.cumsum([0] + [len(o.mesh.vertices) for o in objects[:-1]])
-    faces = np.vstack([o.mesh.faces + k for o, k in zip(objects, offsets, strict=True)])
+    vertices, faces = scene_triangles(objects, resting)
     centre = np.mean([np.mean(v, axis=0) for v in vertices], axis=0)
     cam = spec.camera
     drawn = pick_camera(centre, rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
@@ -144,6 +142,15 @@ def seen_scene(spec: PickSpec, record: CropRecord, objects: tuple[SceneObject, .
     proposals = propose(Observation(cloud, eye, name), record, spec.plan, rng) if len(cloud) >= MIN_POINTS else None
     return PickView(view, resting[0], eye, drawn.distance, drawn.elevation_deg, cloud, proposals, rng,
                     (*scene_seed(spec, objects, view), CHECK_STREAM))
+
+
+def scene_triangles(objects: tuple[SceneObject, ...], resting: tuple[np.ndarray, ...]
+                    ) -> tuple[list[np.ndarray], np.ndarray]:
+    """Each object's mesh vertices where it rests (world frame), and the faces of them all as one mesh (indices
+    into the vertices stacked in order)."""
+    vertices = [transform_points(o.mesh.vertices, pose) for o, pose in zip(objects, resting, strict=True)]
+    offsets = np.cumsum([0] + [len(o.mesh.vertices) for o in objects[:-1]])
+    return vertices, np.vstack([o.mesh.faces + k for o, k in zip(objects, offsets, strict=True)])
 
 
 def scene_name(objects) -> str:

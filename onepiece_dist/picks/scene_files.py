@@ -23,12 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core import portable
-from onepiece_dist.core.frames import transform_points
 from onepiece_dist.core.raycast import import_open3d
 from onepiece_dist.errors import SourceError
 from onepiece_dist.objects import resolve_source
-from onepiece_dist.picks.clutter import WORKSPACE, loaded_object, settle_scene
-from onepiece_dist.sim.pick import TABLE_HALF, TABLE_THICKNESS, PickWorld, pick_camera
+from onepiece_dist.picks.clutter import WORKSPACE, loaded_object, scene_triangles, settle_scene
+from onepiece_dist.sim.pick import TABLE_BOX, PickWorld, pick_camera
 from onepiece_dist.sim.views import depth_images, linear_depth
 from onepiece_dist.specs.job import GripperSpec, JobSpec
 from onepiece_dist.specs.plan import CameraSpec
@@ -74,10 +73,10 @@ def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0,
         resting = settle_scene(world, scene, rng, pile)
     finally:
         world.close()
-    vertices = [transform_points(o.mesh.vertices, pose) for o, pose in zip(scene, resting, strict=True)]
+    vertices, faces = scene_triangles(scene, resting)
     centre = np.mean([v.mean(axis=0) for v in vertices], axis=0)
     seen = _camera(centre, rng, camera)
-    _write_depth(folder / "depth.png", _depth(scene, vertices, seen, camera.depth_noise, rng))
+    _write_depth(folder / "depth.png", _depth(np.vstack(vertices), faces, seen, camera.depth_noise, rng))
     _write_json(folder / "intrinsics.json", {"K": intrinsics(seen).tolist()})
     _write_json(folder / "camera_pose.json", {"matrix": (seen.pose @ OPENCV).tolist()})
     written = SceneFiles(folder, tuple(o.name for o in scene), tuple(float(v) for v in centre))
@@ -100,13 +99,10 @@ def _camera(centre: np.ndarray, rng: np.random.Generator, camera: CameraSpec):
     return pick_camera(centre, rng, camera.distance, camera.elevation_deg, camera.image_size, camera.fov_deg).camera
 
 
-def _depth(scene, vertices: list[np.ndarray], camera, noise: float, rng: np.random.Generator) -> np.ndarray:
-    """(size, size) uint16 millimetres of the objects and the table, 0 where the camera saw nothing; with Gaussian
-    ``noise`` (m, drawn from ``rng``) on every pixel that saw something."""
-    offsets = np.cumsum([0] + [len(o.mesh.vertices) for o in scene[:-1]])
-    faces = np.vstack([o.mesh.faces + k for o, k in zip(scene, offsets, strict=True)])
-    table = (np.array([TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2]), np.array([0.0, 0.0, -TABLE_THICKNESS / 2]))
-    metres = linear_depth(depth_images(np.vstack(vertices), faces, [camera], table)[0], camera)
+def _depth(vertices: np.ndarray, faces: np.ndarray, camera, noise: float, rng: np.random.Generator) -> np.ndarray:
+    """(size, size) uint16 millimetres of the objects (``vertices``, ``faces``: world frame) and the table, 0 where
+    the camera saw nothing; with Gaussian ``noise`` (m, drawn from ``rng``) on every pixel that saw something."""
+    metres = linear_depth(depth_images(vertices, faces, [camera], TABLE_BOX)[0], camera)
     if noise > 0:
         seen = metres > 0
         metres[seen] = np.maximum(metres[seen] + rng.normal(0.0, noise, int(seen.sum())), 0.001)

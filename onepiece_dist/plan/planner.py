@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from onepiece_dist.core.cloud.denoise import NOISE_FLOOR, plane_noise, smoothed, widened
+from onepiece_dist.core.cloud.denoise import denoised
 from onepiece_dist.core.cloud.grasps import (
     CloudCandidates,
     SupportPlane,
@@ -152,15 +152,14 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     points, gripper = observation.points, record.gripper
     if len(points) > THIN_ABOVE:  # millions of points: thinned to about a depth camera's density first
         points = _thin(points, THIN_CELL)
-    plane, noise = None, 0.0
+    plane = None
     if spec.support_plane == "auto":
         up = None if observation.viewpoint is None else observation.viewpoint - points.mean(axis=0)
         plane = support_plane(points, rng, towards=up, up=observation.up)
     if plane is not None and spec.denoise == "auto":
-        noise = plane_noise(points, plane)
-        plane = widened(points, plane, noise, PLANE_TOLERANCE) if noise >= NOISE_FLOOR else plane
-    objects = points[~plane.inliers] if plane is not None else points
-    objects = smoothed(objects) if noise >= NOISE_FLOOR else objects
+        plane, objects = denoised(points, plane, PLANE_TOLERANCE)
+    else:
+        objects = points[~plane.inliers] if plane is not None else points
     table = points[plane.inliers] if plane is not None else np.zeros((0, 3))
     thin, thin_table = _thin(objects, spec.downsample), _thin(table, spec.downsample)
     found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,

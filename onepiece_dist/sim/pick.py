@@ -39,6 +39,8 @@ WORKSPACE = 0.15  # m: the cloud kept around the object's resting place (VGN's w
 START_TOLERANCE = 1e-3  # m of penetration at the pregrasp that counts as a collision
 ROLLING_FRICTION = 0.002  # a table's resistance to rolling: a can on its side stops instead of leaving the table
 DROPS = 5  # drops tried until the object comes to rest within WORKSPACE of the table centre
+# the table as a box for the depth renderer: (half extents, centre), read only
+TABLE_BOX = (np.array([TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2]), np.array([0.0, 0.0, -TABLE_THICKNESS / 2]))
 
 
 class PickWorld(SimWorld):
@@ -93,7 +95,7 @@ class PickWorld(SimWorld):
         self.carry_payload(None)
         for _ in range(DROPS):
             resting = self._drop(rng, vertices)
-            if np.all(np.abs(resting[:2, 3]) < WORKSPACE / 2) and resting[2, 3] > -TABLE_THICKNESS:
+            if on_table(resting, WORKSPACE / 2):
                 break
         return resting
 
@@ -104,14 +106,7 @@ class PickWorld(SimWorld):
         way, and let it and them come to rest; dropped again (up to DROPS times, the neighbours back at rest)
         while any of them rests off the table or further than ``within`` (m, along x or y) from its centre.
         Returns its mesh-frame world pose (the neighbours': ``beside.poses``)."""
-        for _ in range(DROPS):
-            self.carry_payload(None)
-            self.beside.reset(self.client)
-            resting = self._drop(rng, vertices, gap)
-            poses = [resting, *self.beside.poses(self.client)]
-            if all(np.all(np.abs(p[:2, 3]) < within) and p[2, 3] > -TABLE_THICKNESS for p in poses):
-                break
-        return resting
+        return self._settle_among(rng, vertices, within, gap=gap)
 
     def settle_onto(self, rng: np.random.Generator, vertices: np.ndarray, spread: float,
                     within: float = WORKSPACE) -> np.ndarray:
@@ -121,12 +116,17 @@ class PickWorld(SimWorld):
         DROPS times, the neighbours back at rest) while any of them rests off the table or further than
         ``within`` (m, along x or y) from its centre. Returns its mesh-frame world pose (the neighbours':
         ``beside.poses``)."""
+        return self._settle_among(rng, vertices, within, onto=spread)
+
+    def _settle_among(self, rng: np.random.Generator, vertices: np.ndarray, within: float,
+                      gap: float | None = None, onto: float | None = None) -> np.ndarray:
+        """The object dropped among its neighbours (``_drop``'s ``gap`` or ``onto``) until it and they all rest on
+        the table within ``within`` of its centre (DROPS tries, the neighbours back at rest each): its pose."""
         for _ in range(DROPS):
             self.carry_payload(None)
             self.beside.reset(self.client)
-            resting = self._drop(rng, vertices, onto=spread)
-            poses = [resting, *self.beside.poses(self.client)]
-            if all(np.all(np.abs(p[:2, 3]) < within) and p[2, 3] > -TABLE_THICKNESS for p in poses):
+            resting = self._drop(rng, vertices, gap, onto)
+            if all(on_table(p, within) for p in [resting, *self.beside.poses(self.client)]):
                 break
         return resting
 
@@ -174,7 +174,6 @@ class PickWorld(SimWorld):
                    for n in self.beside.neighbours), default=0.0)
         return way * (far + gap - float(np.min(footprint @ way)))
 
-
     def _onto_place(self, rng: np.random.Generator, turned: np.ndarray, spread: float) -> np.ndarray:
         """(3,) where to move an object whose turned vertices (about its mesh origin, lowest at z = 0) are
         ``turned`` (n, 3) so that it lies above the neighbours: its vertices' middle at a seeded place within
@@ -184,6 +183,12 @@ class PickWorld(SimWorld):
         mine = (turned[:, :2].min(axis=0) + turned[:, :2].max(axis=0)) / 2
         place = middle + rng.uniform(-spread, spread, 2) - mine
         return np.array([place[0], place[1], float(stood[:, 2].max())])
+
+
+def on_table(pose: np.ndarray, within: float = TABLE_HALF) -> bool:
+    """Whether an object whose mesh frame rests at ``pose`` (4, 4) is on the table, within ``within`` (m, along x
+    and y) of its centre."""
+    return bool(np.all(np.abs(pose[:2, 3]) < within) and pose[2, 3] > -TABLE_THICKNESS)
 
 
 def _random_rotation(rng: np.random.Generator) -> np.ndarray:
@@ -224,8 +229,7 @@ def observe_scene(vertices: np.ndarray, faces: np.ndarray, centre: np.ndarray, c
     """(m, 3) world points the camera sees of the triangles ``vertices`` (world frame; every object of the scene)
     and ``faces`` on the table, kept within ``half`` (m, along x and y) of ``centre`` (3,), with Gaussian
     ``depth_noise`` (m)."""
-    table = (np.array([TABLE_HALF, TABLE_HALF, TABLE_THICKNESS / 2]), np.array([0.0, 0.0, -TABLE_THICKNESS / 2]))
-    depth = depth_images(vertices, faces, [camera], table)[0]
+    depth = depth_images(vertices, faces, [camera], TABLE_BOX)[0]
     points = back_project(depth, camera)
     if depth_noise > 0 and len(points):
         rays = points - camera.pose[:3, 3]

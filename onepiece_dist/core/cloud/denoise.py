@@ -41,3 +41,13 @@ def smoothed(points: np.ndarray, neighbours: int = SMOOTH_NEIGHBOURS) -> np.ndar
     centre = near.mean(axis=1)
     normal = plane_normals(near - centre[:, None, :])
     return points - dot3(points - centre, normal)[:, None] * normal
+
+
+def denoised(points: np.ndarray, plane: SupportPlane, tolerance: float) -> tuple[SupportPlane, np.ndarray]:
+    """``plane`` and the object points off it (the cloud ``points`` less the table's), the camera's noise taken
+    out where the points under the plane show one above NOISE_FLOOR (the module's doc); else as they came."""
+    noise = plane_noise(points, plane)
+    if noise < NOISE_FLOOR:
+        return plane, points[~plane.inliers]
+    wide = widened(points, plane, noise, tolerance)
+    return wide, smoothed(points[~wide.inliers])
