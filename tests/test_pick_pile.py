@@ -85,3 +85,28 @@ def test_in_a_pile_what_leaned_on_a_picked_object_falls_and_what_leaves_the_tabl
     off = np.eye(4)
     off[:3, 3] = [0.6, 0.0, -0.2]
     assert not on_table(off)
+
+
+def test_a_failed_pick_in_a_pile_leaves_the_objects_where_the_hand_left_them_and_a_start_in_collision_moves_none(
+        tmp_path):
+    from onepiece_dist.core.cloud.top_down import top_down_grasps
+    from onepiece_dist.objects import resolve_source
+    from onepiece_dist.picks.clutter import Scene, SceneExecutions, loaded_object, settle_scene
+    from onepiece_dist.sim.pick import PickWorld
+    from onepiece_dist.specs.job import GripperSpec, JobSpec
+    from onepiece_dist.specs.plan import PickSpec
+
+    plates = tuple(loaded_object(ref, JobSpec(), Path(tmp_path)) for ref in resolve_source("primitives[2:3]") * 2)
+    world = PickWorld(GripperSpec())
+    resting = settle_scene(world, plates, np.random.default_rng(0), pile=True)
+    executions = SceneExecutions(PickSpec(checkpoint="net.pt", clutter=2, pile=True), world, plates,
+                                 Scene(resting, None), 0)
+    under = top_down_grasps(transform_points(plates[0].mesh.vertices, resting[0]), np.array([0.0, 0, -1]),
+                            world.spec)[0]  # closes on the lower plate, the upper one lying across it
+    after = executions.aftermath(under)
+    sunk = under.copy()
+    sunk[2, 3] -= 0.05  # the hand would start inside the table
+    unmoved = executions.aftermath(sunk)
+    world.close()
+    assert after[0][2, 3] - resting[0][2, 3] > 0.01 and resting[1][2, 3] - after[1][2, 3] > 0.01  # pulled out: on top
+    assert all(np.array_equal(a, b) for a, b in zip(unmoved, resting, strict=True))

@@ -5,8 +5,10 @@ table is clear, after MAX_FAILURES failed rounds in a row, or after MAX_ROUNDS r
 
 Laid apart, what is left stays where it rested: a pick does not push its neighbours, and a failed pick leaves the
 scene as it was (each trial of the protocol starts from rest). In a pile (``PickSpec.pile``) what is left settles
-again after each object picked, so what leaned on it falls; an object that comes to rest off the table leaves the
-scene uncleared. Per chooser: the objects cleared and the rounds' outcomes."""
+again after each object picked, so what leaned on it falls; after a failed pick, the objects stay where the hand's
+one execution of the grasp left them (the protocol's nominal trial, the hand then letting go and parking: what it
+pushed or dropped has moved). An object that comes to rest off the table leaves the scene uncleared. Per chooser:
+the objects cleared and the rounds' outcomes."""
 
 from __future__ import annotations
 
@@ -84,20 +86,26 @@ def _cleared(spec: PickSpec, scorer, world, objects, resting, view: int, method:
         rest = tuple(resting[k] for k in left)
         code = view * ROUNDS_A_VIEW + len(outcomes)
         seen = seen_scene(spec, scorer.record, here, rest, rng, code)
-        picked, aimed = False, None
+        picked, aimed, after = False, None, None
         if seen.proposals is not None:
             choice = choose(method, spec, scorer, seen, None)
             if len(choice.poses):
                 executions = SceneExecutions(spec, world, here, Scene(rest, seen), code)
                 aimed = executions.target(choice.poses[0])
                 picked = executions.run(choice.pool, choice.indices[0], choice.poses[0]).success
+                if spec.pile and not picked:
+                    after = executions.aftermath(choice.poses[0])
         outcomes.append(picked)
         failures = 0 if picked else failures + 1
         if picked:
             left.pop(aimed)
             if spec.pile and left:
                 resting = resettled(world, objects, resting, left)
-                left = [k for k in left if on_table(resting[k])]  # what fell off leaves the scene uncleared
+        elif after is not None:  # a failed pick in a pile: what it pushed or dropped stays where it came to rest
+            for k, pose in zip(left, after, strict=True):
+                resting[k] = pose
+        if spec.pile:
+            left = [k for k in left if on_table(resting[k])]  # what fell off leaves the scene uncleared
     return tuple(outcomes)
 
 

@@ -179,14 +179,32 @@ class SceneExecutions:
 
         key = (pool, int(index))
         if key not in self.done:
-            aimed = self.target(pose)
-            self.objects[aimed].load_into(self.world)
-            self.world.set_neighbours(tuple(o.neighbour(rest) for k, (o, rest) in
-                                            enumerate(zip(self.objects, self.scene.resting, strict=True))
-                                            if k != aimed))
+            aimed = self._staged(pose)
             rng = np.random.default_rng([*self.seed, POOLS[pool], int(index)])
             self.done[key] = execute_pick(self.world, pose, self.scene.resting[aimed], self.noise, rng)
         return self.done[key]
+
+    def aftermath(self, pose: np.ndarray) -> list[np.ndarray]:
+        """Where each of the scene's objects rests (4, 4, in order) after the hand executed ``pose`` once (the
+        protocol's nominal trial, which draws nothing), let go and parked: what a failed pick pushed or dropped
+        stays where it came to rest. A start in collision moves nothing (the hand never went in)."""
+        from onepiece_dist.sim.pick import execute_trial
+
+        aimed = self._staged(pose)
+        failure = execute_trial(self.world, pose, self.scene.resting[aimed], self.noise, np.random.default_rng(0),
+                                perturbed=False)
+        if failure == "start_collision":
+            return list(self.scene.resting)
+        placed, others = self.world.let_go(), iter(self.world.beside.poses(self.world.client))
+        return [placed if k == aimed else next(others) for k in range(len(self.objects))]
+
+    def _staged(self, pose: np.ndarray) -> int:
+        """The object ``pose`` closes on loaded into the world, the others beside it at rest: its index."""
+        aimed = self.target(pose)
+        self.objects[aimed].load_into(self.world)
+        self.world.set_neighbours(tuple(o.neighbour(rest) for k, (o, rest) in
+                                        enumerate(zip(self.objects, self.scene.resting, strict=True)) if k != aimed))
+        return aimed
 
 
 def pick_scene(spec: PickSpec, group: ObjectGroup, index: int) -> ObjectPicks:

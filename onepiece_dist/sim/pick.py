@@ -153,6 +153,12 @@ class PickWorld(SimWorld):
         self.set_object_pose(resting)
         return self._come_to_rest()
 
+    def let_go(self) -> np.ndarray:
+        """The hand parked from wherever a trial left it (what it held falls), and the object and its neighbours
+        left to come to rest where they are: the object's mesh-frame world pose (the neighbours': ``beside.poses``)."""
+        self.park()
+        return self._come_to_rest()
+
     def _come_to_rest(self) -> np.ndarray:
         """Step with gravity until the object and its neighbours are at rest (SETTLE_SECONDS at most): its pose."""
         pb.setGravity(0, 0, -9.81, physicsClientId=self.client)
