@@ -36,9 +36,10 @@ NOISES = (BASELINE, 0.001, 0.002, 0.004)
 SETS, METHODS = ("household", "unseen"), ("network", "top_down")
 
 
-def level(noise: float, denoise: str, gripper: str | None = None) -> dict:
+def level(noise: float, denoise: str, gripper: str | None = None, network=None, folder=None) -> dict:
     """Both sets judged with ``noise`` (m) on the camera's depth, the planner's ``denoise`` as given (``gripper``:
-    a preset, its shipped network planning)."""
+    a preset, its shipped network planning unless ``network``, a checkpoint, is given; runs kept under ``folder``,
+    by default this benchmark's)."""
     from benchmarks.experiments.pick_clutter import shipped_for
     from benchmarks.experiments.picks import ATTEMPTS, VIEWS, sets
     from onepiece_dist.picks.runner import run_picks
@@ -47,11 +48,11 @@ def level(noise: float, denoise: str, gripper: str | None = None) -> dict:
     judged = []
     for name in SETS:
         objects, source = sets()[name]
-        network, hand = shipped_for(gripper)
-        folder = ROOT / "data" / ("pick_depth_noise" + (f"_{gripper}" if gripper else "")) / f"{noise:g}_{denoise}"
-        spec = PickSpec(objects=objects(), checkpoint=str(network), gripper=hand, views=VIEWS, attempts=ATTEMPTS,
-                        pictures=0, methods=METHODS, camera=CameraSpec(depth_noise=noise),
-                        plan=PlanSpec(denoise=denoise), output=str(folder / name))
+        shipped, hand = shipped_for(gripper)
+        runs = folder or ROOT / "data" / ("pick_depth_noise" + (f"_{gripper}" if gripper else ""))
+        spec = PickSpec(objects=objects(), checkpoint=str(network or shipped), gripper=hand, views=VIEWS,
+                        attempts=ATTEMPTS, pictures=0, methods=METHODS, camera=CameraSpec(depth_noise=noise),
+                        plan=PlanSpec(denoise=denoise), output=str(runs / f"{noise:g}_{denoise}" / name))
         start = time.perf_counter()
         report = run_picks(spec)
         judged.append({**report.to_json(), "name": name, "source": source,
