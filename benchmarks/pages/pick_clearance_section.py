@@ -12,8 +12,9 @@ LABELS = {"network": "network on the view (as shipped)", "random": "random colli
 
 PILED = {False: ("Clearing the table", "", "What is left stays where it rested: a pick does not push its neighbours."),
          True: ("Clearing a pile", " --pile", "After each object picked what is left comes to rest again, so what "
-                "leaned on it falls; an object that rests off the table leaves the scene uncleared. A failed pick "
-                "leaves the pile as it was.")}
+                "leaned on it falls; after a failed pick the objects stay where the hand's one execution of the grasp "
+                "left them (the protocol's nominal trial, the hand then letting go and parking), so what it pushed "
+                "or dropped has moved; an object that rests off the table leaves the scene uncleared.")}
 
 
 def _pct(value: float) -> str:
