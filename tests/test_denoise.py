@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from onepiece_dist.core.cloud.denoise import NOISE_FLOOR, plane_noise, smoothed, widened
+from onepiece_dist.core.cloud.denoise import NOISE_FLOOR, denoised, plane_noise, smoothed, widened
 from onepiece_dist.core.cloud.support_check import PLANE_TOLERANCE, support_plane
 
 
@@ -45,6 +45,21 @@ def test_a_noisy_table_is_taken_whole_and_the_objects_fuzz_is_smoothed_its_shape
     flat = smoothed(objects)
     assert np.std(flat[top, 2]) < 0.5 * np.std(objects[top, 2])  # the box's top face twice as flat
     assert abs(np.mean(flat[top, 2]) - 0.05) < 0.001  # and where it was
+
+
+def test_the_noises_tail_beyond_the_tables_band_leaves_no_speck_of_an_object_and_nothing_under_the_table():
+    points, _ = _table_and_box(0.002)
+    plane = _plane(points)
+    wide = widened(points, plane, plane_noise(points, plane), PLANE_TOLERANCE)
+
+    def off_the_box(cloud: np.ndarray) -> int:
+        return int(np.sum((np.abs(cloud[:, 0]) > 0.035) | (np.abs(cloud[:, 1]) > 0.025)))
+
+    assert off_the_box(points[~wide.inliers]) > 20 and np.sum(wide.distance(points[~wide.inliers]) < 0) > 5
+    kept, objects = denoised(points, plane, PLANE_TOLERANCE)
+    assert off_the_box(objects) == 0 and objects[:, 2].min() > 0.0
+    assert len(objects) > 0.98 * np.sum(~wide.inliers & (np.abs(points[:, 0]) < 0.035) & (np.abs(points[:, 1]) < 0.025))
+    assert np.array_equal(kept.inliers, wide.inliers)
 
 
 def test_an_exact_view_is_planned_the_same_with_denoise_and_without():

@@ -41,3 +41,24 @@ def test_the_noise_section_pairs_each_level_against_no_noise_and_says_a_change_o
     assert "`denoise: auto` is **kept** as the planner's default" in lines[-1]
     hurt = against_baseline([level(0.004, same), level(0.004, worse, "auto")])
     assert "**not kept**" in noise_section({"command": "c", "date": "d", "machine": "m", "levels": hurt}, None)[-1]
+
+
+def test_planner_variants_on_more_views_are_paired_against_the_first_variant_run_at_each_noise():
+    from benchmarks.pages.pick_noise_section import noise_views_section
+
+    def run(variant: str, noise: float, network: list[bool]) -> dict:
+        return {"variant": variant, "commit": "abc1234", "noise": noise,
+                "sets": [_set("household", network, [False] * 8)]}
+
+    half, all_ = [True] * 4 + [False] * 4, [True] * 8
+    result = {"command": "c", "date": "d", "machine": "m", "views": 24,
+              "runs": [run("before", 0.004, half), run("before", 0.002, half), run("after", 0.002, all_),
+                       run("after", 0.004, half)]}
+    lines = noise_views_section(result)
+    assert lines[0] == "## The planner under noise on 24 views an object, the Franka hand: `c`"
+    assert "| before | abc1234 | 2 mm | household | 50% [50%, 50%] | 0% [0%, 0%] |" in lines
+    two = next(line for line in lines if line.startswith("- 2 mm, after against before"))
+    four = next(line for line in lines if line.startswith("- 4 mm, after against before"))
+    assert "network +50.0 points [" in two and "(higher), pooled 100% against 50%" in two
+    assert "network +0.0 points [+0.0, +0.0] (not shown to differ)" in four
+    assert not any(line.startswith("- 2 mm, before") for line in lines)

@@ -5,7 +5,7 @@ paired over objects against noise of a micrometre, and the planner's ``denoise``
 from __future__ import annotations
 
 from benchmarks.pages.pick_clutter_section import hand_words
-from benchmarks.pages.pick_sets import interval, method_of, pct, pooled
+from benchmarks.pages.pick_sets import interval, method_of, paired_first_attempts, pct, pooled
 
 
 def _points(gain: dict) -> str:
@@ -74,3 +74,33 @@ def _verdict(levels: list[dict]) -> list[str]:
              "level (the interval above zero) and is shown to lower it at no level." if kept else
              "`denoise: auto` is **not kept**: it is shown to raise the first attempt at no noise level, or to "
              "lower it at some.")]
+
+
+def noise_views_section(result: dict) -> list[str]:
+    """results/pick_noise_views.json: planner variants under noise at more views an object, each paired over the
+    meshes against the first variant run."""
+    runs = result["runs"]
+    base = runs[0]["variant"]
+    rows = [f"| {r['variant']} | {r['commit']} | {_mm(r['noise'])} | {s['name']} | {_rate(s, 'network')} | "
+            f"{_rate(s, 'top_down')} |" for r in sorted(runs, key=lambda r: (r["noise"], r["variant"] != base))
+            for s in r["sets"]]
+    lines = [f"## The planner under noise on {result['views']} views an object, the Franka hand: "
+             f"`{result['command']}`", "",
+             f"{result['date']}, {result['machine']}.{hand_words(result)} A change to the planner's denoising moves "
+             "every later draw of a view (its candidates, its check), so at 8 views an object a few points are lost "
+             f"in the reshuffle. The household and unseen sets at {result['views']} views an object, each planner "
+             "variant at the commit it ran at, first attempt:", "",
+             "| variant | commit | noise | set | network on the view | top-down |",
+             "| --- | --- | --- | --- | --- | --- |", *rows, ""]
+    for r in runs:
+        if r["variant"] == base:
+            continue
+        was = next((b for b in runs if b["variant"] == base and b["noise"] == r["noise"]), None)
+        if was is None:
+            continue
+        net, top = (paired_first_attempts(r["sets"], was["sets"], m) for m in ("network", "top_down"))
+        now, then = (pct(pooled(sets, "network")["first_attempt"]) for sets in (r["sets"], was["sets"]))
+        lines.append(f"- {_mm(r['noise'])}, {r['variant']} against {base}, paired over the {net['objects']} meshes: "
+                     f"network {_points(net)} ({_said(net)}), pooled {now} against {then}; top-down {_points(top)} "
+                     f"({_said(top)}).")
+    return lines

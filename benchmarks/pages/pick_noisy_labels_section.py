@@ -70,7 +70,8 @@ def noisy_labels_section(result: dict) -> list[str]:
              f"fitted on the first batch (exact views, {batches[0]['labels']} labels) joined with it, seed for seed "
              "against the shipped recipe's networks (the second batch from exact views), each judged as the noise "
              "section above judges the shipped one (household and unseen sets, 8 views an object, the planner's "
-             "defaults), network first attempt:", "",
+             "defaults of that day: its denoising before the noise's far tail was dropped, above), network first "
+             "attempt:", "",
              "| noise | seed | second batch's views | household | unseen |", "| --- | --- | --- | --- | --- |", *rows,
              "", "The noisy labels' network against the exact labels', paired over the 28 meshes (each object's "
              "rate averaged over the seeds):", ""]

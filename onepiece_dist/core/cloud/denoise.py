@@ -2,9 +2,11 @@
 learn from exact renders; a real camera moves each point 1-2 mm along its ray. Nothing stands below a table, so
 the points just under the support plane are noise alone: their spread measures it. Where it is above
 NOISE_FLOOR (a renderer's depth steps are far below), the table takes every point within 3 deviations of it (the
-noise no longer leaves table points standing as specks of an object), and each object point is moved onto the
-least-squares plane of its SMOOTH_NEIGHBOURS nearest (the fuzz off a surface, its shape kept). Pure numpy and
-scipy's exact k-d tree, fixed-order products: the same bits on every CPU."""
+noise no longer leaves table points standing as specks of an object); what lies further below it is noise and is
+dropped, and so is the far tail above it, which stands as scattered specks (a point with fewer than
+SPECK_NEIGHBOURS others within SPECK_RADIUS); each object point left is moved onto the least-squares plane of its
+SMOOTH_NEIGHBOURS nearest (the fuzz off a surface, its shape kept). Pure numpy and scipy's exact k-d tree,
+fixed-order products: the same bits on every CPU."""
 
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ NOISE_FLOOR = 0.0005  # m: a deviation below this is taken for exact depth and l
 BELOW = 0.02  # m: the points this far under the plane, at most, measure the noise
 SMOOTH_NEIGHBOURS = 32  # about 5 mm at a depth camera's 1.7 mm spacing: 2-4 mm of noise chose it (docs/picks.md)
 HALF_NORMAL_MAD = 1.4826  # a half-normal's deviation over its median (1 / 0.6745)
+SPECK_NEIGHBOURS, SPECK_RADIUS = 4, 0.01  # a point with fewer than 4 others within 1 cm is a speck of noise
 
 
 def plane_noise(points: np.ndarray, plane: SupportPlane) -> float:
@@ -50,4 +53,14 @@ def denoised(points: np.ndarray, plane: SupportPlane, tolerance: float) -> tuple
     if noise < NOISE_FLOOR:
         return plane, points[~plane.inliers]
     wide = widened(points, plane, noise, tolerance)
-    return wide, smoothed(points[~wide.inliers])
+    above = points[~wide.inliers & (wide.distance(points) > 0)]  # nothing stands below a table
+    return wide, smoothed(without_specks(above))
+
+
+def without_specks(points: np.ndarray, neighbours: int = SPECK_NEIGHBOURS, radius: float = SPECK_RADIUS) -> np.ndarray:
+    """``points`` less those with fewer than ``neighbours`` others within ``radius`` (m): the noise's far tail
+    beyond the table's band stands as scattered specks, an object's surface as a dense sheet."""
+    if len(points) <= neighbours:
+        return points
+    nearest = points[neighbour_indices(points, points, neighbours + 1)[:, -1]]
+    return points[np.sum((nearest - points) ** 2, axis=1) <= radius * radius]
