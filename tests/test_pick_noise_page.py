@@ -53,7 +53,8 @@ def test_planner_variants_on_more_views_are_paired_against_the_first_variant_run
     half, all_ = [True] * 4 + [False] * 4, [True] * 8
     result = {"command": "c", "date": "d", "machine": "m", "views": 24,
               "runs": [run("before", 0.004, half), run("before", 0.002, half), run("after", 0.002, all_),
-                       run("after", 0.004, half)]}
+                       run("after", 0.004, half), run("worse", 0.002, all_), run("worse", 0.004, [False] * 8)],
+              "variants": {"before": "as it was", "after": "changed"}}
     lines = noise_views_section(result)
     assert lines[0] == "## The planner under noise on 24 views an object, the Franka hand: `c`"
     assert "| before | abc1234 | 2 mm | household | 50% [50%, 50%] | 0% [0%, 0%] |" in lines
@@ -62,3 +63,5 @@ def test_planner_variants_on_more_views_are_paired_against_the_first_variant_run
     assert "network +50.0 points [" in two and "(higher), pooled 100% against 50%" in two
     assert "network +0.0 points [+0.0, +0.0] (not shown to differ)" in four
     assert not any(line.startswith("- 2 mm, before") for line in lines)
+    assert "variant at the commit it ran at (before: as it was; after: changed), first attempt:" in lines[2]
+    assert lines[-2].startswith("After: **kept**") and lines[-1].startswith("Worse: **not kept**")

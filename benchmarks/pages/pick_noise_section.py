@@ -42,10 +42,12 @@ def noise_section(result: dict, picks: dict | None) -> list[str]:
              "unseen sets judged as above (8 views an object, the shipped network and the planner's defaults, beside "
              "top-down), every pixel of the camera moved along its ray by Gaussian noise (`onepiece pick` spec "
              "`camera.depth_noise`), first attempt; with the planner's `denoise` at `none` and at `auto` (its "
-             "default: the noise measured under the support plane, the table widened to 3 deviations and each "
-             "object point moved onto the plane of its nearest, core.cloud.denoise; an exact view is left as it "
-             "is). Each level is paired against noise of a micrometre, which moves no point to matter but is drawn "
-             "as every level's is: a view's noise comes from its stream, so a run without noise plans and checks "
+             "default: the noise measured under the support plane, the table widened to 3 deviations, the noise's "
+             "far tail dropped (below that band, and the specks above it) and each object point moved onto the "
+             "plane of its nearest, core.cloud.denoise; an exact view is left as it is; the levels with it were run "
+             "again when the tail was dropped, the section below). Each level is paired against noise of a "
+             "micrometre, which moves no point to matter but is drawn as every level's is: a view's noise comes "
+             "from its stream, so a run without noise plans and checks "
              "from other draws (the benchmark's own run, last column), a difference of its own:", "",
              "| noise | denoise | set | network on the view | top-down | network without noise (above) |",
              "| --- | --- | --- | --- | --- | --- |", *rows, ""]
@@ -89,7 +91,9 @@ def noise_views_section(result: dict) -> list[str]:
              f"{result['date']}, {result['machine']}.{hand_words(result)} A change to the planner's denoising moves "
              "every later draw of a view (its candidates, its check), so at 8 views an object a few points are lost "
              f"in the reshuffle. The household and unseen sets at {result['views']} views an object, each planner "
-             "variant at the commit it ran at, first attempt:", "",
+             "variant at the commit it ran at (" + "; ".join(f"{name}: {what}" for name, what in
+                                                             result.get("variants", {}).items()) + "), first attempt:",
+             "",
              "| variant | commit | noise | set | network on the view | top-down |",
              "| --- | --- | --- | --- | --- | --- |", *rows, ""]
     for r in runs:
@@ -103,4 +107,17 @@ def noise_views_section(result: dict) -> list[str]:
         lines.append(f"- {_mm(r['noise'])}, {r['variant']} against {base}, paired over the {net['objects']} meshes: "
                      f"network {_points(net)} ({_said(net)}), pooled {now} against {then}; top-down {_points(top)} "
                      f"({_said(top)}).")
-    return lines
+    return [*lines, "", *_variant_verdicts(runs, base)]
+
+
+def _variant_verdicts(runs: list[dict], base: str) -> list[str]:
+    """Each later variant against ``base``, by the denoise rule: kept where the network is shown to pick more at
+    some noise and shown to pick less at none."""
+    out = []
+    for variant in dict.fromkeys(r["variant"] for r in runs if r["variant"] != base):
+        gains = [paired_first_attempts(r["sets"], b["sets"], "network") for r in runs if r["variant"] == variant
+                 for b in runs if b["variant"] == base and b["noise"] == r["noise"]]
+        kept = any(g["interval"][0] > 0 for g in gains) and not any(g["interval"][1] < 0 for g in gains)
+        out.append(f"{variant.capitalize()}: **{'kept' if kept else 'not kept'}** (kept where the network picks more "
+                   "at some noise, the interval above zero, and is shown to pick less at none).")
+    return out
