@@ -65,13 +65,19 @@ def noise_section(result: dict, picks: dict | None) -> list[str]:
     return [*lines, "", *_verdict(levels)]
 
 
+def raised_never_lowered(gains: list[dict]) -> bool:
+    """The denoise rule over paired gains (each with its ``interval``): shown to raise picks at some level (the
+    interval above zero) and shown to lower them at none."""
+    return any(g["interval"][0] > 0 for g in gains) and not any(g["interval"][1] < 0 for g in gains)
+
+
 def _verdict(levels: list[dict]) -> list[str]:
     """Whether ``denoise: auto`` stays the planner's default: shown to raise picks at some level, and shown to
     lower them at none."""
     gains = [lv["versus_none"] for lv in levels if "versus_none" in lv and lv["noise"] > 1e-5]
     if not gains:
         return []
-    kept = any(g["interval"][0] > 0 for g in gains) and not any(g["interval"][1] < 0 for g in gains)
+    kept = raised_never_lowered(gains)
     return [("`denoise: auto` is **kept** as the planner's default: it raises the first attempt at some noise "
              "level (the interval above zero) and is shown to lower it at no level." if kept else
              "`denoise: auto` is **not kept**: it is shown to raise the first attempt at no noise level, or to "
@@ -117,7 +123,7 @@ def _variant_verdicts(runs: list[dict], base: str) -> list[str]:
     for variant in dict.fromkeys(r["variant"] for r in runs if r["variant"] != base):
         gains = [paired_first_attempts(r["sets"], b["sets"], "network") for r in runs if r["variant"] == variant
                  for b in runs if b["variant"] == base and b["noise"] == r["noise"]]
-        kept = any(g["interval"][0] > 0 for g in gains) and not any(g["interval"][1] < 0 for g in gains)
+        kept = raised_never_lowered(gains)
         out.append(f"{variant.capitalize()}: **{'kept' if kept else 'not kept'}** (kept where the network picks more "
                    "at some noise, the interval above zero, and is shown to pick less at none).")
     return out

@@ -7,7 +7,7 @@ interval at the labels' own noise lies above zero and no level's lies below it."
 from __future__ import annotations
 
 from benchmarks.pages.pick_noise_section import _mm
-from benchmarks.pages.pick_sets import loaded_objects
+from benchmarks.pages.pick_sets import loaded_objects, method_of
 from onepiece_dist.stats.intervals import PairedGain, paired_gain
 
 VIEWS = 8
@@ -23,7 +23,7 @@ def first(sets: list[dict], name: str) -> str:
     found = [s for s in sets if s["name"] == name]
     if not found:
         return "-"
-    rate = next(m for m in found[0]["methods"] if m["method"] == "network")["first_attempt"]
+    rate = method_of(found[0], "network")["first_attempt"]
     return f"{100 * rate:.1f}%"
 
 

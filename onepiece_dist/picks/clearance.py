@@ -119,5 +119,3 @@ def resettled(world, objects, resting: list[np.ndarray], left: list[int]) -> lis
     for k, pose in zip(left, [placed, *world.beside.poses(world.client)], strict=True):
         now[k] = pose
     return now
-
-
