@@ -5,7 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from onepiece_dist.core.cloud.denoise import NOISE_FLOOR, denoised, plane_noise, smoothed, widened
+from onepiece_dist.core.cloud.denoise import (
+    CUT,
+    CUT_MEDIAN,
+    HALF_NORMAL_MAD,
+    NOISE_FLOOR,
+    denoised,
+    plane_noise,
+    smoothed,
+    widened,
+)
 from onepiece_dist.core.cloud.support_check import PLANE_TOLERANCE, support_plane
 
 
@@ -32,6 +41,19 @@ def test_the_noise_under_the_table_is_measured_and_an_exact_view_reads_as_exact(
     for noise in (0.001, 0.002, 0.004):
         points, _ = _table_and_box(noise)
         assert 0.8 * noise < plane_noise(points, _plane(points)) < 1.2 * noise
+
+
+def test_a_cloud_cut_short_under_the_table_still_measures_the_whole_noise():
+    from scipy.special import erf, erfinv
+
+    assert np.allclose(CUT_MEDIAN, np.sqrt(2) * erfinv(erf(CUT / np.sqrt(2)) / 2), atol=1e-6)
+    assert abs(CUT_MEDIAN[-1] * HALF_NORMAL_MAD - 1) < 1e-5  # cut beyond the table, a half-normal's median
+    for noise in (0.002, 0.004):
+        points, _ = _table_and_box(noise, seed=3)
+        cut = points[points[:, 2] > -0.005]  # a workspace crop 5 mm under the table
+        assert 0.9 * noise < plane_noise(cut, _plane(cut)) < 1.1 * noise
+    median_alone = HALF_NORMAL_MAD * np.median(-cut[cut[:, 2] < 0, 2])
+    assert median_alone < 0.9 * noise  # at 4 mm the crop cuts the half-normal at 1.25 deviations
 
 
 def test_a_noisy_table_is_taken_whole_and_the_objects_fuzz_is_smoothed_its_shape_kept():

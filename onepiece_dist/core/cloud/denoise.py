@@ -1,6 +1,7 @@
 """A depth camera's noise taken out of a view before planning (PlanSpec.denoise; docs/planning.md). The networks
 learn from exact renders; a real camera moves each point 1-2 mm along its ray. Nothing stands below a table, so
-the points just under the support plane are noise alone: their spread measures it. Where it is above
+the points just under the support plane are noise alone: their spread measures it (a workspace crop may cut them
+short: the deepest of them says where, and a half-normal cut there is fitted to their median). Where it is above
 NOISE_FLOOR (a renderer's depth steps are far below), the table takes every point within 3 deviations of it (the
 noise no longer leaves table points standing as specks of an object); what lies further below it is noise and is
 dropped, and so is the far tail above it, which stands as scattered specks (a point with fewer than
@@ -20,14 +21,31 @@ BELOW = 0.02  # m: the points this far under the plane, at most, measure the noi
 SMOOTH_NEIGHBOURS = 32  # about 5 mm at a depth camera's 1.7 mm spacing: 2-4 mm of noise chose it (docs/picks.md)
 HALF_NORMAL_MAD = 1.4826  # a half-normal's deviation over its median (1 / 0.6745)
 SPECK_NEIGHBOURS, SPECK_RADIUS = 4, 0.01  # a point with fewer than 4 others within 1 cm is a speck of noise
+# A half-normal of deviation 1 cut at CUT keeps the median CUT_MEDIAN (sqrt(2) erfinv(erf(CUT / sqrt(2)) / 2), tabulated
+# so that the same bits come out on every CPU; tests/test_denoise.py computes it again); cut beyond 5 deviations, 1 /
+# HALF_NORMAL_MAD within 1e-5.
+CUT = np.arange(1.0, 5.01, 0.25)
+CUT_MEDIAN = np.array([0.441771, 0.516293, 0.572760, 0.612724, 0.639112, 0.655378, 0.664751, 0.669809, 0.672367,
+                       0.673582, 0.674124, 0.674351, 0.674440, 0.674473, 0.674484, 0.674488, 0.674489])
 
 
 def plane_noise(points: np.ndarray, plane: SupportPlane) -> float:
     """The depth noise's deviation (m) as the points up to BELOW under ``plane`` show it: HALF_NORMAL_MAD times
-    their median distance under it (0 where none lies there)."""
+    their median distance under it, or, where the deepest of them lies within 5 deviations (the cloud cut short
+    below the table, by a workspace crop or by BELOW), the deviation of a half-normal cut there with their median
+    (cut_deviation); 0 where none lies there."""
     distance = plane.distance(points)
     under = -distance[(distance < 0) & (distance > -BELOW)]
-    return float(HALF_NORMAL_MAD * np.median(under)) if len(under) else 0.0
+    return cut_deviation(float(np.median(under)), float(np.max(under))) if len(under) else 0.0
+
+
+def cut_deviation(median: float, deepest: float) -> float:
+    """The deviation of a half-normal whose draws, cut at ``deepest``, have ``median``: HALF_NORMAL_MAD times the
+    median where the cut lies beyond CUT[-1] deviations; at most ``deepest`` (a cut at CUT[0] deviations)."""
+    ratios = CUT_MEDIAN / CUT  # falls as the cut lies deeper
+    if median <= ratios[-1] * deepest:
+        return HALF_NORMAL_MAD * median
+    return deepest / float(np.interp(median / deepest, ratios[::-1], CUT[::-1]))
 
 
 def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float) -> SupportPlane:
