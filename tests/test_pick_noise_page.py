@@ -43,17 +43,18 @@ def test_the_noise_section_pairs_each_level_against_no_noise_and_says_a_change_o
     assert "**not kept**" in noise_section({"command": "c", "date": "d", "machine": "m", "levels": hurt}, None)[-1]
 
 
-def test_planner_variants_on_more_views_are_paired_against_the_first_variant_run_at_each_noise():
+def test_planner_variants_on_more_views_are_paired_against_the_variant_they_change_at_each_noise():
     from benchmarks.pages.pick_noise_section import noise_views_section
 
-    def run(variant: str, noise: float, network: list[bool]) -> dict:
+    def run(variant: str, noise: float, network: list[bool], against: str = "") -> dict:
         return {"variant": variant, "commit": "abc1234", "noise": noise,
-                "sets": [_set("household", network, [False] * 8)]}
+                "sets": [_set("household", network, [False] * 8)], **({"against": against} if against else {})}
 
     half, all_ = [True] * 4 + [False] * 4, [True] * 8
     result = {"command": "c", "date": "d", "machine": "m", "views": 24,
               "runs": [run("before", 0.004, half), run("before", 0.002, half), run("after", 0.002, all_),
-                       run("after", 0.004, half), run("worse", 0.002, all_), run("worse", 0.004, [False] * 8)],
+                       run("after", 0.004, half), run("worse", 0.002, all_), run("worse", 0.004, [False] * 8),
+                       run("on after", 0.002, half, "after"), run("on after", 0.004, all_, "after")],
               "variants": {"before": "as it was", "after": "changed"}}
     lines = noise_views_section(result)
     assert lines[0] == "## The planner under noise on 24 views an object, the Franka hand: `c`"
@@ -64,4 +65,8 @@ def test_planner_variants_on_more_views_are_paired_against_the_first_variant_run
     assert "network +0.0 points [+0.0, +0.0] (not shown to differ)" in four
     assert not any(line.startswith("- 2 mm, before") for line in lines)
     assert "variant at the commit it ran at (before: as it was; after: changed), first attempt:" in lines[2]
-    assert lines[-2].startswith("After: **kept**") and lines[-1].startswith("Worse: **not kept**")
+    assert lines[-3].startswith("After against before: **kept**")
+    assert lines[-2].startswith("Worse against before: **not kept**")
+    on_after = next(line for line in lines if line.startswith("- 2 mm, on after against after"))
+    assert "network -50.0 points" in on_after and "(lower)" in on_after  # against what it changes, not the first
+    assert lines[-1].startswith("On after against after: **not kept**")

@@ -86,7 +86,7 @@ def _verdict(levels: list[dict]) -> list[str]:
 
 def noise_views_section(result: dict) -> list[str]:
     """results/pick_noise_views.json: planner variants under noise at more views an object, each paired over the
-    meshes against the first variant run."""
+    meshes against the variant it changes (its run's ``against``, else the first variant run)."""
     runs = result["runs"]
     base = runs[0]["variant"]
     rows = [f"| {r['variant']} | {r['commit']} | {_mm(r['noise'])} | {s['name']} | {_rate(s, 'network')} | "
@@ -103,27 +103,36 @@ def noise_views_section(result: dict) -> list[str]:
              "| variant | commit | noise | set | network on the view | top-down |",
              "| --- | --- | --- | --- | --- | --- |", *rows, ""]
     for r in runs:
-        if r["variant"] == base:
-            continue
-        was = next((b for b in runs if b["variant"] == base and b["noise"] == r["noise"]), None)
+        was = _against(runs, r, base)
         if was is None:
             continue
         net, top = (paired_first_attempts(r["sets"], was["sets"], m) for m in ("network", "top_down"))
         now, then = (pct(pooled(sets, "network")["first_attempt"]) for sets in (r["sets"], was["sets"]))
-        lines.append(f"- {_mm(r['noise'])}, {r['variant']} against {base}, paired over the {net['objects']} meshes: "
+        lines.append(f"- {_mm(r['noise'])}, {r['variant']} against {was['variant']}, paired over the {net['objects']} "
+                     "meshes: "
                      f"network {_points(net)} ({_said(net)}), pooled {now} against {then}; top-down {_points(top)} "
                      f"({_said(top)}).")
     return [*lines, "", *_variant_verdicts(runs, base)]
 
 
+def _against(runs: list[dict], run: dict, base: str) -> dict | None:
+    """The run ``run``'s variant is paired against: its ``against`` variant's (else ``base``'s) at the same noise;
+    None for ``base`` itself or where that was not run."""
+    other = run.get("against", base)
+    if run["variant"] == base:
+        return None
+    return next((b for b in runs if b["variant"] == other and b["noise"] == run["noise"]), None)
+
+
 def _variant_verdicts(runs: list[dict], base: str) -> list[str]:
-    """Each later variant against ``base``, by the denoise rule: kept where the network is shown to pick more at
-    some noise and shown to pick less at none."""
+    """Each later variant against the one it changes (_against), by the denoise rule: kept where the network is
+    shown to pick more at some noise and shown to pick less at none."""
     out = []
     for variant in dict.fromkeys(r["variant"] for r in runs if r["variant"] != base):
-        gains = [paired_first_attempts(r["sets"], b["sets"], "network") for r in runs if r["variant"] == variant
-                 for b in runs if b["variant"] == base and b["noise"] == r["noise"]]
+        pairs = [(r, _against(runs, r, base)) for r in runs if r["variant"] == variant]
+        gains = [paired_first_attempts(r["sets"], b["sets"], "network") for r, b in pairs if b is not None]
         kept = raised_never_lowered(gains)
-        out.append(f"{variant.capitalize()}: **{'kept' if kept else 'not kept'}** (kept where the network picks more "
-                   "at some noise, the interval above zero, and is shown to pick less at none).")
+        against = next((b["variant"] for _, b in pairs if b is not None), base)
+        out.append(f"{variant.capitalize()} against {against}: **{'kept' if kept else 'not kept'}** (kept where the "
+                   "network picks more at some noise, the interval above zero, and is shown to pick less at none).")
     return out
