@@ -23,6 +23,7 @@ from datetime import date
 from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.experiments.pick_depth_noise import level
+from benchmarks.experiments.pick_panda_check import slim
 
 RESULTS = HERE / "results" / "pick_noise_views.json"
 VIEWS, NOISES, GRIPPER = 24, (0.004, 0.002), "panda"
@@ -44,7 +45,7 @@ def main() -> None:
            "variants": {**before.get("variants", {}), **({args.variant: args.what} if args.what else {})}}
     for noise in (float(n) for n in args.noises.split(",")):
         judged = level(noise, "auto", GRIPPER, folder=ROOT / "data" / "pick_noise_views" / args.variant, views=VIEWS)
-        run = {"variant": args.variant, "commit": commit, "noise": noise, "sets": judged["sets"],
+        run = {"variant": args.variant, "commit": commit, "noise": noise, "sets": [slim(s) for s in judged["sets"]],
                **({"against": args.against} if args.against else {})}
         out["runs"] = [*[r for r in out["runs"] if (r["variant"], r["noise"]) != (args.variant, noise)], run]
         RESULTS.write_text(json.dumps(out, indent=1) + "\n")
