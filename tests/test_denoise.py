@@ -116,4 +116,6 @@ def test_onepiece_grasp_takes_the_noise_out_unless_told_not_to(tmp_path):
         assert result.exit_code == 0, result.output
         plans.append(json.loads(result.stdout))
     assert plans[0]["grasps"] and plans[1]["grasps"]
+    assert NOISE_FLOOR < plans[0]["support_plane"]["depth_noise"] < 0.0035  # its height, 3 mm along the rays
+    assert plans[1]["support_plane"]["depth_noise"] == 0
     assert [g["pose"] for g in plans[0]["grasps"]] != [g["pose"] for g in plans[1]["grasps"]]

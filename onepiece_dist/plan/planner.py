@@ -128,13 +128,15 @@ class GraspPlan:
         plane = None
         if self.plane is not None:
             normal = apply_rotation(pose[:3, :3], self.plane.normal)
-            plane = SupportPlane(normal, self.plane.offset - float(dot3(normal, pose[:3, 3])), self.plane.inliers)
+            plane = SupportPlane(normal, self.plane.offset - float(dot3(normal, pose[:3, 3])), self.plane.inliers,
+                                 self.plane.noise)
         return dataclasses.replace(self, grasps=grasps, plane=plane, objects=tuple(o.moved(pose) for o in self.objects))
 
     def to_json(self) -> dict:
         plane = None if self.plane is None else {"normal": np.round(self.plane.normal, 9).tolist(),
                                                  "offset": round(self.plane.offset, 9),
-                                                 "points": int(self.plane.inliers.sum())}
+                                                 "points": int(self.plane.inliers.sum()),
+                                                 "depth_noise": round(self.plane.noise, 6)}
         return {"source": self.source, "frame": "the cloud's frame (the robot's base with a camera pose); pose: "
                 "ours (u approach, v closing, origin at the palm centre); panda_pose, and position + quaternion "
                 "(x, y, z, w): the Franka Panda hand (z approach, x closing, origin at the hand base); pregrasp: "

@@ -49,8 +49,8 @@ def cut_deviation(median: float, deepest: float) -> float:
 
 
 def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float) -> SupportPlane:
-    """``plane`` with every point within ``tolerance`` or 3 ``noise`` deviations of it its own."""
-    return SupportPlane(plane.normal, plane.offset, np.abs(plane.distance(points)) < max(tolerance, 3 * noise))
+    """``plane`` with every point within ``tolerance`` or 3 ``noise`` deviations of it its own, and ``noise``."""
+    return SupportPlane(plane.normal, plane.offset, np.abs(plane.distance(points)) < max(tolerance, 3 * noise), noise)
 
 
 def smoothed(points: np.ndarray, neighbours: int = SMOOTH_NEIGHBOURS) -> np.ndarray:

@@ -37,11 +37,13 @@ def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class SupportPlane:
     """A plane ``normal . x + offset = 0`` (unit normal towards the objects on it); ``inliers`` (m,) bool marks
-    the cloud points that lie on it."""
+    the cloud points that lie on it; ``noise``: the depth noise's deviation (m) measured under it where the
+    planner took that noise out (core.cloud.denoise), else 0."""
 
     normal: np.ndarray
     offset: float
     inliers: np.ndarray
+    noise: float = 0.0
 
     def distance(self, points: np.ndarray) -> np.ndarray:
         """Signed distance (..., ) of points (..., 3) above the plane."""
