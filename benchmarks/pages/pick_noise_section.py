@@ -119,9 +119,9 @@ def noise_views_section(result: dict) -> list[str]:
 def _against(runs: list[dict], run: dict, base: str) -> dict | None:
     """The run ``run``'s variant is paired against: its ``against`` variant's (else ``base``'s) at the same noise;
     None for ``base`` itself or where that was not run."""
-    other = run.get("against", base)
     if run["variant"] == base:
         return None
+    other = run.get("against", base)
     return next((b for b in runs if b["variant"] == other and b["noise"] == run["noise"]), None)
 
 

@@ -128,8 +128,8 @@ class GraspPlan:
         plane = None
         if self.plane is not None:
             normal = apply_rotation(pose[:3, :3], self.plane.normal)
-            plane = SupportPlane(normal, self.plane.offset - float(dot3(normal, pose[:3, 3])), self.plane.inliers,
-                                 self.plane.noise)
+            plane = dataclasses.replace(self.plane, normal=normal,
+                                        offset=self.plane.offset - float(dot3(normal, pose[:3, 3])))
         return dataclasses.replace(self, grasps=grasps, plane=plane, objects=tuple(o.moved(pose) for o in self.objects))
 
     def to_json(self) -> dict:

@@ -27,6 +27,7 @@ SPECK_NEIGHBOURS, SPECK_RADIUS = 4, 0.01  # a point with fewer than 4 others wit
 CUT = np.arange(1.0, 5.01, 0.25)
 CUT_MEDIAN = np.array([0.441771, 0.516293, 0.572760, 0.612724, 0.639112, 0.655378, 0.664751, 0.669809, 0.672367,
                        0.673582, 0.674124, 0.674351, 0.674440, 0.674473, 0.674484, 0.674488, 0.674489])
+CUT_RATIO = CUT_MEDIAN / CUT  # the median over the cut: falls as the cut lies deeper
 
 
 def plane_noise(points: np.ndarray, plane: SupportPlane) -> float:
@@ -42,10 +43,9 @@ def plane_noise(points: np.ndarray, plane: SupportPlane) -> float:
 def cut_deviation(median: float, deepest: float) -> float:
     """The deviation of a half-normal whose draws, cut at ``deepest``, have ``median``: HALF_NORMAL_MAD times the
     median where the cut lies beyond CUT[-1] deviations; at most ``deepest`` (a cut at CUT[0] deviations)."""
-    ratios = CUT_MEDIAN / CUT  # falls as the cut lies deeper
-    if median <= ratios[-1] * deepest:
+    if median <= CUT_RATIO[-1] * deepest:
         return HALF_NORMAL_MAD * median
-    return deepest / float(np.interp(median / deepest, ratios[::-1], CUT[::-1]))
+    return deepest / float(np.interp(median / deepest, CUT_RATIO[::-1], CUT[::-1]))
 
 
 def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float) -> SupportPlane:
