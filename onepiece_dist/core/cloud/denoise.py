@@ -48,9 +48,25 @@ def cut_deviation(median: float, deepest: float) -> float:
     return deepest / float(np.interp(median / deepest, CUT_RATIO[::-1], CUT[::-1]))
 
 
-def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float) -> SupportPlane:
-    """``plane`` with every point within ``tolerance`` or 3 ``noise`` deviations of it its own, and ``noise``."""
-    return SupportPlane(plane.normal, plane.offset, np.abs(plane.distance(points)) < max(tolerance, 3 * noise), noise)
+def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float,
+            slopes: np.ndarray | float = 1.0) -> SupportPlane:
+    """``plane`` with every point within ``tolerance`` or 3 ``noise`` deviations of it its own (each deviation
+    times the point's ``slopes``: ray_slopes), and ``noise``."""
+    band = np.maximum(tolerance, 3 * noise * slopes)
+    return SupportPlane(plane.normal, plane.offset, np.abs(plane.distance(points)) < band, noise)
+
+
+def ray_slopes(points: np.ndarray, plane: SupportPlane, viewpoint: np.ndarray | None) -> np.ndarray | float:
+    """(m,) how far a step along each point's camera ray moves it off ``plane``, over the median of those of the
+    points up to BELOW under it (whose spread measured the noise): the noise runs along the rays, so a steeper ray
+    spreads the table's points further from it. 1.0 where the camera's position is unknown."""
+    if viewpoint is None:
+        return 1.0
+    rays = points - viewpoint
+    slopes = np.abs(dot3(rays, plane.normal)) / np.sqrt(dot3(rays, rays))
+    distance = plane.distance(points)
+    under = slopes[(distance < 0) & (distance > -BELOW)]
+    return slopes / float(np.median(under)) if len(under) else 1.0
 
 
 def smoothed(points: np.ndarray, neighbours: int = SMOOTH_NEIGHBOURS) -> np.ndarray:
@@ -64,13 +80,15 @@ def smoothed(points: np.ndarray, neighbours: int = SMOOTH_NEIGHBOURS) -> np.ndar
     return points - dot3(points - centre, normal)[:, None] * normal
 
 
-def denoised(points: np.ndarray, plane: SupportPlane, tolerance: float) -> tuple[SupportPlane, np.ndarray]:
+def denoised(points: np.ndarray, plane: SupportPlane, tolerance: float,
+             viewpoint: np.ndarray | None = None) -> tuple[SupportPlane, np.ndarray]:
     """``plane`` and the object points off it (the cloud ``points`` less the table's), the camera's noise taken
-    out where the points under the plane show one above NOISE_FLOOR (the module's doc); else as they came."""
+    out where the points under the plane show one above NOISE_FLOOR (the module's doc; the band along each ray
+    from ``viewpoint``, where known: ray_slopes); else as they came."""
     noise = plane_noise(points, plane)
     if noise < NOISE_FLOOR:
         return plane, points[~plane.inliers]
-    wide = widened(points, plane, noise, tolerance)
+    wide = widened(points, plane, noise, tolerance, ray_slopes(points, plane, viewpoint))
     above = points[~wide.inliers & (wide.distance(points) > 0)]  # nothing stands below a table
     return wide, smoothed(without_specks(above))
 
