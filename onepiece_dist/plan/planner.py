@@ -159,7 +159,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
         up = None if observation.viewpoint is None else observation.viewpoint - points.mean(axis=0)
         plane = support_plane(points, rng, towards=up, up=observation.up)
     if plane is not None and spec.denoise == "auto":
-        plane, objects = denoised(points, plane, PLANE_TOLERANCE, observation.viewpoint)
+        plane, objects = denoised(points, plane, PLANE_TOLERANCE)
     else:
         objects = points[~plane.inliers] if plane is not None else points
     table = points[plane.inliers] if plane is not None else np.zeros((0, 3))

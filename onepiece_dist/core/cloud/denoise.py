@@ -20,7 +20,6 @@ NOISE_FLOOR = 0.0005  # m: a deviation below this is taken for exact depth and l
 BELOW = 0.02  # m: the points this far under the plane, at most, measure the noise
 SMOOTH_NEIGHBOURS = 32  # about 5 mm at a depth camera's 1.7 mm spacing: 2-4 mm of noise chose it (docs/picks.md)
 HALF_NORMAL_MAD = 1.4826  # a half-normal's deviation over its median (1 / 0.6745)
-MIN_SLOPE = 0.01  # a ray grazing the table closer than this is taken at this slope
 SPECK_NEIGHBOURS, SPECK_RADIUS = 4, 0.01  # a point with fewer than 4 others within 1 cm is a speck of noise
 # A half-normal of deviation 1 cut at CUT keeps the median CUT_MEDIAN (sqrt(2) erfinv(erf(CUT / sqrt(2)) / 2), tabulated
 # so that the same bits come out on every CPU; tests/test_denoise.py computes it again); cut beyond 5 deviations, 1 /
@@ -31,21 +30,14 @@ CUT_MEDIAN = np.array([0.441771, 0.516293, 0.572760, 0.612724, 0.639112, 0.65537
 CUT_RATIO = CUT_MEDIAN / CUT  # the median over the cut: falls as the cut lies deeper
 
 
-def plane_noise(points: np.ndarray, plane: SupportPlane, viewpoint: np.ndarray | None = None) -> float:
-    """The depth noise's deviation (m) as the points up to BELOW under ``plane`` show it, along the camera's rays
-    from ``viewpoint`` where known (else as heights): HALF_NORMAL_MAD times their median distance under it, or,
-    where the deepest of them lies within 5 deviations (the cloud cut short below the table, by a workspace crop or
-    by BELOW), the deviation of a half-normal cut there with their median (cut_deviation); 0 where none lies there.
-    A crop cuts every ray at the same height, so each ray's cut lies as deep as that height over its slope
-    (ray_slopes): only the points within the shallowest of those cuts are measured, a half-normal cut there."""
+def plane_noise(points: np.ndarray, plane: SupportPlane) -> float:
+    """The depth noise's deviation (m) as the points up to BELOW under ``plane`` show it: HALF_NORMAL_MAD times
+    their median distance under it, or, where the deepest of them lies within 5 deviations (the cloud cut short
+    below the table, by a workspace crop or by BELOW), the deviation of a half-normal cut there with their median
+    (cut_deviation); 0 where none lies there."""
     distance = plane.distance(points)
-    below = (distance < 0) & (distance > -BELOW)
-    if not np.any(below):
-        return 0.0
-    slopes = ray_slopes(points[below], plane, viewpoint)
-    under = -distance[below] / slopes  # along each ray
-    cut = float(np.max(-distance[below]) / np.max(slopes))  # the shallowest ray's cut
-    return cut_deviation(float(np.median(under[under <= cut])), cut)
+    under = -distance[(distance < 0) & (distance > -BELOW)]
+    return cut_deviation(float(np.median(under)), float(np.max(under))) if len(under) else 0.0
 
 
 def cut_deviation(median: float, deepest: float) -> float:
@@ -56,22 +48,9 @@ def cut_deviation(median: float, deepest: float) -> float:
     return deepest / float(np.interp(median / deepest, CUT_RATIO[::-1], CUT[::-1]))
 
 
-def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float,
-            slopes: np.ndarray | float = 1.0) -> SupportPlane:
-    """``plane`` with every point within ``tolerance`` or 3 ``noise`` deviations of it its own (a deviation along
-    each point's ray, times its ``slopes``: ray_slopes), and ``noise``."""
-    band = np.maximum(tolerance, 3 * noise * slopes)
-    return SupportPlane(plane.normal, plane.offset, np.abs(plane.distance(points)) < band, noise)
-
-
-def ray_slopes(points: np.ndarray, plane: SupportPlane, viewpoint: np.ndarray | None) -> np.ndarray | float:
-    """(m,) how far a step along each point's camera ray from ``viewpoint`` moves it off ``plane`` (the sine of
-    the ray's elevation over it): the noise runs along the rays, so a steeper ray spreads a table's points further
-    from it (at least MIN_SLOPE). 1.0 where the camera's position is unknown (the noise taken as heights)."""
-    if viewpoint is None:
-        return 1.0
-    rays = points - viewpoint
-    return np.maximum(np.abs(dot3(rays, plane.normal)) / np.sqrt(dot3(rays, rays)), MIN_SLOPE)
+def widened(points: np.ndarray, plane: SupportPlane, noise: float, tolerance: float) -> SupportPlane:
+    """``plane`` with every point within ``tolerance`` or 3 ``noise`` deviations of it its own, and ``noise``."""
+    return SupportPlane(plane.normal, plane.offset, np.abs(plane.distance(points)) < max(tolerance, 3 * noise), noise)
 
 
 def smoothed(points: np.ndarray, neighbours: int = SMOOTH_NEIGHBOURS) -> np.ndarray:
@@ -85,15 +64,13 @@ def smoothed(points: np.ndarray, neighbours: int = SMOOTH_NEIGHBOURS) -> np.ndar
     return points - dot3(points - centre, normal)[:, None] * normal
 
 
-def denoised(points: np.ndarray, plane: SupportPlane, tolerance: float,
-             viewpoint: np.ndarray | None = None) -> tuple[SupportPlane, np.ndarray]:
+def denoised(points: np.ndarray, plane: SupportPlane, tolerance: float) -> tuple[SupportPlane, np.ndarray]:
     """``plane`` and the object points off it (the cloud ``points`` less the table's), the camera's noise taken
-    out where the points under the plane show one above NOISE_FLOOR (the module's doc; the band along each ray
-    from ``viewpoint``, where known: ray_slopes); else as they came."""
-    noise = plane_noise(points, plane, viewpoint)
+    out where the points under the plane show one above NOISE_FLOOR (the module's doc); else as they came."""
+    noise = plane_noise(points, plane)
     if noise < NOISE_FLOOR:
         return plane, points[~plane.inliers]
-    wide = widened(points, plane, noise, tolerance, ray_slopes(points, plane, viewpoint))
+    wide = widened(points, plane, noise, tolerance)
     above = points[~wide.inliers & (wide.distance(points) > 0)]  # nothing stands below a table
     return wide, smoothed(without_specks(above))
 
