@@ -80,3 +80,22 @@ def test_a_scenes_depth_noise_moves_each_seen_pixel_by_about_its_deviation_and_n
     seen = clean > 0
     assert np.array_equal(seen, noisy > 0)  # the same pixels saw something
     assert 0.0018 < float(np.std(noisy[seen] - clean[seen])) < 0.0023  # 2 mm, and the PNG's millimetre steps
+
+
+@pytest.mark.sim
+def test_a_scenes_flying_pixels_stand_between_an_edges_two_depths_and_nowhere_else(tmp_path):
+    from onepiece_dist.picks.scene_files import write_scene
+    from onepiece_dist.plan.camera_files import read_depth
+    from onepiece_dist.specs.plan import CameraSpec
+
+    write_scene("primitives[3:4]", tmp_path / "clean", seed=1)
+    write_scene("primitives[3:4]", tmp_path / "flying", seed=1, camera=CameraSpec(flying_pixels=1.0))
+    clean, flying = read_depth(tmp_path / "clean" / "depth.png"), read_depth(tmp_path / "flying" / "depth.png")
+    padded = np.pad(clean, 1)
+    around = np.stack([padded[:-2, 1:-1], padded[2:, 1:-1], padded[1:-1, :-2], padded[1:-1, 2:]])
+    seen_around = np.where(around > 0, around, clean)
+    edge = np.max(np.abs(seen_around - clean), axis=0) > 0.019  # a neighbour 2 cm nearer or further (in mm)
+    moved = np.abs(flying - clean) > 0.0015  # beyond the PNG's millimetre steps
+    assert moved.sum() > 50 and not np.any(moved & ~edge)
+    low, high = np.minimum(clean, seen_around.min(axis=0)), np.maximum(clean, seen_around.max(axis=0))
+    assert np.all((flying[moved] >= low[moved] - 0.001) & (flying[moved] <= high[moved] + 0.001))

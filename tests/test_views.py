@@ -110,3 +110,26 @@ def test_views_are_stored_in_the_object_frame_of_each_object(spec_factory, tmp_p
         cloud = data["views/points"][mine]
         assert len(cloud) > 100  # an empty cloud would pass the bounds below
         assert np.all(cloud >= mesh.vertices.min(axis=0) - 1e-3) and np.all(cloud <= mesh.vertices.max(axis=0) + 1e-3)
+
+
+def test_flying_pixels_mix_only_an_edges_pixels_between_its_two_depths_and_none_draws_nothing():
+    from onepiece_dist.sim.views import Camera, EDGE_JUMP, buffer_of, linear_depth, mixed_edges
+
+    metres = np.full((40, 40), 0.7)
+    metres[10:30, 12:28] = 0.5  # a box 20 cm before the table
+    metres[:, :3] = 0.0  # and pixels that saw nothing
+    camera = Camera(np.eye(4), 40, 45.0, 0.05, 2.0)
+    assert np.allclose(linear_depth(buffer_of(metres, camera), camera), metres, rtol=0, atol=1e-9)
+    rng = np.random.default_rng(0)
+    assert np.array_equal(mixed_edges(metres, 0.0, rng), metres)
+    assert rng.random() == np.random.default_rng(0).random()  # nothing drawn
+    mixed = mixed_edges(metres, 1.0, np.random.default_rng(1))
+    changed = mixed != metres
+    box = np.zeros_like(changed)
+    box[10:30, 12:28] = True
+    rim = np.zeros_like(box)
+    for axis, step in ((0, 1), (0, -1), (1, 1), (1, -1)):
+        rim |= box != np.roll(box, step, axis)  # a pixel whose 4-neighbour lies on the other side of the box's edge
+    assert changed.sum() >= 0.95 * rim.sum() and not np.any(changed & ~rim)
+    assert np.all((mixed[changed] > 0.5) & (mixed[changed] < 0.7)) and EDGE_JUMP < 0.2
+    assert np.all(mixed[:, :3] == 0.0) and np.all(mixed[:, 3] == 0.7)  # nothing mixed with what was not seen

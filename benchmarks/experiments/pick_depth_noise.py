@@ -37,10 +37,11 @@ SETS, METHODS = ("household", "unseen"), ("network", "top_down")
 
 
 def level(noise: float, denoise: str, gripper: str | None = None, network=None, folder=None,
-          views: int | None = None) -> dict:
+          views: int | None = None, flying: float = 0.0) -> dict:
     """Both sets judged with ``noise`` (m) on the camera's depth, the planner's ``denoise`` as given (``gripper``:
     a preset, its shipped network planning unless ``network``, a checkpoint, is given; runs kept under ``folder``,
-    by default this benchmark's; ``views`` an object, by default the pick benchmark's)."""
+    by default this benchmark's; ``views`` an object, by default the pick benchmark's; a ``flying`` share of the
+    pixels at the depth's edges mixed across them: CameraSpec.flying_pixels)."""
     from benchmarks.experiments.pick_clutter import shipped_for
     from benchmarks.experiments.picks import ATTEMPTS, VIEWS, sets
     from onepiece_dist.picks.runner import run_picks
@@ -52,7 +53,8 @@ def level(noise: float, denoise: str, gripper: str | None = None, network=None, 
         shipped, hand = shipped_for(gripper)
         runs = folder or ROOT / "data" / ("pick_depth_noise" + (f"_{gripper}" if gripper else ""))
         spec = PickSpec(objects=objects(), checkpoint=str(network or shipped), gripper=hand, views=views or VIEWS,
-                        attempts=ATTEMPTS, pictures=0, methods=METHODS, camera=CameraSpec(depth_noise=noise),
+                        attempts=ATTEMPTS, pictures=0, methods=METHODS,
+                        camera=CameraSpec(depth_noise=noise, flying_pixels=flying),
                         plan=PlanSpec(denoise=denoise), output=str(runs / f"{noise:g}_{denoise}" / name))
         start = time.perf_counter()
         report = run_picks(spec)

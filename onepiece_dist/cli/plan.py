@@ -65,6 +65,9 @@ def scene(
                                                       "beside them.")] = False,
     depth_noise: Annotated[float, typer.Option(min=0.0, max=0.05, help="Gaussian depth noise (m) on every "
                                                                       "pixel, as a real camera's.")] = 0.0,
+    flying_pixels: Annotated[float, typer.Option(min=0.0, max=1.0, help="Share of the pixels at a depth edge that "
+                                                                        "mix both depths (a real camera's flying "
+                                                                        "pixels).")] = 0.0,
 ) -> None:
     """A depth camera's own files of objects settled on a simulated table: a 16-bit depth PNG, its intrinsics and
     the camera's pose in the table's frame, to try `onepiece grasp` without a camera (docs/planning.md)."""
@@ -73,7 +76,8 @@ def scene(
     from onepiece_dist.specs.plan import CameraSpec
 
     try:
-        written = write_scene(objects, out, count, seed, CameraSpec(depth_noise=depth_noise),
+        written = write_scene(objects, out, count, seed,
+                              CameraSpec(depth_noise=depth_noise, flying_pixels=flying_pixels),
                               JobSpec(objects=objects, units=units), pile)
     except (SourceError, MeshRejected, ValueError) as error:
         err(f"error: {error}")

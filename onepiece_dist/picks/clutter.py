@@ -136,7 +136,8 @@ def seen_scene(spec: PickSpec, record: CropRecord, objects: tuple[SceneObject, .
     centre = np.mean([np.mean(v, axis=0) for v in vertices], axis=0)
     cam = spec.camera
     drawn = pick_camera(centre, rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
-    cloud = observe_scene(np.vstack(vertices), faces, centre, drawn.camera, rng, cam.depth_noise, WORKSPACE)
+    cloud = observe_scene(np.vstack(vertices), faces, centre, drawn.camera, rng, cam.depth_noise, WORKSPACE,
+                          cam.flying_pixels)
     eye = drawn.camera.pose[:3, 3]
     name = f"{scene_name(objects)} view {view}"
     proposals = propose(Observation(cloud, eye, name), record, spec.plan, rng) if len(cloud) >= MIN_POINTS else None

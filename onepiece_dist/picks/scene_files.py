@@ -28,7 +28,7 @@ from onepiece_dist.errors import SourceError
 from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.clutter import WORKSPACE, loaded_object, scene_triangles, settle_scene
 from onepiece_dist.sim.pick import TABLE_BOX, PickWorld, pick_camera
-from onepiece_dist.sim.views import depth_images, linear_depth
+from onepiece_dist.sim.views import depth_images, linear_depth, mixed_edges
 from onepiece_dist.specs.job import GripperSpec, JobSpec
 from onepiece_dist.specs.plan import CameraSpec
 
@@ -76,7 +76,7 @@ def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0,
     vertices, faces = scene_triangles(scene, resting)
     centre = np.mean([v.mean(axis=0) for v in vertices], axis=0)
     seen = _camera(centre, rng, camera)
-    _write_depth(folder / "depth.png", _depth(np.vstack(vertices), faces, seen, camera.depth_noise, rng))
+    _write_depth(folder / "depth.png", _depth(np.vstack(vertices), faces, seen, camera, rng))
     _write_json(folder / "intrinsics.json", {"K": intrinsics(seen).tolist()})
     _write_json(folder / "camera_pose.json", {"matrix": (seen.pose @ OPENCV).tolist()})
     written = SceneFiles(folder, tuple(o.name for o in scene), tuple(float(v) for v in centre))
@@ -99,13 +99,17 @@ def _camera(centre: np.ndarray, rng: np.random.Generator, camera: CameraSpec):
     return pick_camera(centre, rng, camera.distance, camera.elevation_deg, camera.image_size, camera.fov_deg).camera
 
 
-def _depth(vertices: np.ndarray, faces: np.ndarray, camera, noise: float, rng: np.random.Generator) -> np.ndarray:
+def _depth(vertices: np.ndarray, faces: np.ndarray, camera, spec: CameraSpec, rng: np.random.Generator
+           ) -> np.ndarray:
     """(size, size) uint16 millimetres of the objects (``vertices``, ``faces``: world frame) and the table, 0 where
-    the camera saw nothing; with Gaussian ``noise`` (m, drawn from ``rng``) on every pixel that saw something."""
+    the camera saw nothing; with ``spec``'s share of flying pixels at its edges (sim.views.mixed_edges) and its
+    Gaussian noise (m) on every pixel that saw something, each drawn from ``rng`` where asked for."""
     metres = linear_depth(depth_images(vertices, faces, [camera], TABLE_BOX)[0], camera)
-    if noise > 0:
+    if spec.flying_pixels > 0:
+        metres = mixed_edges(metres, spec.flying_pixels, rng)
+    if spec.depth_noise > 0:
         seen = metres > 0
-        metres[seen] = np.maximum(metres[seen] + rng.normal(0.0, noise, int(seen.sum())), 0.001)
+        metres[seen] = np.maximum(metres[seen] + rng.normal(0.0, spec.depth_noise, int(seen.sum())), 0.001)
     return np.clip(np.round(metres * 1000.0), 0, np.iinfo(np.uint16).max).astype(np.uint16)
 
 

@@ -16,6 +16,7 @@ from onepiece_dist.core.frames import transform_points
 
 NEAR_FRACTION = 0.05  # near plane as a fraction of the camera distance
 FAR_FACTOR = 3.0  # far plane as a multiple of the camera distance
+EDGE_JUMP = 0.02  # m: a depth step between neighbouring pixels this large is an edge, where flying pixels stand
 
 
 @dataclass(frozen=True)
@@ -134,6 +135,33 @@ def linear_depth(buffer: np.ndarray, camera: Camera) -> np.ndarray:
     nothing: what a depth camera writes (pixel (row, col) as :func:`back_project` places it)."""
     hit = buffer < 1.0 - 1e-6
     return np.where(hit, _buffer_distance(np.where(hit, buffer, 0.0), camera), 0.0)
+
+
+def buffer_of(metres: np.ndarray, camera: Camera) -> np.ndarray:
+    """The depth buffer (pybullet's [0, 1] values; 1 where nothing was seen) of depth ``metres`` along the camera's
+    axis (0 where nothing was seen): linear_depth inverted."""
+    near, far = camera.near, camera.far
+    seen = metres > 0
+    z_ndc = (far + near - 2.0 * near * far / np.where(seen, metres, 1.0)) / (far - near)
+    return np.where(seen, (z_ndc + 1.0) / 2.0, 1.0)
+
+
+def mixed_edges(metres: np.ndarray, share: float, rng: np.random.Generator, jump: float = EDGE_JUMP) -> np.ndarray:
+    """Depth ``metres`` (size, size; 0 where nothing was seen) with a depth camera's flying pixels: each pixel with
+    a 4-neighbour more than ``jump`` (m) nearer or further (both seen), at a ``share`` of them drawn from ``rng``,
+    takes a depth drawn uniformly between its own and that neighbour's (the one further from it): a pixel that
+    straddles an object's edge mixes the object with what lies behind it. Nothing is drawn where ``share`` is 0."""
+    if share <= 0:
+        return metres
+    padded = np.pad(metres, 1)
+    around = np.stack([padded[:-2, 1:-1], padded[2:, 1:-1], padded[1:-1, :-2], padded[1:-1, 2:]])
+    gap = np.where((around > 0) & (metres > 0), around - metres, 0.0)
+    widest = np.take_along_axis(gap, np.argmax(np.abs(gap), axis=0)[None], axis=0)[0]
+    edge = np.flatnonzero(np.abs(widest) > jump)
+    mixed = edge[rng.random(len(edge)) < share]
+    out = metres.copy()
+    out.flat[mixed] += rng.random(len(mixed)) * widest.flat[mixed]
+    return out
 
 
 def _buffer_distance(values: np.ndarray, camera: Camera) -> np.ndarray:

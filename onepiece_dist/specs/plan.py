@@ -87,6 +87,8 @@ class CameraSpec(Frozen):
     image_size: int = Field(320, ge=32, le=2048, description="Square depth image size (pixels).")
     fov_deg: float = Field(45.0, gt=1, lt=150, description="Vertical field of view (degrees).")
     depth_noise: float = Field(0.0, ge=0, le=0.05, description="Gaussian depth noise (m) added per pixel.")
+    flying_pixels: float = Field(0.0, ge=0, le=1, description="Share of the pixels at a depth edge (a neighbour "
+                                 "2 cm nearer or further) that mix both depths, as a depth camera's flying pixels.")
 
     @model_validator(mode="after")
     def _ranges_ordered(self) -> CameraSpec:

@@ -1,0 +1,69 @@
+"""The shipped planner under a depth camera's flying pixels (docs/picks.md): where a pixel straddles an object's
+edge, a stereo or time-of-flight camera reads a depth between the object and what lies behind it, so a veil of
+points trails off every silhouette into the air. The pick benchmark renders exact depth; here a share of the pixels
+at its depth edges (a 4-neighbour 2 cm nearer or further) mix both depths (`onepiece pick` spec
+``camera.flying_pixels``, sim.views.mixed_edges). The household and unseen sets judged as the depth-noise benchmark
+judges them (pick_depth_noise: 8 views an object, the shipped network and the planner's defaults, beside top-down,
+with noise of a micrometre), each share paired over objects against that benchmark's micrometre level: the same
+objects, settles and cameras; the mixing's draws come before the noise's, so later draws differ, a difference of
+its own of a few points at one draw a view.
+
+    .venv/bin/python -m benchmarks.experiments.pick_flying_pixels [--shares 1.0] [--gripper panda]
+
+Results: benchmarks/results/pick_flying_pixels.json (a share run again for a hand replaces its own run), rendered
+into docs/picks.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+from datetime import date
+
+from benchmarks.experiments.pick_curve import HERE, ROOT
+from benchmarks.experiments.pick_depth_noise import BASELINE, METHODS, level
+from benchmarks.experiments.pick_depth_noise import RESULTS as NOISE_RESULTS
+from benchmarks.experiments.pick_panda_check import slim
+from benchmarks.pages.pick_sets import paired_first_attempts
+
+RESULTS = HERE / "results" / "pick_flying_pixels.json"
+SHARES = (1.0,)
+
+
+def micrometre_level(gripper: str | None) -> dict:
+    """The depth-noise benchmark's committed micrometre level of ``gripper``'s (``denoise: auto``)."""
+    path = NOISE_RESULTS if gripper is None else NOISE_RESULTS.with_name(f"pick_depth_noise_{gripper}.json")
+    levels = json.loads(path.read_text())["levels"]
+    return next(lv for lv in levels if (lv["noise"], lv["denoise"]) == (BASELINE, "auto"))
+
+
+def judged(share: float, gripper: str | None) -> dict:
+    """Both sets with a ``share`` of the edge pixels flying, paired against the micrometre level."""
+    folder = ROOT / "data" / "pick_flying_pixels" / (gripper or "default") / f"{share:g}"
+    made = level(BASELINE, "auto", gripper, folder=folder, flying=share)
+    base = micrometre_level(gripper)
+    return {"gripper": gripper, "flying": share, "sets": [slim(s) for s in made["sets"]],
+            "network_vs_top_down": made["network_vs_top_down"],
+            "versus_exact": {m: paired_first_attempts(made["sets"], base["sets"], m) for m in METHODS},
+            "exact": {s["name"]: {m["method"]: m["first_attempt"] for m in s["methods"]} for s in base["sets"]}}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--shares", default=",".join(f"{s:g}" for s in SHARES))
+    parser.add_argument("--gripper", choices=("panda",), default=None,
+                        help="the preset whose shipped network plans and whose hand executes")
+    args = parser.parse_args()
+    before = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
+    out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_flying_pixels", "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "runs": before.get("runs", [])}
+    for share in (float(s) for s in args.shares.split(",")):
+        run = judged(share, args.gripper)
+        kept = [r for r in out["runs"] if (r["gripper"], r["flying"]) != (args.gripper, share)]
+        out["runs"] = sorted([*kept, run], key=lambda r: (r["gripper"] or "", r["flying"]))
+        RESULTS.write_text(json.dumps(out, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
