@@ -70,3 +70,24 @@ def test_planner_variants_on_more_views_are_paired_against_the_variant_they_chan
     on_after = next(line for line in lines if line.startswith("- 2 mm, on after against after"))
     assert "network -50.0 points" in on_after and "(lower)" in on_after  # against what it changes, not the first
     assert lines[-1].startswith("On after against after: **not kept**")
+
+
+def test_the_flying_pixels_section_says_which_chooser_they_are_shown_to_cost():
+    from benchmarks.experiments.pick_depth_noise import paired_first_attempts
+    from benchmarks.pages.pick_flying_section import flying_section
+
+    exact = _set("household", [True] * 8, [True] * 8)
+
+    def run(judged: dict) -> dict:
+        return {"gripper": None, "flying": 1.0, "sets": [judged],
+                "network_vs_top_down": paired_first_attempts([judged], [judged], "network", "top_down"),
+                "versus_exact": {m: paired_first_attempts([judged], [exact], m) for m in ("network", "top_down")},
+                "exact": {"household": {"network": 1.0, "top_down": 1.0}}}
+
+    held = flying_section({"command": "c", "date": "d", "machine": "m",
+                           "runs": [run(_set("household", [True] * 8, [False] * 8))]})
+    assert "| the default job's gripper | 1 | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% | 100% |" in held
+    assert held[-1].startswith("Flying pixels: top-down is shown to lose picks to them, the network is not")
+    lost = flying_section({"command": "c", "date": "d", "machine": "m",
+                           "runs": [run(_set("household", [False] * 8, [False] * 8))]})
+    assert lost[-1] == "Flying pixels: both the network and top-down are shown to lose picks to them."

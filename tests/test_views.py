@@ -113,7 +113,7 @@ def test_views_are_stored_in_the_object_frame_of_each_object(spec_factory, tmp_p
 
 
 def test_flying_pixels_mix_only_an_edges_pixels_between_its_two_depths_and_none_draws_nothing():
-    from onepiece_dist.sim.views import Camera, EDGE_JUMP, buffer_of, linear_depth, mixed_edges
+    from onepiece_dist.sim.views import EDGE_JUMP, Camera, buffer_of, linear_depth, mixed_edges
 
     metres = np.full((40, 40), 0.7)
     metres[10:30, 12:28] = 0.5  # a box 20 cm before the table
