@@ -149,8 +149,8 @@ def buffer_of(metres: np.ndarray, camera: Camera) -> np.ndarray:
 def mixed_edges(metres: np.ndarray, share: float, rng: np.random.Generator, jump: float = EDGE_JUMP) -> np.ndarray:
     """Depth ``metres`` (size, size; 0 where nothing was seen) with a depth camera's flying pixels: each pixel with
     a 4-neighbour more than ``jump`` (m) nearer or further (both seen), at a ``share`` of them drawn from ``rng``,
-    takes a depth drawn uniformly between its own and that neighbour's (the one further from it): a pixel that
-    straddles an object's edge mixes the object with what lies behind it. Nothing is drawn where ``share`` is 0."""
+    takes a depth drawn uniformly between its own and that neighbour's (the one whose depth differs most): a pixel
+    that straddles an object's edge mixes the object with what lies behind it. Nothing is drawn where ``share`` is 0."""
     if share <= 0:
         return metres
     padded = np.pad(metres, 1)
