@@ -25,6 +25,7 @@ import json
 import platform
 import time
 from datetime import date
+from pathlib import Path
 
 from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import HERE, ROOT
@@ -37,11 +38,11 @@ SETS, METHODS = ("household", "unseen"), ("network", "top_down")
 
 
 def level(noise: float, denoise: str, gripper: str | None = None, network=None, folder=None,
-          views: int | None = None, flying: float = 0.0) -> dict:
+          views: int | None = None, flying_pixels: float = 0.0) -> dict:
     """Both sets judged with ``noise`` (m) on the camera's depth, the planner's ``denoise`` as given (``gripper``:
     a preset, its shipped network planning unless ``network``, a checkpoint, is given; runs kept under ``folder``,
-    by default this benchmark's; ``views`` an object, by default the pick benchmark's; a ``flying`` share of the
-    pixels at the depth's edges mixed across them: CameraSpec.flying_pixels)."""
+    by default this benchmark's; ``views`` an object, by default the pick benchmark's; a ``flying_pixels`` share
+    of the pixels at the depth's edges mixed across them: CameraSpec.flying_pixels)."""
     from benchmarks.experiments.pick_clutter import shipped_for
     from benchmarks.experiments.picks import ATTEMPTS, VIEWS, sets
     from onepiece_dist.picks.runner import run_picks
@@ -54,7 +55,7 @@ def level(noise: float, denoise: str, gripper: str | None = None, network=None, 
         runs = folder or ROOT / "data" / ("pick_depth_noise" + (f"_{gripper}" if gripper else ""))
         spec = PickSpec(objects=objects(), checkpoint=str(network or shipped), gripper=hand, views=views or VIEWS,
                         attempts=ATTEMPTS, pictures=0, methods=METHODS,
-                        camera=CameraSpec(depth_noise=noise, flying_pixels=flying),
+                        camera=CameraSpec(depth_noise=noise, flying_pixels=flying_pixels),
                         plan=PlanSpec(denoise=denoise), output=str(runs / f"{noise:g}_{denoise}" / name))
         start = time.perf_counter()
         report = run_picks(spec)
@@ -63,6 +64,11 @@ def level(noise: float, denoise: str, gripper: str | None = None, network=None, 
         print(noise, denoise, name, {m["method"]: m["first_attempt"] for m in judged[-1]["methods"]}, flush=True)
     return {"noise": noise, "denoise": denoise, "sets": judged,
             "network_vs_top_down": paired_first_attempts(judged, judged, "network", "top_down")}
+
+
+def results_path(gripper: str | None) -> Path:
+    """Where this benchmark keeps the levels of ``gripper`` (a preset; None: the default job's gripper)."""
+    return RESULTS if gripper is None else RESULTS.with_name(f"pick_depth_noise_{gripper}.json")
 
 
 def against_baseline(levels: list[dict]) -> list[dict]:
@@ -90,7 +96,7 @@ def main() -> None:
     parser.add_argument("--gripper", choices=("panda",), default=None,
                         help="the preset whose shipped network plans and whose hand executes")
     args = parser.parse_args()
-    path = RESULTS if args.gripper is None else RESULTS.with_name(f"pick_depth_noise_{args.gripper}.json")
+    path = results_path(args.gripper)
     kept = json.loads(path.read_text())["levels"] if path.is_file() else []
     command = ".venv/bin/python -m benchmarks.experiments.pick_depth_noise" + (f" --gripper {args.gripper}"
                                                                                if args.gripper else "")

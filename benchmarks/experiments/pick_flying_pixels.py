@@ -22,8 +22,7 @@ import platform
 from datetime import date
 
 from benchmarks.experiments.pick_curve import HERE, ROOT
-from benchmarks.experiments.pick_depth_noise import BASELINE, METHODS, level
-from benchmarks.experiments.pick_depth_noise import RESULTS as NOISE_RESULTS
+from benchmarks.experiments.pick_depth_noise import BASELINE, METHODS, level, results_path
 from benchmarks.experiments.pick_panda_check import slim
 from benchmarks.pages.pick_sets import paired_first_attempts
 
@@ -33,15 +32,14 @@ SHARES = (1.0,)
 
 def micrometre_level(gripper: str | None) -> dict:
     """The depth-noise benchmark's committed micrometre level of ``gripper``'s (``denoise: auto``)."""
-    path = NOISE_RESULTS if gripper is None else NOISE_RESULTS.with_name(f"pick_depth_noise_{gripper}.json")
-    levels = json.loads(path.read_text())["levels"]
+    levels = json.loads(results_path(gripper).read_text())["levels"]
     return next(lv for lv in levels if (lv["noise"], lv["denoise"]) == (BASELINE, "auto"))
 
 
 def judged(share: float, gripper: str | None) -> dict:
     """Both sets with a ``share`` of the edge pixels flying, paired against the micrometre level."""
     folder = ROOT / "data" / "pick_flying_pixels" / (gripper or "default") / f"{share:g}"
-    made = level(BASELINE, "auto", gripper, folder=folder, flying=share)
+    made = level(BASELINE, "auto", gripper, folder=folder, flying_pixels=share)
     base = micrometre_level(gripper)
     return {"gripper": gripper, "flying": share, "sets": [slim(s) for s in made["sets"]],
             "network_vs_top_down": made["network_vs_top_down"],
