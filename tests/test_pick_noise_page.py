@@ -78,16 +78,22 @@ def test_the_flying_pixels_section_says_which_chooser_they_are_shown_to_cost():
 
     exact = _set("household", [True] * 8, [True] * 8)
 
-    def run(judged: dict) -> dict:
-        return {"gripper": None, "flying": 1.0, "sets": [judged],
+    def run(judged: dict, **views) -> dict:
+        return {"gripper": None, "flying": 1.0, **views, "sets": [judged],
                 "network_vs_top_down": paired_first_attempts([judged], [judged], "network", "top_down"),
                 "versus_exact": {m: paired_first_attempts([judged], [exact], m) for m in ("network", "top_down")},
                 "exact": {"household": {"network": 1.0, "top_down": 1.0}}}
 
     held = flying_section({"command": "c", "date": "d", "machine": "m",
                            "runs": [run(_set("household", [True] * 8, [False] * 8))]})
-    assert "| the default job's gripper | 1 | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% | 100% |" in held
+    assert "| the default job's gripper | 1 | 8 | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% | 100% |" in held
     assert held[-1].startswith("Flying pixels: top-down is shown to lose picks to them, the network is not")
     lost = flying_section({"command": "c", "date": "d", "machine": "m",
                            "runs": [run(_set("household", [False] * 8, [False] * 8))]})
     assert lost[-1] == "Flying pixels: both the network and top-down are shown to lose picks to them."
+    at_more_views = flying_section({"command": "c", "date": "d", "machine": "m", "runs": [
+        run(_set("household", [False] * 8, [False] * 8)), run(_set("household", [True] * 8, [False] * 8), views=24)]})
+    assert "| the default job's gripper | 1 | 24 | household | 100% [100%, 100%] | 0% [0%, 0%] | 100% | 100% |" \
+        in at_more_views  # both runs shown, the verdict read from the one at the most views
+    assert at_more_views[-1].startswith("Flying pixels: top-down is shown to lose picks to them, the network is not")
+    assert "at 24 views an object" in at_more_views[-1]
