@@ -97,3 +97,29 @@ def test_the_flying_pixels_section_says_which_chooser_they_are_shown_to_cost():
         in at_more_views  # both runs shown, the verdict read from the one at the most views
     assert at_more_views[-1].startswith("Flying pixels: top-down is shown to lose picks to them, the network is not")
     assert "at 24 views an object" in at_more_views[-1]
+
+
+def test_dropping_the_veils_is_kept_only_where_it_picks_more_under_flying_pixels_and_no_less_on_exact_depth():
+    from benchmarks.experiments.pick_depth_noise import paired_first_attempts
+    from benchmarks.pages.pick_flying_section import veils_section
+
+    every_point = _set("household", [False] * 4 + [True] * 4, [False] * 8)
+
+    def run(share: float, judged: dict) -> dict:
+        return {"flying": share, "sets": [judged],
+                "network_vs_top_down": paired_first_attempts([judged], [judged], "network", "top_down"),
+                "versus_kept": {m: paired_first_attempts([judged], [every_point], m) for m in ("network", "top_down")},
+                "kept": {"household": {"network": 0.5, "top_down": 0.0}}}
+
+    def verdict(*runs: dict) -> str:
+        return veils_section({"command": "c", "date": "d", "machine": "m", "commit": "abc", "views": 24,
+                              "runs": list(runs)})[-1]
+
+    more, same, less = (_set("household", n, [False] * 8) for n in ([True] * 8, [False] * 4 + [True] * 4, [False] * 8))
+    assert verdict(run(1.0, more), run(0.0, same)).startswith("Dropping the veils: **kept**")
+    assert verdict(run(1.0, more), run(0.0, less)).startswith("Dropping the veils: **not kept**")
+    assert verdict(run(1.0, same), run(0.0, same)).startswith("Dropping the veils: **not kept**")
+    assert verdict(run(1.0, more)).startswith("Dropping the veils: judged under flying pixels and on exact depth")
+    lines = veils_section({"command": "c", "date": "d", "machine": "m", "commit": "abc", "views": 24,
+                           "runs": [run(1.0, more)]})
+    assert "| 1 | household | 100% [100%, 100%] | 0% [0%, 0%] | 50% | 0% |" in lines

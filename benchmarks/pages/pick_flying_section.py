@@ -68,3 +68,41 @@ def _verdict(runs: list[dict]) -> list[str]:
     tail = ("" if network else f" (its intervals leave a loss of up to {-100 * worst:.1f} points open at "
             f"{' and '.join(map(str, views))} views an object), so the planner takes no filter for them")
     return [f"Flying pixels: {said}{tail}."]
+
+
+def veils_section(result: dict) -> list[str]:
+    """The planner dropping the veils (results/pick_veils.json), each share paired against keeping every point,
+    and whether the drop is kept: the network picks more under flying pixels, and not shown to pick less on exact
+    depth."""
+    runs = {r["flying"]: r for r in result["runs"]}
+    rows = [f"| {r['flying']:g} | {s['name']} | {_rate(s, 'network')} | {_rate(s, 'top_down')} | "
+            f"{pct(r['kept'][s['name']]['network'])} | {pct(r['kept'][s['name']]['top_down'])} |"
+            for r in result["runs"] for s in r["sets"]]
+    lines = [f"## The planner dropping flying pixels: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}, at {result['commit']}. The planner's `veils: drop` "
+             "(PlanSpec; core.cloud.veils) takes out of the view each point off the support plane whose local "
+             "plane (its 16 nearest) turns its normal to within 0.2 (cosine) of square to the point's ray: a veil "
+             "runs along the rays, a surface the camera sees faces it. The household and unseen sets at "
+             f"{result['views']} views an object, the Franka hand with the network shipped for it, paired over "
+             "objects against the planner keeping every point on the same views (the section above at "
+             f"{result['views']} views, and its exact level), first attempt:", "",
+             "| flying share | set | network, veils dropped | top-down, veils dropped | network, every point | "
+             "top-down, every point |", "| --- | --- | --- | --- | --- | --- |", *rows, ""]
+    for r in result["runs"]:
+        net, top = r["versus_kept"]["network"], r["versus_kept"]["top_down"]
+        lines.append(f"- share {r['flying']:g}: household meshes pooled "
+                     f"{pct(pooled(r['sets'], 'network')['first_attempt'])}; dropping the veils against keeping "
+                     f"every point, paired over the {net['objects']} meshes: the network {_points(net)} "
+                     f"({_said(net)}), top-down {_points(top)} ({_said(top)}).")
+    return [*lines, "", _veils_verdict(runs)]
+
+
+def _veils_verdict(runs: dict) -> str:
+    flying, exact = runs.get(1.0), runs.get(0.0)
+    if flying is None or exact is None:
+        return "Dropping the veils: judged under flying pixels and on exact depth both, or not at all."
+    gain, cost = flying["versus_kept"]["network"], exact["versus_kept"]["network"]
+    kept = gain["interval"][0] > 0 and cost["interval"][1] >= 0
+    return (f"Dropping the veils: **{'kept' if kept else 'not kept'}** as the planner's default (kept where the "
+            "network picks more under flying pixels, its interval above zero, and is not shown to pick less on "
+            f"exact depth): under flying pixels {_points(gain)}, on exact depth {_points(cost)}.")
