@@ -78,11 +78,14 @@ def veils_section(result: dict) -> list[str]:
     rows = [f"| {r['flying']:g} | {s['name']} | {_rate(s, 'network')} | {_rate(s, 'top_down')} | "
             f"{pct(r['kept'][s['name']]['network'])} | {pct(r['kept'][s['name']]['top_down'])} |"
             for r in result["runs"] for s in r["sets"]]
-    lines = [f"## The planner dropping flying pixels: `{result['command']}`", "",
-             f"{result['date']}, {result['machine']}, at {result['commit']}. The planner's `veils: drop` "
-             "(PlanSpec; core.cloud.veils) takes out of the view each point off the support plane whose local "
-             "plane (its 16 nearest) turns its normal to within 0.2 (cosine) of square to the point's ray: a veil "
-             "runs along the rays, a surface the camera sees faces it. The household and unseen sets at "
+    lines = [f"## The planner dropping flying pixels: `{result['command']}` at {result['commit']}", "",
+             f"{result['date']}, {result['machine']}. Tried at {result['commit']} (`git checkout "
+             f"{result['commit']}` runs it again; taken out of the planner after this run, as the verdict below "
+             "says): the planner's option `veils: drop` (PlanSpec; core.cloud.veils there) took out of the view "
+             "each point off the support plane whose local plane (its 16 nearest) turns its normal to within 0.2 "
+             "(cosine) of square to the point's ray: a veil runs along the rays, a surface the camera sees faces "
+             "it (its test there: most of a settled box's veil dropped, none of the box and table). The "
+             "household and unseen sets at "
              f"{result['views']} views an object, the Franka hand with the network shipped for it, paired over "
              "objects against the planner keeping every point on the same views (the section above at "
              f"{result['views']} views, and its exact level), first attempt:", "",

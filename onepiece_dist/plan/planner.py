@@ -25,7 +25,6 @@ from onepiece_dist.core.cloud.outline import OUTLINE_MODELS, outline
 from onepiece_dist.core.cloud.support_check import PLANE_TOLERANCE, support_plane
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, DepthRays, hand_grid, swept_space
 from onepiece_dist.core.cloud.top_down import top_down_grasps
-from onepiece_dist.core.cloud.veils import without_veils
 from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_matrix
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context
 from onepiece_dist.core.hand_frames import to_panda
@@ -159,8 +158,6 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     if spec.support_plane == "auto":
         up = None if observation.viewpoint is None else observation.viewpoint - points.mean(axis=0)
         plane = support_plane(points, rng, towards=up, up=observation.up)
-    if spec.veils == "drop" and observation.viewpoint is not None:
-        points, plane = without_veils(points, plane, observation.viewpoint)
     if plane is not None and spec.denoise == "auto":
         plane, objects = denoised(points, plane, PLANE_TOLERANCE)
     else:

@@ -71,10 +71,6 @@ class PlanSpec(Frozen):
                                              "plane show a deviation above 0.5 mm, the table takes every point "
                                              "within 3 deviations of it and each object point moves onto the "
                                              "plane of its 16 nearest; an exact view is left as it is. none: never.")
-    veils: Literal["keep", "drop"] = Field("keep", description="drop: take a depth camera's flying pixels out of "
-                                           "the view first (core.cloud.veils): each point off the support plane "
-                                           "whose local surface runs within 11.5 degrees of its ray (a veil "
-                                           "trailing off an edge) is dropped. keep: plan on every point.")
     objects_apart: bool = Field(True, description="Tell the view's objects apart (points whose 1 cm cells touch "
                                 "are one object: core.cloud.objects): each gets its own top-down grasps, a grasp's "
                                 "context reads the centre of the object it closes on and the check stands that "
