@@ -30,6 +30,7 @@ from onepiece_dist.sim.views import (
     buffer_of,
     camera_at,
     depth_images,
+    flying_mask,
     linear_depth,
     mixed_edges,
 )
@@ -231,17 +232,18 @@ def pick_camera(target: np.ndarray, rng: np.random.Generator, distance: tuple[fl
 
 
 def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, camera: Camera,
-            rng: np.random.Generator, depth_noise: float = 0.0, flying_pixels: float = 0.0) -> np.ndarray:
+            rng: np.random.Generator, depth_noise: float = 0.0, flying_pixels: float = 0.0,
+            drop_flying: bool = False) -> np.ndarray:
     """(m, 3) world points the camera sees of the object at ``object_pose`` on the table, kept within WORKSPACE
     of the object's resting place (a workspace crop), with Gaussian ``depth_noise`` (m) along each ray and a
     ``flying_pixels`` share of its edge pixels mixed (observe_scene)."""
     return observe_scene(transform_points(vertices, object_pose), faces, object_pose[:3, 3], camera, rng,
-                         depth_noise, flying_pixels=flying_pixels)
+                         depth_noise, flying_pixels=flying_pixels, drop_flying=drop_flying)
 
 
 def observe_scene(vertices: np.ndarray, faces: np.ndarray, centre: np.ndarray, camera: Camera,
                   rng: np.random.Generator, depth_noise: float = 0.0, half: float = WORKSPACE,
-                  flying_pixels: float = 0.0) -> np.ndarray:
+                  flying_pixels: float = 0.0, drop_flying: bool = False) -> np.ndarray:
     """(m, 3) world points the camera sees of the triangles ``vertices`` (world frame; every object of the scene)
     and ``faces`` on the table, kept within ``half`` (m, along x and y) of ``centre`` (3,), with a
     ``flying_pixels`` share of the pixels at its depth edges mixed across them (sim.views.mixed_edges) and
@@ -249,6 +251,9 @@ def observe_scene(vertices: np.ndarray, faces: np.ndarray, centre: np.ndarray, c
     depth = depth_images(vertices, faces, [camera], TABLE_BOX)[0]
     if flying_pixels > 0:
         depth = buffer_of(mixed_edges(linear_depth(depth, camera), flying_pixels, rng), camera)
+    if drop_flying:
+        metres = linear_depth(depth, camera)
+        depth = buffer_of(np.where(flying_mask(metres), 0.0, metres), camera)
     points = back_project(depth, camera)
     if depth_noise > 0 and len(points):
         rays = points - camera.pose[:3, 3]

@@ -146,6 +146,26 @@ def buffer_of(metres: np.ndarray, camera: Camera) -> np.ndarray:
     return np.where(seen, (z_ndc + 1.0) / 2.0, 1.0)
 
 
+FLYING_TOLERANCE = 0.005  # m off both neighbouring surfaces' continuations: a pixel that fits neither is flying
+
+
+def flying_mask(metres: np.ndarray, tolerance: float = FLYING_TOLERANCE) -> np.ndarray:
+    """(size, size) bool: the pixels of depth ``metres`` (0 where nothing was seen) whose depth fits neither
+    neighbouring surface's linear continuation (2 d[i-1] - d[i-2] and 2 d[i+1] - d[i+2]) within ``tolerance``,
+    along rows or along columns: a flying pixel stands between a near surface and a far one, where a face seen
+    grazing steps evenly. Pixels within 2 of an unseen one are never flagged."""
+    padded = np.pad(metres, 2)
+    size_r, size_c = metres.shape
+    out = np.zeros(metres.shape, dtype=bool)
+    for axis in (0, 1):
+        def shifted(k: int, axis: int = axis) -> np.ndarray:
+            return padded[2 + k:2 + k + size_r, 2:-2] if axis == 0 else padded[2:-2, 2 + k:2 + k + size_c]
+        seen = (metres > 0) & (shifted(-1) > 0) & (shifted(-2) > 0) & (shifted(1) > 0) & (shifted(2) > 0)
+        low, high = 2.0 * shifted(-1) - shifted(-2), 2.0 * shifted(1) - shifted(2)
+        out |= seen & (np.abs(metres - low) > tolerance) & (np.abs(metres - high) > tolerance)
+    return out
+
+
 def mixed_edges(metres: np.ndarray, share: float, rng: np.random.Generator, jump: float = EDGE_JUMP) -> np.ndarray:
     """Depth ``metres`` (size, size; 0 where nothing was seen) with a depth camera's flying pixels: each pixel with
     a 4-neighbour more than ``jump`` (m) nearer or further (both seen), at a ``share`` of them drawn from ``rng``,

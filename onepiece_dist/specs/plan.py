@@ -87,6 +87,9 @@ class CameraSpec(Frozen):
     image_size: int = Field(320, ge=32, le=2048, description="Square depth image size (pixels).")
     fov_deg: float = Field(45.0, gt=1, lt=150, description="Vertical field of view (degrees).")
     depth_noise: float = Field(0.0, ge=0, le=0.05, description="Gaussian depth noise (m) added per pixel.")
+    drop_flying: bool = Field(False, description="Drop the depth image's flying pixels before back-projecting "
+                              "(sim.views.flying_mask): a pixel whose depth fits neither neighbouring surface's "
+                              "continuation within 5 mm.")
     flying_pixels: float = Field(0.0, ge=0, le=1, description="Share of the pixels at a depth edge (a neighbour "
                                  "2 cm nearer or further) that mix both depths, as a depth camera's flying pixels.")
 
