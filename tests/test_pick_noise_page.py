@@ -123,3 +123,34 @@ def test_dropping_the_veils_is_kept_only_where_it_picks_more_under_flying_pixels
     lines = veils_section({"command": "c", "date": "d", "machine": "m", "commit": "abc", "views": 24,
                            "runs": [run(1.0, more)]})
     assert "| 1 | household | 100% [100%, 100%] | 0% [0%, 0%] | 50% | 0% |" in lines
+
+
+def test_dropping_flying_pixels_is_kept_at_a_tolerance_whose_most_viewed_runs_pick_more_flying_and_no_less_exact():
+    from benchmarks.experiments.pick_depth_noise import paired_first_attempts
+    from benchmarks.pages.pick_flying_section import drop_section
+    from benchmarks.pages.pick_sets import pooled
+
+    every_pixel = _set("household", [False] * 4 + [True] * 4, [False] * 8)
+
+    def run(tolerance: float, share: float, views: int, judged: dict) -> dict:
+        return {"tolerance": tolerance, "flying": share, "views": views, "sets": [judged],
+                "pooled": {m: pooled([judged], m) for m in ("network", "top_down")},
+                "kept_pooled": {m: pooled([every_pixel], m) for m in ("network", "top_down")},
+                "versus_kept": {m: paired_first_attempts([judged], [every_pixel], m) for m in ("network", "top_down")}}
+
+    def verdict(*runs: dict) -> str:
+        return drop_section({"command": "c", "date": "d", "machine": "m", "block": 24, "runs": list(runs)})[-1]
+
+    more, same, less = (_set("household", n, [False] * 8) for n in ([True] * 8, [False] * 4 + [True] * 4, [False] * 8))
+    kept = "Dropping flying pixels from the depth image: **kept** at 5 mm"
+    assert verdict(run(0.005, 1.0, 24, more), run(0.005, 0.0, 24, same)).startswith(kept)
+    assert verdict(run(0.005, 1.0, 24, more), run(0.005, 0.0, 24, less)).startswith(kept.replace("**kept** at 5 mm",
+                                                                                                  "**not kept**"))
+    assert verdict(run(0.005, 1.0, 24, more), run(0.005, 1.0, 48, same), run(0.005, 0.0, 24, same)).startswith(
+        "Dropping flying pixels from the depth image: **not kept**")  # the run at the most views decides
+    assert verdict(run(0.01, 1.0, 24, same), run(0.01, 0.0, 24, same), run(0.005, 1.0, 24, more),
+                   run(0.005, 0.0, 24, same)).startswith(kept)
+    assert "judged under flying pixels and on exact depth both" in verdict(run(0.005, 1.0, 24, more))
+    lines = drop_section({"command": "c", "date": "d", "machine": "m", "block": 24,
+                          "runs": [run(0.005, 1.0, 24, more)]})
+    assert "| 5 mm | 1 | 24 | 100% | 50% | +50.0 points [+12.5, +87.5] | 0% | 0% | +0.0 points [+0.0, +0.0] |" in lines

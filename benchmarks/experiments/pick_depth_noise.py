@@ -38,11 +38,13 @@ SETS, METHODS = ("household", "unseen"), ("network", "top_down")
 
 
 def level(noise: float, denoise: str, gripper: str | None = None, network=None, folder=None,
-          views: int | None = None, flying_pixels: float = 0.0) -> dict:
+          views: int | None = None, flying_pixels: float = 0.0, drop_flying: float = 0.0, first_view: int = 0
+          ) -> dict:
     """Both sets judged with ``noise`` (m) on the camera's depth, the planner's ``denoise`` as given (``gripper``:
     a preset, its shipped network planning unless ``network``, a checkpoint, is given; runs kept under ``folder``,
-    by default this benchmark's; ``views`` an object, by default the pick benchmark's; a ``flying_pixels`` share
-    of the pixels at the depth's edges mixed across them: CameraSpec.flying_pixels)."""
+    by default this benchmark's; ``views`` an object from ``first_view``, by default the pick benchmark's; a
+    ``flying_pixels`` share of the pixels at the depth's edges mixed across them: CameraSpec.flying_pixels; the
+    planner dropping flying pixels at ``drop_flying``: PlanSpec.drop_flying)."""
     from benchmarks.experiments.pick_clutter import shipped_for
     from benchmarks.experiments.picks import ATTEMPTS, VIEWS, sets
     from onepiece_dist.picks.runner import run_picks
@@ -54,9 +56,10 @@ def level(noise: float, denoise: str, gripper: str | None = None, network=None, 
         shipped, hand = shipped_for(gripper)
         runs = folder or ROOT / "data" / ("pick_depth_noise" + (f"_{gripper}" if gripper else ""))
         spec = PickSpec(objects=objects(), checkpoint=str(network or shipped), gripper=hand, views=views or VIEWS,
-                        attempts=ATTEMPTS, pictures=0, methods=METHODS,
+                        first_view=first_view, attempts=ATTEMPTS, pictures=0, methods=METHODS,
                         camera=CameraSpec(depth_noise=noise, flying_pixels=flying_pixels),
-                        plan=PlanSpec(denoise=denoise), output=str(runs / f"{noise:g}_{denoise}" / name))
+                        plan=PlanSpec(denoise=denoise, drop_flying=drop_flying),
+                        output=str(runs / f"{noise:g}_{denoise}" / name))
         start = time.perf_counter()
         report = run_picks(spec)
         judged.append({**report.to_json(), "name": name, "source": source,

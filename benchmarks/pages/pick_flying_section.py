@@ -109,3 +109,61 @@ def _veils_verdict(runs: dict) -> str:
     return (f"Dropping the veils: **{'kept' if kept else 'not kept'}** as the planner's default (kept where the "
             "network picks more under flying pixels, its interval above zero, and is not shown to pick less on "
             f"exact depth): under flying pixels {_points(gain)}, on exact depth {_points(cost)}.")
+
+
+def drop_section(result: dict) -> list[str]:
+    """The planner dropping a depth image's flying pixels (results/pick_flying_drop.json), each tolerance paired
+    against keeping every pixel, and at which tolerance the option is kept (_drop_verdict)."""
+    def rate(run: dict, key: str, method: str) -> str:
+        return pct(run[key][method]["first_attempt"])
+
+    rows = [f"| {1000 * r['tolerance']:g} mm | {r['flying']:g} | {r['views']} | {rate(r, 'pooled', 'network')} | "
+            f"{rate(r, 'kept_pooled', 'network')} | {_points(r['versus_kept']['network'])} | "
+            f"{rate(r, 'pooled', 'top_down')} | {rate(r, 'kept_pooled', 'top_down')} | "
+            f"{_points(r['versus_kept']['top_down'])} |" for r in result["runs"]]
+    lines = [f"## The planner dropping flying pixels from the depth image: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}. `onepiece grasp --drop-flying T` (PlanSpec.drop_flying, "
+             "core.cloud.flying) drops, before the depth image is back-projected, each pixel that along its row or "
+             "column lies more than T inside the depths of its two neighbours each side and fits neither "
+             "neighbouring surface's linear continuation within T: a flying pixel mixes a near depth and a far one, "
+             "a face seen grazing steps evenly, a thin rim or handle stands nearer than both its sides. The Franka "
+             "hand with the network shipped for it, the household and unseen sets at the micrometre level as the "
+             f"section above judges them, in blocks of {result['block']} views an object (PickSpec.first_view), "
+             "every edge pixel flying (share 1) and exact depth (share 0), household meshes pooled, paired over "
+             "the meshes against the planner keeping every pixel on the same views, first attempt:", "",
+             "| tolerance | flying share | views an object | network, dropped | network, every pixel | paired | "
+             "top-down, dropped | top-down, every pixel | paired |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
+    for r in result.get("first_rule", []):
+        lines.append(f"- First tried at {r['commit']} (branch `image-veils`), every pixel that fits neither "
+                     "continuation within 5 mm, inside its neighbours' depths or not (it also took a curved "
+                     f"silhouette's last pixels, a bowl's rim, a mug's handle), share {r['flying']:g}, {r['views']} "
+                     f"views an object: the network {_points(r['versus_kept']['network'])}, top-down "
+                     f"{_points(r['versus_kept']['top_down'])}.")
+    return [*lines, "", _drop_verdict(result["runs"])]
+
+
+def _drop_verdict(runs: list[dict]) -> str:
+    """Kept at the tolerance whose most-viewed runs show the network picking more under flying pixels (its interval
+    above zero) and not shown to pick less on exact depth; the option stays off by default either way."""
+    kept, said = [], []
+    for tolerance in sorted({r["tolerance"] for r in runs}):
+        by_share = {}
+        for r in sorted((r for r in runs if r["tolerance"] == tolerance), key=lambda r: r["views"]):
+            by_share[r["flying"]] = r  # the most views last
+        flying, exact = by_share.get(1.0), by_share.get(0.0)
+        if flying is None or exact is None:
+            said.append(f"at {1000 * tolerance:g} mm: judged under flying pixels and on exact depth both, or not "
+                        "at all")
+            continue
+        gain, cost = flying["versus_kept"]["network"], exact["versus_kept"]["network"]
+        if gain["interval"][0] > 0 and cost["interval"][1] >= 0:
+            kept.append(tolerance)
+        said.append(f"at {1000 * tolerance:g} mm the network {_points(gain)} under flying pixels ({flying['views']} "
+                    f"views), {_points(cost)} on exact depth ({exact['views']} views)")
+    verdict = (f"**kept** at {1000 * kept[0]:g} mm as the planner's option for a depth camera's images "
+               f"(`onepiece grasp --drop-flying {kept[0]:g}`; off by default, so every run above stands as made)"
+               if kept else "**not kept**")
+    return (f"Dropping flying pixels from the depth image: {verdict} (kept where the network picks more under "
+            f"flying pixels, its interval above zero, and is not shown to pick less on exact depth): "
+            f"{'; '.join(said)}.")

@@ -12,7 +12,7 @@ from benchmarks.pages.pick_check_section import check_trials_section, panda_chec
 from benchmarks.pages.pick_clearance_section import clearance_section
 from benchmarks.pages.pick_clutter_section import clutter_pointer, clutter_section
 from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, rankings_section
-from benchmarks.pages.pick_flying_section import flying_section, veils_section
+from benchmarks.pages.pick_flying_section import drop_section, flying_section, veils_section
 from benchmarks.pages.pick_noise_section import noise_section, noise_views_section
 from benchmarks.pages.pick_noisy_labels_section import noisy_labels_section
 from benchmarks.pages.pick_panda_section import panda_section
@@ -163,9 +163,10 @@ def _dense_line(plan: dict) -> str:
 SECTIONS = ("pick_panda", "pick_panda_check", "pick_clutter_panda", "pick_clutter_panda_pile", "pick_clearance_panda",
             "pick_clearance_panda_pile", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
             "pick_clearance_pile", "pick_depth_noise", "pick_depth_noise_panda", "pick_noise_views",
-            "pick_flying_pixels", "pick_veils", "pick_noisy_labels", "pick_ceiling", "pick_ranked_draws",
-            "pick_reranked", "pick_robust_rank", "pick_rank_features", "pick_shape_check", "pick_check_trials",
-            "pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels", "pick_top_down", "pick_points",
+            "pick_flying_pixels", "pick_veils", "pick_flying_drop", "pick_noisy_labels", "pick_ceiling",
+            "pick_ranked_draws", "pick_reranked", "pick_robust_rank", "pick_rank_features", "pick_shape_check",
+            "pick_check_trials", "pick_unseen", "pick_curve", "pick_space", "pick_on_policy", "pick_vessels",
+            "pick_top_down", "pick_points",
             "pick_top_down_both", "pick_schedule", "pick_household_labels", "pick_outline", "pick_top_draws",
             "pick_rankings", "pick_pool_size")
 
@@ -201,6 +202,7 @@ def render_picks_page() -> str:
               "pick_depth_noise_panda": lambda r: noise_section(r, _panda_picks(load("pick_panda"), picks)),
               "pick_noise_views": noise_views_section, "pick_noisy_labels": noisy_labels_section,
               "pick_flying_pixels": flying_section, "pick_veils": veils_section,
+              "pick_flying_drop": drop_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
               "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda"), picks)),
               "pick_ranked_draws": ranked_draws_section,

@@ -121,6 +121,10 @@ def grasp(
     denoise: Annotated[bool, typer.Option("--denoise/--no-denoise", help="Take a depth camera's noise out of the "
                                           "view first, where the points under the table show it "
                                           "(docs/planning.md); an exact view is left as it is.")] = True,
+    drop_flying: Annotated[float, typer.Option(min=0.0, max=0.05, help="With --intrinsics: drop the depth image's "
+                                               "flying pixels (those inside their neighbours' depths by this many "
+                                               "metres that fit neither neighbouring surface; 0.005 is the measured "
+                                               "setting: docs/planning.md); 0 keeps every pixel.")] = 0.0,
     check_shape: Annotated[str, typer.Option(help="The shape checked on: hull (the points and their shadows as one "
                                              "convex hull), carved (that hull less what the camera saw through: "
                                              "openings stay open) or mirrored (with the points' half turn about "
@@ -147,7 +151,7 @@ def grasp(
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check,
                         check_shape=check_shape, objects_apart=not one_object, denoise="auto" if denoise else "none",
-                        target=None if aim is None else tuple(aim))
+                        drop_flying=drop_flying, target=None if aim is None else tuple(aim))
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, _gripper(gripper))
     except (OnePieceError, ValueError) as error:

@@ -68,7 +68,7 @@ def clear_scenes(spec: PickSpec, group: ObjectGroup, index: int) -> SceneClearan
     except MeshRejected as err:
         return SceneClearances(index, group.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
     views = []
-    for view in range(spec.views):
+    for view in spec.view_indices:
         resting, _ = settled(spec, world, objects, view)
         views.append(Clearance(view, len(objects), {m: _cleared(spec, scorer, world, objects, resting, view, m)
                                                     for m in spec.methods}))

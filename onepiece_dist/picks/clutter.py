@@ -137,7 +137,7 @@ def seen_scene(spec: PickSpec, record: CropRecord, objects: tuple[SceneObject, .
     cam = spec.camera
     drawn = pick_camera(centre, rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
     cloud = observe_scene(np.vstack(vertices), faces, centre, drawn.camera, rng, cam.depth_noise, WORKSPACE,
-                          cam.flying_pixels)
+                          cam.flying_pixels, spec.plan.drop_flying)
     eye = drawn.camera.pose[:3, 3]
     name = f"{scene_name(objects)} view {view}"
     proposals = propose(Observation(cloud, eye, name), record, spec.plan, rng) if len(cloud) >= MIN_POINTS else None
@@ -216,7 +216,7 @@ def pick_scene(spec: PickSpec, group: ObjectGroup, index: int) -> ObjectPicks:
         scorer, world, objects = loaded_scene(spec, group)
     except MeshRejected as err:
         return ObjectPicks(index, group.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    views = tuple(_scene_view(spec, scorer, world, objects, view) for view in range(spec.views))
+    views = tuple(_scene_view(spec, scorer, world, objects, view) for view in spec.view_indices)
     return ObjectPicks(index, group.name, "ok", views, seconds=time.perf_counter() - start)
 
 

@@ -55,7 +55,7 @@ def draw_candidates(spec: PickSpec, ref: ObjectRef, index: int, checkpoints: tup
         scorers, world, loaded = scored_world(spec, checkpoints, ref)
     except MeshRejected as err:
         return CandidateDraws(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    rows = [row for view in range(spec.views) for row in _view(spec, scorers, world, loaded.mesh, view, per_view,
+    rows = [row for view in spec.view_indices for row in _view(spec, scorers, world, loaded.mesh, view, per_view,
                                                                draws)]
     return CandidateDraws(index, ref.name, "ok", tuple(r[0] for r in rows), tuple(r[1] for r in rows),
                           tuple(r[2] for r in rows), tuple(r[3] for r in rows), seconds=time.perf_counter() - start)
@@ -99,7 +99,7 @@ def ranked_draws(spec: PickSpec, ref: ObjectRef, index: int, top: int, draws: in
     except MeshRejected as err:
         return index, ref.name, (), err.reason
     views = []
-    for view in range(spec.views):
+    for view in spec.view_indices:
         seen = observe_view(spec, scorer.record, world, loaded.mesh, view)
         proposals = seen.proposals
         if proposals is None:
@@ -161,7 +161,7 @@ def view_ceilings(spec: PickSpec, ref: ObjectRef, index: int, draws: CeilingDraw
     except MeshRejected as err:
         return index, ref.name, (), err.reason
     return index, ref.name, tuple(_ceiling(spec, record, world, loaded.mesh, view, draws)
-                                  for view in range(spec.views)), ""
+                                  for view in spec.view_indices), ""
 
 
 def _ceiling(spec: PickSpec, record, world, mesh, view: int, draws: CeilingDraws) -> ViewCeiling:

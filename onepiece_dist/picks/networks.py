@@ -59,7 +59,7 @@ def pick_with_networks(spec: PickSpec, checkpoints: tuple[str, ...], ref: Object
         scorers, world, loaded = scored_world(spec, checkpoints, ref)
     except MeshRejected as err:
         return NetworkPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    views = [_view(spec, scorers, world, loaded.mesh, view) for view in range(spec.views)]
+    views = [_view(spec, scorers, world, loaded.mesh, view) for view in spec.view_indices]
     return NetworkPicks(index, ref.name, "ok", tuple(v[0] for v in views), tuple(v[1] for v in views),
                         seconds=time.perf_counter() - start)
 

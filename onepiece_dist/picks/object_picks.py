@@ -101,7 +101,7 @@ def pick_object(spec: PickSpec, ref: ObjectRef, index: int) -> ObjectPicks:
         world, loaded = simulated_object(spec, scorer.record, ref)
     except MeshRejected as err:
         return ObjectPicks(index, ref.name, "rejected", reason=err.reason, seconds=time.perf_counter() - start)
-    views = tuple(_pick_view(spec, scorer, world, loaded.mesh, view) for view in range(spec.views))
+    views = tuple(_pick_view(spec, scorer, world, loaded.mesh, view) for view in spec.view_indices)
     return ObjectPicks(index, ref.name, "ok", views, seconds=time.perf_counter() - start)
 
 

@@ -67,7 +67,8 @@ def observe_view(spec: PickSpec, record: CropRecord, world, mesh, view: int) -> 
     resting = world.settle(rng, mesh.vertices)
     cam = spec.camera
     drawn = pick_camera(resting[:3, 3], rng, cam.distance, cam.elevation_deg, cam.image_size, cam.fov_deg)
-    cloud = observe(mesh.vertices, mesh.faces, resting, drawn.camera, rng, cam.depth_noise, cam.flying_pixels)
+    cloud = observe(mesh.vertices, mesh.faces, resting, drawn.camera, rng, cam.depth_noise, cam.flying_pixels,
+                    spec.plan.drop_flying)
     eye = drawn.camera.pose[:3, 3]
     proposals = None
     if len(cloud) >= MIN_POINTS:

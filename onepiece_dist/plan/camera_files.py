@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.cloud.flying import without_flying
 from onepiece_dist.core.frames import matrix_from_quat, transform_points
 from onepiece_dist.core.raycast import import_open3d
 from onepiece_dist.errors import CloudRejected
@@ -126,9 +127,11 @@ def crop_to_workspace(observation: Observation, lower: np.ndarray, upper: np.nda
                        observation.up)
 
 
-def depth_observation(path: str | Path, intrinsics: Intrinsics, depth_scale: float | None = None) -> Observation:
-    """A depth image file back-projected in the OpenCV camera frame."""
-    depth = read_depth(path, depth_scale)
+def depth_observation(path: str | Path, intrinsics: Intrinsics, depth_scale: float | None = None,
+                      drop_flying: float = 0.0) -> Observation:
+    """A depth image file back-projected in the OpenCV camera frame, its flying pixels dropped at ``drop_flying``
+    (m; core.cloud.flying; 0 keeps every pixel)."""
+    depth = without_flying(read_depth(path, depth_scale), drop_flying)
     return depth_to_cloud(depth, intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy, source=str(path))
 
 

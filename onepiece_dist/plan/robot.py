@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core.frames import invert_poses, transform_points
+from onepiece_dist.errors import CloudRejected
 from onepiece_dist.plan.camera_files import (
     crop_to_workspace,
     depth_observation,
@@ -42,13 +43,17 @@ class RobotPlan:
 
 def read_observation(cloud: str | Path, intrinsics: str | None = None, depth_scale: float | None = None,
                      viewpoint: tuple[float, float, float] | None = None, camera_pose: str | Path | None = None,
-                     workspace: str | None = None) -> tuple[Observation, np.ndarray | None]:
+                     workspace: str | None = None, drop_flying: float = 0.0) -> tuple[Observation, np.ndarray | None]:
     """The observation to plan on (in the camera's frame when ``camera_pose`` is given, with that pose), else in
-    the cloud's own frame (and None)."""
+    the cloud's own frame (and None); a depth image's flying pixels dropped at ``drop_flying`` (m; PlanSpec)."""
     pose = None if camera_pose is None else read_camera_pose(camera_pose)
     view = None if viewpoint is None else np.asarray(viewpoint, dtype=np.float64)
     if intrinsics is not None:
-        observation = depth_observation(cloud, read_intrinsics(intrinsics), depth_scale)
+        observation = depth_observation(cloud, read_intrinsics(intrinsics), depth_scale, drop_flying)
+    elif drop_flying > 0:
+        raise CloudRejected(f"{cloud}: drop_flying (--drop-flying) finds flying pixels on a depth image, and a "
+                            "point cloud has no pixel neighbours: give the depth image with --intrinsics, or "
+                            "leave drop_flying at 0")
     else:
         observation = read_cloud(cloud, view if view is not None else (np.zeros(3) if pose is not None else None))
     if pose is not None:
@@ -67,7 +72,8 @@ def plan_from_files(cloud: str | Path, checkpoint: str | Path | None = None, spe
     network (None: the shipped one), in the robot's base frame when ``camera_pose`` (a JSON file) is given; the
     first ``spec.check_first`` reordered by ``check`` (planner.plan_grasps)."""
     spec = spec or PlanSpec()
-    observation, pose = read_observation(cloud, intrinsics, depth_scale, viewpoint, camera_pose, workspace)
+    observation, pose = read_observation(cloud, intrinsics, depth_scale, viewpoint, camera_pose, workspace,
+                                         spec.drop_flying)
     if pose is not None and spec.target is not None:  # the target is given in the base frame; planning is not
         target = transform_points(np.array([spec.target]), invert_poses(pose[None])[0])[0]
         spec = spec.model_copy(update={"target": tuple(float(v) for v in target)})

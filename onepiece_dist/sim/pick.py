@@ -14,6 +14,7 @@ import numpy as np
 import pybullet as pb
 
 from onepiece_dist.core import portable
+from onepiece_dist.core.cloud.flying import without_flying
 from onepiece_dist.core.frames import compose_poses, perturb_pose, quat_from_matrix, transform_points
 from onepiece_dist.sim.beside import Beside, Neighbour
 from onepiece_dist.sim.trials import (
@@ -231,24 +232,29 @@ def pick_camera(target: np.ndarray, rng: np.random.Generator, distance: tuple[fl
 
 
 def observe(vertices: np.ndarray, faces: np.ndarray, object_pose: np.ndarray, camera: Camera,
-            rng: np.random.Generator, depth_noise: float = 0.0, flying_pixels: float = 0.0) -> np.ndarray:
+            rng: np.random.Generator, depth_noise: float = 0.0, flying_pixels: float = 0.0,
+            drop_flying: float = 0.0) -> np.ndarray:
     """(m, 3) world points the camera sees of the object at ``object_pose`` on the table, kept within WORKSPACE
     of the object's resting place (a workspace crop), with Gaussian ``depth_noise`` (m) along each ray and a
-    ``flying_pixels`` share of its edge pixels mixed (observe_scene)."""
+    ``flying_pixels`` share of its edge pixels mixed, those found flying at ``drop_flying`` dropped
+    (observe_scene)."""
     return observe_scene(transform_points(vertices, object_pose), faces, object_pose[:3, 3], camera, rng,
-                         depth_noise, flying_pixels=flying_pixels)
+                         depth_noise, flying_pixels=flying_pixels, drop_flying=drop_flying)
 
 
 def observe_scene(vertices: np.ndarray, faces: np.ndarray, centre: np.ndarray, camera: Camera,
                   rng: np.random.Generator, depth_noise: float = 0.0, half: float = WORKSPACE,
-                  flying_pixels: float = 0.0) -> np.ndarray:
+                  flying_pixels: float = 0.0, drop_flying: float = 0.0) -> np.ndarray:
     """(m, 3) world points the camera sees of the triangles ``vertices`` (world frame; every object of the scene)
     and ``faces`` on the table, kept within ``half`` (m, along x and y) of ``centre`` (3,), with a
     ``flying_pixels`` share of the pixels at its depth edges mixed across them (sim.views.mixed_edges) and
-    Gaussian ``depth_noise`` (m); nothing is drawn for either where it is 0."""
+    Gaussian ``depth_noise`` (m); nothing is drawn for either where it is 0. With ``drop_flying`` (m) the planner
+    drops the image's flying pixels at that tolerance before back-projecting (core.cloud.flying; draws nothing)."""
     depth = depth_images(vertices, faces, [camera], TABLE_BOX)[0]
     if flying_pixels > 0:
         depth = buffer_of(mixed_edges(linear_depth(depth, camera), flying_pixels, rng), camera)
+    if drop_flying > 0:
+        depth = buffer_of(without_flying(linear_depth(depth, camera), drop_flying), camera)
     points = back_project(depth, camera)
     if depth_noise > 0 and len(points):
         rays = points - camera.pose[:3, 3]

@@ -71,6 +71,11 @@ class PlanSpec(Frozen):
                                              "plane show a deviation above 0.5 mm, the table takes every point "
                                              "within 3 deviations of it and each object point moves onto the "
                                              "plane of its 16 nearest; an exact view is left as it is. none: never.")
+    drop_flying: float = Field(0.0, ge=0, le=0.05, description="Drop a depth image's flying pixels before it is "
+                               "back-projected (core.cloud.flying): each pixel more than this (m) inside its "
+                               "neighbours' depths, along rows or columns, that fits neither neighbouring surface's "
+                               "continuation within it. 0 keeps every pixel; 0.005 is the measured setting "
+                               "(docs/picks.md). A depth image only: a point cloud has no pixel neighbours.")
     objects_apart: bool = Field(True, description="Tell the view's objects apart (points whose 1 cm cells touch "
                                 "are one object: core.cloud.objects): each gets its own top-down grasps, a grasp's "
                                 "context reads the centre of the object it closes on and the check stands that "
@@ -115,6 +120,9 @@ class PickSpec(Frozen):
     checkpoint: str = Field(..., description="The network's checkpoint (best.pt of a train stage).")
     output: str = Field("onepiece-out/picks", description="Folder for picks.json and the pictures.")
     views: int = Field(3, ge=1, le=64, description="Camera poses per object.")
+    first_view: int = Field(0, ge=0, le=4096, description="The first view's index: views first_view to first_view "
+                            "+ views - 1, each with draws of its own, so a run at first_view N adds views to one "
+                            "of N views without repeating them.")
     attempts: int = Field(3, ge=1, le=20, description="k: the ranked grasps tried per view, one after another.")
     seed: int = Field(0, ge=0, lt=2**63, description="Seed of the drops, the camera poses and the planning.")
     methods: tuple[Method, ...] = Field(
@@ -165,6 +173,11 @@ class PickSpec(Frozen):
         if self.pile and self.clutter < 2:
             raise ValueError("pile drops each next object onto those there: it needs clutter 2 or more")
         return self
+
+    @property
+    def view_indices(self) -> range:
+        """The indices of the views each object is seen at: first_view to first_view + views - 1."""
+        return range(self.first_view, self.first_view + self.views)
 
     def object_job(self, gripper: GripperSpec, voxel: VoxelSpec) -> JobSpec:
         """The job-shaped spec the object loader and the full-mesh sampler read (file limits, extents, physics)."""
