@@ -39,15 +39,16 @@ def test_a_pixel_without_a_return_near_it_is_never_flagged_and_zero_keeps_every_
 
 
 @pytest.mark.sim
-def test_a_scenes_flying_pixels_are_dropped_from_its_depth_png_and_its_clean_view_keeps_its_points(tmp_path):
+def test_a_scenes_flying_pixels_are_dropped_from_its_depth_png_its_command_says_so_and_a_clean_view_stays(tmp_path):
     from scipy.spatial import cKDTree
 
     from onepiece_dist.picks.scene_files import write_scene
     from onepiece_dist.plan.robot import read_observation
     from onepiece_dist.specs.plan import CameraSpec
 
-    for name, camera in (("clean", CameraSpec()), ("flying", CameraSpec(flying_pixels=1.0))):
-        write_scene("primitives[3:4]", tmp_path / name, seed=1, camera=camera)
+    commands = {name: write_scene("primitives[3:4]", tmp_path / name, seed=1, camera=camera).grasp_command()
+                for name, camera in (("clean", CameraSpec()), ("flying", CameraSpec(flying_pixels=1.0)))}
+    assert commands["flying"].endswith(" --drop-flying 0.005") and "--drop-flying" not in commands["clean"]
 
     def points(name: str, drop: float) -> np.ndarray:
         folder = tmp_path / name

@@ -7,7 +7,7 @@ keeping every pixel on the same views. Views are judged in blocks of 24 (PickSpe
 blocks and a block already judged (its reports under data/) is read again, not run; the first block of the
 planner keeping every pixel is pick_flying_pixels' 24-view Franka run and its exact level.
 
-    .venv/bin/python -m benchmarks.experiments.pick_flying_drop [--tolerances 0.005,0.01] [--views 48]
+    .venv/bin/python -m benchmarks.experiments.pick_flying_drop [--tolerances 0.005,0.01] [--shares 1,0] [--views 48]
 
 Results: benchmarks/results/pick_flying_drop.json, rendered into docs/picks.md; with the first rule tried
 (branch image-veils at ba75109, every pixel that fits neither continuation; its reports under data/) where they
@@ -85,11 +85,12 @@ def first_rule() -> list[dict]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tolerances", default="0.005,0.01", help="Comma-separated tolerances (m).")
+    parser.add_argument("--shares", default="1,0", help="Comma-separated flying shares (1: every edge pixel).")
     parser.add_argument("--views", type=int, default=BLOCK, help=f"Views an object, a multiple of {BLOCK}.")
     args = parser.parse_args()
     runs = json.loads(RESULTS.read_text())["runs"] if RESULTS.is_file() else []
     for tolerance in (float(t) for t in args.tolerances.split(",")):
-        for share in SHARES:
+        for share in (float(f) for f in args.shares.split(",")):
             run = judged(tolerance, share, args.views)
             runs = [r for r in runs if (r["tolerance"], r["flying"], r["views"]) != (tolerance, share, args.views)]
             runs.append(run)

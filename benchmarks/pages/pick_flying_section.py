@@ -134,12 +134,16 @@ def drop_section(result: dict) -> list[str]:
              "| tolerance | flying share | views an object | network, dropped | network, every pixel | paired | "
              "top-down, dropped | top-down, every pixel | paired |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
-    for r in result.get("first_rule", []):
-        lines.append(f"- First tried at {r['commit']} (branch `image-veils`), every pixel that fits neither "
-                     "continuation within 5 mm, inside its neighbours' depths or not (it also took a curved "
-                     f"silhouette's last pixels, a bowl's rim, a mug's handle), share {r['flying']:g}, {r['views']} "
-                     f"views an object: the network {_points(r['versus_kept']['network'])}, top-down "
-                     f"{_points(r['versus_kept']['top_down'])}.")
+    tried = {r["flying"]: r for r in result.get("first_rule", [])}
+    if tried:
+        said = "; ".join(f"{'under flying pixels' if share else 'on exact depth'} the network "
+                         f"{_points(r['versus_kept']['network'])}, top-down {_points(r['versus_kept']['top_down'])}"
+                         for share, r in sorted(tried.items(), reverse=True))
+        first = next(iter(tried.values()))
+        lines.append(f"First tried at {first['commit']} (branch `image-veils`): every pixel that fits neither "
+                     "continuation within 5 mm, inside its neighbours' depths or not, which also took a curved "
+                     f"silhouette's last pixels, a bowl's rim and a mug's handle ({first['views']} views an "
+                     f"object): {said}.")
     return [*lines, "", _drop_verdict(result["runs"])]
 
 
@@ -153,8 +157,10 @@ def _drop_verdict(runs: list[dict]) -> str:
             by_share[r["flying"]] = r  # the most views last
         flying, exact = by_share.get(1.0), by_share.get(0.0)
         if flying is None or exact is None:
-            said.append(f"at {1000 * tolerance:g} mm: judged under flying pixels and on exact depth both, or not "
-                        "at all")
+            judged, where, not_where = ((flying, "under flying pixels", "on exact depth") if flying else
+                                        (exact, "on exact depth", "under flying pixels"))
+            said.append(f"at {1000 * tolerance:g} mm the network {_points(judged['versus_kept']['network'])} {where} "
+                        f"({judged['views']} views), not judged {not_where}")
             continue
         gain, cost = flying["versus_kept"]["network"], exact["versus_kept"]["network"]
         if gain["interval"][0] > 0 and cost["interval"][1] >= 0:

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from onepiece_dist.core import portable
+from onepiece_dist.core.cloud.flying import FLYING_TOLERANCE
 from onepiece_dist.core.raycast import import_open3d
 from onepiece_dist.errors import SourceError
 from onepiece_dist.objects import resolve_source
@@ -43,14 +44,17 @@ class SceneFiles:
     folder: Path
     objects: tuple[str, ...]
     centre: tuple[float, float, float]
+    drop_flying: float = 0.0  # m: where the camera's flying pixels are in the image, the planner drops them
 
     def grasp_command(self) -> str:
-        """The `onepiece grasp` command that plans on these files, in the base frame, within the scene's box."""
+        """The `onepiece grasp` command that plans on these files, in the base frame, within the scene's box (and
+        dropping the image's flying pixels where it has them: docs/picks.md)."""
         x, y, _ = self.centre
         box = ",".join(f"{v:.2f}" for v in (x - WORKSPACE, y - WORKSPACE, -0.02, x + WORKSPACE, y + WORKSPACE, 0.4))
         depth, intrinsics, pose = (shlex.quote(str(self.folder / name))
                                    for name in ("depth.png", "intrinsics.json", "camera_pose.json"))
-        return f"onepiece grasp {depth} --intrinsics {intrinsics} --camera-pose {pose} --workspace {box}"
+        drop = f" --drop-flying {self.drop_flying:g}" if self.drop_flying > 0 else ""
+        return f"onepiece grasp {depth} --intrinsics {intrinsics} --camera-pose {pose} --workspace {box}{drop}"
 
 
 def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0, camera: CameraSpec | None = None,
@@ -79,7 +83,8 @@ def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0,
     _write_depth(folder / "depth.png", _depth(np.vstack(vertices), faces, seen, camera, rng))
     _write_json(folder / "intrinsics.json", {"K": intrinsics(seen).tolist()})
     _write_json(folder / "camera_pose.json", {"matrix": (seen.pose @ OPENCV).tolist()})
-    written = SceneFiles(folder, tuple(o.name for o in scene), tuple(float(v) for v in centre))
+    written = SceneFiles(folder, tuple(o.name for o in scene), tuple(float(v) for v in centre),
+                         FLYING_TOLERANCE if camera.flying_pixels > 0 else 0.0)
     _write_json(folder / "scene.json", {
         "objects": [{"name": o.name, "resting_pose": pose.tolist()} for o, pose in zip(scene, resting, strict=True)],
         "seed": seed, "pile": pile, "camera": camera.model_dump(mode="json"), "grasp": written.grasp_command()})
