@@ -25,11 +25,12 @@ def flying_mask(depth: np.ndarray, tolerance: float = FLYING_TOLERANCE) -> np.nd
         def shifted(k: int, axis: int = axis) -> np.ndarray:
             return padded[2 + k:2 + k + rows, 2:-2] if axis == 0 else padded[2:-2, 2 + k:2 + k + cols]
 
-        around = np.stack([shifted(k) for k in (-2, -1, 1, 2)])
-        seen = (metres > 0) & np.all(around > 0, axis=0)
-        before, after = 2.0 * shifted(-1) - shifted(-2), 2.0 * shifted(1) - shifted(2)
-        inside = (metres > around.min(axis=0) + tolerance) & (metres < around.max(axis=0) - tolerance)
-        out |= seen & inside & (np.abs(metres - before) > tolerance) & (np.abs(metres - after) > tolerance)
+        far_before, near_before, near_after, far_after = (shifted(k) for k in (-2, -1, 1, 2))
+        low = np.minimum(np.minimum(far_before, near_before), np.minimum(near_after, far_after))
+        high = np.maximum(np.maximum(far_before, near_before), np.maximum(near_after, far_after))
+        flagged = (low > 0) & (metres > low + tolerance) & (metres < high - tolerance)  # seen around, inside
+        flagged &= np.abs(metres - (2.0 * near_before - far_before)) > tolerance
+        out |= flagged & (np.abs(metres - (2.0 * near_after - far_after)) > tolerance)
     return out
 
 
