@@ -17,6 +17,7 @@ are on this machine.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import platform
 from datetime import date
@@ -24,8 +25,7 @@ from pathlib import Path
 
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.experiments.pick_depth_noise import BASELINE, METHODS, SETS, level
-from benchmarks.experiments.pick_panda_check import slim
-from benchmarks.pages.pick_sets import paired_first_attempts, pooled
+from benchmarks.pages.pick_sets import first_attempt_share, loaded_objects, paired_first_attempts, pooled
 
 RESULTS = HERE / "results" / "pick_flying_drop.json"
 BLOCK, GRIPPER, SHARES = 24, "panda", (1.0, 0.0)
@@ -34,6 +34,7 @@ KEPT = {1.0: ROOT / "data" / "pick_flying_pixels" / GRIPPER / "1" / "24",  # the
 FIRST_RULE = ("ba75109", ROOT / "data" / "pick_image_veils")  # the rule first tried, on the image-veils branch
 
 
+@functools.cache
 def block(tolerance: float, share: float, first: int) -> list[dict]:
     """Both sets' reports of views ``first`` to ``first + BLOCK - 1`` with ``share`` of the edge pixels flying and
     the planner dropping flying pixels at ``tolerance`` (0: keeping every pixel): read where judged, else run."""
@@ -54,7 +55,7 @@ def joined(blocks: list[list[dict]]) -> list[dict]:
         for same in zip(*(part["objects"] for part in parts), strict=True):  # one object in each block
             status = next((o["status"] for o in same if o["status"] != "ok"), "ok")
             objects.append({**same[0], "status": status, "views": [v for o in same for v in o.get("views", [])]})
-        sets.append(slim({**parts[0], "objects": objects}))
+        sets.append({**parts[0], "objects": objects})
     return sets
 
 
@@ -62,9 +63,16 @@ def judged(tolerance: float, share: float, views: int) -> dict:
     """``tolerance`` at ``share`` over ``views`` views an object, paired against keeping every pixel."""
     made = joined([block(tolerance, share, first) for first in range(0, views, BLOCK)])
     kept = joined([block(0.0, share, first) for first in range(0, views, BLOCK)])
-    return {"tolerance": tolerance, "flying": share, "views": views, "sets": made,
+    return {"tolerance": tolerance, "flying": share, "views": views, "objects": first_attempts(made),
             "pooled": {m: pooled(made, m) for m in METHODS}, "kept_pooled": {m: pooled(kept, m) for m in METHODS},
             "versus_kept": {m: paired_first_attempts(made, kept, m) for m in METHODS}}
+
+
+def first_attempts(sets: list[dict]) -> dict:
+    """Per loaded object ("set/name"): each chooser's share of its views picked at the first attempt (what a
+    pairing reads; the views themselves stay in the reports under data/)."""
+    return {f"{s['name']}/{o['name']}": {m: first_attempt_share(o, m) for m in METHODS}
+            for s, o in loaded_objects(sets)}
 
 
 def first_rule() -> list[dict]:

@@ -152,10 +152,8 @@ def _drop_verdict(runs: list[dict]) -> str:
     above zero) and not shown to pick less on exact depth; the option stays off by default either way."""
     kept, said = [], []
     for tolerance in sorted({r["tolerance"] for r in runs}):
-        by_share = {}
-        for r in sorted((r for r in runs if r["tolerance"] == tolerance), key=lambda r: r["views"]):
-            by_share[r["flying"]] = r  # the most views last
-        flying, exact = by_share.get(1.0), by_share.get(0.0)
+        flying, exact = (max((r for r in runs if (r["tolerance"], r["flying"]) == (tolerance, share)),
+                             key=lambda r: r["views"], default=None) for share in (1.0, 0.0))
         if flying is None or exact is None:
             judged, where, not_where = ((flying, "under flying pixels", "on exact depth") if flying else
                                         (exact, "on exact depth", "under flying pixels"))
