@@ -11,6 +11,7 @@ objects with a bootstrap interval.
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --density-scales 0.5,2   # the check's mass guessed
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --shapes hull,carved   # the shapes, by 8 draws
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-draws 4,8,16   # the check's own draws
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --noise-scales 2,3   # the check's pose noise
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-shape carved --checks 3   # by the benchmark
 
 Results: benchmarks/results/pick_shape_check.json, rendered into docs/picks.md.
@@ -85,10 +86,12 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     from onepiece_dist.picks.shape_check import check_shape, held_draws
     from onepiece_dist.plan.planner import Seen
 
-    which, objects, stored, density_scale, shapes, draws = task
+    which, objects, stored, density_scale, shapes, draws, noise_scale = task
     torch.set_num_threads(1)
     spec = _spec(objects, 3)
-    check_sim = spec.sim.model_copy(update={"density": spec.sim.density * density_scale})  # the check's guess
+    check_sim = spec.sim.model_copy(update={"density": spec.sim.density * density_scale,  # the check's guess
+                                            "pose_noise": spec.sim.pose_noise * noise_scale,
+                                            "rotation_noise": spec.sim.rotation_noise * noise_scale})
     scorer = process_scorer(spec)
     rows = []
     for again in seen_again(spec, scorer, objects, stored, LOOKED_AT, []):
@@ -151,13 +154,40 @@ def expected(sets: dict[str, str], density_scale: float = 1.0, shapes: tuple[str
     return out
 
 
-def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, ...], draws: int) -> list:
+def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, ...], draws: int,
+                noise_scales: tuple[float, ...] = (1.0,)) -> list:
+    """_drawn_set of each set (and each of ``noise_scales``, in that order within a set) on two processes."""
     from multiprocessing import get_context
 
     ranked = json.loads(RANKED.read_text())
     with get_context("spawn").Pool(2) as pool:
-        return pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes, draws)
-                                     for w, o in sets.items()])
+        return pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes, draws, scale)
+                                     for w, o in sets.items() for scale in noise_scales])
+
+
+def expected_noise(sets: dict[str, str], scales: tuple[float, ...], stored: dict) -> dict:
+    """Per multiple of the protocol's pose noise (``scales``) the hull's check draws at, number checked and set:
+    drawn_summary over the ranked-draws views, and its first against the check at the protocol's own noise
+    measured in the same run (the same draws from the same streams, scaled), paired over objects
+    (shape_difference); and how many views' shares at the protocol's noise equal those the shapes' measure kept
+    (``stored``: expected_shapes' rows)."""
+    scales = (1.0, *(s_ for s_ in scales if s_ != 1.0))
+    found = iter(_drawn_sets(sets, 1.0, ("hull",), DRAWS, scales))
+    out, agree = {}, {}
+    for which in sets:
+        by_scale = {scale: next(found)[1] for scale in scales}
+        base = by_scale[1.0]
+        agree[which] = sum(row["held_hull"] == old["held_hull"] for row, old in zip(base, stored[which], strict=True))
+        for scale in scales[1:]:
+            out.setdefault(str(scale), {})[which] = [
+                {**row, "held_noisy": row["held_hull"], "held_hull": one["held_hull"]}
+                for row, one in zip(by_scale[scale], base, strict=True)]
+    summary = {"stored_agree": agree}
+    for scale, by_set in out.items():
+        by_set["all objects"] = [row for rows in by_set.values() for row in rows]
+        summary[scale] = {str(k): {w: {**drawn_summary(rows, k, "noisy"), "versus": shape_difference(
+            rows, k, "hull", "noisy")} for w, rows in by_set.items()} for k in (3, LOOKED_AT)}
+    return summary
 
 
 def expected_draws(sets: dict[str, str], counts: tuple[int, ...]) -> dict:
@@ -214,6 +244,8 @@ def main() -> None:
                         "check runs on; another than the hull is kept beside the committed results")
     parser.add_argument("--check-draws", default="", help="only the ranked-draws measure, the hull's check with "
                         "each of these numbers of draws, kept beside the committed results")
+    parser.add_argument("--noise-scales", default="", help="only the ranked-draws measure, the hull's check at "
+                        "these multiples of the protocol's pose noise, kept beside the committed results")
     parser.add_argument("--views", type=int, default=VIEWS, help="the benchmark's one draw at this many views an "
                         "object (the first 8 the benchmark's), the check with the planner's default draws, kept "
                         "beside the committed results")
@@ -228,6 +260,11 @@ def main() -> None:
     if args.shapes:
         found = expected(sets, 1.0, tuple(args.shapes.split(",")))
         _beside(lambda result: _keep_shapes(result.setdefault("expected_shapes", {}), found))
+        return
+    if args.noise_scales:
+        stored = json.loads(RESULTS.read_text())["expected_shapes"]["rows"]["carved"]
+        found = expected_noise(sets, tuple(float(n) for n in args.noise_scales.split(",")), stored)
+        _beside(lambda result: result.update(expected_noise=found))
         return
     if args.density_scales:
         found = {scale: expected(sets, float(scale))["hull"] for scale in args.density_scales.split(",")}
