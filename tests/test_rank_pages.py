@@ -258,3 +258,30 @@ def test_a_check_by_single_trials_replaces_the_protocols_only_where_as_good_and_
 
     assert section(True).startswith("As good and cheaper: the nominal trial, then 1 perturbed")
     assert "**not kept**" in section(False) and "As good, at the same cost or more: none" in section(False)
+
+
+def test_the_checks_pose_noise_is_judged_against_its_own_noise_by_the_draws_of_what_each_chose():
+    from benchmarks.experiments.pick_shape_check import noise_summary
+    from benchmarks.pages.pick_rank_section import shape_check_section
+
+    base = [{"object": "a", "shares": [0.5, 1.0, 0.0], "held_hull": [1.0, 0.75, 0.0]},
+            {"object": "b", "shares": [1.0, 0.0, 0.5], "held_hull": [1.0, 0.0, 0.0]}]
+    wider = [{**base[0], "held_hull": [0.25, 0.75, 0.0]},  # a: the second chosen (1.0 against 0.5)
+             {**base[1], "held_hull": [0.0, 0.0, 0.5]}]  # b: the third chosen (0.5 against 1.0)
+    stored = {"household": [base[0], {**base[1], "held_hull": [0.0, 0.0, 0.0]}]}  # one view as kept before
+    summary = noise_summary({"household": {1.0: base, 2.0: wider}}, stored)
+    assert summary["stored_agree"] == {"household": 1}
+    three = summary["2.0"]["3"]["household"]
+    assert three["checked"] == 0.75 and three["versus"]["mean"] == 0.0  # +0.5 on a, -0.5 on b
+    assert summary["2.0"]["3"]["all objects"]["versus"] == three["versus"]
+    result = {"command": "c", "date": "d", "machine": "m", "draws": 8, "checks": [0], "expected_noise": summary,
+              "sets": {"household": {"0": {"views": 2, "per_object": {"a": 1, "b": 2}, "first_attempt": 0.75,
+                                           "interval": [0, 1], "within_3": 1.0, "failures": {}, "seconds": 1.0}}}}
+    page = "\n".join(shape_check_section(result))
+    assert "| 2x | 3 | household | 75.0% | +0.0 [-50.0, +50.0] | +0.0 [-50.0, +50.0] |" in page
+    assert "(which gave the shares the shapes' measure above kept on 1 household views)" in page
+    assert ("at 2x the protocol's pose noise against 1x, over all objects: +0.0 [-50.0, +50.0] points: **not kept**"
+            in page)
+    better = noise_summary({"household": {1.0: base, 3.0: [wider[0], base[1]]}}, stored)
+    assert "at 3x the protocol's pose noise against 1x, over all objects: +25.0 [+0.0, +50.0]" in "\n".join(
+        shape_check_section({**result, "expected_noise": better}))

@@ -166,19 +166,23 @@ def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, .
 
 
 def expected_noise(sets: dict[str, str], scales: tuple[float, ...], stored: dict) -> dict:
-    """Per multiple of the protocol's pose noise (``scales``) the hull's check draws at, number checked and set:
-    drawn_summary over the ranked-draws views, and its first against the check at the protocol's own noise
-    measured in the same run (the same draws from the same streams, scaled), paired over objects
-    (shape_difference); and how many views' shares at the protocol's noise equal those the shapes' measure kept
-    (``stored``: expected_shapes' rows)."""
+    """Per multiple of the protocol's pose noise (``scales``, 1 added) the hull's check draws at: the ranked-draws
+    views of each set seen again and checked (the same draws from the same streams, scaled); noise_summary."""
     scales = (1.0, *(s_ for s_ in scales if s_ != 1.0))
     found = iter(_drawn_sets(sets, 1.0, ("hull",), DRAWS, scales))
+    return noise_summary({which: {scale: next(found)[1] for scale in scales} for which in sets}, stored)
+
+
+def noise_summary(measured: dict, stored: dict) -> dict:
+    """From ``measured`` (set -> noise scale -> _drawn_set's rows, 1.0 among the scales): per other scale, number
+    checked and set (and all objects), drawn_summary of the check's first and its first against the check at the
+    protocol's noise, paired over objects (shape_difference); and how many views' shares at the protocol's noise
+    equal those the shapes' measure kept (``stored``: expected_shapes' rows, set -> rows)."""
     out, agree = {}, {}
-    for which in sets:
-        by_scale = {scale: next(found)[1] for scale in scales}
+    for which, by_scale in measured.items():
         base = by_scale[1.0]
         agree[which] = sum(row["held_hull"] == old["held_hull"] for row, old in zip(base, stored[which], strict=True))
-        for scale in scales[1:]:
+        for scale in (s_ for s_ in by_scale if s_ != 1.0):
             out.setdefault(str(scale), {})[which] = [
                 {**row, "held_noisy": row["held_hull"], "held_hull": one["held_hull"]}
                 for row, one in zip(by_scale[scale], base, strict=True)]

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from benchmarks.pages.pick_check_noise_section import noise_lines
+
 RULES = {
     "shipped": "the network's score (its own order)",
     "near_mean": "the mean score of the view's candidates within {m:g} m and {deg:g} degrees",
@@ -142,6 +144,7 @@ def shape_check_section(result: dict) -> list[str]:
                     f"{_pct(d['check_held_first'])} of its draws |" for k, by_set in drawn.items()
                     for w, d in by_set.items()), ""]
     lines += _density_lines(result.get("expected_density", {}))
+    lines += noise_lines(result.get("expected_noise", {}))
     lines += shape_lines(result.get("expected_shapes", {}))
     lines += draws_lines(result.get("expected_draws", {}))
     lines += judged_shape_lines(result)
