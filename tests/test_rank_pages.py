@@ -282,6 +282,7 @@ def test_the_checks_pose_noise_is_judged_against_its_own_noise_by_the_draws_of_w
     assert "(which gave the shares the shapes' measure above kept on 1 household views)" in page
     assert ("at 2x the protocol's pose noise against 1x, over all objects: +0.0 [-50.0, +50.0] points: **not kept**"
             in page)
-    better = noise_summary({"household": {1.0: base, 3.0: [wider[0], base[1]]}}, stored)
-    assert "at 3x the protocol's pose noise against 1x, over all objects: +25.0 [+0.0, +50.0]" in "\n".join(
-        shape_check_section({**result, "expected_noise": better}))
+    better = noise_summary({"household": {1.0: base, 0.5: [wider[0], base[1]]}}, stored)
+    page = "\n".join(shape_check_section({**result, "expected_friction": better}))
+    assert "| the check's finger friction | checked |" in page and "| 0.5x | 3 | household | 100.0% |" in page
+    assert "at 0.5x the protocol's friction against 1x, over all objects: +25.0 [+0.0, +50.0] points: **not" in page

@@ -12,6 +12,7 @@ objects with a bootstrap interval.
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --shapes hull,carved   # the shapes, by 8 draws
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-draws 4,8,16   # the check's own draws
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --noise-scales 2,3   # the check's pose noise
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --friction-scales 0.75,0.5   # its fingers' friction
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-shape carved --checks 3   # by the benchmark
 
 Results: benchmarks/results/pick_shape_check.json, rendered into docs/picks.md.
@@ -86,13 +87,14 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
     from onepiece_dist.picks.shape_check import check_shape, held_draws
     from onepiece_dist.plan.planner import Seen
 
-    which, objects, stored, density_scale, shapes, draws, noise_scale = task
+    which, objects, stored, density_scale, shapes, draws, (noise_scale, friction_scale) = task
     torch.set_num_threads(1)
     spec = _spec(objects, 3)
     check_sim = spec.sim.model_copy(update={"density": spec.sim.density * density_scale,  # the check's guess
                                             "pose_noise": spec.sim.pose_noise * noise_scale,
                                             "rotation_noise": spec.sim.rotation_noise * noise_scale})
     scorer = process_scorer(spec)
+    gripper = scorer.gripper.model_copy(update={"friction": scorer.gripper.friction * friction_scale})
     rows = []
     for again in seen_again(spec, scorer, objects, stored, LOOKED_AT, []):
         seen, poses = Seen.of(again.seen.proposals), again.seen.proposals.poses[again.chosen]
@@ -100,7 +102,7 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
         held, seconds = {}, {}
         for name in [name for name in SHAPES if name in shapes]:
             clock = time.perf_counter()
-            held[name] = held_draws(check_shape(seen, name), poses, scorer.gripper, check_sim, draws,
+            held[name] = held_draws(check_shape(seen, name), poses, gripper, check_sim, draws,
                                     np.random.default_rng(seed))
             seconds[f"seconds_{name}"] = round(time.perf_counter() - clock, 3)  # the shape and its executions
         rows.append({"object": again.ref.name, "shares": np.mean(again.stored["draws"], axis=1)[:LOOKED_AT].tolist(),
@@ -155,21 +157,24 @@ def expected(sets: dict[str, str], density_scale: float = 1.0, shapes: tuple[str
 
 
 def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, ...], draws: int,
-                noise_scales: tuple[float, ...] = (1.0,)) -> list:
-    """_drawn_set of each set (and each of ``noise_scales``, in that order within a set) on two processes."""
+                scales: tuple[tuple[float, float], ...] = ((1.0, 1.0),)) -> list:
+    """_drawn_set of each set (and each of ``scales``, the check's pose noise and finger friction as multiples of
+    the protocol's, in that order within a set) on two processes."""
     from multiprocessing import get_context
 
     ranked = json.loads(RANKED.read_text())
     with get_context("spawn").Pool(2) as pool:
         return pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes, draws, scale)
-                                     for w, o in sets.items() for scale in noise_scales])
+                                     for w, o in sets.items() for scale in scales])
 
 
-def expected_noise(sets: dict[str, str], scales: tuple[float, ...], stored: dict) -> dict:
-    """Per multiple of the protocol's pose noise (``scales``, 1 added) the hull's check draws at: the ranked-draws
-    views of each set seen again and checked (the same draws from the same streams, scaled); noise_summary."""
+def expected_noise(sets: dict[str, str], scales: tuple[float, ...], stored: dict, friction: bool = False) -> dict:
+    """Per multiple of the protocol's pose noise (``scales``, 1 added; with ``friction``, of the fingers'
+    friction instead) the hull's check runs at: the ranked-draws views of each set seen again and checked (the
+    same draws from the same streams); noise_summary."""
     scales = (1.0, *(s_ for s_ in scales if s_ != 1.0))
-    found = iter(_drawn_sets(sets, 1.0, ("hull",), DRAWS, scales))
+    pairs = tuple((1.0, s_) if friction else (s_, 1.0) for s_ in scales)
+    found = iter(_drawn_sets(sets, 1.0, ("hull",), DRAWS, pairs))
     return noise_summary({which: {scale: next(found)[1] for scale in scales} for which in sets}, stored)
 
 
@@ -250,6 +255,8 @@ def main() -> None:
                         "each of these numbers of draws, kept beside the committed results")
     parser.add_argument("--noise-scales", default="", help="only the ranked-draws measure, the hull's check at "
                         "these multiples of the protocol's pose noise, kept beside the committed results")
+    parser.add_argument("--friction-scales", default="", help="only the ranked-draws measure, the hull's check "
+                        "with the fingers' friction at these multiples, kept beside the committed results")
     parser.add_argument("--views", type=int, default=VIEWS, help="the benchmark's one draw at this many views an "
                         "object (the first 8 the benchmark's), the check with the planner's default draws, kept "
                         "beside the committed results")
@@ -265,10 +272,11 @@ def main() -> None:
         found = expected(sets, 1.0, tuple(args.shapes.split(",")))
         _beside(lambda result: _keep_shapes(result.setdefault("expected_shapes", {}), found))
         return
-    if args.noise_scales:
+    if args.noise_scales or args.friction_scales:
         stored = json.loads(RESULTS.read_text())["expected_shapes"]["rows"]["carved"]
-        found = expected_noise(sets, tuple(float(n) for n in args.noise_scales.split(",")), stored)
-        _beside(lambda result: result.update(expected_noise=found))
+        scales = tuple(float(n) for n in (args.noise_scales or args.friction_scales).split(","))
+        found = expected_noise(sets, scales, stored, friction=not args.noise_scales)
+        _beside(lambda result: result.update({"expected_noise" if args.noise_scales else "expected_friction": found}))
         return
     if args.density_scales:
         found = {scale: expected(sets, float(scale))["hull"] for scale in args.density_scales.split(",")}

@@ -145,6 +145,7 @@ def shape_check_section(result: dict) -> list[str]:
                     for w, d in by_set.items()), ""]
     lines += _density_lines(result.get("expected_density", {}))
     lines += noise_lines(result.get("expected_noise", {}))
+    lines += noise_lines(result.get("expected_friction", {}), "friction")
     lines += shape_lines(result.get("expected_shapes", {}))
     lines += draws_lines(result.get("expected_draws", {}))
     lines += judged_shape_lines(result)
