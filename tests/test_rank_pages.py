@@ -283,6 +283,8 @@ def test_the_checks_pose_noise_is_judged_against_its_own_noise_by_the_draws_of_w
     assert ("at 2x the protocol's pose noise against 1x, over all objects: +0.0 [-50.0, +50.0] points: **not kept**"
             in page)
     better = noise_summary({"household": {1.0: base, 0.5: [wider[0], base[1]]}}, stored)
+    better.pop("stored_agree")  # 1x not measured again: the kept shares are the base
     page = "\n".join(shape_check_section({**result, "expected_friction": better}))
+    assert "against the check at the protocol's as the shapes' measure above kept it:" in page
     assert "| the check's finger friction | checked |" in page and "| 0.5x | 3 | household | 100.0% |" in page
     assert "at 0.5x the protocol's friction against 1x, over all objects: +25.0 [+0.0, +50.0] points: **not" in page

@@ -11,7 +11,7 @@ objects with a bootstrap interval.
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --density-scales 0.5,2   # the check's mass guessed
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --shapes hull,carved   # the shapes, by 8 draws
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-draws 4,8,16   # the check's own draws
-    .venv/bin/python -m benchmarks.experiments.pick_shape_check --noise-scales 2,3   # the check's pose noise
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --noise-scales 1,2,3   # the check's pose noise
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --friction-scales 0.75,0.5   # its fingers' friction
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-shape carved --checks 3   # by the benchmark
 
@@ -169,13 +169,18 @@ def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, .
 
 
 def expected_noise(sets: dict[str, str], scales: tuple[float, ...], stored: dict, friction: bool = False) -> dict:
-    """Per multiple of the protocol's pose noise (``scales``, 1 added; with ``friction``, of the fingers'
-    friction instead) the hull's check runs at: the ranked-draws views of each set seen again and checked (the
-    same draws from the same streams); noise_summary."""
-    scales = (1.0, *(s_ for s_ in scales if s_ != 1.0))
+    """Per multiple of the protocol's pose noise (``scales``; with ``friction``, of the fingers' friction instead)
+    the hull's check runs at: the ranked-draws views of each set seen again and checked (the same draws from the
+    same streams); noise_summary against the check at 1x measured again where ``scales`` holds 1, else against
+    the shares the shapes' measure kept (``stored``; a run measuring 1x again says whether they agree)."""
     pairs = tuple((1.0, s_) if friction else (s_, 1.0) for s_ in scales)
     found = iter(_drawn_sets(sets, 1.0, ("hull",), DRAWS, pairs))
-    return noise_summary({which: {scale: next(found)[1] for scale in scales} for which in sets}, stored)
+    measured = {which: {scale: next(found)[1] for scale in scales} for which in sets}
+    if 1.0 in scales:
+        return noise_summary(measured, stored)
+    for which, by_scale in measured.items():
+        by_scale[1.0] = stored[which]
+    return {key: value for key, value in noise_summary(measured, stored).items() if key != "stored_agree"}
 
 
 def noise_summary(measured: dict, stored: dict) -> dict:
@@ -274,7 +279,7 @@ def main() -> None:
         return
     if args.noise_scales or args.friction_scales:
         stored = json.loads(RESULTS.read_text())["expected_shapes"]["rows"]["carved"]
-        scales = tuple(float(n) for n in (args.noise_scales or args.friction_scales).split(","))
+        scales = tuple(float(n) for n in (args.noise_scales or args.friction_scales).split(","))  # 1: measured again
         found = expected_noise(sets, scales, stored, friction=not args.noise_scales)
         _beside(lambda result: result.update({"expected_noise" if args.noise_scales else "expected_friction": found}))
         return

@@ -36,10 +36,11 @@ def noise_lines(by_scale: dict, scaled: str = "noise") -> list[str]:
             f"| {_interval(d['versus'], 'mean', 'interval')} |"
             for s in scales for k, by_set in by_scale[s].items() for w, d in by_set.items()]
     agree = by_scale.get("stored_agree", {})
+    against_what = ("in the same run (which gave the shares the shapes' measure above kept on "
+                    + " and ".join(f"{n} {w} views" for w, n in agree.items()) + ")" if agree
+                    else "as the shapes' measure above kept it")
     lines = [f"{opening}, each grasp's draws from the same stream as at the protocol's (the same draws), judged as "
-             "above and paired over objects against the check at the protocol's in the same run"
-             + (" (which gave the shares the shapes' measure above kept on "
-                + " and ".join(f"{n} {w} views" for w, n in agree.items()) + ")" if agree else "") + ":", "",
+             f"above and paired over objects against the check at the protocol's {against_what}:", "",
              f"| {column} | checked | set | the check's first | gain over the network's first [95% CI] "
              f"| against {against} [95% CI] |", "| --- | --- | --- | --- | --- | --- |", *rows, ""]
     for s in scales:
