@@ -18,9 +18,10 @@ WORDS = {  # what is scaled: the column's name, the opening sentence, the verdic
               "hull; a grasp that holds on the hull under larger pose noise than the protocol's might be the one "
               "that does. The hull's check with its pose noise (3 mm and 0.05 rad) scaled, its friction noise as it "
               "is", "the protocol's pose noise"),
-    "friction": ("the check's finger friction", "Most first grasps lost slip when lifted; a grasp that holds on the "
-                 "hull with less friction than the protocol's might be the surer one on the true shape. The hull's "
-                 "check with its fingers' friction (0.4) scaled, its noise as it is", "the protocol's friction"),
+    "friction": ("the check's finger friction", "Most of the first grasps that fail slip when lifted; a grasp that "
+                 "holds on the hull with less friction than the protocol's might be the surer one on the true "
+                 "shape. The hull's check with its fingers' friction (0.4) scaled, its noise as it is",
+                 "the protocol's friction"),
 }
 
 

@@ -144,10 +144,10 @@ def shape_check_section(result: dict) -> list[str]:
                     f"{_pct(d['check_held_first'])} of its draws |" for k, by_set in drawn.items()
                     for w, d in by_set.items()), ""]
     lines += _density_lines(result.get("expected_density", {}))
-    lines += noise_lines(result.get("expected_noise", {}))
-    lines += noise_lines(result.get("expected_friction", {}), "friction")
     lines += shape_lines(result.get("expected_shapes", {}))
     lines += draws_lines(result.get("expected_draws", {}))
+    lines += noise_lines(result.get("expected_noise", {}))
+    lines += noise_lines(result.get("expected_friction", {}), "friction")
     lines += judged_shape_lines(result)
     for gain in gains:
         k = str(gain["checked"])
