@@ -93,7 +93,8 @@ def first_rule() -> list[dict]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tolerances", default="0.005,0.01", help="Comma-separated tolerances (m).")
-    parser.add_argument("--shares", default="1,0", help="Comma-separated flying shares (1: every edge pixel).")
+    parser.add_argument("--shares", default=",".join(f"{s:g}" for s in SHARES),
+                        help="Comma-separated flying shares (1: every edge pixel).")
     parser.add_argument("--views", type=int, default=BLOCK, help=f"Views an object, a multiple of {BLOCK}.")
     args = parser.parse_args()
     runs = json.loads(RESULTS.read_text())["runs"] if RESULTS.is_file() else []

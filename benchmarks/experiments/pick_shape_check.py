@@ -171,32 +171,31 @@ def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, .
 def expected_noise(sets: dict[str, str], scales: tuple[float, ...], stored: dict, friction: bool = False) -> dict:
     """Per multiple of the protocol's pose noise (``scales``; with ``friction``, of the fingers' friction instead)
     the hull's check runs at: the ranked-draws views of each set seen again and checked (the same draws from the
-    same streams); noise_summary against the check at 1x measured again where ``scales`` holds 1, else against
-    the shares the shapes' measure kept (``stored``; a run measuring 1x again says whether they agree)."""
+    same streams); noise_summary against the check at 1x measured again where ``scales`` holds 1 (and whether it
+    agrees with ``stored``, the shares the shapes' measure kept), else against ``stored``."""
     pairs = tuple((1.0, s_) if friction else (s_, 1.0) for s_ in scales)
     found = iter(_drawn_sets(sets, 1.0, ("hull",), DRAWS, pairs))
     measured = {which: {scale: next(found)[1] for scale in scales} for which in sets}
     if 1.0 in scales:
         return noise_summary(measured, stored)
-    for which, by_scale in measured.items():
-        by_scale[1.0] = stored[which]
-    return {key: value for key, value in noise_summary(measured, stored).items() if key != "stored_agree"}
+    return noise_summary({which: {1.0: stored[which], **by_scale} for which, by_scale in measured.items()})
 
 
-def noise_summary(measured: dict, stored: dict) -> dict:
+def noise_summary(measured: dict, stored: dict | None = None) -> dict:
     """From ``measured`` (set -> noise scale -> _drawn_set's rows, 1.0 among the scales): per other scale, number
     checked and set (and all objects), drawn_summary of the check's first and its first against the check at the
-    protocol's noise, paired over objects (shape_difference); and how many views' shares at the protocol's noise
-    equal those the shapes' measure kept (``stored``: expected_shapes' rows, set -> rows)."""
-    out, agree = {}, {}
+    protocol's noise, paired over objects (shape_difference); with ``stored`` (expected_shapes' rows, set -> rows),
+    how many views' shares at the protocol's noise equal those the shapes' measure kept (``stored_agree``)."""
+    out = {}
     for which, by_scale in measured.items():
         base = by_scale[1.0]
-        agree[which] = sum(row["held_hull"] == old["held_hull"] for row, old in zip(base, stored[which], strict=True))
         for scale in (s_ for s_ in by_scale if s_ != 1.0):
             out.setdefault(str(scale), {})[which] = [
                 {**row, "held_noisy": row["held_hull"], "held_hull": one["held_hull"]}
                 for row, one in zip(by_scale[scale], base, strict=True)]
-    summary = {"stored_agree": agree}
+    summary = {} if stored is None else {"stored_agree": {
+        which: sum(row["held_hull"] == old["held_hull"] for row, old in zip(by_scale[1.0], stored[which], strict=True))
+        for which, by_scale in measured.items()}}
     for scale, by_set in out.items():
         by_set["all objects"] = [row for rows in by_set.values() for row in rows]
         summary[scale] = {str(k): {w: {**drawn_summary(rows, k, "noisy"), "versus": shape_difference(
