@@ -25,12 +25,12 @@ def missing_methods(served: type, names: set[str]) -> set[str]:
 
 
 def test_every_method_a_client_calls_by_name_is_a_method_of_the_class_its_actor_runs():
-    clients = {trainer.TrainerClient, registry.RegistryClient, writer.WriterClient}
+    clients = {trainer.TrainerClient, registry.RegistryClient, writer.WriterClient, ray_runner.RoundTrainer}
     ours = {c for c in ActorClient.__subclasses__() if c.__module__.startswith("onepiece_dist.")}
     assert ours == clients  # a new client is checked too, once it is listed here
     for client in clients:
         names = called_by_name(client)
-        assert len(names) >= 3, (client, names)  # the reader sees the calls
+        assert len(names) >= (1 if client is ray_runner.RoundTrainer else 3), (client, names)  # it sees the calls
         assert missing_methods(client.served, names) == set(), client
 
 

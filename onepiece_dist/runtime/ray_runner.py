@@ -28,10 +28,10 @@ from onepiece_dist.job.stages.label_one_object import label_shard
 from onepiece_dist.job.stages.patch_shards import build_patch_shard
 from onepiece_dist.job.status import EvaluationReport, JobStatus, TrainingReport
 from onepiece_dist.objects import ObjectRef
-from onepiece_dist.runtime.actors import restartable_actor
+from onepiece_dist.runtime.actors import ActorClient, restartable_actor
 from onepiece_dist.runtime.crashes import CrashLog, crash_folder, crashed_on, running
 from onepiece_dist.runtime.registry import RegistryClient
-from onepiece_dist.runtime.trainer import TrainerClient
+from onepiece_dist.runtime.trainer import Trainer, TrainerClient, trainer_gpus
 from onepiece_dist.runtime.writer import WriterClient, central_name
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.store import PartStore
@@ -54,6 +54,10 @@ class SimWorker:
         self.parts = PartStore(spec.parts_folder())
         self.central = central
         self.crash_log = CrashLog(crashes) if crashes else None
+
+    def fit_steps(self, run: StepRun) -> StepResult:
+        """An adaptive round's network fitted in this worker, as a trainer fits it (Trainer.fit_steps)."""
+        return Trainer().fit_steps(run)
 
     def starting(self, method: str, index: int) -> None:
         """Note the item in this process's crash record (see :mod:`onepiece_dist.runtime.crashes`)."""
@@ -81,6 +85,16 @@ class SimWorker:
             if central is not None:
                 central.send_codes(index, result.part_key, self.parts.read_array(result.part_key, "code"))
         return dataclasses.replace(result, node=node_id())
+
+
+class RoundTrainer(ActorClient):
+    """A simulation worker of the job fitting an adaptive round's network on its CPU (SimWorker.fit_steps),
+    waiting out its restarts as a trainer's client does."""
+
+    served = SimWorker
+
+    def fit_steps(self, run: StepRun) -> StepResult:
+        return self.call("fit_steps", run)
 
 
 def node_id() -> str:
@@ -193,6 +207,13 @@ class RayRuntime(Runtime):
         return self.trainers[-1].fit(spec)
 
     def fit_round(self, run: StepRun) -> StepResult:
+        """One adaptive round's network. On a CPU, one of the job's simulation workers fits it: the round's label
+        shards wait for it, so that worker's CPU is the trainer's, and no worker stops and starts again, nor a
+        trainer starts, each round. On a GPU, a trainer actor holding one, the workers released."""
+        import ray
+
+        if not trainer_gpus(self.spec.train.device, ray.cluster_resources().get("GPU", 0)):
+            return RoundTrainer(self._workers(1)[0], f"simulation worker of job {self.job_id}").fit_steps(run)
         self.release_workers()  # the round's trainer gets their CPUs; the next round starts them again
         trainer = TrainerClient.start_named(f"trainer-{self.job_id}-round", self.spec.train.device)
         try:
