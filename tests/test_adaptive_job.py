@@ -136,11 +136,19 @@ def test_an_adaptive_job_killed_mid_round_resumes_at_that_round_with_the_same_da
 
 @pytest.mark.ray
 def test_an_adaptive_job_on_ray_labels_on_the_workers_and_gives_the_in_process_dataset(ray_session, tmp_path,
-                                                                                      fault_free):
+                                                                                      fault_free, monkeypatch):
+    """Each round's network is fitted on one of the job's simulation workers (on a CPU): no trainer actor starts
+    for a round, and the workers that label round 0 label every round after it."""
     from onepiece_dist.api import Client
+    from onepiece_dist.runtime import ray_runner
 
+    started, start = [], ray_runner.restartable_actor
+    monkeypatch.setattr(ray_runner, "restartable_actor",
+                        lambda cls, *a, **k: started.append(cls) or start(cls, *a, **k))
+    monkeypatch.setattr(ray_runner.TrainerClient, "start_named", lambda *a: pytest.fail("a round's trainer actor"))
     spec = adaptive_spec(tmp_path, "ray")
     final = Client().submit(spec).wait(timeout=300)
     assert final.state == "succeeded" and len(final.adaptive.rounds) >= 2
+    assert started.count(ray_runner.SimWorker) == 2  # one a CPU of the embedded Ray, started once for the job
     assert final.label_seconds > 0 and final.labels.labelled_grasps == final.adaptive.rounds[-1].labels
     assert content_digest(spec.output, training=False) == content_digest(fault_free(spec), training=False)
