@@ -288,3 +288,27 @@ def test_the_checks_pose_noise_is_judged_against_its_own_noise_by_the_draws_of_w
     assert "against the check at the protocol's as the shapes' measure above kept it:" in page
     assert "| the check's finger friction | checked |" in page and "| 0.5x | 3 | household | 100.0% |" in page
     assert "at 0.5x the protocol's friction against 1x, over all objects: +25.0 [+0.0, +50.0] points: **not" in page
+
+
+def test_the_checks_ties_broken_by_slip_are_judged_by_the_draws_of_what_each_chose():
+    from benchmarks.experiments.pick_check_slip import slip_key, slip_summary
+    from benchmarks.pages.pick_check_slip_section import slip_lines
+
+    assert slip_key([1.0, 1.0, 0.0], [[9.0, 7.0], [2.0], []]) == [9992.0, 9998.0, -1000.0]
+    rows = [{"object": "a", "shares": [0.5, 1.0, 0.0], "held_hull": [1.0, 1.0, 0.0],
+             "slips_hull": [[9.0], [2.0], []]},  # a tie on the hull: the second slipped less, and picks surer
+            {"object": "b", "shares": [1.0, 0.0, 0.5], "held_hull": [1.0, 0.5, 0.0],
+             "slips_hull": [[9.0], [1.0], []]}]  # no tie: the slip does not move the first
+    stored = {"household": [rows[0], {**rows[1], "held_hull": [0.0, 0.0, 0.0]}]}  # one view as kept before
+    summary = slip_summary([("household", rows)], stored)
+    assert summary["stored_agree"] == {"household": 1}
+    three = summary["3"]["household"]
+    assert (three["checked"], three["changed"], three["versus"]["mean"]) == (1.0, 1, 0.25)
+    assert summary["3"]["all objects"]["versus"] == three["versus"]
+    assert summary["rows"]["household"][0]["slips_hull"] == [[9.0], [2.0], []]
+    page = "\n".join(slip_lines(summary))
+    assert "those the shapes' measure above kept on 1 of 2 household views" in page
+    assert "| 3 | household | 2 | 75.0% | 100.0% | +25.0 [+0.0, +50.0] | 100.0% | 1 |" in page
+    assert "The tie-broken first among the first 3 against the check's, over all objects: +25.0 [+0.0, +50.0] " \
+           "points: **not kept**" in page
+    assert slip_lines({}) == []

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from benchmarks.pages.pick_check_noise_section import noise_lines
+from benchmarks.pages.pick_check_slip_section import slip_lines
 
 RULES = {
     "shipped": "the network's score (its own order)",
@@ -148,6 +149,7 @@ def shape_check_section(result: dict) -> list[str]:
     lines += draws_lines(result.get("expected_draws", {}))
     lines += noise_lines(result.get("expected_noise", {}))
     lines += noise_lines(result.get("expected_friction", {}), "friction")
+    lines += slip_lines(result.get("expected_slip", {}))
     lines += judged_shape_lines(result)
     for gain in gains:
         k = str(gain["checked"])
