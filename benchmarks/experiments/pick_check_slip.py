@@ -23,15 +23,17 @@ import json
 
 import numpy as np
 
-from benchmarks.experiments.pick_ranked_draws import RESULTS as RANKED
 from benchmarks.experiments.pick_shape_check import (
     DRAWS,
     LOOKED_AT,
     RESULTS,
     _beside,
     _drawn_set,
+    _drawn_sets,
+    _first_of,
     drawn_summary,
     shape_difference,
+    stored_agree,
 )
 
 SLIP_CAP_MM = 1000.0  # the key of a grasp that never held: after every grasp that did
@@ -89,14 +91,12 @@ def slip_summary(found: list[tuple[str, list[dict]]], stored: dict) -> dict:
     rows = {which: [{**row, "held_slip": None if row["held_hull"] is None
                      else slip_key(row["held_hull"], row["slips_hull"])} for row in set_rows]
             for which, set_rows in found}
-    out = {"stored_agree": {which: sum(row["held_hull"] == old["held_hull"]
-                                       for row, old in zip(set_rows, stored[which], strict=True))
-                            for which, set_rows in rows.items()}}
+    out = {"stored_agree": stored_agree(rows, stored)}
     rows["all objects"] = [row for set_rows in list(rows.values()) for row in set_rows]
     for k in (3, LOOKED_AT):
         out[str(k)] = {which: {**drawn_summary(set_rows, k, "slip"),
                                "versus": shape_difference(set_rows, k, "hull", "slip"),
-                               "changed": sum(_first(r["held_slip"], k) != _first(r["held_hull"], k)
+                               "changed": sum(_first_of(r["held_slip"], k) != _first_of(r["held_hull"], k)
                                               for r in set_rows if r["held_hull"] is not None)}
                        for which, set_rows in rows.items()}
     out["rows"] = {which: [{"object": r["object"], "shares": r["shares"], "held_hull": r["held_hull"],
@@ -104,21 +104,12 @@ def slip_summary(found: list[tuple[str, list[dict]]], stored: dict) -> dict:
     return out
 
 
-def _first(held: list[float], k: int) -> int:
-    return int(np.argmax(held[:k]))
-
-
 def main() -> None:
-    from multiprocessing import get_context
-
     from benchmarks.experiments.household import UNSEEN, household_objects
 
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
-    ranked = json.loads(RANKED.read_text())
     stored = json.loads(RESULTS.read_text())["expected_shapes"]["rows"]["carved"]
-    with get_context("spawn").Pool(2) as pool:
-        found = pool.map(_recorded_set, [(w, o, ranked["sets"][w]["rows"], 1.0, ("hull",), DRAWS, (1.0, 1.0))
-                                         for w, o in sets.items()])
+    found = _drawn_sets(sets, 1.0, ("hull",), DRAWS, run=_recorded_set)
     summary = slip_summary(found, stored)
     _beside(lambda result: result.update(expected_slip=summary))
     print(json.dumps({k: v for k, v in summary.items() if k != "rows"}, indent=1))

@@ -157,15 +157,15 @@ def expected(sets: dict[str, str], density_scale: float = 1.0, shapes: tuple[str
 
 
 def _drawn_sets(sets: dict[str, str], density_scale: float, shapes: tuple[str, ...], draws: int,
-                scales: tuple[tuple[float, float], ...] = ((1.0, 1.0),)) -> list:
-    """_drawn_set of each set (and each of ``scales``, the check's pose noise and finger friction as multiples of
-    the protocol's, in that order within a set) on two processes."""
+                scales: tuple[tuple[float, float], ...] = ((1.0, 1.0),), run=_drawn_set) -> list:
+    """``run`` (default _drawn_set) on each set (and each of ``scales``, the check's pose noise and finger friction
+    as multiples of the protocol's, in that order within a set) on two processes."""
     from multiprocessing import get_context
 
     ranked = json.loads(RANKED.read_text())
     with get_context("spawn").Pool(2) as pool:
-        return pool.map(_drawn_set, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes, draws, scale)
-                                     for w, o in sets.items() for scale in scales])
+        return pool.map(run, [(w, o, ranked["sets"][w]["rows"], density_scale, shapes, draws, scale)
+                              for w, o in sets.items() for scale in scales])
 
 
 def expected_noise(sets: dict[str, str], scales: tuple[float, ...], stored: dict, friction: bool = False) -> dict:
@@ -193,14 +193,19 @@ def noise_summary(measured: dict, stored: dict | None = None) -> dict:
             out.setdefault(str(scale), {})[which] = [
                 {**row, "held_noisy": row["held_hull"], "held_hull": one["held_hull"]}
                 for row, one in zip(by_scale[scale], base, strict=True)]
-    summary = {} if stored is None else {"stored_agree": {
-        which: sum(row["held_hull"] == old["held_hull"] for row, old in zip(by_scale[1.0], stored[which], strict=True))
-        for which, by_scale in measured.items()}}
+    summary = {} if stored is None else {"stored_agree": stored_agree(
+        {which: by_scale[1.0] for which, by_scale in measured.items()}, stored)}
     for scale, by_set in out.items():
         by_set["all objects"] = [row for rows in by_set.values() for row in rows]
         summary[scale] = {str(k): {w: {**drawn_summary(rows, k, "noisy"), "versus": shape_difference(
             rows, k, "hull", "noisy")} for w, rows in by_set.items()} for k in (3, LOOKED_AT)}
     return summary
+
+
+def stored_agree(rows: dict[str, list[dict]], stored: dict[str, list[dict]]) -> dict[str, int]:
+    """Per set, how many views' hull shares in ``rows`` equal those ``stored`` (the shapes' measure) kept."""
+    return {which: sum(row["held_hull"] == old["held_hull"] for row, old in zip(set_rows, stored[which], strict=True))
+            for which, set_rows in rows.items()}
 
 
 def expected_draws(sets: dict[str, str], counts: tuple[int, ...]) -> dict:
