@@ -29,9 +29,11 @@ def test_the_plugin_writes_each_tests_wall_and_the_cpu_it_kept_busy(tmp_path):
     (tmp_path / "pytest.ini").write_text("[pytest]\n")  # this folder's own root: none of the suite's options
     (tmp_path / "test_two.py").write_text(TWO_TESTS)
     rows = tmp_path / "rows.jsonl"
-    ran = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p",
-                          "benchmarks.speed.suite_cpu", f"--suite-cpu-out={rows}", "test_two.py"], cwd=tmp_path,
-                         capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=120)
+    plugins = ["-p", "no:cacheprovider", "-p", "no:dash", "-p", "no:dash.testing.plugin", "-p",
+               "benchmarks.speed.suite_cpu"]
+    ran = subprocess.run([sys.executable, "-m", "pytest", "-q", *plugins, f"--suite-cpu-out={rows}", "test_two.py"],
+                         cwd=tmp_path, capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                         timeout=120)
     assert ran.returncode == 0, ran.stdout[-2000:]
     found = {row["test"]: row for row in map(json.loads, rows.read_text().splitlines())}
     assert set(found) == {"test_two.py::test_sleeps", "test_two.py::test_spins"}
@@ -68,6 +70,7 @@ def test_the_section_says_whether_the_suite_and_its_floor_meet_the_target():
     slow = "\n".join(suite_section(suite_result(951.0, (1131.0, 609.0))))
     assert "3 passed in 951 s" in slow and "(600 s): **not met**" in slow
     assert "870 s against the target's 600 s (**not met**)" in slow and "must shrink by 540 CPU-seconds (31%)" in slow
+    assert "took 1.09 times the floor" in slow
     costliest = [line for line in slow.splitlines() if line.startswith("| `tests/")]
     assert [line.split("`")[1] for line in costliest] == ["tests/a.py::test_cluster", "tests/b.py::test_study",
                                                           "tests/a.py::test_kill"]

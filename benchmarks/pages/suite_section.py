@@ -36,7 +36,8 @@ def _floor_lines(r: dict) -> list[str]:
                f"{busy - target * r['cores']:.0f} CPU-seconds ({1 - target * r['cores'] / busy:.0%})"
                if floor > target else "the target is within reach of scheduling alone")
     return [f"The floor, both groups' {busy:.0f} busy CPU-seconds over {r['cores']} cores: {floor:.0f} s against "
-            f"the target's {target} s (**{met(-floor, -target)}**): {verdict}."]
+            f"the target's {target} s (**{met(-floor, -target)}**): {verdict}. The suite as the README runs it took "
+            f"{r['suite']['wall_seconds'] / floor:.2f} times the floor."]
 
 
 def _costliest(r: dict) -> list[list]:
