@@ -26,14 +26,7 @@ import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
-from onepiece_dist.errors import (
-    ClusterUnreachable,
-    DriverGone,
-    JobError,
-    JobNotFound,
-    SpecError,
-    VersionMismatch,
-)
+from onepiece_dist.errors import ClusterUnreachable, DriverGone, JobError, JobNotFound, SpecError, VersionMismatch
 from onepiece_dist.job.pipeline import ProgressFn
 from onepiece_dist.job.relabel import RelabelReport, relabel_report, relabel_spec
 from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, protocol_of, score_heldout
@@ -42,7 +35,7 @@ from onepiece_dist.objects import resolve_source
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.picks.shape_check import plan_checked as plan_grasps
 from onepiece_dist.plan.robot import RobotPlan
-from onepiece_dist.runtime.local import run_local
+from onepiece_dist.runtime.local import run_local, with_user_decompositions
 from onepiece_dist.runtime.ray_env import connect, loopback_environment
 from onepiece_dist.runtime.registry import CLUSTER_INFO_MARK, RegistryClient
 from onepiece_dist.specs.job import JobSpec, default_job_id
@@ -63,7 +56,7 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
             workers: int | None = None, progress: ProgressFn | None = None) -> JobStatus:
     """Run ``spec`` to completion here and return its final status: on an embedded Ray (default), on the
     cluster at ``address`` (this process is the driver), or without Ray (``in_process``)."""
-    job_id = job_id or default_job_id(spec)
+    job_id, spec = job_id or default_job_id(spec), spec if address else with_user_decompositions(spec)
     refs = resolve_source(spec.objects)  # a bad source is a usage error, found before any Ray starts
     if in_process:
         return run_local(spec, job_id=job_id, progress=progress, refs=refs)
@@ -84,7 +77,8 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
 def evaluate_model(model_path: str | Path, spec: JobSpec) -> EvaluationReport:
     """Label the candidates of ``spec.objects`` in simulation (in process, by the evaluation's protocol), then
     score the model on them (``onepiece evaluate``)."""
-    labelled = spec.model_copy(update={"stages": ("ingest", "extract", "dedup"), "sim": heldout_sim(spec)})
+    labelled = with_user_decompositions(spec).model_copy(update={"stages": ("ingest", "extract", "dedup"),
+                                                                 "sim": heldout_sim(spec)})
     status = run_local(labelled, job_id="evaluate")
     return score_heldout(model_path, labelled.output, spec.train.device, objects_scored(status),
                          protocol_of(labelled))
@@ -202,7 +196,7 @@ class Client:
         that job; one whose job has ended gets a fresh id (``<id>-2``, ...): ``handle.note`` says which."""
         job_id = job_id or default_job_id(spec)
         if self.address is None:
-            return self._submit_local(spec, job_id)
+            return self._submit_local(with_user_decompositions(spec), job_id)
         check_remote_paths(spec)
         cluster = self.cluster_info()
         if cluster["version"] != package_version():
@@ -384,7 +378,7 @@ def _job_row(status: dict) -> dict:
 def check_remote_paths(spec: JobSpec) -> None:
     """A job for a cluster names its paths absolutely: every node resolves a relative one against its own working
     folder, so its parts would scatter over the nodes' disks."""
-    for field in ("output", "cache_dir"):
+    for field in ("output", "cache_dir", "decompositions"):
         value = getattr(spec, field)
         if value and not Path(value).is_absolute():
             raise SpecError(f"{field}: {value!r} is relative; a job on a cluster needs an absolute path on the "

@@ -124,8 +124,9 @@ def fault_free(tmp_path_factory):
     """``fault_free(spec)``: the folder of ``spec``'s dataset run in-process, without faults, once per suite run for
     each spec (its output left out); the reference that the faulted runs of that spec must equal. xdist's workers
     share it: the datasets lie in the run's temporary folder, each made under a lock of its own, so a worker that
-    asks for one another worker is making waits for it instead of making it again (a test only reads it)."""
-    from onepiece_dist.runtime.local import run_local
+    asks for one another worker is making waits for it instead of making it again (a test only reads it). Its
+    objects are decomposed in the user's cache, as a local run's are (runtime.local.with_user_decompositions)."""
+    from onepiece_dist.runtime.local import run_local, with_user_decompositions
 
     base = tmp_path_factory.getbasetemp()
     shared = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "fault-free"  # this run's only
@@ -138,7 +139,7 @@ def fault_free(tmp_path_factory):
         try:
             fcntl.flock(lock, fcntl.LOCK_EX)
             if not done.exists():
-                run_local(spec.model_copy(update={"output": str(output)}))
+                run_local(with_user_decompositions(spec).model_copy(update={"output": str(output)}))
                 done.touch()
             return str(output)
         finally:

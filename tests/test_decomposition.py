@@ -67,3 +67,46 @@ def test_a_vhacd_child_past_its_time_is_ended_and_the_object_gets_no_pieces_from
     child = collision.VhacdChild()
     assert child.run(tmp_path / "in.obj", tmp_path / "out.obj", 50_000, timeout=1.0) is False
     assert child._child is None and not (tmp_path / "out.obj").exists()
+
+
+def files_and_times(folder):
+    return {path.name: path.stat().st_mtime_ns for path in folder.iterdir()}
+
+
+def test_local_jobs_share_the_users_decompositions_and_hold_what_a_job_of_its_own_makes(tmp_path, monkeypatch):
+    """Local runs (api.run_job) keep decompositions in this user's cache folder: a second job on the same objects
+    decomposes nothing and writes none beside its parts, and both hold the content of a job that decomposed
+    everything itself in its parts folder (run_local with the spec as given)."""
+    from onepiece_dist.api import run_job
+    from onepiece_dist.runtime.local import run_local
+    from onepiece_dist.sim.collision import user_decompositions
+    from onepiece_dist.store import open_dataset
+    from onepiece_dist.store.dataset import content_digest
+    from tests.factories import small_spec
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    folder = user_decompositions()
+    assert folder.parent == tmp_path / "cache" / "onepiece" / "decompositions" and folder.name.startswith("pybullet-")
+    assert folder.stat().st_mode & 0o777 == 0o700
+    first, second = (small_spec(tmp_path / name, objects="primitives[0:2]", grasps_per_object=8)
+                     for name in ("first", "second"))
+    run_job(first, in_process=True)
+    made = files_and_times(folder)
+    assert len([name for name in made if name.endswith("-vhacd50000.obj")]) == 2, made
+    run_job(second, in_process=True)
+    assert files_and_times(folder) == made  # nothing decomposed again
+    assert not (tmp_path / "second" / "ds.zarr.parts" / "collision").exists()
+    assert open_dataset(second.output).attrs["job_spec"]["decompositions"] == str(folder)
+    own = small_spec(tmp_path / "own", objects="primitives[0:2]", grasps_per_object=8)
+    run_local(own)
+    assert sorted(p.name for p in (tmp_path / "own" / "ds.zarr.parts" / "collision").iterdir()) == sorted(made)
+    assert content_digest(first.output) == content_digest(second.output) == content_digest(own.output)
+
+
+def test_a_job_for_a_cluster_names_its_decompositions_folder_absolutely(tmp_path):
+    from onepiece_dist.api import check_remote_paths
+    from onepiece_dist.errors import SpecError
+
+    check_remote_paths(JobSpec(output=str(tmp_path / "a.zarr"), decompositions=str(tmp_path / "d")))
+    with pytest.raises(SpecError, match="decompositions: 'shared/decompositions' is relative"):
+        check_remote_paths(JobSpec(output=str(tmp_path / "a.zarr"), decompositions="shared/decompositions"))

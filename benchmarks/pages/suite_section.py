@@ -17,7 +17,7 @@ def suite_section(r: dict) -> list[str]:
             f"The README's test command (`scripts/dev test`: one pytest worker per core, the tests that start Ray one "
             f"at a time on one of them, the rest beside them at a lower CPU priority: tests/conftest.py): {counts} in "
             f"{suite['wall_seconds']:.0f} s, {_busy(suite)} on {r['cores']} cores. Target: within about 10 minutes "
-            f"({target} s): **{met(-suite['wall_seconds'], -target)}**.", "",
+            f"({target} s): **{met(-suite['wall_seconds'], -target)}**.{_cache_words(r)}", "",
             "Each group alone in one process (`-n 0`), with the machine's busy CPU-seconds meanwhile (every "
             "process's: Ray's daemons and actors and the children a test starts count):", "",
             *table(["group", "tests", "wall (s)", "busy CPU-seconds", "cores busy on average"],
@@ -25,6 +25,14 @@ def suite_section(r: dict) -> list[str]:
                      f"{g['wall_seconds']:.0f}", _number(g["busy_seconds"]), _cores(g)] for g in r["groups"]]),
             "", *_floor_lines(r), "", f"The {COSTLIEST} costliest tests, each alone:", "",
             *table(["test", "group", "wall (s)", "busy CPU-seconds"], _costliest(r))]
+
+
+def _cache_words(r: dict) -> str:
+    """What the runs found in the user's cache (the local jobs' shared decompositions: sim.collision)."""
+    if r.get("user_cache") is None:
+        return ""
+    return (f" The user's cache was {r['user_cache']} (a fresh `XDG_CACHE_HOME`): every decomposition the local "
+            "jobs share was made during the run, as on a fresh machine.")
 
 
 def _floor_lines(r: dict) -> list[str]:

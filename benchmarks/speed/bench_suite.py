@@ -42,10 +42,14 @@ def outcomes(output: str) -> dict[str, int]:
 
 
 def timed(args: list[str]) -> dict:
-    """``args`` run from the checkout: its wall seconds, the machine's busy CPU-seconds meanwhile, its outcomes."""
-    busy, start = busy_seconds(), time.perf_counter()
-    done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
-    wall, after = time.perf_counter() - start, busy_seconds()
+    """``args`` run from the checkout: its wall seconds, the machine's busy CPU-seconds meanwhile, its outcomes.
+    Its user cache starts empty (a fresh ``XDG_CACHE_HOME``): the local jobs' decompositions (sim.collision) are
+    made as on a fresh machine, not taken from an earlier run's."""
+    with tempfile.TemporaryDirectory() as cache:
+        busy, start = busy_seconds(), time.perf_counter()
+        done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True,
+                              env={**os.environ, "XDG_CACHE_HOME": cache})
+        wall, after = time.perf_counter() - start, busy_seconds()
     if done.returncode != 0:
         sys.exit(f"{' '.join(args[2:])} failed:\n{done.stdout[-3000:]}")
     return {"wall_seconds": round(wall, 1), "busy_seconds": None if busy is None else round(after - busy, 1),
@@ -74,6 +78,7 @@ def main() -> None:
     groups = [group(name, marker) for name, marker in GROUPS]
     result = {"command": ".venv/bin/python -m benchmarks.speed.bench_suite", "date": date.today().isoformat(),
               "machine": f"{platform.machine()}, {cores} cores", "cores": cores, "target_seconds": TARGET_SECONDS,
+              "user_cache": "empty at each run's start",
               "suite": suite, "groups": groups, "floor_seconds": floor_seconds(groups, cores)}
     out = HERE / "results" / "suite.json"
     out.write_text(json.dumps(result, indent=1) + "\n")

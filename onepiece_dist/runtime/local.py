@@ -20,10 +20,18 @@ from onepiece_dist.objects import ObjectRef
 from onepiece_dist.runtime.pinned_child import PinnedSimulation
 from onepiece_dist.runtime.trainer import Trainer
 from onepiece_dist.runtime.writer import DatasetWriter
+from onepiece_dist.sim.collision import user_decompositions
 from onepiece_dist.specs.job import JobSpec
 
 if TYPE_CHECKING:
     from onepiece_dist.learn.train import StepResult, StepRun
+
+
+def with_user_decompositions(spec: JobSpec) -> JobSpec:
+    """``spec`` keeping its decompositions in this user's folder (sim.collision.user_decompositions) unless it
+    names one: a local run's (the API's and the CLI's), so that its objects are decomposed once on this machine,
+    not once a job. The folder is a place, not content: the dataset's content digest leaves it out."""
+    return spec if spec.decompositions else spec.model_copy(update={"decompositions": str(user_decompositions())})
 
 
 def run_local(spec: JobSpec, job_id: str = "local", progress: ProgressFn | None = None,

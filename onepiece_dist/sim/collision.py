@@ -62,6 +62,24 @@ with open(sys.argv[2], "w") as out:
 COACD_THRESHOLD = 0.05  # CoACD's concavity threshold (its default): lower cuts finer and runs longer
 
 
+def user_decompositions() -> Path:
+    """This user's folder of decompositions on this machine, which local jobs share (JobSpec.decompositions):
+    ``$XDG_CACHE_HOME`` (default ``~/.cache``) ``/onepiece/decompositions/``, one folder per version of the
+    decomposers (pybullet's VHACD, CoACD), since a new one may cut the same mesh otherwise. Owner-only."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    def of(package: str) -> str:
+        try:
+            return f"{package}-{version(package)}"
+        except PackageNotFoundError:
+            return f"{package}-none"
+
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    folder = cache / "onepiece" / "decompositions" / f"{of('pybullet')}_{of('coacd')}"
+    folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+    return folder
+
+
 def load_simulated(world, loaded: LoadedObject, cache_dir: Path, method: str, default_density: float) -> None:
     """``loaded`` as ``world``'s object: its convex pieces by ``method`` (cached in ``cache_dir``), the mass of its
     enclosed volume at its manifest's density or mass (else ``default_density``), its own friction."""

@@ -248,6 +248,9 @@ class JobSpec(Frozen):
     output: str = Field("onepiece-out/dataset.zarr", description="Dataset path (Zarr v3 directory).")
     cache_dir: str | None = Field(None, description="Folder of per-object results shared across jobs; "
                                   "defaults to the dataset's own parts/ folder.")
+    decompositions: str | None = Field(None, description="Folder of the objects' convex decompositions, shared by "
+                                       "the jobs naming it. Default: a local run's (API, CLI) is this user's cache "
+                                       "folder, a cluster job's the parts folder's collision/.")
     stages: tuple[Stage, ...] = Field(("ingest", "extract", "dedup", "assemble", "label", "train", "evaluate"),
                                       description="Stages to run: 'assemble' builds the one object from the unique "
                                       "codes, 'label' labels grasps on it, 'train' fits the grasp network, "
@@ -326,9 +329,12 @@ class JobSpec(Frozen):
         return stage in self.stages
 
     def parts_folder(self) -> str:
-        """Where per-object parts live: ``cache_dir`` (shared across jobs) or ``<output>.parts`` beside the
-        dataset."""
+        """Where per-object parts live: ``cache_dir`` (shared across jobs) or ``<output>.parts`` beside it."""
         return self.cache_dir or f"{Path(self.output)}.parts"
+
+    def decompositions_folder(self) -> Path:
+        """Where the objects' convex decompositions are kept: ``decompositions``, or the parts folder's."""
+        return Path(self.decompositions or Path(self.parts_folder()) / "collision")
 
     def code_bytes(self) -> int:
         a, b, c = self.grid_shape()
@@ -388,8 +394,6 @@ def _parse_mapping(text: str, path: Path) -> dict[str, Any]:
         data = json.loads(text) if path.suffix == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as err:
         raise SpecError(f"{path}: not valid {'JSON' if path.suffix == '.json' else 'YAML'}: {err}") from None
-    if data is None:
-        return {}
-    if not isinstance(data, dict):
+    if data is not None and not isinstance(data, dict):
         raise SpecError(f"{path}: a spec must be a mapping of fields, got {type(data).__name__}")
-    return data
+    return data or {}

@@ -254,7 +254,7 @@ def disk_bytes(path: Path) -> int:
     return sum(os.path.getsize(os.path.join(top, f)) for top, _, files in os.walk(path) for f in files)
 
 
-PLACE_KEYS = ("seconds", "output", "cache_dir", "checkpoint", "package_version")
+PLACE_KEYS = ("seconds", "output", "cache_dir", "decompositions", "checkpoint", "package_version")
 
 
 def content_digest(path: str | os.PathLike, training: bool = True) -> str:

@@ -53,7 +53,7 @@ def heldout_label_draws(job: JobSpec, dataset: str, sample: int, draws: int, see
         for k in np.unique(owner[rows]):
             mine = rows[owner[rows] == k]
             found.append(simulate(object_draws, job, refs[ids[k]], poses[mine], mine, draws, seed,
-                                  str(Path(job.parts_folder()) / "collision")))
+                                  str(job.decompositions_folder())))
     finally:
         simulate.close()
     return rows, np.concatenate(found)

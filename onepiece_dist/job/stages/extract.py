@@ -44,7 +44,7 @@ def extract_object(spec: JobSpec, ref: ObjectRef, index: int, parts: PartStore) 
         return replace(_from_meta(index, ref.name, key, meta, reused=True, start=start), repairs=repairs,
                        shortfall=shortfall(meta, spec.grasps_per_object))
     try:
-        arrays, meta = extract_arrays(spec, loaded.mesh, parts.folder / "collision", loaded)
+        arrays, meta = extract_arrays(spec, loaded.mesh, spec.decompositions_folder(), loaded)
     except MeshRejected as err:
         return ObjectResult(index, ref.name, "rejected", reason=err.reason, content_id=loaded.content_id,
                             seconds=time.perf_counter() - start)
