@@ -110,3 +110,18 @@ def test_a_job_for_a_cluster_names_its_decompositions_folder_absolutely(tmp_path
     check_remote_paths(JobSpec(output=str(tmp_path / "a.zarr"), decompositions=str(tmp_path / "d")))
     with pytest.raises(SpecError, match="decompositions: 'shared/decompositions' is relative"):
         check_remote_paths(JobSpec(output=str(tmp_path / "a.zarr"), decompositions="shared/decompositions"))
+
+
+def test_a_damaged_decomposition_in_the_folder_is_made_again_not_loaded(tmp_path):
+    """A shared folder's file that does not read as a decomposition (damaged on disk) is replaced by a fresh one,
+    and the object gets the fresh pieces, not a rejection every later job would meet too."""
+    mesh = l_shape()
+    fresh = convex_pieces(mesh, tmp_path / "fresh", "vhacd")
+    made = (tmp_path / "fresh" / f"{mesh.content_id}-vhacd50000.obj").read_bytes()
+    for damage in (b"\xff\xfe not text", b"v 0 0\nf 1 2 3\n"):
+        damaged = tmp_path / "shared" / f"{mesh.content_id}-vhacd50000.obj"
+        damaged.parent.mkdir(exist_ok=True)
+        damaged.write_bytes(damage)
+        pieces = convex_pieces(mesh, tmp_path / "shared", "vhacd")
+        assert damaged.read_bytes() == made
+        assert len(pieces) == len(fresh) and all(np.array_equal(a, b) for a, b in zip(pieces, fresh, strict=True))

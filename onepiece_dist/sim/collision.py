@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from onepiece_dist.core.mesh import TriangleMesh, enclosed_volume
+from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_obj, write_obj
 
 if TYPE_CHECKING:
@@ -99,19 +100,30 @@ def convex_pieces(mesh: TriangleMesh, cache_dir: Path, method: str = "vhacd",
     cache_dir.mkdir(parents=True, exist_ok=True)
     if method == "coacd":
         out = cache_dir / f"{mesh.content_id}-coacd{threshold:g}.obj"
-        if not out.is_file():
-            _run_coacd(mesh, cache_dir, out, threshold)
-        if out.is_file():
-            return _split_pieces(out.read_bytes(), mesh.name)
+        pieces = _cached_or_made(out, mesh.name, lambda: _run_coacd(mesh, cache_dir, out, threshold))
+        if pieces is not None:
+            return pieces
         warnings.warn(f"{mesh.name}: CoACD failed (is the 'coacd' package installed? pip install "
                       "'onepiece-dist[decompose]'); using VHACD", stacklevel=2)
     out = cache_dir / f"{mesh.content_id}-vhacd{resolution}.obj"
-    if not out.is_file():
-        _run_vhacd(mesh, cache_dir, out, resolution)
-    if not out.is_file():
+    pieces = _cached_or_made(out, mesh.name, lambda: _run_vhacd(mesh, cache_dir, out, resolution))
+    if pieces is None:
         warnings.warn(f"{mesh.name}: convex decomposition failed; using the convex hull", stacklevel=2)
         return [mesh.vertices]
-    return _split_pieces(out.read_bytes(), mesh.name)
+    return pieces
+
+
+def _cached_or_made(out: Path, name: str, make: Callable[[], None]) -> list[np.ndarray] | None:
+    """The pieces in ``out`` (a decomposition made earlier, maybe by another job), else made now by ``make``;
+    None where ``make`` wrote none. A cached file that does not read as one (damaged on the disk the jobs share)
+    is removed and made again, never handed on: every later job would load it."""
+    if out.is_file():
+        try:
+            return _split_pieces(out.read_bytes(), name)
+        except (MeshRejected, ValueError):  # UnicodeDecodeError is a ValueError
+            out.unlink(missing_ok=True)
+    make()
+    return _split_pieces(out.read_bytes(), name) if out.is_file() else None
 
 
 def _run_vhacd(mesh: TriangleMesh, cache_dir: Path, out: Path, resolution: int) -> None:
