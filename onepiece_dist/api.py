@@ -56,7 +56,8 @@ def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False,
             workers: int | None = None, progress: ProgressFn | None = None) -> JobStatus:
     """Run ``spec`` to completion here and return its final status: on an embedded Ray (default), on the
     cluster at ``address`` (this process is the driver), or without Ray (``in_process``)."""
-    job_id, spec = job_id or default_job_id(spec), spec if address else with_user_decompositions(spec)
+    job_id = job_id or default_job_id(spec)
+    spec = with_user_decompositions(spec) if in_process or not address else spec  # a local run's folder
     refs = resolve_source(spec.objects)  # a bad source is a usage error, found before any Ray starts
     if in_process:
         return run_local(spec, job_id=job_id, progress=progress, refs=refs)

@@ -285,7 +285,7 @@ def _digest_group(digest, prefix: str, group, skip: tuple[str, ...] = ()) -> Non
 
 def _content_only(value):
     """``value`` without the mapping entries that say when or where, not what: durations (``seconds``,
-    ``*_seconds``, ``*_s``) and paths (``output``, ``cache_dir``, ``checkpoint``)."""
+    ``*_seconds``, ``*_s``) and paths (``output``, ``cache_dir``, ``decompositions``, ``checkpoint``)."""
     if isinstance(value, dict):
         return {k: _content_only(v) for k, v in value.items()
                 if not (k in PLACE_KEYS or k.endswith("_seconds") or k.endswith("_s"))}
