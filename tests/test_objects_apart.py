@@ -8,7 +8,7 @@ import pytest
 
 from onepiece_dist.core.cloud.completion import completed_shape
 from onepiece_dist.core.cloud.grasps import SupportPlane
-from onepiece_dist.core.cloud.objects import GAP, closed_on, point_groups, separate_objects
+from onepiece_dist.core.cloud.objects import BLOCK, GAP, closed_on, closed_on_each, point_groups, separate_objects
 from onepiece_dist.core.cloud.top_down import top_down_grasps
 from onepiece_dist.specs.plan import PICK_SIM
 from tests.test_shape_check import seen_box
@@ -29,6 +29,32 @@ def test_points_further_apart_than_the_gap_are_separate_objects_and_stray_points
     whole = separate_objects(stray)
     assert len(whole) == 1 and whole[0] is stray  # one object: every point kept, the stray one too
     assert point_groups(np.zeros((0, 3))).shape == (0,)
+
+
+def _closed_on_one_by_one(objects, pose, depth, width, height) -> int:
+    """The rule as closed_on states it, pose by pose: the most points in the closing region, else the nearest."""
+    inside = [np.sum((lambda u: (u[:, 0] >= 0) & (u[:, 0] < depth) & (np.abs(u[:, 1]) < width / 2)
+                      & (np.abs(u[:, 2]) < height / 2))((o - pose[:3, 3]) @ pose[:3, :3])) for o in objects]
+    centre = pose[:3, 3] + pose[:3, 0] * depth / 2
+    return int(np.argmax(inside)) if max(inside) > 0 else int(np.argmin([np.min(np.sum((o - centre) ** 2, 1))
+                                                                          for o in objects]))
+
+
+def test_each_grasp_closes_on_the_object_with_most_points_in_its_region_else_the_nearest():
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(0)
+    box = seen_box()
+    objects = [box, seen_box((0.03, 0.03, 0.04)) + APART, box[::3] + [0.0, 0.08, 0.0]]
+    poses = np.tile(np.eye(4), (BLOCK // len(box) + 300, 1, 1))  # more than one block of poses an object
+    poses[:, :3, :3] = Rotation.random(len(poses), random_state=1).as_matrix()
+    poses[:, :3, 3] = rng.uniform([-0.05, -0.05, 0.0], [0.15, 0.13, 0.12], (len(poses), 3))
+    depth, width, height = 0.04, 0.08, 0.02
+    chosen = closed_on_each(objects, poses, depth, width, height)
+    expected = [_closed_on_one_by_one(objects, pose, depth, width, height) for pose in poses]
+    assert chosen.tolist() == expected and len(set(expected)) == 3
+    assert closed_on(objects, poses[0], depth, width, height) == expected[0]
+    assert closed_on_each(objects[:1], poses, depth, width, height).tolist() == [0] * len(poses)
 
 
 @pytest.mark.sim
