@@ -218,6 +218,20 @@ def test_the_picks_page_judges_each_hands_planning_with_its_check_against_the_sa
     assert "(the 0.3 s target: **met**)" in _hands_line({**plan, "hands": [{**hand, "median_checked_seconds": 0.29}]})
 
 
+def test_the_picks_page_judges_planning_from_a_depth_cameras_files_of_several_objects():
+    from benchmarks.pages.picks_page import _files_line
+
+    plan = {"targets": {"cpu_seconds_per_view": 0.3}}
+    assert _files_line(plan) == ""  # a run before the files were timed
+    rows = [{"objects": ["a", "b"], "points": 50000, "check_first": 3},
+            {"objects": ["a", "b", "c", "d"], "points": 90000, "check_first": 3}]
+    line = _files_line({**plan, "files": {"rows": rows, "median_seconds_per_view": 0.25,
+                                          "median_checked_seconds": 0.5}})
+    assert "(2 or 4 of the scenes' objects, 2 views)" in line and "50000-90000 points" in line
+    assert "0.250 s a view without the check (the 0.3 s target: **met**)" in line
+    assert "0.500 s with its first 3 checked (**not met**)" in line
+
+
 def test_the_picks_page_names_the_gripper_that_executes_the_picks():
     from benchmarks.pages.picks_page import _gripper_words
 

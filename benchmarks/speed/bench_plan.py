@@ -9,10 +9,11 @@ degrees), as `onepiece pick` sees it; and one of them made a 2-million-point clo
 jitter), thinned by the planner first. The network is the shipped one (onepiece_dist/plan/networks/; PointNet
 width 32 with the grasp's context, 128 points per crop), or that architecture with fresh weights where the package
 has none: latency does not depend on what it learnt; the Franka hand (the panda preset: HANDS) plans the same views
-with the network shipped for it. Torch and BLAS on one thread. Targets: at most 0.3 s per
-view on one core; at most 1 s for the 2-million-point cloud; at most 30 ms of scoring on a GPU (measured only where
-one is present). Results: benchmarks/results/plan.json, rendered into
-docs/picks.md by benchmarks/pages/report.py.
+with the network shipped for it. Several of the objects side by side (FILE_SCENES) are planned as `onepiece grasp`
+plans a depth camera's own files: `onepiece scene`'s PNG, intrinsics and camera pose read back in the robot's
+frame. Torch and BLAS on one thread. Targets: at most 0.3 s per view on one core; at most 1 s for the
+2-million-point cloud; at most 30 ms of scoring on a GPU (measured only where one is present). Results:
+benchmarks/results/plan.json, rendered into docs/picks.md by benchmarks/pages/report.py.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ HERE = Path(__file__).resolve().parents[1]
 SCENES = "primitives[3:6]+pybullet:named[0:3]"
 CANDIDATES, REPEATS = 500, 3
 HANDS = ("panda",)  # gripper presets planned on the same views beside the default job's gripper
+FILE_SCENES = ((2, 0), (2, 1), (2, 2), (4, 0), (4, 1), (4, 2))  # (objects on the table, seed): `onepiece scene`
 TARGETS = {"cpu_seconds_per_view": 0.3, "gpu_score_seconds": 0.03, "dense_seconds": 1.0}
 
 
@@ -114,7 +116,31 @@ def measure(folder: Path) -> dict:
                      "seconds": {k: round(v, 4) for k, v in best.seconds.items()},
                      "baseline_seconds": round(baseline + best.seconds["sample"], 4),
                      **(check_seconds(observation, net, spec) if len(observation.points) < 1_000_000 else {})})
-    return {"rows": rows, "gpu": gpu_scoring(folder), "hands": [hand_seconds(seen, hand) for hand in HANDS]}
+    return {"rows": rows, "gpu": gpu_scoring(folder), "hands": [hand_seconds(seen, hand) for hand in HANDS],
+            "files": file_scenes(folder, net)}
+
+
+def file_scenes(folder: Path, net) -> dict:
+    """Several of SCENES' objects side by side on the table, written as a depth camera's own files (`onepiece
+    scene`: FILE_SCENES) and read back as `onepiece grasp` reads them (plan.robot.read_observation, the scene's
+    workspace): each view's planning (the least of REPEATS) without and with the planner's default check."""
+    from onepiece_dist.picks.scene_files import write_scene
+    from onepiece_dist.plan.planner import plan_grasps
+    from onepiece_dist.plan.robot import read_observation
+    from onepiece_dist.specs.plan import PlanSpec
+
+    spec, rows = PlanSpec(candidates=CANDIDATES, check_first=0), []
+    for count, seed in FILE_SCENES:
+        files = write_scene(SCENES, folder / f"scene_{count}_{seed}", count, seed)
+        observation, _ = read_observation(files.folder / "depth.png", str(files.folder / "intrinsics.json"),
+                                          camera_pose=files.folder / "camera_pose.json", workspace=files.workspace())
+        best = min((plan_grasps(observation, net, spec) for _ in range(REPEATS)), key=lambda p: p.seconds["total"])
+        rows.append({"objects": list(files.objects), "seed": seed, "points": len(observation.points),
+                     "found": len(best.objects), **best.counts.to_json(),
+                     "seconds": {k: round(v, 4) for k, v in best.seconds.items()},
+                     **check_seconds(observation, net, spec)})
+    return {"rows": rows, "median_seconds_per_view": float(np.median([r["seconds"]["total"] for r in rows])),
+            "median_checked_seconds": float(np.median([r["seconds"]["total"] + r["check_seconds"] for r in rows]))}
 
 
 def hand_seconds(seen, hand: str) -> dict:

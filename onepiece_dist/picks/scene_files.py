@@ -49,12 +49,16 @@ class SceneFiles:
     def grasp_command(self) -> str:
         """The `onepiece grasp` command that plans on these files, in the base frame, within the scene's box (and
         dropping the image's flying pixels where it has them: docs/picks.md)."""
-        x, y, _ = self.centre
-        box = ",".join(f"{v:.2f}" for v in (x - WORKSPACE, y - WORKSPACE, -0.02, x + WORKSPACE, y + WORKSPACE, 0.4))
         depth, intrinsics, pose = (shlex.quote(str(self.folder / name))
                                    for name in ("depth.png", "intrinsics.json", "camera_pose.json"))
         drop = f" --drop-flying {self.drop_flying:g}" if self.drop_flying > 0 else ""
-        return f"onepiece grasp {depth} --intrinsics {intrinsics} --camera-pose {pose} --workspace {box}{drop}"
+        return (f"onepiece grasp {depth} --intrinsics {intrinsics} --camera-pose {pose} --workspace "
+                f"{self.workspace()}{drop}")
+
+    def workspace(self) -> str:
+        """The box around the scene's objects (base frame, m: x0,y0,z0,x1,y1,z1) that `onepiece grasp` plans in."""
+        x, y, _ = self.centre
+        return ",".join(f"{v:.2f}" for v in (x - WORKSPACE, y - WORKSPACE, -0.02, x + WORKSPACE, y + WORKSPACE, 0.4))
 
 
 def write_scene(objects: str, folder: str | Path, count: int = 1, seed: int = 0, camera: CameraSpec | None = None,
