@@ -53,8 +53,9 @@ class SupportPlane:
 @dataclass(frozen=True)
 class CloudCandidates:
     """poses (n, 4, 4) float64 gripper poses in the cloud's frame; the counts say where the tried poses went:
-    ``sampled`` placements tried, ``collided`` met an observed point at every bite, ``below_plane`` met the support
-    plane (the planner counts those with too few points in the closing region)."""
+    ``sampled`` placements tried, ``below_plane`` met the support plane at the shallowest bite of some lateral
+    shift, ``collided`` the rest that met an observed point at every shift (the planner counts those with too few
+    points in the closing region)."""
 
     poses: np.ndarray
     sampled: int
@@ -154,17 +155,16 @@ class Blockers:
         high = points if plane is None else points[plane.distance(points) > PLANE_CLEARANCE - ROUNDING]
         return cls(points, plane, high)
 
-    def blocked(self, poses: np.ndarray, gripper: GripperSpec, every: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """(n,) bool meeting a point, (n,) bool meeting a point or below the plane. Where not ``every``, poses
-        below the plane are not tried on the points (they are blocked either way; the first says False)."""
+    def blocked(self, poses: np.ndarray, gripper: GripperSpec) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) bool above the plane and meeting a point, (n,) bool meeting a point or the plane. A pose that meets
+        the plane is blocked either way and is not tried on the points (most of a view's points are its table's,
+        and most blocked placements meet it)."""
         if self.plane is None:
             hit = collides(self.points, poses, gripper)
             return hit, hit
         above = above_plane(poses, gripper, self.plane)
         hit_points = np.zeros(len(poses), dtype=bool)
         hit_points[above] = collides(self.high, poses[above], gripper)
-        if every:
-            hit_points[~above] = collides(self.points, poses[~above], gripper)
         return hit_points, hit_points | ~above
 
 
@@ -172,8 +172,8 @@ def deepest_free(blockers: Blockers, centres: np.ndarray, approach: np.ndarray, 
                  gripper: GripperSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Push each hand in from the shallowest bite while its open gripper stays clear of the ``blockers``' points
     and above their plane: the pose at the last free bite (GPD's deepenHand); (n,) bool whether even the
-    shallowest was free; (n,) bool whether the shallowest was clear of the points but met the plane. Each deeper
-    bite is checked only for the hands still free."""
+    shallowest was free; (n,) bool whether the shallowest met the plane. Each deeper bite is checked only for the
+    hands still free."""
     depths = bite_depths(gripper)
     poses = _poses_at(centres, approach, closing, depths[0])
     hit_points, hit = blockers.blocked(poses, gripper)
@@ -183,7 +183,7 @@ def deepest_free(blockers: Blockers, centres: np.ndarray, approach: np.ndarray, 
         if len(going) == 0:
             break
         deeper = _poses_at(centres[going], approach[going], closing[going], depth)
-        clear = ~blockers.blocked(deeper, gripper, every=False)[1]
+        clear = ~blockers.blocked(deeper, gripper)[1]
         poses[going[clear]] = deeper[clear]
         going = going[clear]
     return poses, free, below
@@ -194,7 +194,7 @@ def best_placement(points: np.ndarray, centres: np.ndarray, approach: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`deepest_free` at the first of PLACEMENTS lateral shifts of the hand along its closing axis (GPD's
     finger placements) whose shallowest bite is free; hands no shift frees are tried at the next. Returns the
-    poses, (n,) bool free at some shift, and (n,) bool not free but kept off only by the plane at some shift."""
+    poses, (n,) bool free at some shift, and (n,) bool not free and meeting the plane at some shift."""
     poses = np.zeros((len(centres), 4, 4))
     free, below = np.zeros(len(centres), bool), np.zeros(len(centres), bool)
     todo, blockers = np.arange(len(centres)), Blockers.of(points, plane)
