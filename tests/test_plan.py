@@ -319,3 +319,34 @@ def test_the_top_down_grasps_join_the_pool_by_default_and_the_rest_is_unchanged(
     assert np.allclose(added.poses[n:], expected)
     assert added.counts.candidates == plain.counts.candidates + 3 and added.counts.sampled == plain.counts.sampled + 3
     assert np.allclose(added.poses[n:, :3, 0] @ gravity(added.plane), 1)  # each approaches along gravity
+
+
+FIRST_PLAN = """
+import sys
+import numpy as np
+from onepiece_dist.plan import GraspScorer, Observation, plan_grasps
+from onepiece_dist.plan.shipped import shipped_network
+from onepiece_dist.specs.plan import PlanSpec
+from tests.test_objects_apart import APART
+from tests.test_plan import _floor
+from tests.test_shape_check import seen_box
+
+scorer = GraspScorer(shipped_network(), device="cpu")
+loaded = {name for name in sys.modules if name.split(".")[0] == "scipy"}
+cloud = np.vstack([seen_box(), seen_box() + APART, _floor(0.0)])  # two objects on a table: every step of a plan
+plan = plan_grasps(Observation(cloud, np.array([0.3, -0.3, 0.4]), "two"), scorer, PlanSpec(check_first=0))
+assert len(plan.objects) == 2 and len(plan.grasps) > 0
+print(sorted({name for name in sys.modules if name.split(".")[0] == "scipy"} - loaded))
+"""
+
+
+def test_a_process_first_plan_imports_nothing_the_network_load_did_not():
+    """A robot's first plan is planning, not a third of a second of scipy's imports (GraspScorer loads them)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    ran = subprocess.run([sys.executable, "-c", FIRST_PLAN], capture_output=True, text=True, timeout=120,
+                         cwd=Path(__file__).resolve().parents[1])
+    assert ran.returncode == 0, ran.stderr[-2000:]
+    assert ran.stdout.strip() == "[]"

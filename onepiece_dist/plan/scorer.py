@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from onepiece_dist.core.cloud import import_planning_libraries
 from onepiece_dist.core.cloud.outline import OUTLINE_MODELS
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS
 from onepiece_dist.core.voxel import crop_regions, network_inputs, unpack_codes
@@ -85,6 +86,7 @@ class GraspScorer:
         self.reads_space = saved.model in SPACE_MODELS
         self.reads_outline = saved.model in OUTLINE_MODELS
         self.model = saved.build().to(self.device)
+        import_planning_libraries()  # a robot's first plan is planning, not imports
 
     @property
     def gripper(self) -> GripperSpec:
