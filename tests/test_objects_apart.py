@@ -92,6 +92,15 @@ def test_the_planner_checks_each_grasp_on_its_own_object_where_the_view_holds_tw
     key = [g.pose.tobytes() for g in plain.grasps]
     assert sorted(g.pose.tobytes() for g in checked.grasps[:3]) == sorted(key[:3])
     assert [g.pose.tobytes() for g in checked.grasps[3:]] == key[3:] and "check" in checked.seconds
+    assert all(g.held is None for g in plain.grasps + checked.grasps[3:])  # only what was executed says so
+    held = {g.pose.tobytes(): g.held for g in checked.grasps[:3]}
+    first = held.pop(key[0])  # the network's first is executed first; the other two unless it held every draw
+    assert first is not None and 0 <= first[0] <= first[1] <= 2
+    assert all((h is None) == (first == (2, 2)) for h in held.values()), (first, held)
+    assert all(h is None or 0 <= h[0] <= h[1] <= 2 for h in held.values())
+    assert checked.grasps[0].to_json()["check"] == {"held": checked.grasps[0].held[0],
+                                                    "draws": checked.grasps[0].held[1]}
+    assert plain.grasps[0].to_json()["check"] is None
 
 
 def test_a_grasps_context_reads_the_centre_of_the_object_it_closes_on():

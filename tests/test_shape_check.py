@@ -266,12 +266,16 @@ def test_the_check_stops_where_the_first_grasp_held_every_draw_none_after_it_can
     ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, score, 100)
                    for k, (pose, score) in enumerate([(good, 0.9), (air, 0.8), (good, 0.7)]))
     stopped, alone = np.random.default_rng(0), np.random.default_rng(0)
-    assert checked(ranked, shape, gripper, PICK_SIM, 4, stopped) == ranked
+    first_held = checked(ranked, shape, gripper, PICK_SIM, 4, stopped)
+    assert [g.score for g in first_held] == [0.9, 0.8, 0.7] and [g.rank for g in first_held] == [1, 2, 3]
+    assert [g.held for g in first_held] == [(4, 4), None, None]  # the first held every draw: no other executed
     held_shares(shape, good[None], gripper, PICK_SIM, 4, alone)
     assert stopped.random() == alone.random()  # only the first grasp's draws were taken from the stream
     second_first = (ranked[1], ranked[0], ranked[2])  # the air grasp first: every grasp is executed, reordered
     reordered = checked(second_first, shape, gripper, PICK_SIM, 4, np.random.default_rng(0))
     assert [g.score for g in reordered][:2] in ([0.9, 0.7], [0.7, 0.9]) and reordered[2].score == 0.8
+    held = {g.score: g.held for g in reordered}  # every grasp executed; the last only until its place is settled
+    assert held[0.8] == (0, 4) and held[0.9][1] == 4 and 1 <= held[0.7][1] <= 4
 
 
 def test_the_last_grasp_checked_stops_drawing_once_its_place_is_settled_and_every_order_stays_the_same():

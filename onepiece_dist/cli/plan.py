@@ -186,7 +186,7 @@ def _print_plan(plan, json_path: Path, png: Path | None) -> None:
         centre = g.pose[:3, 3]
         err(f"  #{g.rank}  object {g.object}  score {g.score:.3f}  palm at ({centre[0]:+.3f}, {centre[1]:+.3f}, "
             f"{centre[2]:+.3f}) m  approach ({g.pose[0, 0]:+.2f}, {g.pose[1, 0]:+.2f}, {g.pose[2, 0]:+.2f})  "
-            f"{g.points} points")
+            f"{g.points} points" + ("" if g.held is None else f"  held in {g.held[0]} of {g.held[1]} checks"))
     if not plan.grasps:
         err("  no grasp: every candidate collided with the cloud or the plane, or held too few points")
     typer.echo(str(json_path))

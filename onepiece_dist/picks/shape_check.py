@@ -143,12 +143,18 @@ def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape 
 
 def _checked_with(ranked: tuple[PlannedGrasp, ...], held_of: Callable[[int], Callable[..., list[bool]]],
                   draws: int) -> tuple[PlannedGrasp, ...]:
-    """``ranked`` reordered lazily (reordered_lazily) by the draws ``held_of(k)`` executes of each grasp k."""
+    """``ranked`` reordered lazily (reordered_lazily) by the draws ``held_of(k)`` executes of each grasp k, each
+    checked grasp with how many of its draws held (PlannedGrasp.held)."""
+    executed: dict[int, list[bool]] = {}
 
     def share(k: int, earlier: np.ndarray | None) -> float:
-        return share_of(held_of(k)(ranked[k].pose, settled_against(earlier, draws)), draws)
+        executed[k] = held_of(k)(ranked[k].pose, settled_against(earlier, draws))
+        return share_of(executed[k], draws)
 
-    return reordered_lazily(ranked, share)
+    order = lazy_order(len(ranked), share)
+    annotated = tuple(dataclasses.replace(g, held=(sum(executed[k]), len(executed[k]))) if k in executed else g
+                      for k, g in enumerate(ranked))
+    return annotated if order is None else _in_order(annotated, order)
 
 
 def share_of(outcomes: list[bool], draws: int) -> float:
@@ -159,22 +165,29 @@ def share_of(outcomes: list[bool], draws: int) -> float:
 
 def reordered_lazily(ranked: tuple[PlannedGrasp, ...], share: Callable[[int, np.ndarray | None], float]
                      ) -> tuple[PlannedGrasp, ...]:
-    """``ranked`` reordered by ``share(k, earlier)`` of each, asked in rank order. It stops where the first held
-    every draw: no later grasp can pass it (ties keep the network's order), so the rest keep the network's order
-    too and the check costs a third of its draws. The last grasp is given the ``earlier`` shares and stops drawing
-    once its place among them is settled. Either way the order is what executing every draw would give: each
-    grasp's draws come from the stream in rank order, and only draws after every other grasp's are left out."""
+    """``ranked`` reordered by ``share(k, earlier)`` of each, asked in rank order (lazy_order), ranks numbered
+    again; ``ranked`` itself where the first held every draw."""
+    order = lazy_order(len(ranked), share)
+    return ranked if order is None else _in_order(ranked, order)
+
+
+def lazy_order(count: int, share: Callable[[int, np.ndarray | None], float]) -> np.ndarray | None:
+    """The order of ``count`` ranked grasps by ``share(k, earlier)`` of each, asked in rank order; None (the
+    network's order) where the first held every draw: no later grasp can pass it (ties keep the network's order),
+    so the rest keep the network's order too and the check costs a third of its draws. The last grasp is given
+    the ``earlier`` shares and stops drawing once its place among them is settled. Either way the order is what
+    executing every draw would give: each grasp's draws come from the stream in rank order, and only draws after
+    every other grasp's are left out."""
     first = share(0, None)
     if first >= 1.0:
-        return ranked
+        return None
     shares = [first]
-    for k in range(1, len(ranked)):
-        shares.append(share(k, np.array(shares) if k == len(ranked) - 1 else None))
-    return _reordered(ranked, np.array(shares))
+    for k in range(1, count):
+        shares.append(share(k, np.array(shares) if k == count - 1 else None))
+    return np.argsort(-np.array(shares), kind="stable")
 
 
-def _reordered(ranked: tuple[PlannedGrasp, ...], shares: np.ndarray) -> tuple[PlannedGrasp, ...]:
-    order = np.argsort(-shares, kind="stable")
+def _in_order(ranked: tuple[PlannedGrasp, ...], order: np.ndarray) -> tuple[PlannedGrasp, ...]:
     return tuple(dataclasses.replace(ranked[i], rank=k + 1) for k, i in enumerate(order))
 
 

@@ -44,7 +44,8 @@ class PlannedGrasp:
     """One ranked grasp: ``pose`` (4, 4) ours (gripper frame to the cloud's frame, docs/gripper_frame.md),
     ``panda_pose`` (4, 4) the same grasp as a Franka Panda hand transform (ACRONYM's and GraspGen's convention),
     ``opening`` the opening to approach with (m), ``observed_width`` the observed points' extent between the
-    fingers (m), ``score`` the network's success probability, ``points`` observed points in the closing region."""
+    fingers (m), ``score`` the network's success probability, ``points`` observed points in the closing region;
+    ``held``: how many of the check's executions on the shape the view implies held (picks.shape_check)."""
 
     rank: int
     pose: np.ndarray
@@ -54,6 +55,7 @@ class PlannedGrasp:
     score: float
     points: int
     object: int = 0  # the object told apart it closes on (GraspPlan.objects; 0: the one with the most points)
+    held: tuple[int, int] | None = None  # the check's (draws that held, draws executed); None: not checked
 
     def pregrasp(self) -> np.ndarray:
         """(4, 4) the Panda hand PREGRASP back along its approach (its z) from ``panda_pose``."""
@@ -65,6 +67,7 @@ class PlannedGrasp:
         pregrasp = self.pregrasp()
         return {"rank": self.rank, "object": self.object, "score": round(self.score, 6), "opening": self.opening,
                 "observed_width": round(self.observed_width, 6), "points": self.points,
+                "check": None if self.held is None else {"held": self.held[0], "draws": self.held[1]},
                 "pose": np.round(self.pose, 9).tolist(), "panda_pose": np.round(self.panda_pose, 9).tolist(),
                 "position": np.round(self.panda_pose[:3, 3], 9).tolist(),
                 "quaternion": np.round(quat_from_matrix(self.panda_pose[:3, :3]), 9).tolist(),
