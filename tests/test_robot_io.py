@@ -155,3 +155,24 @@ def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others
                                        str(tmp_path / "r")])
     assert refused.exit_code != 0 and "no network ships for the gripper 'robotiq_2f_85'" in refused.output
     assert "--checkpoint" in refused.output and not (tmp_path / "r" / "grasps.json").exists()
+
+
+def test_intrinsics_made_for_another_image_are_refused_and_a_ros_camera_info_is_read(tmp_path):
+    from onepiece_dist.plan.robot import read_observation
+
+    write_png(tmp_path / "depth.png", depth_millimetres())  # 160 x 120
+    k = [FX, 0, CX, 0, FY, CY, 0, 0, 1]
+    (tmp_path / "k.json").write_text(json.dumps({"K": [k[:3], k[3:6], k[6:]]}))
+    (tmp_path / "info.json").write_text(json.dumps({"k": k, "width": 160, "height": 120}))  # a ROS 2 CameraInfo's
+    seen = read_observation(tmp_path / "depth.png", str(tmp_path / "k.json"))[0]
+    assert np.array_equal(read_observation(tmp_path / "depth.png", str(tmp_path / "info.json"))[0].points,
+                          seen.points)
+    (tmp_path / "colour.json").write_text(json.dumps({"K": k, "width": 640, "height": 480}))  # another stream's
+    (tmp_path / "elsewhere.json").write_text(json.dumps({"fx": FX, "fy": FY, "cx": 4 * CX, "cy": 4 * CY}))
+    refused = {name: CliRunner().invoke(app, ["grasp", str(tmp_path / "depth.png"), "--intrinsics",
+                                              str(tmp_path / f"{name}.json"), "--out", str(tmp_path / name)])
+               for name in ("colour", "elsewhere")}
+    assert all(result.exit_code == 2 for result in refused.values())
+    assert "colour.json: these intrinsics are for a 640x480 image" in refused["colour"].output
+    assert "is 160x120" in refused["colour"].output and "scaled by 0.25" in refused["colour"].output
+    assert "elsewhere.json: the principal point (320, 240) lies outside" in refused["elsewhere"].output

@@ -1,6 +1,7 @@
 """What a depth camera and a robot give, read into an :class:`Observation` in the robot's base frame (issue 56):
 a 16-bit PNG depth image in camera units (or an NPY), its intrinsics (fx,fy,cx,cy, or a JSON file with those keys
-or a 3x3 ``K``), the camera's pose in the robot's base frame (a JSON file: ``{"matrix": 4x4}`` or ``{"position":
+or a 3x3 ``K``, or a ROS CameraInfo's 9 values of ``K``/``k``; refused where made for another image), the camera's
+pose in the robot's base frame (a JSON file: ``{"matrix": 4x4}`` or ``{"position":
 [x, y, z], "quaternion": [x, y, z, w]}``, camera to base, the OpenCV camera frame: x right, y down, z forward), and
 a workspace box the cloud is cropped to. Bad input is refused naming the file and the fix."""
 
@@ -23,10 +24,33 @@ PNG_DEPTH_SCALE = 0.001  # a 16-bit PNG holds millimetres unless told otherwise
 
 @dataclass(frozen=True)
 class Intrinsics:
+    """A pinhole camera's focal lengths and principal point (pixels); the image ``width`` and ``height`` they are
+    for where their file says (a ROS CameraInfo's or a RealSense's), and where they were read from."""
+
     fx: float
     fy: float
     cx: float
     cy: float
+    width: int | None = None
+    height: int | None = None
+    source: str = "--intrinsics"
+
+    def check(self, shape: tuple[int, ...], image: str) -> None:
+        """Refuse a depth image of ``shape`` (H, W) from ``image`` that these intrinsics were not made for: another
+        size than their file says, or a principal point outside it (those of another stream or resolution)."""
+        height, width = shape[:2]
+        if self.width is not None and self.height is not None and (self.width, self.height) != (width, height):
+            across, down = width / self.width, height / self.height
+            scale = f"{across:g}" if across == down else f"{across:g} (fx, cx) and {down:g} (fy, cy)"
+            raise CloudRejected(
+                f"{self.source}: these intrinsics are for a {self.width}x{self.height} image, {image} is "
+                f"{width}x{height}: give the intrinsics of the stream the depth image came from (or, for the same "
+                f"lens at another resolution, fx, fy, cx, cy scaled by {scale})")
+        if not (0 <= self.cx <= width and 0 <= self.cy <= height):
+            raise CloudRejected(
+                f"{self.source}: the principal point ({self.cx:g}, {self.cy:g}) lies outside {image}'s "
+                f"{width}x{height} pixels: are these the intrinsics of another stream or resolution? Give those "
+                "of the depth image (its camera info or calibration)")
 
 
 def _json(path: Path, what: str):
@@ -41,13 +65,16 @@ def read_intrinsics(text: str) -> Intrinsics:
     path = Path(text)
     if path.suffix.lower() == ".json":
         data = _json(path, "intrinsics")
-        if isinstance(data, dict) and "K" in data:
-            k = np.asarray(data["K"], dtype=np.float64)
-            if k.shape != (3, 3):
-                raise CloudRejected(f"{path}: K must be 3x3, got shape {k.shape}")
-            return Intrinsics(k[0, 0], k[1, 1], k[0, 2], k[1, 2])
+        size = _image_size(data, path)
+        key = next((key for key in ("K", "k") if isinstance(data, dict) and key in data), None)
+        if key is not None:  # 3x3, or a ROS CameraInfo's 9 in row order
+            k = np.asarray(data[key], dtype=np.float64)
+            if k.size != 9 or k.ndim not in (1, 2):
+                raise CloudRejected(f"{path}: {key} must be 3x3 (or its 9 values in row order), got shape {k.shape}")
+            k = k.reshape(3, 3)
+            return Intrinsics(k[0, 0], k[1, 1], k[0, 2], k[1, 2], *size, str(path))
         if isinstance(data, dict) and all(key in data for key in ("fx", "fy", "cx", "cy")):
-            return Intrinsics(*(float(data[key]) for key in ("fx", "fy", "cx", "cy")))
+            return Intrinsics(*(float(data[key]) for key in ("fx", "fy", "cx", "cy")), *size, str(path))
         raise CloudRejected(f'{path}: give {{"fx", "fy", "cx", "cy"}} or a 3x3 "K" (pixels)')
     try:
         values = [float(v) for v in text.split(",")]
@@ -56,6 +83,20 @@ def read_intrinsics(text: str) -> Intrinsics:
     if len(values) != 4:
         raise CloudRejected(f"--intrinsics {text!r}: give fx,fy,cx,cy (pixels) or a JSON file")
     return Intrinsics(*values)
+
+
+def _image_size(data, path: Path) -> tuple[int | None, int | None]:
+    """The image ``width`` and ``height`` an intrinsics file gives (both, or neither: (None, None))."""
+    if not isinstance(data, dict) or "width" not in data or "height" not in data:
+        return None, None
+    try:
+        width, height = int(data["width"]), int(data["height"])
+    except (TypeError, ValueError):
+        width = height = 0
+    if width <= 0 or height <= 0 or (width, height) != (data["width"], data["height"]):
+        raise CloudRejected(f"{path}: width and height are the image's size in pixels, whole and positive, got "
+                            f"{data['width']!r} and {data['height']!r}")
+    return width, height
 
 
 def read_camera_pose(path: str | Path) -> np.ndarray:
@@ -131,7 +172,9 @@ def depth_observation(path: str | Path, intrinsics: Intrinsics, depth_scale: flo
                       drop_flying: float = 0.0) -> Observation:
     """A depth image file back-projected in the OpenCV camera frame, its flying pixels dropped at ``drop_flying``
     (m; core.cloud.flying; 0 keeps every pixel)."""
-    depth = without_flying(read_depth(path, depth_scale), drop_flying)
+    depth = read_depth(path, depth_scale)
+    intrinsics.check(depth.shape, str(path))
+    depth = without_flying(depth, drop_flying)
     return depth_to_cloud(depth, intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy, source=str(path))
 
 
