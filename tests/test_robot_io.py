@@ -4,6 +4,7 @@ told from a box's side, a view of the table alone refused, and the shipped netwo
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -176,3 +177,18 @@ def test_intrinsics_made_for_another_image_are_refused_and_a_ros_camera_info_is_
     assert "colour.json: these intrinsics are for a 640x480 image" in refused["colour"].output
     assert "is 160x120" in refused["colour"].output and "scaled by 0.25" in refused["colour"].output
     assert "elsewhere.json: the principal point (320, 240) lies outside" in refused["elsewhere"].output
+
+
+def test_a_camera_pose_in_opengl_axes_and_a_workspace_beside_the_cloud_are_refused_saying_why(tmp_path):
+    write_png(tmp_path / "depth.png", depth_millimetres())
+    opengl = CAMERA_POSE @ np.diag([1.0, -1.0, -1.0, 1.0])  # the same camera, y up and z backward
+    (tmp_path / "opengl.json").write_text(json.dumps({"matrix": opengl.tolist()}))
+    (tmp_path / "pose.json").write_text(json.dumps({"matrix": CAMERA_POSE.tolist()}))
+    args = ["grasp", str(tmp_path / "depth.png"), "--intrinsics", f"{FX},{FY},{CX},{CY}", "--out", str(tmp_path)]
+    turned = CliRunner().invoke(app, [*args, "--camera-pose", str(tmp_path / "opengl.json")])
+    assert turned.exit_code == 2 and "opengl.json: with this camera pose 100% of" in turned.output
+    assert "OpenCV's camera axes" in turned.output
+    beside = CliRunner().invoke(app, [*args, "--camera-pose", str(tmp_path / "pose.json"), "--workspace",
+                                      "1,1,0,2,2,1"])
+    assert beside.exit_code == 2 and "none of its 19200 points lies in the workspace" in beside.output
+    assert re.search(r"z \[[+-]0\.00, \+0\.05\] m", beside.output)  # the table at z = 0, the box's top 5 cm up

@@ -20,6 +20,7 @@ from onepiece_dist.errors import CloudRejected
 from onepiece_dist.plan.observation import Observation, check_cloud, depth_to_cloud
 
 PNG_DEPTH_SCALE = 0.001  # a 16-bit PNG holds millimetres unless told otherwise
+LOOKING_UP = 0.9  # more of a view's points above its camera than this: the camera pose is refused (check_looks_down)
 
 
 @dataclass(frozen=True)
@@ -164,8 +165,29 @@ def crop_to_workspace(observation: Observation, lower: np.ndarray, upper: np.nda
     framed = points if pose is None else transform_points(points, pose)
     inside = np.all((framed >= lower) & (framed <= upper), axis=1)
     source = f"{observation.source} (workspace {lower.tolist()} to {upper.tolist()})"
+    if len(points) and not inside.any():
+        spans = ", ".join(f"{axis} [{low:+.2f}, {high:+.2f}]"
+                          for axis, low, high in zip("xyz", framed.min(axis=0), framed.max(axis=0), strict=True))
+        frame = "the robot's base frame (the camera pose's)" if pose is not None else "the cloud's frame"
+        raise CloudRejected(f"{source}: none of its {len(points)} points lies in the workspace; in {frame} they "
+                            f"span {spans} m: give the box in that frame, in metres")
     return Observation(check_cloud(points[inside], source), observation.viewpoint, observation.source,
                        observation.up)
+
+
+def check_looks_down(observation: Observation, camera_pose: np.ndarray, pose_file: str | Path) -> None:
+    """Refuse a camera pose that has the camera look up at nearly all it saw (LOOKING_UP of the points above it in
+    the base frame): the planner takes the base frame's +z as up and the table below the objects, and a pose in
+    another camera convention turns the cloud over."""
+    pose = np.asarray(camera_pose, dtype=np.float64)
+    heights = transform_points(observation.points, pose)[:, 2] - pose[2, 3]
+    above = float(np.mean(heights > 0)) if len(heights) else 0.0
+    if above > LOOKING_UP:
+        raise CloudRejected(
+            f"{pose_file}: with this camera pose {above:.0%} of {observation.source}'s points lie above the camera, "
+            "which would look up at its scene: is the pose camera to base, in OpenCV's camera axes (x right, y "
+            "down, z forward)? An OpenGL camera's pose (y up, z backward) is turned into it by negating its "
+            "rotation's second and third columns; a base-to-camera pose by inverting it")
 
 
 def depth_observation(path: str | Path, intrinsics: Intrinsics, depth_scale: float | None = None,

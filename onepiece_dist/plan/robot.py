@@ -13,6 +13,7 @@ import numpy as np
 from onepiece_dist.core.frames import invert_poses, transform_points
 from onepiece_dist.errors import CloudRejected
 from onepiece_dist.plan.camera_files import (
+    check_looks_down,
     crop_to_workspace,
     depth_observation,
     in_frame,
@@ -57,6 +58,7 @@ def read_observation(cloud: str | Path, intrinsics: str | None = None, depth_sca
     else:
         observation = read_cloud(cloud, view if view is not None else (np.zeros(3) if pose is not None else None))
     if pose is not None:
+        check_looks_down(observation, pose, camera_pose)
         observation = with_known_up(observation, pose)
     if workspace is not None:
         observation = crop_to_workspace(observation, *read_workspace(workspace), pose)
