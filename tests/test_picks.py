@@ -174,3 +174,21 @@ def test_a_stronger_grip_gets_the_solver_iterations_that_hold_a_light_box(preset
         held[world.physics.solver_iterations] = sum(o.success for o in outcomes)
         world.close()
     assert held[iterations] >= holds and held[SOLVER_ITERATIONS] <= 2, held
+
+
+@pytest.mark.slow
+def test_onepiece_pick_without_a_checkpoint_picks_with_the_shipped_network_and_says_so(tmp_path):
+    from typer.testing import CliRunner
+
+    from onepiece_dist.cli.main import app
+    from onepiece_dist.plan.shipped import shipped_network
+
+    spec = tmp_path / "small.yaml"
+    spec.write_text(json.dumps({**SMALL, "views": 1, "pictures": 0, "methods": ["network", "random"]}))
+    result = CliRunner().invoke(app, ["pick", "--spec", str(spec), "--objects", "primitives[0:1]", "--views", "1",
+                                      "--out", str(tmp_path / "picks"), "--in-process", "--json"])
+    assert result.exit_code == 0, result.output
+    assert "picking with the shipped network pick_view.pt" in result.stderr
+    report = json.loads(result.stdout)
+    assert report["spec"]["checkpoint"] == str(shipped_network())
+    assert {m["method"] for m in report["methods"]} == {"network", "random"}

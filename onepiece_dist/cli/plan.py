@@ -195,7 +195,8 @@ def _print_plan(plan, json_path: Path, png: Path | None) -> None:
 
 
 def pick(
-    checkpoint: Annotated[Path, typer.Argument(help="The network (best.pt of a train stage).")],
+    checkpoint: Annotated[Path | None, typer.Argument(help="The network (best.pt of a train stage); none: the "
+                                                            "network shipped for the gripper.")] = None,
     objects: Annotated[str, typer.Option(help="Held-out objects: built-in set, folder or glob.")] = (
         "pybullet:random_urdfs[500:508]"),
     out: Annotated[Path, typer.Option(help="Folder for picks.json and pictures/.")] = Path("onepiece-picks"),
@@ -216,14 +217,18 @@ def pick(
     """The simulated pick benchmark: objects settled on a table, one depth camera, the planner's best grasp executed
     with the label protocol; first-attempt and within-k pick success beside the baselines and the oracle."""
     from onepiece_dist.api import run_picks
+    from onepiece_dist.plan.shipped import shipped_summary
     from onepiece_dist.specs.plan import parse_pick_spec
 
     given = _spec_mapping(spec_file)
-    given.update({"checkpoint": str(checkpoint), "objects": objects, "output": str(out), "views": views,
+    given.update({**({"checkpoint": str(checkpoint)} if checkpoint is not None else {}), "objects": objects,
+                  "output": str(out), "views": views,
                   "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {}),
                   **({"pile": True} if pile else {})})
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))
+        if spec.checkpoint is None:
+            err(shipped_summary(spec.gripper).replace("planning with", "picking with", 1))
         report = run_picks(spec, address=address, in_process=in_process,
                            progress=lambda o: err(f"{o.name}: {o.status} {o.reason}".rstrip()))
     except (SpecError, SourceError, CloudRejected, CheckpointRejected) as error:

@@ -20,6 +20,7 @@ from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.clutter import groups_of, pick_scene
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan.scorer import GraspScorer
+from onepiece_dist.plan.shipped import shipped_network
 from onepiece_dist.runtime.actors import restartable_actor
 from onepiece_dist.runtime.crashes import CrashLog, crash_folder, running
 from onepiece_dist.runtime.pinned_child import PinnedSimulation
@@ -125,6 +126,7 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
     """Run the benchmark: on an embedded Ray (default), the cluster at ``address``, or in this process; write
     ``picks.json`` into ``spec.output`` and return the report."""
     units = pick_units(spec)  # a bad source is a usage error, found before any Ray starts
+    spec = with_network(spec)
     GraspScorer(spec.checkpoint, spec.gripper, device="cpu")  # a bad checkpoint fails here, not in every worker
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     if in_process:
@@ -134,6 +136,13 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
     report = summarise(spec, results)
     (Path(spec.output) / REPORT_FILE).write_text(json.dumps(report.to_json(), indent=1) + "\n")
     return report
+
+
+def with_network(spec: PickSpec) -> PickSpec:
+    """``spec`` naming its network: the one shipped for its gripper where it names no checkpoint."""
+    if spec.checkpoint is not None:
+        return spec
+    return spec.model_copy(update={"checkpoint": str(shipped_network(spec.gripper))})
 
 
 def pick_units(spec: PickSpec) -> list:

@@ -117,7 +117,8 @@ class PickSpec(Frozen):
     ``views`` seeded poses; the planner's best grasp executed by the label protocol, up to ``attempts`` tries."""
 
     objects: str = Field("pybullet:random_urdfs[500:508]", description="Held-out objects (a source as a job's).")
-    checkpoint: str = Field(..., description="The network's checkpoint (best.pt of a train stage).")
+    checkpoint: str | None = Field(None, description="The network's checkpoint (best.pt of a train stage); none: "
+                                   "the network shipped for the gripper (onepiece_dist/plan/networks/).")
     output: str = Field("onepiece-out/picks", description="Folder for picks.json and the pictures.")
     views: int = Field(3, ge=1, le=64, description="Camera poses per object.")
     first_view: int = Field(0, ge=0, le=4096, description="The first view's index: views first_view to first_view "
@@ -136,7 +137,8 @@ class PickSpec(Frozen):
                                  "(network_full_mesh).")
     pictures: int = Field(4, ge=0, le=64, description="Views drawn as PNG with their planned grasps.")
     workers: int | None = Field(None, ge=1, description="Worker actors on Ray (default: the cluster's CPUs).")
-    gripper: GripperSpec | None = Field(None, description="The gripper; default: the checkpoint's.")
+    gripper: GripperSpec | None = Field(None, description="The gripper; default: the checkpoint's (the default "
+                                        "job's without a checkpoint).")
     plan: PlanSpec = PlanSpec()
     camera: CameraSpec = CameraSpec()
     sim: SimSpec = Field(PICK_SIM, description="The label protocol every pick is executed with (K trials, "
