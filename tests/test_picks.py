@@ -4,6 +4,7 @@ benchmark end to end in process and on the embedded Ray (the local multi-node cl
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -192,3 +193,10 @@ def test_onepiece_pick_without_a_checkpoint_picks_with_the_shipped_network_and_s
     report = json.loads(result.stdout)
     assert report["spec"]["checkpoint"] == str(shipped_network())
     assert {m["method"] for m in report["methods"]} == {"network", "random"}
+    panda = Path(__file__).resolve().parents[1] / "examples" / "grippers" / "panda.yaml"
+    franka = CliRunner().invoke(app, ["pick", "--spec", str(spec), "--objects", "primitives[0:1]", "--views", "1",
+                                      "--gripper", str(panda), "--out", str(tmp_path / "franka"), "--in-process",
+                                      "--json"])
+    assert franka.exit_code == 0, franka.output
+    assert "picking with the shipped network pick_view_panda.pt" in franka.stderr
+    assert json.loads(franka.stdout)["spec"]["gripper"]["name"] == "franka_panda"

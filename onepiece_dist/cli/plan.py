@@ -210,6 +210,11 @@ def pick(
                        ] = 1,
     pile: Annotated[bool, typer.Option("--pile", help="With --clutter N: each next object dropped onto those "
                                                       "there (a pile), not beside them.")] = False,
+    gripper: Annotated[Path | None, typer.Option(help="YAML gripper spec (its fields, or preset: panda | "
+                                                      "robotiq_2f85 | robotiq_2f140) that executes the picks; "
+                                                      "refused unless the checkpoint was trained for it (default: "
+                                                      "the checkpoint's; without one, the network shipped for "
+                                                      "it).")] = None,
     address: Address = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
@@ -224,7 +229,8 @@ def pick(
     given.update({**({"checkpoint": str(checkpoint)} if checkpoint is not None else {}), "objects": objects,
                   "output": str(out), "views": views,
                   "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {}),
-                  **({"pile": True} if pile else {})})
+                  **({"pile": True} if pile else {}),
+                  **({"gripper": _gripper(gripper).model_dump(mode="json")} if gripper is not None else {})})
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))
         if spec.checkpoint is None:
