@@ -156,6 +156,10 @@ def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others
                                        str(tmp_path / "r")])
     assert refused.exit_code != 0 and "no network ships for the gripper 'robotiq_2f_85'" in refused.output
     assert "--checkpoint" in refused.output and not (tmp_path / "r" / "grasps.json").exists()
+    by_name = CliRunner().invoke(app, [*run, "--gripper", "panda", "--check", "0", "--out", str(tmp_path / "n")])
+    assert by_name.exit_code == 0 and "pick_view_panda.pt" in by_name.output  # a preset by its name
+    typo = CliRunner().invoke(app, [*run, "--gripper", "pandas", "--out", str(tmp_path / "t")])
+    assert typo.exit_code == 2 and "pandas: not a gripper spec: no such file, nor a preset (panda," in typo.output
 
 
 def test_intrinsics_made_for_another_image_are_refused_and_a_ros_camera_info_is_read(tmp_path):

@@ -18,7 +18,7 @@ from onepiece_dist.errors import (
     SourceError,
     SpecError,
 )
-from onepiece_dist.gripper.presets import gripper_fields
+from onepiece_dist.gripper.presets import PRESETS, gripper_fields
 
 
 def _floats(text: str | None, count: int, name: str) -> list[float] | None:
@@ -42,6 +42,10 @@ def _gripper(path: Path | None):
     from onepiece_dist.specs.job import GripperSpec
 
     try:
+        if not path.exists() and str(path) in PRESETS:  # a preset's name: --gripper panda
+            return GripperSpec.model_validate(gripper_fields(str(path)))
+        if not path.exists():
+            raise OSError(f"no such file, nor a preset ({', '.join(sorted(PRESETS))})")
         return GripperSpec.model_validate(gripper_fields(yaml.safe_load(path.read_text()) or {}))
     except (OSError, yaml.YAMLError, ValueError) as error:
         err(f"error: {path}: not a gripper spec: {error}")
@@ -106,9 +110,10 @@ def grasp(
     viewpoint: Annotated[str | None, typer.Option(help="x,y,z: the camera's position in the cloud's frame "
                                                        "(normals face it; default: a depth image's camera, "
                                                        "else unknown).")] = None,
-    gripper: Annotated[Path | None, typer.Option(help="YAML gripper spec (its fields, or preset: panda | "
-                                                      "robotiq_2f85 | robotiq_2f140); refused unless the checkpoint "
-                                                      "was trained for it (default: the checkpoint's).")] = None,
+    gripper: Annotated[Path | None, typer.Option(help="A preset's name (panda | robotiq_2f85 | robotiq_2f140) or "
+                                                      "a YAML gripper spec (its fields, or preset: NAME); refused "
+                                                      "unless the checkpoint was trained for it (default: the "
+                                                      "checkpoint's).")] = None,
     no_plane: Annotated[bool, typer.Option("--no-plane", help="The cloud is the object alone: no support "
                                                               "plane.")] = False,
     top_down: Annotated[bool, typer.Option("--top-down/--no-top-down", help="Also propose the three top-down "
@@ -210,8 +215,8 @@ def pick(
                        ] = 1,
     pile: Annotated[bool, typer.Option("--pile", help="With --clutter N: each next object dropped onto those "
                                                       "there (a pile), not beside them.")] = False,
-    gripper: Annotated[Path | None, typer.Option(help="YAML gripper spec (its fields, or preset: panda | "
-                                                      "robotiq_2f85 | robotiq_2f140) that executes the picks; "
+    gripper: Annotated[Path | None, typer.Option(help="A preset's name (panda | robotiq_2f85 | robotiq_2f140) or "
+                                                      "a YAML gripper spec that executes the picks; "
                                                       "refused unless the checkpoint was trained for it (default: "
                                                       "the checkpoint's; without one, the network shipped for "
                                                       "it).")] = None,
