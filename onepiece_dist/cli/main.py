@@ -125,9 +125,20 @@ def _run_and_report(spec, address, job_id, workers, in_process, as_json: bool = 
              f"top-1 success {e.top1:.2f}{_interval(e.top1_interval)} against random choice {e.random_choice:.2f}"
              f"{_interval(e.random_choice_interval)}, AP {e.ap:.2f} against {e.positive_rate:.2f} for random scores")
         _err(f"held-out protocol: {e.protocol}; {e.verdict}")
+    if status.training:
+        _err(_next_step(status.training.checkpoint))
     if final_status:  # what a client reads of a job that ended, without a Ray job of its own (api.Client.status)
         _err(status.log_line())
     typer.echo(status.model_dump_json() if as_json else status.output)
+
+
+def _next_step(checkpoint: str) -> str:
+    """Where a trained network goes next: planning on a camera's view, beside the network that ships for it."""
+    from onepiece_dist.plan.shipped import shipped_summary
+
+    shipped = shipped_summary().removeprefix("planning with ")
+    return (f"grasps on a camera's view with this network: onepiece grasp depth.png --intrinsics k.json "
+            f"--checkpoint {checkpoint}; without --checkpoint, with {shipped}")
 
 
 def _interval(pair: tuple[float, float] | None) -> str:
