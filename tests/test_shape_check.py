@@ -281,7 +281,7 @@ def test_the_check_stops_where_the_first_grasp_held_every_draw_none_after_it_can
 def test_the_last_grasp_checked_stops_drawing_once_its_place_is_settled_and_every_order_stays_the_same():
     import itertools
 
-    from onepiece_dist.picks.shape_check import drawn, reordered_lazily, settled_against, share_of
+    from onepiece_dist.picks.shape_check import drawn, lazy_order, settled_against, share_of
     from onepiece_dist.plan.planner import PlannedGrasp
 
     pose = np.eye(4)
@@ -298,7 +298,8 @@ def test_the_last_grasp_checked_stops_drawing_once_its_place_is_settled_and_ever
             taken.append(len(got))
             return share_of(got, draws)
 
-        lazily = reordered_lazily(ranked, share)
+        order = lazy_order(len(ranked), share)
+        lazily = ranked if order is None else tuple(ranked[i] for i in order)
         expected = ranked if full[0] == 1.0 else tuple(ranked[i] for i in np.argsort(-np.array(full), kind="stable"))
         assert [g.score for g in lazily] == [g.score for g in expected], patterns
         assert taken[:-1] == [draws] * (len(taken) - 1)  # only the last grasp's draws are ever left out

@@ -7,7 +7,7 @@ trial fails cannot pick) and then n perturbed trials, and orders the grasps by h
 ranked-draws views (pick_ranked_draws: the shipped network's first grasps, each executed 8 times on the object
 itself) both checks are run on the same hull, and each is judged by the share of 8 draws of the grasp it puts first,
 paired over objects; the seconds are what each check would execute with the planner's lazy order
-(shape_check.reordered_lazily: it stops where the first held every draw).
+(shape_check.lazy_order: it stops where the first held every draw).
 
     .venv/bin/python -m benchmarks.experiments.pick_check_trials
 
@@ -98,7 +98,7 @@ def trial_shares(row: dict, n: int) -> list[float]:
 
 
 def protocol_seconds(row: dict) -> float:
-    """What the planner's lazy check (shape_check.reordered_lazily) would execute of the protocol draws
+    """What the planner's lazy check (shape_check.lazy_order) would execute of the protocol draws
     (shape_check.protocol_draws: the nominal trial once, each draw's perturbed trials until one fails): stop after
     the first grasp where it held every draw."""
     grasps = row["protocol"]

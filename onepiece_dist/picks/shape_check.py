@@ -124,7 +124,7 @@ def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: Grippe
 def checked(ranked: tuple[PlannedGrasp, ...], shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec,
             draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
     """``ranked`` reordered by how often each held on ``shape`` (the network's order on ties), ranks numbered
-    again; unchanged where there is no shape to check on (lazily: ``reordered_lazily``)."""
+    again; unchanged where there is no shape to check on (lazily: ``lazy_order``)."""
     if len(ranked) < 2:
         return ranked
     held = shape_draws(shape, gripper, sim, draws, rng)
@@ -135,7 +135,7 @@ def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape 
                   sim: SimSpec, draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
     """``ranked`` reordered by how often each held on its own shape (``shapes``, one a grasp: the object it closes
     on), the network's order on ties; unchanged where a grasp has no shape to check on (lazily:
-    ``reordered_lazily``)."""
+    ``lazy_order``)."""
     if len(ranked) < 2 or any(shape is None for shape in shapes):
         return ranked
     return _checked_with(ranked, lambda k: shape_draws(shapes[k], gripper, sim, draws, rng), draws)
@@ -143,7 +143,7 @@ def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape 
 
 def _checked_with(ranked: tuple[PlannedGrasp, ...], held_of: Callable[[int], Callable[..., list[bool]]],
                   draws: int) -> tuple[PlannedGrasp, ...]:
-    """``ranked`` reordered lazily (reordered_lazily) by the draws ``held_of(k)`` executes of each grasp k, each
+    """``ranked`` reordered lazily (lazy_order) by the draws ``held_of(k)`` executes of each grasp k, each
     checked grasp with how many of its draws held (PlannedGrasp.held)."""
     executed: dict[int, list[bool]] = {}
 
@@ -161,14 +161,6 @@ def share_of(outcomes: list[bool], draws: int) -> float:
     """The share of ``draws`` that held, a draw not taken counted as failed (where settled_against stopped, this
     keeps every comparison the draws settled)."""
     return sum(outcomes) / draws
-
-
-def reordered_lazily(ranked: tuple[PlannedGrasp, ...], share: Callable[[int, np.ndarray | None], float]
-                     ) -> tuple[PlannedGrasp, ...]:
-    """``ranked`` reordered by ``share(k, earlier)`` of each, asked in rank order (lazy_order), ranks numbered
-    again; ``ranked`` itself where the first held every draw."""
-    order = lazy_order(len(ranked), share)
-    return ranked if order is None else _in_order(ranked, order)
 
 
 def lazy_order(count: int, share: Callable[[int, np.ndarray | None], float]) -> np.ndarray | None:
