@@ -42,9 +42,9 @@ def _gripper(path: Path | None):
     from onepiece_dist.specs.job import GripperSpec
 
     try:
-        if not path.exists() and str(path) in PRESETS:  # a preset's name: --gripper panda
-            return GripperSpec.model_validate(gripper_fields(str(path)))
         if not path.exists():
+            if str(path) in PRESETS:  # a preset's name: --gripper panda
+                return GripperSpec.model_validate(gripper_fields(str(path)))
             raise OSError(f"no such file, nor a preset ({', '.join(sorted(PRESETS))})")
         return GripperSpec.model_validate(gripper_fields(yaml.safe_load(path.read_text()) or {}))
     except (OSError, yaml.YAMLError, ValueError) as error:

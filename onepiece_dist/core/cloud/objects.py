@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from onepiece_dist.core.frames import gripper_frame_batches
 from onepiece_dist.core.grasp_context import object_centre
 
 GAP = 0.01  # m: about two rays apart at the pick camera's 0.8 m, yet less than a finger's width
@@ -79,43 +80,22 @@ def closed_on_each(objects: list[np.ndarray], poses: np.ndarray, depth: float, w
 
 def _closed_on(objects: list[np.ndarray], poses: np.ndarray, depth: float, width: float, height: float
                ) -> np.ndarray:
-    """closed_on of each of ``poses`` (n, 4, 4): each object's points against a block of poses at once; the
-    nearest point only where no object has one inside."""
-    inside = np.zeros((len(objects), len(poses)), dtype=np.int64)
-    for k, points in enumerate(objects):
-        points = np.asarray(points, dtype=np.float64)
-        step = max(1, BLOCK // max(len(points), 1))
-        for start in range(0, len(poses), step):
-            inside[k, start:start + step] = _in_region(points, poses[start:start + step], depth, width, height)
+    """closed_on of each of ``poses`` (n, 4, 4): each object's points in the gripper frames of a block of poses at
+    once (core.frames.gripper_frame_batches: the same bits on every CPU, as the crops cut them); the nearest point
+    only where no object has one inside."""
+    clouds = [np.asarray(points, dtype=np.float64) for points in objects]
+    inside = np.zeros((len(clouds), len(poses)), dtype=np.int64)
+    for k, points in enumerate(clouds):
+        for start, (u, v, t) in gripper_frame_batches(points, poses, pairs=BLOCK):
+            within = (u >= 0) & (u < depth) & (np.abs(v) < width / 2) & (np.abs(t) < height / 2)
+            inside[k, start:start + len(u)] = np.count_nonzero(within, axis=1)
     chosen = inside.argmax(axis=0)
     empty = np.flatnonzero(inside.max(axis=0) == 0)
     if len(empty):
         centres = poses[empty, :3, 3] + poses[empty, :3, 0] * depth / 2
-        chosen[empty] = np.array([[_nearest(np.asarray(points, dtype=np.float64), centre) for centre in centres]
-                                  for points in objects]).argmin(axis=0)
+        chosen[empty] = np.array([[float(np.min(np.sum((points - centre) ** 2, axis=1))) for centre in centres]
+                                  for points in clouds]).argmin(axis=0)
     return chosen.astype(np.int64)
-
-
-def _in_region(points: np.ndarray, poses: np.ndarray, depth: float, width: float, height: float) -> np.ndarray:
-    """(m,) how many of ``points`` (p, 3) lie in each of ``poses``' (m, 4, 4) closing region. Fixed-order
-    products, not a matrix product: the same counts on every CPU."""
-    rotation, origin = poses[:, :3, :3], poses[:, :3, 3]
-    offsets = [points[None, :, a] - origin[:, a, None] for a in range(3)]  # (m, p) each
-
-    def along(a: int) -> np.ndarray:
-        return (offsets[0] * rotation[:, 0, a, None] + offsets[1] * rotation[:, 1, a, None]) \
-            + offsets[2] * rotation[:, 2, a, None]
-
-    u = along(0)
-    within = (u >= 0) & (u < depth)
-    within &= np.abs(along(1)) < width / 2
-    within &= np.abs(along(2)) < height / 2
-    return np.count_nonzero(within, axis=1)
-
-
-def _nearest(points: np.ndarray, centre: np.ndarray) -> float:
-    """The least squared distance of one of ``points`` (p, 3) to ``centre`` (3,)."""
-    return float(np.min(np.sum((points - centre) ** 2, axis=1)))
 
 
 def grasped_centres(objects: list[np.ndarray], poses: np.ndarray, depth: float, width: float, height: float
