@@ -98,3 +98,20 @@ def cluster_info() -> dict:
     """What a client outside the cluster asks of it (run inside it, by ``onepiece cluster-info``): the package
     version the cluster runs and every job's latest status from the registry."""
     return {"version": package_version(), "jobs": {status["job_id"]: status for status in RegistryClient().jobs()}}
+
+
+RAY_JOB_STATES = {"PENDING": "pending", "RUNNING": "running", "SUCCEEDED": "succeeded", "FAILED": "failed",
+                  "STOPPED": "cancelled"}
+
+
+def jobs_api_state(ray_status) -> str:
+    """A Jobs API status (``JobStatus.RUNNING``...) in our words."""
+    return RAY_JOB_STATES.get(str(ray_status).split(".")[-1], "pending")
+
+
+def job_row(status: dict) -> dict:
+    """One row of `onepiece list`: a job's status (as JSON) in a few fields."""
+    progress = status.get("progress") or {}
+    return {"job_id": status["job_id"], "state": status.get("state", "pending"), "stage": status.get("stage", ""),
+            "objects_done": progress.get("objects_done", 0), "objects_total": progress.get("objects_total", 0),
+            "output": status.get("output", "")}

@@ -49,3 +49,14 @@ def paired_gain(tried: Sequence[Mapping[str, int]], base: Sequence[Mapping[str, 
     low, high = bootstrap_interval(difference, seed, draws, confidence)
     verdict = ("one seed: undecided" if len(tried) < 2 else "kept" if low > 0 else "not kept")
     return PairedGain(round(float(difference.mean()), 4), (round(low, 4), round(high, 4)), len(tried), verdict)
+
+
+def against_a_guess(top: np.ndarray, random: np.ndarray, seed: int = 0) -> tuple[tuple[float, float], str]:
+    """The 95% interval (objects resampled) of top-1 minus a random choice, and what it says: above a guess,
+    below it, or not told apart from it by these objects."""
+    difference = bootstrap_interval(top - random, seed=seed)
+    if difference[0] > 0:
+        return difference, "the network is above a guess"
+    if difference[1] < 0:
+        return difference, "the network is below a guess"
+    return difference, "these held-out objects cannot tell the network from a guess"

@@ -11,7 +11,7 @@ import numpy as np
 
 from onepiece_dist.job.status import EvaluationReport, JobStatus
 from onepiece_dist.specs.job import JobSpec
-from onepiece_dist.stats.intervals import bootstrap_interval
+from onepiece_dist.stats.intervals import against_a_guess, bootstrap_interval
 from onepiece_dist.stats.ranking import SEPARABLE, average_precision, can_separate
 
 
@@ -100,14 +100,3 @@ def per_object_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarra
     top = [labels[groups == g][np.argmax(scores[groups == g])] for g in objects]
     random = [labels[groups == g].mean() for g in objects]
     return np.asarray(top, np.float64), np.asarray(random, np.float64)
-
-
-def against_a_guess(top: np.ndarray, random: np.ndarray, seed: int = 0) -> tuple[tuple[float, float], str]:
-    """The 95% interval (objects resampled) of top-1 minus a random choice, and what it says: above a guess,
-    below it, or not told apart from it by these objects."""
-    difference = bootstrap_interval(top - random, seed=seed)
-    if difference[0] > 0:
-        return difference, "the network is above a guess"
-    if difference[1] < 0:
-        return difference, "the network is below a guess"
-    return difference, "these held-out objects cannot tell the network from a guess"
