@@ -32,24 +32,35 @@ from onepiece_dist.job.relabel import RelabelReport, relabel_report, relabel_spe
 from onepiece_dist.job.stages.evaluate import heldout_sim, objects_scored, protocol_of, score_heldout
 from onepiece_dist.job.status import STATUS_SUFFIX, EvaluationReport, JobStatus, status_path, without_status_lines
 from onepiece_dist.objects import resolve_source
+from onepiece_dist.picks.pick_labels import run_pick_labels
 from onepiece_dist.picks.runner import PickReport, run_picks
 from onepiece_dist.picks.shape_check import plan_checked as plan_grasps
 from onepiece_dist.plan.robot import RobotPlan
 from onepiece_dist.runtime.local import run_local, with_user_decompositions
 from onepiece_dist.runtime.ray_env import connect, loopback_environment
-from onepiece_dist.runtime.registry import CLUSTER_INFO_MARK, RegistryClient
+from onepiece_dist.runtime.registry import CLUSTER_INFO_MARK, RegistryClient, job_row, jobs_api_state
 from onepiece_dist.specs.job import JobSpec, default_job_id
-from onepiece_dist.specs.plan import PickSpec, PlanSpec
+from onepiece_dist.specs.plan import PickLabelSpec, PickSpec, PlanSpec
 from onepiece_dist.store import DatasetReader, open_dataset
 from onepiece_dist.version import package_version
 
-__all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "PickReport",
-           "PickSpec", "PlanSpec", "RelabelReport", "RobotPlan", "evaluate_model", "open_dataset", "plan_grasps",
-           "relabel_report", "relabel_spec", "resolve_source", "run_job", "run_picks"]
+LEARN = ("PickNetwork", "design_options", "train_pick_network")  # onepiece_dist.learn.pick_network's, with torch
+__all__ = ["Client", "ClusterUnreachable", "DatasetReader", "JobHandle", "JobSpec", "JobStatus", "PickLabelSpec",
+           "PickReport", "PickSpec", "PlanSpec", "RelabelReport", "RobotPlan", "evaluate_model", "open_dataset",
+           "plan_grasps", "relabel_report", "relabel_spec", "resolve_source", "run_job", "run_pick_labels",
+           "run_picks", *LEARN]
+
+
+def __getattr__(name: str):
+    """The names of LEARN, imported when first asked for: importing the API loads no torch."""
+    if name not in LEARN:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from onepiece_dist.learn import pick_network
+
+    return getattr(pick_network, name)
+
 
 TERMINAL = ("succeeded", "failed", "cancelled")
-_RAY_JOB_STATES = {"PENDING": "pending", "RUNNING": "running", "SUCCEEDED": "succeeded", "FAILED": "failed",
-                   "STOPPED": "cancelled"}
 
 
 def run_job(spec: JobSpec, address: str | None = None, in_process: bool = False, job_id: str | None = None,
@@ -135,7 +146,7 @@ def _driver_alive(driver: str) -> bool:
 
 def local_jobs(folder: str | Path) -> list[dict]:
     """A row per job status file under ``folder`` (as :meth:`Client.jobs` gives)."""
-    return [_job_row(JobStatus.load(str(path)[: -len(STATUS_SUFFIX)]).model_dump(mode="json"))
+    return [job_row(JobStatus.load(str(path)[: -len(STATUS_SUFFIX)]).model_dump(mode="json"))
             for path in sorted(Path(folder).glob(f"**/*{STATUS_SUFFIX}"))]
 
 
@@ -227,7 +238,7 @@ class Client:
     def _ray_state(self, job_id: str) -> str | None:
         """The Jobs API's state of ``job_id`` in our words, or None when the cluster has no such job."""
         try:
-            return _our_state(self.jobs_api().get_job_status(job_id))
+            return jobs_api_state(self.jobs_api().get_job_status(job_id))
         except RuntimeError as err:
             if "does not exist" in str(err) or "not found" in str(err).lower():
                 return None
@@ -247,7 +258,7 @@ class Client:
         api, reader = self.jobs_api(), f"onepiece-info-{uuid.uuid4().hex[:12]}"
         api.submit_job(entrypoint="python -m onepiece_dist.cli cluster-info --address auto", submission_id=reader)
         deadline = time.monotonic() + timeout
-        while _our_state(api.get_job_status(reader)) not in TERMINAL:
+        while jobs_api_state(api.get_job_status(reader)) not in TERMINAL:
             if time.monotonic() > deadline:
                 raise TimeoutError(f"reading the job registry at {self.address} took over {timeout} s")
             time.sleep(0.2)
@@ -331,16 +342,16 @@ class Client:
         """Every job: id, state, stage, objects done and total, output."""
         if self.address is None:
             registry = _registry()
-            return [_job_row(s) for s in registry.jobs()] if registry else []
+            return [job_row(s) for s in registry.jobs()] if registry else []
         reported = self.cluster_info()["jobs"]
         rows = []
         for job in self.jobs_api().list_jobs():
             if not job.submission_id or job.submission_id.startswith("onepiece-info-"):
                 continue
-            state = _our_state(job.status)
+            state = jobs_api_state(job.status)
             found = reported.get(job.submission_id) or {"job_id": job.submission_id, "state": state,
                                                         "output": (job.metadata or {}).get("output", "")}
-            rows.append(_job_row({**found, "state": state if state in TERMINAL else found["state"]}))
+            rows.append(job_row({**found, "state": state if state in TERMINAL else found["state"]}))
         return rows
 
     def logs(self, job_id: str) -> str:
@@ -362,18 +373,6 @@ class Client:
             while queue:
                 yield without_status_lines(queue.pop(0))
             thread.join(0.2)
-
-
-def _our_state(ray_status) -> str:
-    """A Jobs API status (``JobStatus.RUNNING``...) in our words."""
-    return _RAY_JOB_STATES.get(str(ray_status).split(".")[-1], "pending")
-
-
-def _job_row(status: dict) -> dict:
-    progress = status.get("progress") or {}
-    return {"job_id": status["job_id"], "state": status.get("state", "pending"), "stage": status.get("stage", ""),
-            "objects_done": progress.get("objects_done", 0), "objects_total": progress.get("objects_total", 0),
-            "output": status.get("output", "")}
 
 
 def check_remote_paths(spec: JobSpec) -> None:

@@ -48,7 +48,7 @@ LAYERS: dict[str, tuple[set[str], set[str]]] = {
     # the pick benchmark: one object's views and choosers, a task per object on the runtime's worker pool
     "picks": (BASE | {"core", "stats", "objects", "sim", "store", "plan", "job", "runtime"},
               {"numpy", "ray", "torch", "pydantic"}),
-    "api": (BASE | {"objects", "job", "runtime", "picks", "plan", "store"}, {"ray"}),
+    "api": (BASE | {"objects", "job", "runtime", "picks", "plan", "store", "learn"}, {"ray"}),  # learn: lazily
     # the study wing: arms, held-out evaluation, statistics, decision, pages; nothing below it imports it
     "study": (BASE | {"api", "job", "runtime", "picks", "learn", "store", "core", "stats", "objects", "sim"},
               {"numpy", "pydantic", "yaml", "ray", "torch", "matplotlib"}),

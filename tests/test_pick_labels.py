@@ -287,13 +287,13 @@ def test_the_listwise_term_is_small_only_where_each_views_successes_score_above_
 
 
 def test_listwise_batches_hold_each_views_rows_together_in_a_seeded_order(pick_labels):
-    from onepiece_dist.learn.pick_train import _view_keys, _view_order
+    from onepiece_dist.learn.pick_train import _view_order, view_keys
 
     _, labels = pick_labels
     rows = np.arange(len(labels))
     order = _view_order(labels, rows, np.random.default_rng(3))
     assert sorted(order) == list(rows)
-    keys = _view_keys(labels, order)
+    keys = view_keys(labels, order)
     runs = np.flatnonzero(np.diff(keys)) + 1
     assert len(runs) + 1 == len(np.unique(keys))  # each view's rows in one run
     assert np.array_equal(order, _view_order(labels, rows, np.random.default_rng(3)))

@@ -32,6 +32,7 @@ from onepiece_dist.cli.common import (
 )
 from onepiece_dist.cli.jobs import register as register_job_commands
 from onepiece_dist.cli.label import register as register_label_commands
+from onepiece_dist.cli.pick_network import register as register_pick_network_commands
 from onepiece_dist.cli.plan import register as register_plan_commands
 from onepiece_dist.cli.study import study_app
 from onepiece_dist.errors import JobError, JobNotFound, MeshRejected, SourceError, SpecError, StoreError
@@ -42,6 +43,7 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, help="ONE PIECE gr
                   epilog=EXIT_TABLE)
 register_job_commands(app)
 register_plan_commands(app)
+register_pick_network_commands(app)
 register_label_commands(app)
 app.add_typer(study_app, name="study")
 _err = err

@@ -8,7 +8,7 @@ from pathlib import Path
 from onepiece_dist.job.status import JobStatus
 from onepiece_dist.objects.supplement import SupplementReport, SupplementSpec
 from onepiece_dist.specs.job import JobSpec
-from onepiece_dist.specs.plan import PickSpec, PlanSpec
+from onepiece_dist.specs.plan import PickLabelSpec, PickSpec, PlanSpec
 from onepiece_dist.store.layout import ARRAYS, DatasetAttributes
 from onepiece_dist.study.pick_study.result import PickStudyResult
 from onepiece_dist.study.result import StudyResult
@@ -17,7 +17,7 @@ from onepiece_dist.study.spec import StudySpec
 MODELS = {"job_spec": JobSpec, "job_status": JobStatus, "dataset_layout": DatasetAttributes,
           "supplement_spec": SupplementSpec, "supplement_report": SupplementReport, "study_spec": StudySpec,
           "study_result": StudyResult, "plan_spec": PlanSpec, "pick_spec": PickSpec,
-          "pick_study_result": PickStudyResult}
+          "pick_label_spec": PickLabelSpec, "pick_study_result": PickStudyResult}
 
 
 def render_schemas() -> dict[str, str]:

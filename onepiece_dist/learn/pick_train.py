@@ -124,7 +124,7 @@ def score_rows(model: torch.nn.Module, labels: PickLabels, rows: np.ndarray, poi
 
 def view_top1(labels: PickLabels, rows: np.ndarray, scores: np.ndarray) -> float:
     """Share of the views (object, view) among ``rows`` whose best-scored row picked."""
-    keys = _view_keys(labels, rows)
+    keys = view_keys(labels, rows)
     hits = []
     for key in np.unique(keys):
         mine = np.flatnonzero(keys == key)
@@ -148,7 +148,7 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
     train, val = split_by_object(labels, options.validation, options.seed)
     model = MODELS[options.model]()
     if options.start_from is not None:
-        model.load_state_dict(_weights_of(options.start_from, options.model))
+        model.load_state_dict(weights_of(options.start_from, options.model))
     optimiser = torch.optim.Adam(model.parameters(), lr=options.learning_rate)
     trials = int(labels.attrs["spec"]["sim"]["label_trials"])
     rng = np.random.default_rng([options.seed, 56])
@@ -174,7 +174,7 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
                            time.perf_counter() - start)
 
 
-def _weights_of(checkpoint: str, model: str) -> dict:
+def weights_of(checkpoint: str, model: str) -> dict:
     """The state dict of ``checkpoint`` (loaded weights-only), which must hold a ``model`` network."""
     saved = torch.load(checkpoint, map_location="cpu", weights_only=True)
     if saved.get("model") != model:
@@ -214,7 +214,7 @@ def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: Pick
         logits = model(batch)
         loss = torch.nn.functional.binary_cross_entropy_with_logits(logits, target)
         if options.ranking:
-            loss = loss + options.ranking * listwise_loss(logits, target, _view_keys(labels, chunk))
+            loss = loss + options.ranking * listwise_loss(logits, target, view_keys(labels, chunk))
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()
@@ -222,13 +222,13 @@ def _epoch(model, optimiser, labels: PickLabels, rows: np.ndarray, options: Pick
     return float(np.mean(losses)) if losses else 0.0
 
 
-def _view_keys(labels: PickLabels, rows: np.ndarray) -> np.ndarray:
+def view_keys(labels: PickLabels, rows: np.ndarray) -> np.ndarray:
     return labels.object[rows].astype(np.int64) * 100_000 + labels.view[rows]
 
 
 def _view_order(labels: PickLabels, rows: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """``rows`` with each view's rows together (in a seeded order) and the views in a seeded order."""
-    keys = _view_keys(labels, rows)
+    keys = view_keys(labels, rows)
     views, group = np.unique(keys, return_inverse=True)
     rank = rng.permutation(len(views))[group]
     return rows[np.lexsort((rng.random(len(rows)), rank))]

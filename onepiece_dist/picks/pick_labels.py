@@ -13,12 +13,13 @@ import dataclasses
 import functools
 import hashlib
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from onepiece_dist.core.cloud.outline import OUTLINE_POINTS, outline
-from onepiece_dist.errors import MeshRejected
+from onepiece_dist.errors import MeshRejected, SpecError, StoreError
 from onepiece_dist.objects import ObjectRef, load_object, resolve_source
 from onepiece_dist.picks.runner import PoolStatus, run_each_in_process
 from onepiece_dist.picks.views import Executions, index_of, observe_view
@@ -28,7 +29,7 @@ from onepiece_dist.runtime.ray_env import connect
 from onepiece_dist.runtime.registry import RegistryClient
 from onepiece_dist.sim.collision import load_simulated
 from onepiece_dist.specs.plan import PickLabelSpec
-from onepiece_dist.store.pick_labels import FAILURE_CODES, LabelledObject, write_pick_labels
+from onepiece_dist.store.pick_labels import FAILURE_CODES, LabelledObject, read_pick_labels, write_pick_labels
 
 SAME_POSE, SAME_CONTEXT = 1e-9, 1e-6  # m (and unit vectors): a view seen again is the labelled one within these
 
@@ -150,19 +151,41 @@ class PickLabelWorker:
         return label_object(self.spec, ref, index)
 
 
-def run_pick_labels(spec: PickLabelSpec, address: str | None = None, in_process: bool = False) -> Path:
-    """Label every object of ``spec.objects``; write ``pick_labels.zarr`` into ``spec.output``; return its path."""
+def run_pick_labels(spec: PickLabelSpec, address: str | None = None, in_process: bool = False,
+                    progress: Callable[[LabelledObject], None] | None = None) -> Path:
+    """Label every object of ``spec.objects``; write ``pick_labels.zarr`` into ``spec.output``; return its path.
+    ``progress`` sees each object's labels as they land (in the order they finish)."""
     refs = resolve_source(spec.objects)
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    results = run_each_in_process(label_object, spec, refs) if in_process else _run_on_ray(spec, refs, address)
+    results = (run_each_in_process(label_object, spec, refs, progress) if in_process
+               else _run_on_ray(spec, refs, address, progress))
     path = Path(spec.output) / "pick_labels.zarr"
     core_seconds = sum(r.seconds for r in results)
     write_pick_labels(path, results, spec.model_dump(mode="json"), core_seconds, time.perf_counter() - start)
     return path
 
 
-def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None) -> list[LabelledObject]:
+def labels_made(spec: PickLabelSpec) -> Path | None:
+    """The pick labels ``spec.output`` holds for ``spec`` itself (None where it holds none); :class:`SpecError`
+    where it holds labels of another spec: they are never replaced by others (give another output)."""
+    path = Path(spec.output) / "pick_labels.zarr"
+    if not path.exists():
+        return None
+    try:
+        stored = PickLabelSpec.stored(read_pick_labels(path).attrs["spec"])
+    except (StoreError, KeyError, ValueError) as err:
+        raise SpecError(f"{path}: exists and is not a pick-labels store of ours ({err}): give another output "
+                        "folder") from None
+    if stored.model_copy(update={"workers": spec.workers, "output": spec.output}) != spec:  # neither moves a label
+        changed = sorted(k for k, v in spec.model_dump().items() if stored.model_dump().get(k) != v)
+        raise SpecError(f"{path}: holds pick labels of another spec (they differ in {', '.join(changed)}): "
+                        "they are kept; give another output folder for these")
+    return path
+
+
+def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None,
+                progress: Callable[[LabelledObject], None] | None = None) -> list[LabelledObject]:
     import ray
 
     from onepiece_dist.runtime.ray_runner import WorkerPool, worker_count
@@ -173,7 +196,7 @@ def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None)
     actors = [restartable_actor(PickLabelWorker, f"{job_id}-{k}", num_cpus=1, scheduling_strategy="SPREAD")
               .remote(spec) for k in range(worker_count(spec.workers, len(refs)))]
     try:
-        pool = WorkerPool(actors, RegistryClient(), PoolStatus(job_id), lambda result: None, "label",
+        pool = WorkerPool(actors, RegistryClient(), PoolStatus(job_id), progress or (lambda result: None), "label",
                           lambda i, ref, reason: LabelledObject.rejected(i, ref.name, reason))
         return pool.run(refs)
     finally:
@@ -184,4 +207,4 @@ def _run_on_ray(spec: PickLabelSpec, refs: list[ObjectRef], address: str | None)
 
 
 __all__ = ["PickLabelWorker", "cached_scorer", "crop_record", "label_object", "label_rows", "labelled_object",
-           "labelling_world", "outlines_again", "run_pick_labels"]
+           "labelling_world", "labels_made", "outlines_again", "run_pick_labels"]

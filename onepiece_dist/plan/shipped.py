@@ -24,8 +24,9 @@ def network_path(gripper: GripperSpec | None = None) -> Path:
     name = (gripper or GripperSpec()).name
     if name not in SHIPPED:
         raise CheckpointRejected(f"no network ships for the gripper {name!r}: networks ship for "
-                                 f"{', '.join(SHIPPED)} (gripper preset panda); train one for this gripper "
-                                 "(python -m benchmarks.experiments.pick_panda shows how) and give --checkpoint")
+                                 f"{', '.join(SHIPPED)} (gripper preset panda); make one for this gripper "
+                                 "(onepiece pick-labels --gripper ... --out labels/, then onepiece pick-train "
+                                 "labels/pick_labels.zarr) and give --checkpoint")
     return FOLDER / f"{SHIPPED[name]}.pt"
 
 

@@ -196,6 +196,14 @@ def parse_pick_spec(data: dict[str, Any], source: str = "<pick spec>") -> PickSp
             from None
 
 
+def parse_pick_label_spec(data: dict[str, Any], source: str = "<pick label spec>") -> PickLabelSpec:
+    """Validate a mapping into a :class:`PickLabelSpec`; errors name the field, the value and the rule."""
+    try:
+        return PickLabelSpec.model_validate(data)
+    except ValidationError as err:
+        raise SpecError(describe_validation_error(err, source, "pick label spec")) from None
+
+
 class PickLabelSpec(Frozen):
     """Labels made where the network is used (issue 55): each training object settled on the table and seen from
     ``views`` seeded cameras exactly as the pick benchmark sees it, the planner's candidates proposed on the view
@@ -205,7 +213,8 @@ class PickLabelSpec(Frozen):
     objects: str = Field("pybullet:random_urdfs[0:64]", description="Training objects (a source as a job's).")
     output: str = Field("onepiece-out/pick_labels", description="Folder of the labels (pick_labels.zarr).")
     views: int = Field(8, ge=1, le=256, description="Camera poses per object.")
-    per_view: int = Field(64, ge=1, le=10_000, description="Candidates executed per view (a seeded subset).")
+    per_view: int = Field(16, ge=1, le=10_000, description="Candidates executed per view (a seeded subset; 16 "
+                          "made the shipped networks' labels).")
     checkpoint: str | None = Field(None, description="A network whose best-scored candidates of each view are "
                                    "executed first (its own first choices, right or wrong: on-policy labels); the "
                                    "rest of per_view at random. None: all at random.")
