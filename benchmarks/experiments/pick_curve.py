@@ -27,19 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.learn.pick_network import DESIGNS, pick_crop
+
 HERE = Path(__file__).resolve().parents[1]
 ROOT = HERE.parent
 OUT = ROOT / "data" / "pick_curve"
 TRAIN_OBJECTS = "pybullet:random_urdfs[0:160]+data/shapes"
-DESIGNS = {  # name -> PickTrainOptions fields
-    "context": {"model": "pointnet_context"},
-    "crop_only": {"model": "pointnet_small"},
-    "context_balanced": {"model": "pointnet_context", "balanced": True},
-    "context_share": {"model": "pointnet_context", "target": "share"},
-    "context_wide": {"model": "pointnet_context_wide"},
-    "context_listwise": {"model": "pointnet_context", "ranking": 1.0},
-    "context_space": {"model": "pointnet_context_space", "balanced": True},
-}
 TRIAL_DESIGNS = {  # designs tried beside the curve, never on it: name -> PickTrainOptions fields
     "context_balanced_256": {"model": "pointnet_context", "balanced": True, "points": 256},
     "context_balanced_cosine": {"model": "pointnet_context", "balanced": True, "schedule": "cosine"},
@@ -96,11 +89,8 @@ def fit_rows(all_labels, rows: np.ndarray, design: str, seed: int, folder: Path)
     from onepiece_dist.learn.pick_train import PickTrainOptions, train_on_pick_labels
 
     subset = all_labels.subset(rows)
-    spec = all_labels.attrs["spec"]
-    crop = {"gripper": spec["gripper"], "voxel": spec["voxel"], "points_per_grasp": spec["points_per_grasp"],
-            "source": "pick_labels"}
     options = replace(PickTrainOptions(seed=seed), **{**DESIGNS, **TRIAL_DESIGNS}[design])
-    result = train_on_pick_labels(subset, folder, crop, options)
+    result = train_on_pick_labels(subset, folder, pick_crop(all_labels), options)
     label_seconds = all_labels.attrs["core_seconds"] * len(rows) / len(all_labels)
     return {"design": design, "labels": len(rows), "options": asdict(options),
             "checkpoint": str(result.checkpoint.relative_to(ROOT)), "fit_seconds": round(result.seconds, 1),

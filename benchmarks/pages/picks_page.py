@@ -15,6 +15,7 @@ from benchmarks.pages.pick_curve_section import curve_section, pool_size_lines, 
 from benchmarks.pages.pick_flying_section import drop_section, flying_section, veils_section
 from benchmarks.pages.pick_noise_section import noise_section, noise_views_section
 from benchmarks.pages.pick_noisy_labels_section import noisy_labels_section
+from benchmarks.pages.pick_own_section import own_network_section
 from benchmarks.pages.pick_panda_section import panda_section
 from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
 from benchmarks.pages.pick_sets import (
@@ -181,7 +182,8 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_panda", "pick_panda_check", "pick_clutter_panda", "pick_clutter_panda_pile", "pick_clearance_panda",
+SECTIONS = ("pick_own_network", "pick_panda", "pick_panda_check", "pick_clutter_panda", "pick_clutter_panda_pile",
+            "pick_clearance_panda",
             "pick_clearance_panda_pile", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
             "pick_clearance_pile", "pick_depth_noise", "pick_depth_noise_panda", "pick_noise_views",
             "pick_flying_pixels", "pick_veils", "pick_flying_drop", "pick_noisy_labels", "pick_ceiling",
@@ -211,7 +213,9 @@ def render_picks_page() -> str:
         lines += ["## Planned grasps", "", "The network's ranked grasps on the view's cloud (the best in green); "
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
-    render = {"pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
+    render = {"pick_own_network": lambda r: own_network_section(r, (picks or {}).get("targets", {}).get(
+                  "first_attempt", 0.85)),
+              "pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
                                                     load("pick_panda_then")),
               "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda")),
               "pick_clutter_panda": clutter_section, "pick_clutter_panda_pile": clutter_section,

@@ -1,0 +1,121 @@
+"""A network made by the two commands a user runs (issue 55): `onepiece pick-labels` with its defaults (64 of
+pybullet_data's random objects, 8 views each, 16 candidates executed a view, the default job's box gripper) and
+`onepiece pick-train` with its defaults (the shipped design), at several label seeds and fit seeds; each network
+judged by `onepiece pick` on the household and unseen sets (8 views an object, the planner's defaults: its first 3
+grasps checked), the network chooser alone, beside the shipped network on the same views.
+
+    .venv/bin/python -m benchmarks.experiments.pick_own_network [--label-seeds 0,1] [--fit-seeds 0,1]
+        [--gripper panda]
+
+With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it. Labels:
+data/own_network[_panda]/labels_s<L>/ (kept where they hold labels of the same spec); networks:
+data/own_network[_panda]/net_l<L>_f<F>/best.pt; results: benchmarks/results/pick_own_network[_panda].json (written
+as each network lands; a run again judges only what is not in it), rendered on docs/picks.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+from datetime import date
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parents[1]
+ROOT = HERE.parent
+VIEWS = 8
+SETS = ("household", "unseen")
+
+
+def named(gripper: str | None) -> str:
+    return "own_network" + ("" if gripper is None else f"_{gripper}")
+
+
+def labels(seed: int, gripper: str | None) -> tuple[Path, dict]:
+    """The default pick labels at ``seed`` with ``gripper`` (a preset; None: the default job's), made unless kept,
+    and what making them cost."""
+    from onepiece_dist.picks.pick_labels import labels_made, run_pick_labels
+    from onepiece_dist.specs.plan import PickLabelSpec
+    from onepiece_dist.store.pick_labels import read_pick_labels
+
+    spec = PickLabelSpec(output=str(ROOT / "data" / named(gripper) / f"labels_s{seed}"), seed=seed,
+                         **({"gripper": gripper} if gripper else {}))
+    path = labels_made(spec) or run_pick_labels(spec)
+    made = read_pick_labels(path)
+    return path, {"seed": seed, "objects": spec.objects, "views": spec.views, "per_view": spec.per_view,
+                  "gripper": spec.gripper.name, "labels": len(made),
+                  "success_rate": round(float(made.success.mean()), 4),
+                  "core_seconds": made.attrs["core_seconds"], "wall_seconds": made.attrs["wall_seconds"]}
+
+
+def network(path: Path, label_seed: int, fit_seed: int) -> dict:
+    from onepiece_dist.learn.pick_network import SHIPPED_DESIGN, design_options, train_pick_network
+
+    network = train_pick_network(path, path.parent.parent / f"net_l{label_seed}_f{fit_seed}",
+                                 design_options(SHIPPED_DESIGN, fit_seed))
+    return {**network.to_json(), "checkpoint": str(network.result.checkpoint.relative_to(ROOT)),
+            "labels": str(path.relative_to(ROOT)), "fit_seconds": round(network.result.seconds, 1)}
+
+
+def judged(checkpoint: Path | None, name: str, gripper: str | None) -> dict:
+    """``checkpoint`` (None: the network shipped for ``gripper``) on each of SETS, executed by ``gripper``, as
+    `onepiece pick` judges it."""
+    from benchmarks.experiments.picks import sets
+    from onepiece_dist.gripper.presets import gripper_fields
+    from onepiece_dist.picks.runner import run_picks
+    from onepiece_dist.specs.job import GripperSpec
+    from onepiece_dist.specs.plan import PickSpec
+
+    hand = GripperSpec.model_validate(gripper_fields(gripper)) if gripper else GripperSpec()
+
+    out = {}
+    for set_name in SETS:
+        spec = PickSpec(objects=sets()[set_name][0](), checkpoint=None if checkpoint is None else str(checkpoint),
+                        output=str(ROOT / "data" / named(gripper) / "picks" / name / set_name), views=VIEWS,
+                        methods=("network",), pictures=0, gripper=hand)
+        start = time.perf_counter()
+        report = run_picks(spec)
+        method = report.methods[0]
+        out[set_name] = {"first_attempt": method.first_attempt, "interval": list(method.first_attempt_interval),
+                         "views": method.views, "per_object": report.first_picks("network"),
+                         "seconds": round(time.perf_counter() - start, 1)}
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--label-seeds", default="0,1")
+    parser.add_argument("--fit-seeds", default="0,1")
+    parser.add_argument("--gripper", default=None, help="a gripper preset (panda); default: the default job's")
+    args = parser.parse_args()
+    path = HERE / "results" / f"pick_{named(args.gripper)}.json"
+    result = json.loads(path.read_text()) if path.is_file() else {"networks": [], "shipped": None}
+    result.update({"command": ".venv/bin/python -m benchmarks.experiments.pick_own_network"
+                              + (f" --gripper {args.gripper}" if args.gripper else ""),
+                   "date": date.today().isoformat(), "views": VIEWS,
+                   "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}"})
+
+    def write() -> None:
+        path.write_text(json.dumps(result, indent=1) + "\n")
+
+    if result["shipped"] is None:
+        result["shipped"] = judged(None, "shipped", args.gripper)
+        write()
+    done = {(n["label_seed"], n["fit_seed"]) for n in result["networks"]}
+    for label_seed in (int(s) for s in args.label_seeds.split(",")):
+        labelled, made = labels(label_seed, args.gripper)
+        for fit_seed in (int(s) for s in args.fit_seeds.split(",")):
+            if (label_seed, fit_seed) in done:
+                continue
+            fitted = network(labelled, label_seed, fit_seed)
+            entry = {"label_seed": label_seed, "fit_seed": fit_seed, "made": made, "network": fitted,
+                     "picks": judged(ROOT / fitted["checkpoint"], f"l{label_seed}_f{fit_seed}", args.gripper)}
+            result["networks"] = sorted([*result["networks"], entry], key=lambda n: (n["label_seed"], n["fit_seed"]))
+            write()
+            print(label_seed, fit_seed, {k: v["first_attempt"] for k, v in entry["picks"].items()}, flush=True)
+    print(path)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,71 @@
+"""What a user's own network picks (results/pick_own_network.json, benchmarks/experiments/pick_own_network.py):
+networks made by `onepiece pick-labels` and `onepiece pick-train` with their defaults, at several label and fit
+seeds, judged beside the shipped network on the same views of the household and unseen sets."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from benchmarks.pages.pick_trials_section import VIEWS, gain_words
+from onepiece_dist.stats.intervals import bootstrap_interval, paired_gain
+
+SETS = ("household", "unseen")
+
+
+def _both(picks: dict) -> dict[str, int]:
+    """Object name -> views picked at the first attempt, over both sets."""
+    return {name: n for set_name in SETS for name, n in picks[set_name]["per_object"].items()}
+
+
+def _pooled(picks: dict) -> tuple[float, tuple[float, float]]:
+    rates = np.array([n / VIEWS for n in _both(picks).values()])
+    return float(rates.mean()), bootstrap_interval(rates)
+
+
+def _cell(figure: dict) -> str:
+    low, high = figure["interval"]
+    return f"{100 * figure['first_attempt']:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
+
+
+def _pooled_cell(picks: dict) -> str:
+    rate, (low, high) = _pooled(picks)
+    return f"{100 * rate:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
+
+
+def _row(n: dict) -> str:
+    made, fitted, val = n["made"], n["network"], n["network"]["validation"]
+    return (f"| {n['label_seed']} | {n['fit_seed']} | {made['labels']} | {made['core_seconds']:.0f} | "
+            f"{fitted['fit_seconds']:.0f} | {100 * val['top1']:.0f}% against {100 * val['guess']:.0f}% | "
+            f"{_cell(n['picks']['household'])} | {_cell(n['picks']['unseen'])} | {_pooled_cell(n['picks'])} |")
+
+
+def own_network_section(result: dict, target: float) -> list[str]:
+    networks, shipped = result["networks"], result["shipped"]
+    if not networks:
+        return []
+    made = networks[0]["made"]
+    gain = paired_gain([_both(n["picks"]) for n in networks], [_both(shipped)] * len(networks), VIEWS)
+    household = paired_gain([n["picks"]["household"]["per_object"] for n in networks],
+                            [shipped["household"]["per_object"]] * len(networks), VIEWS)
+    pooled = [_pooled(n["picks"])[0] for n in networks]
+    met = sum(rate >= target for rate in pooled)
+    return [f"## A network made by the two commands: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
+            f"({made['objects']}, {made['views']} views an object, {made['per_view']} candidates executed a view, "
+            "the default job's box gripper; docs/planning.md) and `onepiece pick-train` with its defaults (the "
+            "shipped design), at each label seed and fit seed; each network judged as `onepiece pick` judges it "
+            f"({result['views']} views an object, its first 3 grasps checked), the network chooser alone, on the "
+            "views that judge the shipped network above (shipped: the same run's figures). Nothing here was chosen "
+            "on either set.", "",
+            "| label seed | fit seed | labels | labelling core-seconds | fit seconds | validation views' top-1 | "
+            "household first attempt | unseen first attempt | both sets (28 objects) |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+            *(_row(n) for n in networks),
+            f"| shipped | | 81152 | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} | "
+            f"{_pooled_cell(shipped)} |", "",
+            f"Against the shipped network on the same views, over both sets: {gain_words(gain)}; on the household "
+            f"set alone: {gain_words(household)} (a network made so replaces the shipped one where the household "
+            f"interval lies above zero: {'it does' if household.verdict == 'kept' else 'the shipped one stays'}). "
+            f"The first-attempt target over both sets (>= {100 * target:.0f}%): "
+            f"{'**met**' if met == len(pooled) else '**not met**'} by {met} of the {len(pooled)} networks (mean "
+            f"{100 * float(np.mean(pooled)):.1f}%)."]
