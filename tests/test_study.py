@@ -264,6 +264,7 @@ def test_a_job_that_trains_also_evaluates_on_unseen_objects_and_says_so(tmp_path
     scores, protocol, next_step = run.stderr.strip().splitlines()[-3:]
     assert next_step.startswith("grasps on a camera's view with this network: onepiece grasp depth.png")
     assert f"--checkpoint {tmp_path / 'd.zarr.train' / 'best.pt'};" in next_step and "pick_view.pt" in next_step
+    assert "onepiece pick-labels --objects" in next_step and "onepiece pick-train" in next_step
     assert scores.startswith("held-out: 2 unseen objects") and "top-1 success" in scores and "random choice" in scores
     assert protocol.startswith("held-out protocol: 4 label trials per candidate, every one must hold; ")
     evaluation = open_dataset(tmp_path / "d.zarr").attrs["evaluation"]
