@@ -10,6 +10,7 @@ from benchmarks.pages.pick_trials_section import VIEWS, gain_words
 from onepiece_dist.stats.intervals import bootstrap_interval, paired_gain
 
 SETS = ("household", "unseen")
+SHIPPED_LABELS = 81152  # both shipped networks': plan/networks/*.json
 
 
 def _both(picks: dict) -> dict[str, int]:
@@ -39,6 +40,15 @@ def _row(n: dict) -> str:
             f"{_cell(n['picks']['household'])} | {_cell(n['picks']['unseen'])} | {_pooled_cell(n['picks'])} |")
 
 
+def _hand(made: dict) -> str:
+    gripper = made.get("gripper", "onepiece_box")
+    return "the default job's box gripper" if gripper == "onepiece_box" else f"the `{gripper}` hand (`--gripper`)"
+
+
+def _title(made: dict) -> str:
+    return "" if made.get("gripper", "onepiece_box") == "onepiece_box" else ", the Franka hand"
+
+
 def own_network_section(result: dict, target: float) -> list[str]:
     networks, shipped = result["networks"], result["shipped"]
     if not networks:
@@ -49,19 +59,19 @@ def own_network_section(result: dict, target: float) -> list[str]:
                             [shipped["household"]["per_object"]] * len(networks), VIEWS)
     pooled = [_pooled(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
-    return [f"## A network made by the two commands: `{result['command']}`", "",
+    return [f"## A network made by the two commands{_title(made)}: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
             f"({made['objects']}, {made['views']} views an object, {made['per_view']} candidates executed a view, "
-            "the default job's box gripper; docs/planning.md) and `onepiece pick-train` with its defaults (the "
+            f"{_hand(made)}; docs/planning.md) and `onepiece pick-train` with its defaults (the "
             "shipped design), at each label seed and fit seed; each network judged as `onepiece pick` judges it "
             f"({result['views']} views an object, its first 3 grasps checked), the network chooser alone, on the "
-            "views that judge the shipped network above (shipped: the same run's figures). Nothing here was chosen "
-            "on either set.", "",
+            "views that judge the shipped network above, executed by the same hand (shipped: the network shipped "
+            "for it, the same run's figures). Nothing here was chosen on either set.", "",
             "| label seed | fit seed | labels | labelling core-seconds | fit seconds | validation views' top-1 | "
             "household first attempt | unseen first attempt | both sets (28 objects) |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
             *(_row(n) for n in networks),
-            f"| shipped | | 81152 | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} | "
+            f"| shipped | | {SHIPPED_LABELS} | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} | "
             f"{_pooled_cell(shipped)} |", "",
             f"Against the shipped network on the same views, over both sets: {gain_words(gain)}; on the household "
             f"set alone: {gain_words(household)} (a network made so replaces the shipped one where the household "
