@@ -5,9 +5,10 @@ judged by `onepiece pick` on the household and unseen sets (8 views an object, t
 grasps checked), the network chooser alone, beside the shipped network on the same views.
 
     .venv/bin/python -m benchmarks.experiments.pick_own_network [--label-seeds 0,1] [--fit-seeds 0,1]
-        [--gripper panda]
+        [--gripper panda] [--objects SOURCE]
 
-With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it. Labels:
+With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it; ``--objects`` labels
+other objects than pick-labels' default (more of them: more labels). Labels:
 data/own_network[_panda]/labels_s<L>/ (kept where they hold labels of the same spec); networks:
 data/own_network[_panda]/net_l<L>_f<F>/best.pt; results: benchmarks/results/pick_own_network[_panda].json (written
 as each network lands; a run again judges only what is not in it), rendered on docs/picks.md.
@@ -32,15 +33,20 @@ def named(gripper: str | None) -> str:
     return "own_network" + ("" if gripper is None else f"_{gripper}")
 
 
-def labels(seed: int, gripper: str | None) -> tuple[Path, dict]:
-    """The default pick labels at ``seed`` with ``gripper`` (a preset; None: the default job's), made unless kept,
-    and what making them cost."""
+def tag(objects: str | None) -> str:
+    """The folders' prefix for labels of ``objects`` (none for the default's)."""
+    return "" if objects is None else "".join(c if c.isalnum() else "_" for c in objects).strip("_") + "_"
+
+
+def labels(seed: int, gripper: str | None, objects: str | None = None) -> tuple[Path, dict]:
+    """The default pick labels at ``seed`` with ``gripper`` (a preset; None: the default job's) of ``objects``
+    (None: the default's), made unless kept, and what making them cost."""
     from onepiece_dist.picks.pick_labels import labels_made, run_pick_labels
     from onepiece_dist.specs.plan import PickLabelSpec
     from onepiece_dist.store.pick_labels import read_pick_labels
 
-    spec = PickLabelSpec(output=str(ROOT / "data" / named(gripper) / f"labels_s{seed}"), seed=seed,
-                         **({"gripper": gripper} if gripper else {}))
+    spec = PickLabelSpec(output=str(ROOT / "data" / named(gripper) / f"labels_{tag(objects)}s{seed}"), seed=seed,
+                         **({"gripper": gripper} if gripper else {}), **({"objects": objects} if objects else {}))
     path = labels_made(spec) or run_pick_labels(spec)
     made = read_pick_labels(path)
     return path, {"seed": seed, "objects": spec.objects, "views": spec.views, "per_view": spec.per_view,
@@ -49,10 +55,10 @@ def labels(seed: int, gripper: str | None) -> tuple[Path, dict]:
                   "core_seconds": made.attrs["core_seconds"], "wall_seconds": made.attrs["wall_seconds"]}
 
 
-def network(path: Path, label_seed: int, fit_seed: int) -> dict:
+def network(path: Path, label_seed: int, fit_seed: int, prefix: str = "") -> dict:
     from onepiece_dist.learn.pick_network import SHIPPED_DESIGN, design_options, train_pick_network
 
-    network = train_pick_network(path, path.parent.parent / f"net_l{label_seed}_f{fit_seed}",
+    network = train_pick_network(path, path.parent.parent / f"net_{prefix}l{label_seed}_f{fit_seed}",
                                  design_options(SHIPPED_DESIGN, fit_seed))
     return {**network.to_json(), "checkpoint": str(network.result.checkpoint.relative_to(ROOT)),
             "labels": str(path.relative_to(ROOT)), "fit_seconds": round(network.result.seconds, 1)}
@@ -88,6 +94,7 @@ def main() -> None:
     parser.add_argument("--label-seeds", default="0,1")
     parser.add_argument("--fit-seeds", default="0,1")
     parser.add_argument("--gripper", default=None, help="a gripper preset (panda); default: the default job's")
+    parser.add_argument("--objects", default=None, help="pick-labels --objects (default: its default)")
     args = parser.parse_args()
     path = HERE / "results" / f"pick_{named(args.gripper)}.json"
     result = json.loads(path.read_text()) if path.is_file() else {"networks": [], "shipped": None}
@@ -102,16 +109,18 @@ def main() -> None:
     if result["shipped"] is None:
         result["shipped"] = judged(None, "shipped", args.gripper)
         write()
-    done = {(n["label_seed"], n["fit_seed"]) for n in result["networks"]}
+    done = {(n["made"]["objects"], n["label_seed"], n["fit_seed"]) for n in result["networks"]}
     for label_seed in (int(s) for s in args.label_seeds.split(",")):
-        labelled, made = labels(label_seed, args.gripper)
+        labelled, made = labels(label_seed, args.gripper, args.objects)
         for fit_seed in (int(s) for s in args.fit_seeds.split(",")):
-            if (label_seed, fit_seed) in done:
+            if (made["objects"], label_seed, fit_seed) in done:
                 continue
-            fitted = network(labelled, label_seed, fit_seed)
+            prefix = tag(args.objects)
+            fitted = network(labelled, label_seed, fit_seed, prefix)
             entry = {"label_seed": label_seed, "fit_seed": fit_seed, "made": made, "network": fitted,
-                     "picks": judged(ROOT / fitted["checkpoint"], f"l{label_seed}_f{fit_seed}", args.gripper)}
-            result["networks"] = sorted([*result["networks"], entry], key=lambda n: (n["label_seed"], n["fit_seed"]))
+                     "picks": judged(ROOT / fitted["checkpoint"], f"{prefix}l{label_seed}_f{fit_seed}", args.gripper)}
+            result["networks"] = sorted([*result["networks"], entry],
+                                        key=lambda n: (n["made"]["labels"], n["label_seed"], n["fit_seed"]))
             write()
             print(label_seed, fit_seed, {k: v["first_attempt"] for k, v in entry["picks"].items()}, flush=True)
     print(path)

@@ -35,8 +35,9 @@ def _pooled_cell(picks: dict) -> str:
 
 def _row(n: dict) -> str:
     made, fitted, val = n["made"], n["network"], n["network"]["validation"]
-    return (f"| {n['label_seed']} | {n['fit_seed']} | {made['labels']} | {made['core_seconds']:.0f} | "
-            f"{fitted['fit_seconds']:.0f} | {100 * val['top1']:.0f}% against {100 * val['guess']:.0f}% | "
+    return (f"| `{made['objects']}` | {n['label_seed']} | {n['fit_seed']} | {made['labels']} | "
+            f"{made['core_seconds']:.0f} | {fitted['fit_seconds']:.0f} | "
+            f"{100 * val['top1']:.0f}% against {100 * val['guess']:.0f}% | "
             f"{_cell(n['picks']['household'])} | {_cell(n['picks']['unseen'])} | {_pooled_cell(n['picks'])} |")
 
 
@@ -54,28 +55,36 @@ def own_network_section(result: dict, target: float) -> list[str]:
     if not networks:
         return []
     made = networks[0]["made"]
+    groups = {n["made"]["objects"]: [] for n in networks}
+    for n in networks:
+        groups[n["made"]["objects"]].append(n)
+    return [f"## A network made by the two commands{_title(made)}: `{result['command']}`", "",
+            f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
+            f"({made['views']} views an object, {made['per_view']} candidates executed a view, {_hand(made)}; "
+            "docs/planning.md) on its default objects or more of them (`--objects`), and `onepiece pick-train` with "
+            "its defaults (the shipped design), at each label seed and fit seed; each network judged as `onepiece "
+            f"pick` judges it ({result['views']} views an object, its first 3 grasps checked), the network chooser "
+            "alone, on the views that judge the shipped network above, executed by the same hand (shipped: the "
+            "network shipped for it, the same run's figures). Nothing here was chosen on either set.", "",
+            "| objects | label seed | fit seed | labels | labelling core-seconds | fit seconds | validation views' "
+            "top-1 | household first attempt | unseen first attempt | both sets (28 objects) |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+            *(_row(n) for n in networks),
+            f"| shipped | | | {SHIPPED_LABELS} | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} | "
+            f"{_pooled_cell(shipped)} |", "",
+            *(line for objects, group in groups.items() for line in (_verdict(objects, group, shipped, target), ""))]
+
+
+def _verdict(objects: str, networks: list[dict], shipped: dict, target: float) -> str:
+    """The networks labelled on ``objects`` against the shipped one, and the target over both sets."""
     gain = paired_gain([_both(n["picks"]) for n in networks], [_both(shipped)] * len(networks), VIEWS)
     household = paired_gain([n["picks"]["household"]["per_object"] for n in networks],
                             [shipped["household"]["per_object"]] * len(networks), VIEWS)
     pooled = [_pooled(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
-    return [f"## A network made by the two commands{_title(made)}: `{result['command']}`", "",
-            f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
-            f"({made['objects']}, {made['views']} views an object, {made['per_view']} candidates executed a view, "
-            f"{_hand(made)}; docs/planning.md) and `onepiece pick-train` with its defaults (the "
-            "shipped design), at each label seed and fit seed; each network judged as `onepiece pick` judges it "
-            f"({result['views']} views an object, its first 3 grasps checked), the network chooser alone, on the "
-            "views that judge the shipped network above, executed by the same hand (shipped: the network shipped "
-            "for it, the same run's figures). Nothing here was chosen on either set.", "",
-            "| label seed | fit seed | labels | labelling core-seconds | fit seconds | validation views' top-1 | "
-            "household first attempt | unseen first attempt | both sets (28 objects) |",
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
-            *(_row(n) for n in networks),
-            f"| shipped | | {SHIPPED_LABELS} | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} | "
-            f"{_pooled_cell(shipped)} |", "",
-            f"Against the shipped network on the same views, over both sets: {gain_words(gain)}; on the household "
-            f"set alone: {gain_words(household)} (a network made so replaces the shipped one where the household "
-            f"interval lies above zero: {'it does' if household.verdict == 'kept' else 'the shipped one stays'}). "
-            f"The first-attempt target over both sets (>= {100 * target:.0f}%): "
-            f"{'**met**' if met == len(pooled) else '**not met**'} by {met} of the {len(pooled)} networks (mean "
-            f"{100 * float(np.mean(pooled)):.1f}%)."]
+    return (f"Labelled on `{objects}` ({networks[0]['made']['labels']} labels), against the shipped network on the "
+            f"same views, over both sets: {gain_words(gain)}; on the household set alone: {gain_words(household)} "
+            "(a network made so replaces the shipped one where the household interval lies above zero: "
+            f"{'it does' if household.verdict == 'kept' else 'the shipped one stays'}). The first-attempt target "
+            f"over both sets (>= {100 * target:.0f}%): {'**met**' if met == len(pooled) else '**not met**'} by {met} "
+            f"of the {len(pooled)} networks (mean {100 * float(np.mean(pooled)):.1f}%).")
