@@ -127,3 +127,21 @@ def test_validation_views_say_above_a_guess_only_where_the_network_beats_one():
     assert wrong.top1 < wrong.guess and wrong.above_guess[1] < 0 and "below a guess" in wrong.verdict
     every = ValidationPicks.of(synthetic(np.ones(len(success), bool), 8), rows, np.zeros(len(success)))
     assert "cannot tell a network from a guess" in every.verdict
+
+
+@pytest.mark.slow
+def test_pick_labels_read_a_folder_of_centimetres_with_units_and_say_so_without(small_spec, tmp_path):
+    from onepiece_dist.core.mesh import box_mesh
+
+    mesh = box_mesh((4.0, 6.0, 10.0))  # a 4 x 6 x 10 cm box, written in centimetres
+    folder = tmp_path / "meshes"
+    folder.mkdir()
+    lines = [f"v {x} {y} {z}" for x, y, z in mesh.vertices] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces]
+    (folder / "box.obj").write_text("\n".join(lines) + "\n")
+    args = ["pick-labels", "--objects", str(folder), "--views", "1", "--per-view", "6", "--spec", str(small_spec),
+            "--in-process"]
+    refused = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "m")])
+    assert refused.exit_code == 1 and "box.obj: rejected" in refused.output and "--units cm" in refused.output
+    made = CliRunner().invoke(app, [*args, "--units", "cm", "--out", str(tmp_path / "cm")])
+    assert made.exit_code == 0, made.output
+    assert len(read_pick_labels(tmp_path / "cm" / "pick_labels.zarr")) > 0

@@ -43,6 +43,8 @@ def pick_labels(
                                                          "executed first (on-policy labels).")] = None,
     seed: Annotated[int | None, typer.Option(help=f"Seed of drops, cameras and executions. {_default('seed')}")
                     ] = None,
+    units: Annotated[str | None, typer.Option(help=f"Units of the objects' mesh files: m, cm or mm. "
+                                                   f"{_default('units')}")] = None,
     spec_file: Annotated[Path | None, typer.Option("--spec", help="YAML pick label spec (PickLabelSpec, "
                                                                   "schemas/pick_label_spec.schema.json); options "
                                                                   "given here override it.")] = None,
@@ -58,7 +60,7 @@ def pick_labels(
 
     given = _spec_mapping(spec_file)
     given.update({k: v for k, v in {"objects": objects, "output": None if out is None else str(out), "views": views,
-                                    "per_view": per_view, "seed": seed,
+                                    "per_view": per_view, "seed": seed, "units": units,
                                     "checkpoint": None if checkpoint is None else str(checkpoint)}.items()
                   if v is not None})
     if gripper is not None:

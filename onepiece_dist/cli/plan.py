@@ -220,6 +220,8 @@ def pick(
                                                       "refused unless the checkpoint was trained for it (default: "
                                                       "the checkpoint's; without one, the network shipped for "
                                                       "it).")] = None,
+    units: Annotated[str | None, typer.Option(help="Units of the objects' mesh files: m, cm or mm (default: m).")
+                     ] = None,
     address: Address = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
@@ -234,7 +236,7 @@ def pick(
     given.update({**({"checkpoint": str(checkpoint)} if checkpoint is not None else {}), "objects": objects,
                   "output": str(out), "views": views,
                   "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {}),
-                  **({"pile": True} if pile else {}),
+                  **({"pile": True} if pile else {}), **({"units": units} if units is not None else {}),
                   **({"gripper": _gripper(gripper).model_dump(mode="json")} if gripper is not None else {})})
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))

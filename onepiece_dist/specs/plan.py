@@ -117,6 +117,9 @@ class PickSpec(Frozen):
     ``views`` seeded poses; the planner's best grasp executed by the label protocol, up to ``attempts`` tries."""
 
     objects: str = Field("pybullet:random_urdfs[500:508]", description="Held-out objects (a source as a job's).")
+    units: Literal["m", "cm", "mm"] = Field("m", description="Units of the objects' mesh and URDF files (a "
+                                           "folder's objects.yaml may say otherwise for its own).")
+    scale: float = Field(1.0, gt=0, le=1000, description="A further scale of those files (after units).")
     checkpoint: str | None = Field(None, description="The network's checkpoint (best.pt of a train stage); none: "
                                    "the network shipped for the gripper (onepiece_dist/plan/networks/).")
     output: str = Field("onepiece-out/picks", description="Folder for picks.json and the pictures.")
@@ -184,7 +187,7 @@ class PickSpec(Frozen):
     def object_job(self, gripper: GripperSpec, voxel: VoxelSpec) -> JobSpec:
         """The job-shaped spec the object loader and the full-mesh sampler read (file limits, extents, physics)."""
         return JobSpec(objects=self.objects, gripper=gripper, voxel=voxel, sampler=self.sampler, sim=self.sim,
-                       max_file_bytes=self.max_file_bytes, seed=self.seed)
+                       max_file_bytes=self.max_file_bytes, seed=self.seed, units=self.units, scale=self.scale)
 
 
 def parse_pick_spec(data: dict[str, Any], source: str = "<pick spec>") -> PickSpec:
@@ -211,6 +214,9 @@ class PickLabelSpec(Frozen):
     keeps the candidate's crop of the view and its context (gravity and the object's centre in the gripper frame)."""
 
     objects: str = Field("pybullet:random_urdfs[0:64]", description="Training objects (a source as a job's).")
+    units: Literal["m", "cm", "mm"] = Field("m", description="Units of the objects' mesh and URDF files (a "
+                                           "folder's objects.yaml may say otherwise for its own).")
+    scale: float = Field(1.0, gt=0, le=1000, description="A further scale of those files (after units).")
     output: str = Field("onepiece-out/pick_labels", description="Folder of the labels (pick_labels.zarr).")
     views: int = Field(8, ge=1, le=256, description="Camera poses per object.")
     per_view: int = Field(16, ge=1, le=10_000, description="Candidates executed per view (a seeded subset; 16 "
@@ -239,7 +245,8 @@ class PickLabelSpec(Frozen):
     def object_job(self) -> JobSpec:
         """The job-shaped spec the object loader reads (file limits, extents, physics)."""
         return JobSpec(objects=self.objects, gripper=self.gripper, voxel=self.voxel, sampler=self.sampler,
-                       sim=self.sim, max_file_bytes=self.max_file_bytes, seed=self.seed)
+                       sim=self.sim, max_file_bytes=self.max_file_bytes, seed=self.seed, units=self.units,
+                       scale=self.scale)
 
     @classmethod
     def stored(cls, data: dict[str, Any]) -> PickLabelSpec:
