@@ -142,7 +142,7 @@ def _next_step(checkpoint: str) -> str:
     return (f"grasps on a camera's view with this network: onepiece grasp depth.png --intrinsics k.json "
             f"--checkpoint {checkpoint}; without --checkpoint, with {shipped}; a network trained on pick labels of "
             "your own objects and gripper: onepiece pick-labels --objects YOURS --gripper GRIPPER, then onepiece "
-            "pick-train (about 5 min on 2 cores at the defaults; docs/planning.md)")
+            "pick-train (docs/planning.md)")
 
 
 def _interval(pair: tuple[float, float] | None) -> str:
