@@ -71,6 +71,9 @@ def test_pick_train_fits_the_same_network_twice_and_grasp_plans_with_it(labelled
     checkpoint = tmp_path / "a" / "best.pt"
     assert fits[0].stdout.strip() == str(checkpoint) and "validation objects" in fits[0].output
     assert f"onepiece pick {checkpoint}" in fits[0].output
+    held_out = runner.invoke(app, ["pick-train", str(out / "pick_labels.zarr"), "--out", str(tmp_path / "c"),
+                                   "--validation", "0.9"])
+    assert held_out.exit_code == 2 and "no object is left to train on" in held_out.output
     saved = [torch.load(tmp_path / name / "best.pt", weights_only=True) for name in ("a", "b")]
     assert saved[0]["crop"]["source"] == "pick_labels" and saved[0]["model"] == "pointnet_context"
     assert all(torch.equal(saved[0]["state_dict"][k], saved[1]["state_dict"][k]) for k in saved[0]["state_dict"])

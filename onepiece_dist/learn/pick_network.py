@@ -117,6 +117,11 @@ def train_pick_network(labels_path: str | Path, folder: str | Path, options: Pic
     if len(labels) == 0:
         raise ValueError(f"{labels_path}: these pick labels hold no row (every object rejected or no view held a "
                          "candidate: see its objects); label other objects")
+    train, _ = split_by_object(labels, options.validation, options.seed)
+    if len(train) == 0:
+        raise ValueError(f"{labels_path}: labels of {len(np.unique(labels.object))} object(s), and a validation share "
+                         f"of {options.validation:g} holds them all out: no object is left to train on (label more "
+                         "objects, or give a smaller validation share)")
     result = train_on_pick_labels(labels, folder, pick_crop(labels), options)
     network = PickNetwork(design, result, validation_of(labels, result.checkpoint, options), str(labels_path))
     (Path(folder) / RECORD).write_text(json.dumps(network.to_json(), indent=1) + "\n")
