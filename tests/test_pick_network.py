@@ -99,7 +99,13 @@ def test_pick_labels_on_the_embedded_ray_are_the_in_process_labels(labelled, sma
 
 
 def test_pick_train_refuses_what_is_not_a_label_store_and_an_unknown_design(tmp_path):
+    from onepiece_dist.plan.shipped import NETWORK
+
     runner = CliRunner()
+    other_hand = runner.invoke(app, ["pick-labels", "--checkpoint", str(NETWORK), "--gripper", "panda", "--out",
+                                     str(tmp_path / "o"), "--in-process"])
+    assert other_hand.exit_code == 2 and "gripper" in other_hand.output
+    assert not (tmp_path / "o").exists()  # refused before any work
     (tmp_path / "empty.zarr").mkdir()
     refused = runner.invoke(app, ["pick-train", str(tmp_path / "empty.zarr"), "--out", str(tmp_path / "n")])
     assert refused.exit_code == 2 and "not a pick-labels store" in refused.output

@@ -156,6 +156,8 @@ def run_pick_labels(spec: PickLabelSpec, address: str | None = None, in_process:
     """Label every object of ``spec.objects``; write ``pick_labels.zarr`` into ``spec.output``; return its path.
     ``progress`` sees each object's labels as they land (in the order they finish)."""
     refs = resolve_source(spec.objects)
+    if spec.checkpoint is not None:  # one for another gripper or crop is refused here, before any object is labelled
+        cached_scorer(spec.checkpoint, spec.gripper)
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     results = (run_each_in_process(label_object, spec, refs, progress) if in_process
