@@ -154,3 +154,8 @@ def test_pick_labels_read_a_folder_of_centimetres_with_units_and_say_so_without(
     made = CliRunner().invoke(app, [*args, "--units", "cm", "--out", str(tmp_path / "cm")])
     assert made.exit_code == 0, made.output
     assert len(read_pick_labels(tmp_path / "cm" / "pick_labels.zarr")) > 0
+    picks = ["pick", "--objects", str(folder), "--views", "1", "--attempts", "1", "--in-process"]
+    nothing = CliRunner().invoke(app, [*picks, "--out", str(tmp_path / "p")])
+    assert nothing.exit_code == 1 and "--units cm" in nothing.output and "nothing was picked" in nothing.output
+    picked = CliRunner().invoke(app, [*picks, "--units", "cm", "--out", str(tmp_path / "q")])
+    assert picked.exit_code == 0, picked.output

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli.common import EXIT_USAGE, Address, err
+from onepiece_dist.cli.common import EXIT_FAILED, EXIT_USAGE, Address, err
 from onepiece_dist.errors import (
     CheckpointRejected,
     CloudRejected,
@@ -247,14 +247,19 @@ def pick(
     except (SpecError, SourceError, CloudRejected, CheckpointRejected) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
+    loaded = any(o.status == "ok" for o in report.objects)
     if as_json:
         typer.echo(json.dumps(report.to_json()))
+        if not loaded:
+            raise typer.Exit(EXIT_FAILED)
         return
     for m in report.methods:
         err(f"{m.method:<18} first attempt {m.first_attempt:.0%} [{m.first_attempt_interval[0]:.0%}, "
             f"{m.first_attempt_interval[1]:.0%}]  within {spec.attempts}: {m.within_k:.0%}  ({m.views} views)")
     err(report.verdict)
     typer.echo(str(Path(spec.output) / "picks.json"))
+    if not loaded:  # every object rejected (the reasons above): nothing was picked
+        raise typer.Exit(EXIT_FAILED)
 
 
 def _spec_mapping(path: Path | None) -> dict:
