@@ -22,7 +22,8 @@ from onepiece_dist.errors import (
 )
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_UNREACHABLE, EXIT_TIMEOUT = 0, 1, 2, 3, 4
-EXIT_CODES = {EXIT_OK: "ok", EXIT_FAILED: "the job failed or was cancelled (a refused scan, for supplement)",
+EXIT_CODES = {EXIT_OK: "ok", EXIT_FAILED: "the job failed or was cancelled (a refused scan, for supplement; no "
+                                          "object loaded, for pick and pick-labels)",
               EXIT_USAGE: "usage or input error: bad arguments or spec, unknown source, no such job or dataset, "
                           "relative output for a cluster, package version differs from the cluster's",
               EXIT_UNREACHABLE: "cluster unreachable", EXIT_TIMEOUT: "timed out (wait, submit --wait)"}
