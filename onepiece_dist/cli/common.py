@@ -20,6 +20,7 @@ from onepiece_dist.errors import (
     SpecError,
     VersionMismatch,
 )
+from onepiece_dist.gripper.presets import PRESETS, gripper_fields
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_UNREACHABLE, EXIT_TIMEOUT = 0, 1, 2, 3, 4
 EXIT_CODES = {EXIT_OK: "ok", EXIT_FAILED: "the job failed or was cancelled (a refused scan, for supplement; no "
@@ -169,3 +170,40 @@ class ProgressDisplay:
             self.bar.stop()
         if self.handler is not None:
             logging.getLogger("onepiece_dist").removeHandler(self.handler)
+
+
+def gripper_option(path: Path | None):
+    """A --gripper option: a preset's name or a YAML gripper spec (None: not given); exit 2 naming it when it is
+    neither."""
+    if path is None:
+        return None
+    import yaml
+
+    from onepiece_dist.specs.job import GripperSpec
+
+    try:
+        if not path.exists():
+            if str(path) in PRESETS:  # a preset's name: --gripper panda
+                return GripperSpec.model_validate(gripper_fields(str(path)))
+            raise OSError(f"no such file, nor a preset ({', '.join(sorted(PRESETS))})")
+        return GripperSpec.model_validate(gripper_fields(yaml.safe_load(path.read_text()) or {}))
+    except (OSError, yaml.YAMLError, ValueError) as error:
+        err(f"error: {path}: not a gripper spec: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+
+
+def spec_mapping(path: Path | None) -> dict:
+    """A --spec YAML file's fields ({} where none is given); exit 2 naming it when it is not a mapping."""
+    if path is None:
+        return {}
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except (OSError, yaml.YAMLError) as error:
+        err(f"error: {path}: cannot read the pick spec: {error}")
+        raise typer.Exit(EXIT_USAGE) from None
+    if not isinstance(data, dict):
+        err(f"error: {path}: a pick spec is a mapping of fields")
+        raise typer.Exit(EXIT_USAGE)
+    return data

@@ -11,8 +11,7 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli.common import EXIT_FAILED, EXIT_USAGE, Address, err
-from onepiece_dist.cli.plan import _gripper, _spec_mapping
+from onepiece_dist.cli.common import EXIT_FAILED, EXIT_USAGE, Address, err, gripper_option, spec_mapping
 from onepiece_dist.errors import OnePieceError
 
 
@@ -58,13 +57,13 @@ def pick_labels(
     from onepiece_dist.specs.plan import parse_pick_label_spec
     from onepiece_dist.store.pick_labels import read_pick_labels
 
-    given = _spec_mapping(spec_file)
+    given = spec_mapping(spec_file)
     given.update({k: v for k, v in {"objects": objects, "output": None if out is None else str(out), "views": views,
                                     "per_view": per_view, "seed": seed, "units": units,
                                     "checkpoint": None if checkpoint is None else str(checkpoint)}.items()
                   if v is not None})
     if gripper is not None:
-        given["gripper"] = _gripper(gripper).model_dump(mode="json")
+        given["gripper"] = gripper_option(gripper).model_dump(mode="json")
     try:
         spec = parse_pick_label_spec(given, str(spec_file or "command line"))
         path = labels_made(spec)

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from onepiece_dist.cli.common import EXIT_FAILED, EXIT_USAGE, Address, err
+from onepiece_dist.cli.common import EXIT_FAILED, EXIT_USAGE, Address, err, gripper_option, spec_mapping
 from onepiece_dist.errors import (
     CheckpointRejected,
     CloudRejected,
@@ -18,7 +18,6 @@ from onepiece_dist.errors import (
     SourceError,
     SpecError,
 )
-from onepiece_dist.gripper.presets import PRESETS, gripper_fields
 
 
 def _floats(text: str | None, count: int, name: str) -> list[float] | None:
@@ -32,24 +31,6 @@ def _floats(text: str | None, count: int, name: str) -> list[float] | None:
         err(f"error: {name}={text!r}: give {count} comma-separated numbers")
         raise typer.Exit(EXIT_USAGE)
     return values
-
-
-def _gripper(path: Path | None):
-    if path is None:
-        return None
-    import yaml
-
-    from onepiece_dist.specs.job import GripperSpec
-
-    try:
-        if not path.exists():
-            if str(path) in PRESETS:  # a preset's name: --gripper panda
-                return GripperSpec.model_validate(gripper_fields(str(path)))
-            raise OSError(f"no such file, nor a preset ({', '.join(sorted(PRESETS))})")
-        return GripperSpec.model_validate(gripper_fields(yaml.safe_load(path.read_text()) or {}))
-    except (OSError, yaml.YAMLError, ValueError) as error:
-        err(f"error: {path}: not a gripper spec: {error}")
-        raise typer.Exit(EXIT_USAGE) from None
 
 
 def register(app: typer.Typer) -> None:
@@ -158,7 +139,7 @@ def grasp(
                         check_shape=check_shape, objects_apart=not one_object, denoise="auto" if denoise else "none",
                         drop_flying=drop_flying, target=None if aim is None else tuple(aim))
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
-                              camera_pose, workspace, _gripper(gripper))
+                              camera_pose, workspace, gripper_option(gripper))
     except (OnePieceError, ValueError) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
@@ -232,12 +213,12 @@ def pick(
     from onepiece_dist.plan.shipped import shipped_summary
     from onepiece_dist.specs.plan import parse_pick_spec
 
-    given = _spec_mapping(spec_file)
+    given = spec_mapping(spec_file)
     given.update({**({"checkpoint": str(checkpoint)} if checkpoint is not None else {}), "objects": objects,
                   "output": str(out), "views": views,
                   "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {}),
                   **({"pile": True} if pile else {}), **({"units": units} if units is not None else {}),
-                  **({"gripper": _gripper(gripper).model_dump(mode="json")} if gripper is not None else {})})
+                  **({"gripper": gripper_option(gripper).model_dump(mode="json")} if gripper is not None else {})})
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))
         if spec.checkpoint is None:
@@ -260,19 +241,3 @@ def pick(
     typer.echo(str(Path(spec.output) / "picks.json"))
     if not loaded:  # every object rejected (the reasons above): nothing was picked
         raise typer.Exit(EXIT_FAILED)
-
-
-def _spec_mapping(path: Path | None) -> dict:
-    if path is None:
-        return {}
-    import yaml
-
-    try:
-        data = yaml.safe_load(path.read_text()) or {}
-    except (OSError, yaml.YAMLError) as error:
-        err(f"error: {path}: cannot read the pick spec: {error}")
-        raise typer.Exit(EXIT_USAGE) from None
-    if not isinstance(data, dict):
-        err(f"error: {path}: a pick spec is a mapping of fields")
-        raise typer.Exit(EXIT_USAGE)
-    return data

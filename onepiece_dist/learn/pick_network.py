@@ -23,7 +23,7 @@ from onepiece_dist.learn.pick_train import (
     weights_of,
 )
 from onepiece_dist.stats.intervals import against_a_guess
-from onepiece_dist.stats.ranking import can_separate
+from onepiece_dist.stats.ranking import can_separate, per_group_success
 from onepiece_dist.store.pick_labels import PickLabels, read_pick_labels
 
 DESIGNS = {  # the pick learning curve's designs (docs/picks.md): name -> PickTrainOptions fields
@@ -71,11 +71,9 @@ class ValidationPicks:
     @classmethod
     def of(cls, labels: PickLabels, rows: np.ndarray, scores: np.ndarray) -> ValidationPicks:
         keys = view_keys(labels, rows)
-        views = np.unique(keys)
-        first = np.array([labels.success[rows[np.flatnonzero(keys == k)][np.argmax(scores[keys == k])]]
-                          for k in views], np.float64)
-        guess = np.array([labels.success[rows[keys == k]].mean() for k in views], np.float64)
-        owner = np.array([labels.object[rows[np.flatnonzero(keys == k)[0]]] for k in views])
+        first, guess = per_group_success(scores, labels.success[rows], keys)  # a view each, in sorted order
+        views, opening = np.unique(keys, return_index=True)
+        owner = labels.object[rows[opening]]
         objects = np.unique(owner)
         per_top = np.array([first[owner == o].mean() for o in objects])
         per_guess = np.array([guess[owner == o].mean() for o in objects])

@@ -20,7 +20,7 @@ import torch
 from onepiece_dist.core.cloud.outline import OUTLINE_MODELS
 from onepiece_dist.core.cloud.swept_space import SPACE_MODELS, turned_half
 from onepiece_dist.learn.models import CONTEXT_MODELS, MODELS
-from onepiece_dist.stats.ranking import average_precision
+from onepiece_dist.stats.ranking import average_precision, per_group_success
 from onepiece_dist.store.pick_labels import PickLabels
 
 HALF_TURN = np.array([1.0, -1.0, -1.0], np.float32)  # (u, v, t) -> (u, -v, -t)
@@ -124,12 +124,8 @@ def score_rows(model: torch.nn.Module, labels: PickLabels, rows: np.ndarray, poi
 
 def view_top1(labels: PickLabels, rows: np.ndarray, scores: np.ndarray) -> float:
     """Share of the views (object, view) among ``rows`` whose best-scored row picked."""
-    keys = view_keys(labels, rows)
-    hits = []
-    for key in np.unique(keys):
-        mine = np.flatnonzero(keys == key)
-        hits.append(bool(labels.success[rows[mine[np.argmax(scores[mine])]]]))
-    return float(np.mean(hits)) if hits else 0.0
+    top, _ = per_group_success(scores, labels.success[rows], view_keys(labels, rows))
+    return float(top.mean()) if len(top) else 0.0
 
 
 def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,

@@ -179,8 +179,10 @@ def labels_made(spec: PickLabelSpec) -> Path | None:
     except (StoreError, KeyError, ValueError) as err:
         raise SpecError(f"{path}: exists and is not a pick-labels store of ours ({err}): give another output "
                         "folder") from None
-    if stored.model_copy(update={"workers": spec.workers, "output": spec.output}) != spec:  # neither moves a label
-        changed = sorted(k for k, v in spec.model_dump().items() if stored.model_dump().get(k) != v)
+    stored = stored.model_copy(update={"workers": spec.workers, "output": spec.output})  # neither moves a label
+    if stored != spec:
+        before = stored.model_dump()
+        changed = sorted(k for k, v in spec.model_dump().items() if before[k] != v)
         raise SpecError(f"{path}: holds pick labels of another spec (they differ in {', '.join(changed)}): "
                         "they are kept; give another output folder for these")
     return path

@@ -26,3 +26,12 @@ def average_precision(scores: np.ndarray, labels: np.ndarray) -> float:
     hits = labels[order]
     precision = np.cumsum(hits) / np.arange(1, len(hits) + 1)
     return float(np.sum(precision * hits) / positives)
+
+
+def per_group_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(g,) the success of the best-scored candidate of each of the g ``groups`` (objects, or a view's candidates;
+    in sorted order, the first of equal scores) and (g,) a random candidate's expected one."""
+    found = np.unique(groups)
+    top = [labels[groups == g][np.argmax(scores[groups == g])] for g in found]
+    random = [labels[groups == g].mean() for g in found]
+    return np.asarray(top, np.float64), np.asarray(random, np.float64)

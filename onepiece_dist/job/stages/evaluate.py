@@ -12,7 +12,7 @@ import numpy as np
 from onepiece_dist.job.status import EvaluationReport, JobStatus
 from onepiece_dist.specs.job import JobSpec
 from onepiece_dist.stats.intervals import against_a_guess, bootstrap_interval
-from onepiece_dist.stats.ranking import SEPARABLE, average_precision, can_separate
+from onepiece_dist.stats.ranking import SEPARABLE, average_precision, can_separate, per_group_success
 
 
 def heldout_sim(spec: JobSpec):
@@ -64,7 +64,7 @@ def score_heldout(checkpoint: str | os.PathLike, dataset: str, device: str, obje
     labelled = GraspDataset(dataset, "grasps")
     scores = predict(load_model(checkpoint), labelled, device=resolve_device(device))
     labels = labelled.labels()
-    per_top, per_random = per_object_success(scores, labels, labelled.groups)
+    per_top, per_random = per_group_success(scores, labels, labelled.groups)
     top, random = (float(np.mean(per_top)), float(np.mean(per_random))) if len(per_top) else (0.0, 0.0)
     positive = float(labels.mean()) if len(labels) else 0.0
     separable, sentence = verdict(positive, top, random)
@@ -90,13 +90,5 @@ def record_evaluation(spec: JobSpec, report: EvaluationReport) -> EvaluationRepo
 
 def top_ranked_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[float, float]:
     """Success rate of executing each object's best-scored grasp, and the expected rate of a random one."""
-    top, random = per_object_success(scores, labels, groups)
+    top, random = per_group_success(scores, labels, groups)
     return (float(np.mean(top)), float(np.mean(random))) if len(top) else (0.0, 0.0)
-
-
-def per_object_success(scores: np.ndarray, labels: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(objects,) the success of each object's best-scored grasp and (objects,) a random grasp's expected one."""
-    objects = np.unique(groups)
-    top = [labels[groups == g][np.argmax(scores[groups == g])] for g in objects]
-    random = [labels[groups == g].mean() for g in objects]
-    return np.asarray(top, np.float64), np.asarray(random, np.float64)
