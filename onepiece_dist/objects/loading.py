@@ -24,6 +24,7 @@ from onepiece_dist.core.repair import boundary_edges, closed_volume, connected_p
 from onepiece_dist.errors import MeshRejected
 from onepiece_dist.objects.meshio import parse_mesh_bytes
 from onepiece_dist.objects.paths import confined
+from onepiece_dist.objects.shapes import SHAPE_KINDS, shape_mesh
 from onepiece_dist.objects.sources import ObjectRef
 from onepiece_dist.objects.urdf import GeometryElement, parse_urdf
 from onepiece_dist.specs.job import JobSpec
@@ -151,6 +152,8 @@ def _element_arrays(element: GeometryElement, folder: Path, source: str,
 
 
 def _primitive(kind: str, dims: tuple, name: str) -> TriangleMesh:
+    if kind in SHAPE_KINDS:
+        return shape_mesh(kind, dims, name)
     if kind == "box":
         return box_mesh(tuple(dims), name=name)
     if kind == "cylinder":

@@ -1,6 +1,7 @@
 """Object sources: a built-in set, a folder or a glob, resolved to a sorted list of :class:`ObjectRef`.
 
 Grammar: ``pybullet:named``, ``pybullet:random_urdfs[START:STOP]``, ``primitives`` or ``primitives[START:STOP]``,
+``shapes:groceries[START:STOP]`` or ``shapes:vessels[START:STOP]`` (seeded household-sized shapes: objects.shapes),
 a folder path, or a glob (``meshes/**/*.obj``). Several sources may be joined with ``+``.
 """
 
@@ -15,6 +16,7 @@ from pathlib import Path
 from onepiece_dist.errors import SourceError
 from onepiece_dist.objects.manifest import MANIFEST, Manifest, ObjectSettings, read_manifest
 from onepiece_dist.objects.paths import PACKAGE_MAP, package_folders
+from onepiece_dist.objects.shapes import SETS, shape_parameters
 from onepiece_dist.objects.urdf import mesh_filenames
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".glb")
@@ -86,10 +88,13 @@ def _resolve_one(part: str) -> list[ObjectRef]:
         return _pybullet_random()[window]
     if base == "primitives":
         return [ObjectRef(name, "primitive", primitive=(kind, dims)) for name, kind, dims in PRIMITIVES][window]
+    if base.startswith("shapes:"):
+        return _shapes(base[len("shapes:"):])[window]
     if base.startswith("grasps:"):
         return [foreign_ref(base[len("grasps:"):])]
     if base.startswith("pybullet:"):
-        raise SourceError(f"unknown built-in set {base!r}; known: pybullet:named, pybullet:random_urdfs[a:b]")
+        raise SourceError(f"unknown built-in set {base!r}; known: pybullet:named, pybullet:random_urdfs[a:b], "
+                          f"{', '.join(f'shapes:{name}[a:b]' for name in SETS)}")
     if os.path.isdir(part):
         return folder_refs(Path(part))
     if glob.has_magic(part):
@@ -102,6 +107,13 @@ def _resolve_one(part: str) -> list[ObjectRef]:
 
 def _int(text: str | None) -> int | None:
     return int(text) if text else None
+
+
+def _shapes(set_name: str) -> list[ObjectRef]:
+    if set_name not in SETS:
+        raise SourceError(f"unknown shape set 'shapes:{set_name}'; known: "
+                          f"{', '.join(f'shapes:{name}[a:b]' for name in SETS)}")
+    return [ObjectRef(name, "primitive", primitive=(kind, sizes)) for name, kind, sizes in shape_parameters(set_name)]
 
 
 def _pybullet_root() -> Path:
