@@ -239,8 +239,8 @@ class TrainSpec(Frozen):
 class JobSpec(Frozen):
     """Everything a job needs. Workers receive exactly this object."""
 
-    objects: str = Field("pybullet:named", description="Object source: a built-in set "
-                         "(pybullet:named, pybullet:random_urdfs[0:64], primitives), a folder or a glob.")
+    objects: str = Field("pybullet:named", description="Object source: a built-in set (pybullet:named, "
+                         "pybullet:random_urdfs[0:64], primitives, shapes:groceries[0:32]), a folder or a glob.")
     grasps_per_object: int = Field(64, ge=1, le=100_000,
         description="Grasp candidates sampled and simulated per object.")
     seed: int = Field(0, ge=0, lt=2**63,
