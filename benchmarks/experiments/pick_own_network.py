@@ -27,6 +27,7 @@ HERE = Path(__file__).resolve().parents[1]
 ROOT = HERE.parent
 VIEWS = 8
 SETS = ("household", "unseen")
+FIRST_OBJECTS = "pybullet:random_urdfs[0:64]"  # pick-labels' default objects when this experiment began
 
 
 def named(gripper: str | None) -> str:
@@ -40,13 +41,13 @@ def tag(objects: str | None) -> str:
 
 def labels(seed: int, gripper: str | None, objects: str | None = None) -> tuple[Path, dict]:
     """The default pick labels at ``seed`` with ``gripper`` (a preset; None: the default job's) of ``objects``
-    (None: the default's), made unless kept, and what making them cost."""
+    (None: FIRST_OBJECTS), made unless kept, and what making them cost."""
     from onepiece_dist.picks.pick_labels import labels_made, run_pick_labels
     from onepiece_dist.specs.plan import PickLabelSpec
     from onepiece_dist.store.pick_labels import read_pick_labels
 
     spec = PickLabelSpec(output=str(ROOT / "data" / named(gripper) / f"labels_{tag(objects)}s{seed}"), seed=seed,
-                         **({"gripper": gripper} if gripper else {}), **({"objects": objects} if objects else {}))
+                         objects=objects or FIRST_OBJECTS, **({"gripper": gripper} if gripper else {}))
     path = labels_made(spec) or run_pick_labels(spec)
     made = read_pick_labels(path)
     return path, {"seed": seed, "objects": spec.objects, "views": spec.views, "per_view": spec.per_view,
@@ -94,7 +95,7 @@ def main() -> None:
     parser.add_argument("--label-seeds", default="0,1")
     parser.add_argument("--fit-seeds", default="0,1")
     parser.add_argument("--gripper", default=None, help="a gripper preset (panda); default: the default job's")
-    parser.add_argument("--objects", default=None, help="pick-labels --objects (default: its default)")
+    parser.add_argument("--objects", default=None, help=f"pick-labels --objects (default: {FIRST_OBJECTS})")
     args = parser.parse_args()
     path = HERE / "results" / f"pick_{named(args.gripper)}.json"
     result = json.loads(path.read_text()) if path.is_file() else {"networks": [], "shipped": None}

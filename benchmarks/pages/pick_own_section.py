@@ -11,6 +11,7 @@ from onepiece_dist.stats.intervals import bootstrap_interval, paired_gain
 
 SETS = ("household", "unseen")
 SHIPPED_LABELS = 81152  # both shipped networks': plan/networks/*.json
+FIRST_OBJECTS = "pybullet:random_urdfs[0:64]"  # pick-labels' first default objects (pick_own_network.py)
 
 
 def _both(picks: dict) -> dict[str, int]:
@@ -72,7 +73,21 @@ def own_network_section(result: dict, target: float) -> list[str]:
             *(_row(n) for n in networks),
             f"| shipped | | | {SHIPPED_LABELS} | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} | "
             f"{_pooled_cell(shipped)} |", "",
-            *(line for objects, group in groups.items() for line in (_verdict(objects, group, shipped, target), ""))]
+            *(line for objects, group in groups.items()
+              for line in (_verdict(objects, group, shipped, target) + _against_first(group, groups), ""))]
+
+
+def _against_first(networks: list[dict], groups: dict[str, list[dict]]) -> str:
+    """`` Against ...``: ``networks`` against those labelled on FIRST_OBJECTS at the same label and fit seeds
+    ('' where they are those, or none share their seeds)."""
+    first = {(n["label_seed"], n["fit_seed"]): n for n in groups.get(FIRST_OBJECTS, [])}
+    pairs = [(n, first[n["label_seed"], n["fit_seed"]]) for n in networks
+             if networks[0]["made"]["objects"] != FIRST_OBJECTS and (n["label_seed"], n["fit_seed"]) in first]
+    if not pairs:
+        return ""
+    gain = paired_gain([_both(n["picks"]) for n, _ in pairs], [_both(f["picks"]) for _, f in pairs], VIEWS)
+    return (f" Against the networks labelled on `{FIRST_OBJECTS}` ({pairs[0][1]['made']['labels']} labels) at the "
+            f"same seeds, over both sets: {gain_words(gain)}.")
 
 
 def _verdict(objects: str, networks: list[dict], shipped: dict, target: float) -> str:
