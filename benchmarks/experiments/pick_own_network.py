@@ -1,5 +1,5 @@
-"""A network made by the two commands a user runs (issue 55): `onepiece pick-labels` with its defaults (64 of
-pybullet_data's random objects, 8 views each, 16 candidates executed a view, the default job's box gripper) and
+"""A network made by the two commands a user runs (issue 55): `onepiece pick-labels` with its defaults (8 views
+each, 16 candidates executed a view, the default job's box gripper) on FIRST_OBJECTS (its first default objects) and
 `onepiece pick-train` with its defaults (the shipped design), at several label seeds and fit seeds; each network
 judged by `onepiece pick` on the household and unseen sets (8 views an object, the planner's defaults: its first 3
 grasps checked), the network chooser alone, beside the shipped network on the same views.
@@ -8,7 +8,7 @@ grasps checked), the network chooser alone, beside the shipped network on the sa
         [--gripper panda] [--objects SOURCE]
 
 With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it; ``--objects`` labels
-other objects than pick-labels' default (more of them: more labels). Labels:
+other objects (pick-labels' default today; more of them: more labels). Labels:
 data/own_network[_panda]/labels_s<L>/ (kept where they hold labels of the same spec); networks:
 data/own_network[_panda]/net_l<L>_f<F>/best.pt; results: benchmarks/results/pick_own_network[_panda].json (written
 as each network lands; a run again judges only what is not in it), rendered on docs/picks.md.

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from benchmarks.pages.pick_trials_section import VIEWS, gain_words
+from onepiece_dist.specs.plan import PICK_LABEL_OBJECTS
 from onepiece_dist.stats.intervals import bootstrap_interval, paired_gain
 
 SETS = ("household", "unseen")
@@ -62,11 +63,12 @@ def own_network_section(result: dict, target: float) -> list[str]:
     return [f"## A network made by the two commands{_title(made)}: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
             f"({made['views']} views an object, {made['per_view']} candidates executed a view, {_hand(made)}; "
-            "docs/planning.md) on its default objects or more of them (`--objects`), and `onepiece pick-train` with "
-            "its defaults (the shipped design), at each label seed and fit seed; each network judged as `onepiece "
-            f"pick` judges it ({result['views']} views an object, its first 3 grasps checked), the network chooser "
-            "alone, on the views that judge the shipped network above, executed by the same hand (shipped: the "
-            "network shipped for it, the same run's figures). Nothing here was chosen on either set.", "",
+            "docs/planning.md) on the objects each row names (`--objects`; its default objects were "
+            f"`{FIRST_OBJECTS}`, and are `{PICK_LABEL_OBJECTS}` since this page's trials), and `onepiece pick-train` "
+            "with its defaults (the shipped design), at each label seed and fit seed; each network judged as "
+            f"`onepiece pick` judges it ({result['views']} views an object, its first 3 grasps checked), the network "
+            "chooser alone, on the views that judge the shipped network above, executed by the same hand (shipped: "
+            "the network shipped for it, the same run's figures). Nothing here was chosen on either set.", "",
             "| objects | label seed | fit seed | labels | labelling core-seconds | fit seconds | validation views' "
             "top-1 | household first attempt | unseen first attempt | both sets (28 objects) |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",

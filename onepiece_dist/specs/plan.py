@@ -207,13 +207,20 @@ def parse_pick_label_spec(data: dict[str, Any], source: str = "<pick label spec>
         raise SpecError(describe_validation_error(err, source, "pick label spec")) from None
 
 
+# pick-labels' default objects: at the same label count the Franka hand's network picks more of the household
+# meshes on these than on pybullet:random_urdfs[0:64], the box gripper's as many (docs/picks.md, "A network made
+# by the two commands").
+PICK_LABEL_OBJECTS = "pybullet:random_urdfs[0:32]+shapes:groceries[0:16]+shapes:vessels[0:16]"
+
+
 class PickLabelSpec(Frozen):
     """Labels made where the network is used (issue 55): each training object settled on the table and seen from
     ``views`` seeded cameras exactly as the pick benchmark sees it, the planner's candidates proposed on the view
     and each executed by the pick protocol (the same hand, table and trials the benchmark judges with). Each label
     keeps the candidate's crop of the view and its context (gravity and the object's centre in the gripper frame)."""
 
-    objects: str = Field("pybullet:random_urdfs[0:64]", description="Training objects (a source as a job's).")
+    objects: str = Field(PICK_LABEL_OBJECTS, description="Training objects (a source as a job's). The default: "
+                         "32 of pybullet_data's random objects and 32 seeded household-sized shapes (objects.shapes).")
     units: Literal["m", "cm", "mm"] = Field("m", description="Units of the objects' mesh and URDF files (a "
                                            "folder's objects.yaml may say otherwise for its own).")
     scale: float = Field(1.0, gt=0, le=1000, description="A further scale of those files (after units).")
