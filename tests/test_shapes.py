@@ -53,3 +53,13 @@ def test_an_unknown_set_is_refused_naming_the_known_ones():
     with pytest.raises(SourceError, match=r"shapes:toys.*shapes:groceries\[a:b\], shapes:vessels\[a:b\]"):
         resolve_source("shapes:toys[0:3]")
     assert resolve_source("shapes:vessels[2000:2010]") == []
+
+
+def test_pick_labels_default_objects_resolve_and_load_without_a_fetch(tmp_path):
+    from onepiece_dist.specs.plan import PickLabelSpec
+
+    spec = PickLabelSpec()
+    loaded = _loaded(spec.objects, tmp_path)
+    kinds = [o.ref.name.split("/")[0] for o in loaded]
+    assert kinds.count("random_urdfs") == kinds.count("groceries") + kinds.count("vessels") > 0
+    assert len({o.content_id for o in loaded}) == len(loaded)  # no object twice
