@@ -65,36 +65,48 @@ def network(path: Path, label_seed: int, fit_seed: int, prefix: str = "") -> dic
             "labels": str(path.relative_to(ROOT)), "fit_seconds": round(network.result.seconds, 1)}
 
 
-def judged(checkpoint: Path | None, name: str, gripper: str | None) -> dict:
+def judged(checkpoint: Path | None, name: str, gripper: str | None, others: tuple[str, ...] = ()) -> dict:
     """``checkpoint`` (None: the network shipped for ``gripper``) on each of SETS, executed by ``gripper``, as
-    `onepiece pick` judges it."""
+    `onepiece pick` judges it; with ``others`` (pick methods: random, top_down) judged on the same views too."""
     from benchmarks.experiments.picks import sets
-    from onepiece_dist.gripper.presets import gripper_fields
     from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.specs.job import GripperSpec
     from onepiece_dist.specs.plan import PickSpec
-
-    hand = GripperSpec.model_validate(gripper_fields(gripper)) if gripper else GripperSpec()
 
     out = {}
     for set_name in SETS:
         spec = PickSpec(objects=sets()[set_name][0](), checkpoint=None if checkpoint is None else str(checkpoint),
                         output=str(ROOT / "data" / named(gripper) / "picks" / name / set_name), views=VIEWS,
-                        methods=("network",), pictures=0, gripper=hand)
+                        methods=("network", *others), pictures=0, gripper=hand(gripper))
         start = time.perf_counter()
         report = run_picks(spec)
-        method = report.methods[0]
-        out[set_name] = {"first_attempt": method.first_attempt, "interval": list(method.first_attempt_interval),
-                         "views": method.views, "per_object": report.first_picks("network"),
-                         "seconds": round(time.perf_counter() - start, 1)}
+        figures = {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),
+                              "views": m.views, "per_object": report.first_picks(m.method)} for m in report.methods}
+        out[set_name] = {**figures["network"], "seconds": round(time.perf_counter() - start, 1),
+                         **({"others": {m: figures[m] for m in others}} if others else {})}
     return out
+
+
+def hand(gripper: str | None):
+    """The GripperSpec of the preset ``gripper`` (None: the default job's)."""
+    from onepiece_dist.gripper.presets import gripper_fields
+    from onepiece_dist.specs.job import GripperSpec
+
+    return GripperSpec.model_validate(gripper_fields(gripper)) if gripper else GripperSpec()
+
+
+def ships_for(gripper: str | None) -> bool:
+    """Whether a network ships for ``gripper`` (else each network is judged beside random and top-down)."""
+    from onepiece_dist.plan.shipped import SHIPPED
+
+    return hand(gripper).name in SHIPPED
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--label-seeds", default="0,1")
     parser.add_argument("--fit-seeds", default="0,1")
-    parser.add_argument("--gripper", default=None, help="a gripper preset (panda); default: the default job's")
+    parser.add_argument("--gripper", default=None,
+                        help="a gripper preset (panda, robotiq_2f85, ...); default: the default job's")
     parser.add_argument("--objects", default=None, help=f"pick-labels --objects (default: {FIRST_OBJECTS})")
     args = parser.parse_args()
     path = HERE / "results" / f"pick_{named(args.gripper)}.json"
@@ -107,7 +119,8 @@ def main() -> None:
     def write() -> None:
         path.write_text(json.dumps(result, indent=1) + "\n")
 
-    if result["shipped"] is None:
+    others = () if ships_for(args.gripper) else ("random", "top_down")
+    if result["shipped"] is None and not others:
         result["shipped"] = judged(None, "shipped", args.gripper)
         write()
     done = {(n["made"]["objects"], n["label_seed"], n["fit_seed"]) for n in result["networks"]}
@@ -119,7 +132,8 @@ def main() -> None:
             prefix = tag(args.objects)
             fitted = network(labelled, label_seed, fit_seed, prefix)
             entry = {"label_seed": label_seed, "fit_seed": fit_seed, "made": made, "network": fitted,
-                     "picks": judged(ROOT / fitted["checkpoint"], f"{prefix}l{label_seed}_f{fit_seed}", args.gripper)}
+                     "picks": judged(ROOT / fitted["checkpoint"], f"{prefix}l{label_seed}_f{fit_seed}", args.gripper,
+                                     others)}
             result["networks"] = sorted([*result["networks"], entry],
                                         key=lambda n: (n["made"]["labels"], n["label_seed"], n["fit_seed"]))
             write()
