@@ -6,9 +6,11 @@ pick_top_down_both.json, pick_schedule.json, pick_outline.json, pick_top_draws.j
 copied into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark
 (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household figures into
 the record. With --gripper panda it ships the Franka hand's network instead (pick_panda.json's seed 0, with the
-figures the benchmark gave it on that hand) as onepiece_dist/plan/networks/pick_view_panda.pt.
+figures the benchmark gave it on that hand) as onepiece_dist/plan/networks/pick_view_panda.pt. With --gripper
+robotiq_2f85 it ships the network `onepiece pick-labels` and `onepiece pick-train` made with their defaults for
+that hand (benchmarks/experiments/pick_own_network.py, seed 0) as pick_view_robotiq_2f85.pt.
 
-    .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks] [--gripper panda]
+    .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks] [--gripper panda|robotiq_2f85]
 """
 
 from __future__ import annotations
@@ -174,14 +176,40 @@ def ship_panda() -> dict:
                  _figures(point["sets"], source), POOL, network)
 
 
+def ship_own(gripper: str) -> dict:
+    """A network made by the two commands (pick-labels' default objects, label seed 0, fit seed 0: a seed is never
+    chosen; results/pick_own_network_<gripper>.json) shipped for the preset ``gripper``, one no network shipped for,
+    with the figures that judged it."""
+    from benchmarks.experiments.pick_own_network import hand
+    from onepiece_dist.plan.shipped import network_path
+    from onepiece_dist.specs.plan import PICK_LABEL_OBJECTS
+
+    source = f"benchmarks/results/pick_own_network_{gripper}.json"
+    result = json.loads((ROOT / source).read_text())
+    made = next(n for n in result["networks"]
+                if n["made"]["objects"] == PICK_LABEL_OBJECTS and (n["label_seed"], n["fit_seed"]) == (0, 0))
+    point = {"checkpoint": made["network"]["checkpoint"], "design": made["network"]["design"],
+             "labels": made["made"]["labels"]}
+    figures = {f"{name}_first_attempt": {"rate": made["picks"][name]["first_attempt"],
+                                         "interval": made["picks"][name]["interval"],
+                                         "views": made["picks"][name]["views"], "from": source}
+               for name in ("household", "unseen")}
+    return _ship(point, PICK_LABEL_OBJECTS, "onepiece pick-labels and onepiece pick-train (python -m "
+                 "benchmarks.experiments.pick_own_network)", figures, POOL, network_path(hand(gripper)))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-picks", action="store_true")
-    parser.add_argument("--gripper", choices=("default", "panda"), default="default",
-                        help="panda: ship the Franka hand's network (benchmarks/experiments/pick_panda.py)")
+    parser.add_argument("--gripper", choices=("default", "panda", "robotiq_2f85"), default="default",
+                        help="panda: ship the Franka hand's network (benchmarks/experiments/pick_panda.py); "
+                             "robotiq_2f85: a network made by the two commands (pick_own_network.py)")
     args = parser.parse_args()
     if args.gripper == "panda":
         print(ship_panda())
+        return
+    if args.gripper != "default":
+        print(ship_own(args.gripper))
         return
     if args.record_picks:
         print(record_picks())
