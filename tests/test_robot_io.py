@@ -146,21 +146,22 @@ def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others
     assert shipped_record(panda)["gripper"] == "franka_panda" and shipped_record(panda)["labels"] > 0
     np.save(tmp_path / "depth.npy", depth_millimetres().astype(np.float64) / 1000)
     run = ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}"]
-    (tmp_path / "robotiq_2f140.yaml").write_text("preset: robotiq_2f140\n")
+    (tmp_path / "my_hand.yaml").write_text("name: my_hand\nmax_opening: 0.1\nclosing_width: 0.1\n")
     example = Path(__file__).resolve().parents[1] / "examples" / "grippers" / "panda.yaml"  # the README's
     result = CliRunner().invoke(app, [*run, "--gripper", str(example), "--out", str(tmp_path / "p")])
     assert result.exit_code == 0, result.output
     assert "planning with the shipped network pick_view_panda.pt" in result.output and "franka_panda" in result.output
     assert json.loads((tmp_path / "p" / "grasps.json").read_text())["grasps"]
-    refused = CliRunner().invoke(app, [*run, "--gripper", str(tmp_path / "robotiq_2f140.yaml"), "--out",
+    refused = CliRunner().invoke(app, [*run, "--gripper", str(tmp_path / "my_hand.yaml"), "--out",
                                        str(tmp_path / "r")])
-    assert refused.exit_code != 0 and "no network ships for the gripper 'robotiq_2f_140'" in refused.output
+    assert refused.exit_code != 0 and "no network ships for the gripper 'my_hand'" in refused.output
     assert "--checkpoint" in refused.output and not (tmp_path / "r" / "grasps.json").exists()
     by_name = CliRunner().invoke(app, [*run, "--gripper", "panda", "--check", "0", "--out", str(tmp_path / "n")])
     assert by_name.exit_code == 0 and "pick_view_panda.pt" in by_name.output  # a preset by its name
-    robotiq = CliRunner().invoke(app, [*run, "--gripper", "robotiq_2f85", "--check", "0", "--out", str(tmp_path / "q")])
-    assert robotiq.exit_code == 0 and "pick_view_robotiq_2f85.pt" in robotiq.output, robotiq.output
-    assert json.loads((tmp_path / "q" / "grasps.json").read_text())["grasps"]
+    for preset in ("robotiq_2f85", "robotiq_2f140"):  # networks made by pick-labels and pick-train ship for both
+        robotiq = CliRunner().invoke(app, [*run, "--gripper", preset, "--check", "0", "--out", str(tmp_path / preset)])
+        assert robotiq.exit_code == 0 and f"pick_view_{preset}.pt" in robotiq.output, robotiq.output
+        assert json.loads((tmp_path / preset / "grasps.json").read_text())["grasps"]
     typo = CliRunner().invoke(app, [*run, "--gripper", "pandas", "--out", str(tmp_path / "t")])
     assert typo.exit_code == 2 and "pandas: not a gripper spec: no such file, nor a preset (panda," in typo.output
 

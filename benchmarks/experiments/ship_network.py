@@ -7,10 +7,11 @@ copied into onepiece_dist/plan/networks/pick_view.pt with its record; after the 
 (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household figures into
 the record. With --gripper panda it ships the Franka hand's network instead (pick_panda.json's seed 0, with the
 figures the benchmark gave it on that hand) as onepiece_dist/plan/networks/pick_view_panda.pt. With --gripper
-robotiq_2f85 it ships the network `onepiece pick-labels` and `onepiece pick-train` made with their defaults for
-that hand (benchmarks/experiments/pick_own_network.py, seed 0) as pick_view_robotiq_2f85.pt.
+robotiq_2f85 (or robotiq_2f140) it ships the network `onepiece pick-labels` and `onepiece pick-train` made with
+their defaults for that hand (benchmarks/experiments/pick_own_network.py, seed 0) as pick_view_robotiq_2f85.pt.
 
-    .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks] [--gripper panda|robotiq_2f85]
+    .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks]
+        [--gripper panda|robotiq_2f85|robotiq_2f140]
 """
 
 from __future__ import annotations
@@ -201,9 +202,9 @@ def ship_own(gripper: str) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-picks", action="store_true")
-    parser.add_argument("--gripper", choices=("default", "panda", "robotiq_2f85"), default="default",
+    parser.add_argument("--gripper", choices=("default", "panda", "robotiq_2f85", "robotiq_2f140"), default="default",
                         help="panda: ship the Franka hand's network (benchmarks/experiments/pick_panda.py); "
-                             "robotiq_2f85: a network made by the two commands (pick_own_network.py)")
+                             "robotiq_2f85, robotiq_2f140: a network made by the two commands (pick_own_network.py)")
     args = parser.parse_args()
     if args.gripper == "panda":
         print(ship_panda())

@@ -182,8 +182,9 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_own_network", "pick_own_network_panda", "pick_own_network_robotiq_2f85", "pick_panda",
-            "pick_panda_check", "pick_clutter_panda", "pick_clutter_panda_pile", "pick_clearance_panda",
+SECTIONS = ("pick_own_network", "pick_own_network_panda", "pick_own_network_robotiq_2f85",
+            "pick_own_network_robotiq_2f140", "pick_panda", "pick_panda_check", "pick_clutter_panda",
+            "pick_clutter_panda_pile", "pick_clearance_panda",
             "pick_clearance_panda_pile", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
             "pick_clearance_pile", "pick_depth_noise", "pick_depth_noise_panda", "pick_noise_views",
             "pick_flying_pixels", "pick_veils", "pick_flying_drop", "pick_noisy_labels", "pick_ceiling",
@@ -217,6 +218,7 @@ def render_picks_page() -> str:
     render = {"pick_own_network": lambda r: own_network_section(r, target),
               "pick_own_network_panda": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f85": lambda r: own_network_section(r, target),
+              "pick_own_network_robotiq_2f140": lambda r: own_network_section(r, target),
               "pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
                                                     load("pick_panda_then")),
               "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda")),

@@ -1,7 +1,8 @@
 """The networks shipped with the package (issue 56): ``onepiece grasp`` plans with the one trained for its gripper
 when no checkpoint is given: the default job's box gripper's (``pick_view.pt``), the Franka hand's for the
-``panda`` preset (``pick_view_panda.pt``, issue 55), or the Robotiq 2F-85's for its preset
-(``pick_view_robotiq_2f85.pt``, made by ``onepiece pick-labels`` and ``onepiece pick-train`` with their defaults).
+``panda`` preset (``pick_view_panda.pt``, issue 55), or the Robotiq 2F-85's and 2F-140's for their presets
+(``pick_view_robotiq_2f85.pt``, ``pick_view_robotiq_2f140.pt``: made by ``onepiece pick-labels`` and ``onepiece
+pick-train`` with their defaults).
 Each and its record (how it was trained, what it picks) are package data in ``plan/networks/``, made by the
 committed command ``python -m benchmarks.experiments.ship_network`` (docs/picks.md)."""
 
@@ -15,7 +16,7 @@ from onepiece_dist.specs.job import GripperSpec
 
 FOLDER = Path(__file__).resolve().parent / "networks"
 SHIPPED = {"onepiece_box": "pick_view", "franka_panda": "pick_view_panda",  # gripper name -> the files' stem
-           "robotiq_2f_85": "pick_view_robotiq_2f85"}
+           "robotiq_2f_85": "pick_view_robotiq_2f85", "robotiq_2f_140": "pick_view_robotiq_2f140"}
 NETWORK = FOLDER / f"{SHIPPED[GripperSpec().name]}.pt"  # the default job's gripper's
 RECORD = NETWORK.with_suffix(".json")
 
@@ -26,9 +27,9 @@ def network_path(gripper: GripperSpec | None = None) -> Path:
     name = (gripper or GripperSpec()).name
     if name not in SHIPPED:
         raise CheckpointRejected(f"no network ships for the gripper {name!r}: networks ship for "
-                                 f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85); make one for this "
-                                 "gripper (onepiece pick-labels --gripper ... --out labels/, then onepiece pick-train "
-                                 "labels/pick_labels.zarr) and give --checkpoint")
+                                 f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140); "
+                                 "make one for this gripper (onepiece pick-labels --gripper ... --out labels/, then "
+                                 "onepiece pick-train labels/pick_labels.zarr) and give --checkpoint")
     return FOLDER / f"{SHIPPED[name]}.pt"
 
 
