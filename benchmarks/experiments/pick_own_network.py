@@ -119,7 +119,8 @@ def main() -> None:
     def write() -> None:
         path.write_text(json.dumps(result, indent=1) + "\n")
 
-    others = () if ships_for(args.gripper) else ("random", "top_down")
+    judged_beside = result["shipped"] is None and bool(result["networks"])  # its rows stay comparable
+    others = ("random", "top_down") if judged_beside or not ships_for(args.gripper) else ()
     if result["shipped"] is None and not others:
         result["shipped"] = judged(None, "shipped", args.gripper)
         write()
