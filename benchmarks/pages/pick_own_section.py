@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from benchmarks.experiments.pick_own_network import FIRST_OBJECTS
 from benchmarks.pages.pick_trials_section import VIEWS, gain_words
 from onepiece_dist.specs.plan import PICK_LABEL_OBJECTS
 from onepiece_dist.stats.intervals import bootstrap_interval, paired_gain
 
 SETS = ("household", "unseen")
 SHIPPED_LABELS = 81152  # both shipped networks': plan/networks/*.json
-FIRST_OBJECTS = "pybullet:random_urdfs[0:64]"  # pick-labels' first default objects (pick_own_network.py)
 
 
 def _both(picks: dict) -> dict[str, int]:

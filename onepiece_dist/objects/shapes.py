@@ -25,11 +25,12 @@ SETS = {"groceries": (("box", "cylinder", "capsule", "ellipsoid"), 55),
         "vessels": (("flat_box", "cup", "bowl", "bottle"), 56)}  # set -> (kinds in turn, the seed's tag)
 
 
-def shape_parameters(set_name: str) -> list[tuple[str, str, tuple[float, ...]]]:
-    """Every shape of ``set_name`` (a key of SETS): (name, kind, sizes in metres), in order."""
+def shape_parameters(set_name: str, window: slice = slice(None)) -> list[tuple[str, str, tuple[float, ...]]]:
+    """The shapes of ``set_name`` (a key of SETS) in ``window`` of its SET_SIZE: (name, kind, sizes in metres), in
+    order."""
     kinds, tag = SETS[set_name]
     shapes = []
-    for k in range(SET_SIZE):
+    for k in range(SET_SIZE)[window]:
         kind = kinds[k % len(kinds)]
         sizes = _SIZES[kind](np.random.default_rng([tag, k]))
         shapes.append((f"{set_name}/{kind}_{k:03d}", kind, tuple(round(float(s), 6) for s in sizes)))
@@ -136,5 +137,5 @@ _SIZES = {  # kind -> its sizes drawn from a generator
     "bowl": _bowl_sizes,
     "bottle": _bottle_sizes,
 }
-SHAPE_KINDS = frozenset(_SIZES) - {"box", "cylinder"}  # built here; a URDF's box and cylinder are core.mesh's
+SHAPE_KINDS = frozenset(_SIZES)
 _BUILDERS = {"capsule": _capsule, "cup": _cup, "bowl": _bowl, "bottle": _bottle}

@@ -89,7 +89,7 @@ def _resolve_one(part: str) -> list[ObjectRef]:
     if base == "primitives":
         return [ObjectRef(name, "primitive", primitive=(kind, dims)) for name, kind, dims in PRIMITIVES][window]
     if base.startswith("shapes:"):
-        return _shapes(base[len("shapes:"):])[window]
+        return _shapes(base[len("shapes:"):], window)
     if base.startswith("grasps:"):
         return [foreign_ref(base[len("grasps:"):])]
     if base.startswith("pybullet:"):
@@ -109,11 +109,12 @@ def _int(text: str | None) -> int | None:
     return int(text) if text else None
 
 
-def _shapes(set_name: str) -> list[ObjectRef]:
+def _shapes(set_name: str, window: slice) -> list[ObjectRef]:
     if set_name not in SETS:
         raise SourceError(f"unknown shape set 'shapes:{set_name}'; known: "
                           f"{', '.join(f'shapes:{name}[a:b]' for name in SETS)}")
-    return [ObjectRef(name, "primitive", primitive=(kind, sizes)) for name, kind, sizes in shape_parameters(set_name)]
+    return [ObjectRef(name, "primitive", primitive=(kind, sizes))
+            for name, kind, sizes in shape_parameters(set_name, window)]
 
 
 def _pybullet_root() -> Path:
