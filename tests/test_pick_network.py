@@ -79,6 +79,7 @@ def test_pick_train_fits_the_same_network_twice_and_grasp_plans_with_it(labelled
     assert all(torch.equal(saved[0]["state_dict"][k], saved[1]["state_dict"][k]) for k in saved[0]["state_dict"])
     record = json.loads((tmp_path / "a" / "network.json").read_text())
     assert record["design"] == "context_balanced" and record["validation"]["views"] > 0
+    assert "start_from" not in record
     scene = runner.invoke(app, ["scene", "primitives[3:4]", "--out", str(tmp_path / "scene")])
     assert scene.exit_code == 0, scene.output
     command = shlex.split(json.loads((tmp_path / "scene" / "scene.json").read_text())["grasp"])[1:]
@@ -86,6 +87,29 @@ def test_pick_train_fits_the_same_network_twice_and_grasp_plans_with_it(labelled
                                   str(tmp_path / "g"), "--json"])
     assert planned.exit_code == 0, planned.output
     assert json.loads(planned.stdout)["grasps"]
+
+
+@pytest.mark.slow
+def test_pick_train_starts_from_the_shipped_network_where_asked(labelled, tmp_path):
+    from onepiece_dist.plan.shipped import NETWORK
+
+    out, _ = labelled
+    runner, labels = CliRunner(), str(out / "pick_labels.zarr")
+    fits = {start: runner.invoke(app, ["pick-train", labels, "--out", str(tmp_path / start), "--epochs", "1",
+                                       "--validation", "0.34", *(["--start-from", "shipped"] if start else [])])
+            for start in ("", "shipped")}
+    assert all(f.exit_code == 0 for f in fits.values()), fits["shipped"].output
+    shipped = torch.load(NETWORK, weights_only=True)["state_dict"]
+
+    def apart(folder: str) -> float:  # how far a fit's weights lie from the shipped network's
+        fitted = torch.load(tmp_path / folder / "best.pt", weights_only=True)["state_dict"]
+        return sum(float((fitted[k] - shipped[k]).norm()) for k in shipped if shipped[k].is_floating_point())
+
+    assert apart("shipped") < apart("") / 4  # one epoch moves it a little from where it started
+    record = json.loads((tmp_path / "shipped" / "network.json").read_text())
+    assert record["start_from"] == str(NETWORK)
+    saved = torch.load(tmp_path / "shipped" / "best.pt", weights_only=True)
+    assert saved["crop"]["source"] == "pick_labels"  # the crop record of the labels' gripper, not the start's
 
 
 @pytest.mark.ray
@@ -112,6 +136,15 @@ def test_pick_train_refuses_what_is_not_a_label_store_and_an_unknown_design(tmp_
     assert str(tmp_path / "empty.zarr") in refused.output.replace("\n", "")
     unknown = runner.invoke(app, ["pick-train", str(tmp_path / "empty.zarr"), "--design", "context_balancd"])
     assert unknown.exit_code == 2 and "context_balanced" in unknown.output
+    missing = runner.invoke(app, ["pick-train", str(tmp_path / "empty.zarr"), "--start-from",
+                                  str(tmp_path / "none.pt")])
+    assert missing.exit_code == 2 and "none.pt" in missing.output and "shipped" in missing.output
+    (tmp_path / "junk.pt").write_bytes(b"not a checkpoint")
+    junk = runner.invoke(app, ["pick-train", str(tmp_path / "empty.zarr"), "--start-from", str(tmp_path / "junk.pt")])
+    assert junk.exit_code == 2 and "junk.pt" in junk.output and "not a checkpoint" in junk.output
+    other_model = runner.invoke(app, ["pick-train", str(tmp_path / "empty.zarr"), "--start-from", str(NETWORK),
+                                      "--design", "crop_only"])
+    assert other_model.exit_code == 2 and "pointnet_context" in other_model.output
 
 
 def synthetic(success: np.ndarray, objects: int) -> PickLabels:

@@ -5,10 +5,11 @@ judged by `onepiece pick` on the household and unseen sets (8 views an object, t
 grasps checked), the network chooser alone, beside the shipped network on the same views.
 
     .venv/bin/python -m benchmarks.experiments.pick_own_network [--label-seeds 0,1] [--fit-seeds 0,1]
-        [--gripper panda] [--objects SOURCE]
+        [--gripper panda] [--objects SOURCE] [--start-from shipped]
 
 With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it; ``--objects`` labels
-other objects (pick-labels' default today; more of them: more labels). Labels:
+other objects (pick-labels' default today; more of them: more labels); ``--start-from shipped`` starts each fit
+from the network shipped for the default job's gripper (`onepiece pick-train --start-from shipped`). Labels:
 data/own_network[_panda]/labels_s<L>/ (kept where they hold labels of the same spec); networks:
 data/own_network[_panda]/net_l<L>_f<F>/best.pt; results: benchmarks/results/pick_own_network[_panda].json (written
 as each network lands; a run again judges only what is not in it), rendered on docs/picks.md.
@@ -56,12 +57,17 @@ def labels(seed: int, gripper: str | None, objects: str | None = None) -> tuple[
                   "core_seconds": made.attrs["core_seconds"], "wall_seconds": made.attrs["wall_seconds"]}
 
 
-def network(path: Path, label_seed: int, fit_seed: int, prefix: str = "") -> dict:
+def network(path: Path, label_seed: int, fit_seed: int, prefix: str = "", start_from: str | None = None) -> dict:
+    """The shipped design fitted on the labels at ``path`` (`onepiece pick-train`), from fresh weights or, with
+    ``start_from`` "shipped", from the network shipped for the default job's gripper (`--start-from shipped`)."""
     from onepiece_dist.learn.pick_network import SHIPPED_DESIGN, design_options, train_pick_network
+    from onepiece_dist.plan.shipped import shipped_network
 
+    start = None if start_from is None else str(shipped_network())
     network = train_pick_network(path, path.parent.parent / f"net_{prefix}l{label_seed}_f{fit_seed}",
-                                 design_options(SHIPPED_DESIGN, fit_seed))
-    return {**network.to_json(), "checkpoint": str(network.result.checkpoint.relative_to(ROOT)),
+                                 design_options(SHIPPED_DESIGN, fit_seed, start_from=start))
+    started = {} if start is None else {"start_from": str(Path(start).relative_to(ROOT))}
+    return {**network.to_json(), **started, "checkpoint": str(network.result.checkpoint.relative_to(ROOT)),
             "labels": str(path.relative_to(ROOT)), "fit_seconds": round(network.result.seconds, 1)}
 
 
@@ -108,6 +114,8 @@ def main() -> None:
     parser.add_argument("--gripper", default=None,
                         help="a gripper preset (panda, robotiq_2f85, ...); default: the default job's")
     parser.add_argument("--objects", default=None, help=f"pick-labels --objects (default: {FIRST_OBJECTS})")
+    parser.add_argument("--start-from", default=None, choices=("shipped",),
+                        help="pick-train --start-from shipped: each fit starts from the default job's shipped network")
     args = parser.parse_args()
     path = HERE / "results" / f"pick_{named(args.gripper)}.json"
     result = json.loads(path.read_text()) if path.is_file() else {"networks": [], "shipped": None}
@@ -124,19 +132,20 @@ def main() -> None:
     if result["shipped"] is None and not others:
         result["shipped"] = judged(None, "shipped", args.gripper)
         write()
-    done = {(n["made"]["objects"], n["label_seed"], n["fit_seed"]) for n in result["networks"]}
+    done = {(n["made"]["objects"], n.get("start_from"), n["label_seed"], n["fit_seed"]) for n in result["networks"]}
     for label_seed in (int(s) for s in args.label_seeds.split(",")):
         labelled, made = labels(label_seed, args.gripper, args.objects)
         for fit_seed in (int(s) for s in args.fit_seeds.split(",")):
-            if (made["objects"], label_seed, fit_seed) in done:
+            if (made["objects"], args.start_from, label_seed, fit_seed) in done:
                 continue
-            prefix = tag(args.objects)
-            fitted = network(labelled, label_seed, fit_seed, prefix)
+            prefix = ("from_shipped_" if args.start_from else "") + tag(args.objects)
+            fitted = network(labelled, label_seed, fit_seed, prefix, args.start_from)
             entry = {"label_seed": label_seed, "fit_seed": fit_seed, "made": made, "network": fitted,
+                     **({"start_from": args.start_from} if args.start_from else {}),
                      "picks": judged(ROOT / fitted["checkpoint"], f"{prefix}l{label_seed}_f{fit_seed}", args.gripper,
                                      others)}
-            result["networks"] = sorted([*result["networks"], entry],
-                                        key=lambda n: (n["made"]["labels"], n["label_seed"], n["fit_seed"]))
+            result["networks"] = sorted([*result["networks"], entry], key=lambda n: (
+                n["made"]["labels"], n.get("start_from") or "", n["label_seed"], n["fit_seed"]))
             write()
             print(label_seed, fit_seed, {k: v["first_attempt"] for k, v in entry["picks"].items()}, flush=True)
     print(path)

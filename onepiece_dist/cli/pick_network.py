@@ -110,6 +110,11 @@ def pick_train(
     validation: Annotated[float, typer.Option(min=0.01, max=0.9, help="Share of the objects held out to choose "
                                                                      "the epoch and judge the network.")] = 0.1,
     seed: Annotated[int, typer.Option(help="Seed of the split, the weights and the batches.")] = 0,
+    start_from: Annotated[str | None, typer.Option(help="Start the fit from this checkpoint's weights (a best.pt "
+                                                         "of the same design), or from `shipped`: the network "
+                                                         "shipped for the default job's gripper (81,152 labels; "
+                                                         "docs/picks.md says what starting from it gives). "
+                                                         "Default: fresh weights.")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print network.json on stdout.")] = False,
 ) -> None:
     """Fit a grasp network on pick labels (by default the shipped networks' design); best.pt plans with
@@ -117,7 +122,8 @@ def pick_train(
     from onepiece_dist.api import design_options, train_pick_network
 
     try:
-        options = design_options(design, seed, epochs=epochs, validation=validation)
+        options = design_options(design, seed, epochs=epochs, validation=validation,
+                                 start_from=_start_from(start_from))
         network = train_pick_network(labels, out, options, design)
     except (OnePieceError, ValueError) as error:
         err(f"error: {error}")
@@ -130,6 +136,20 @@ def pick_train(
     err(f"judge it on objects it never saw, and plan with it:\n  onepiece pick {checkpoint} --objects HELD_OUT\n"
         f"  onepiece grasp depth.png --intrinsics k.json --camera-pose camera.json --checkpoint {checkpoint}")
     typer.echo(json.dumps(network.to_json(), indent=1) if as_json else str(checkpoint))
+
+
+def _start_from(given: str | None) -> str | None:
+    """The checkpoint ``--start-from`` names: the shipped default network for ``shipped``; a path must exist."""
+    from onepiece_dist.plan.shipped import shipped_network
+
+    if given is None:
+        return None
+    if given == "shipped":
+        return str(shipped_network())
+    if not Path(given).is_file():
+        raise ValueError(f"--start-from {given}: no such checkpoint: give a best.pt of `onepiece pick-train` or "
+                         "`shipped`")
+    return given
 
 
 __all__ = ["pick_labels", "pick_train", "register"]

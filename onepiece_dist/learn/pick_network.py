@@ -93,15 +93,18 @@ class ValidationPicks:
 
 @dataclass(frozen=True)
 class PickNetwork:
-    """A fitted network (``result.checkpoint``), its design and what its validation views say of it."""
+    """A fitted network (``result.checkpoint``), its design, what its validation views say of it, and the
+    checkpoint its fit started from (None: fresh weights)."""
 
     design: str
     result: PickTrainResult
     validation: ValidationPicks
     labels: str
+    start_from: str | None = None
 
     def to_json(self) -> dict:
-        return {"checkpoint": str(self.result.checkpoint), "design": self.design, "labels": self.labels,
+        started = {} if self.start_from is None else {"start_from": self.start_from}
+        return {"checkpoint": str(self.result.checkpoint), "design": self.design, "labels": self.labels, **started,
                 "training_rows": self.result.labels, "success_rate": round(self.result.success_rate, 4),
                 "best_epoch": asdict(self.result.best), "epochs": len(self.result.epochs),
                 "validation": {**asdict(self.validation), "above_guess": list(self.validation.above_guess)}}
@@ -111,6 +114,8 @@ def train_pick_network(labels_path: str | Path, folder: str | Path, options: Pic
                        design: str = SHIPPED_DESIGN) -> PickNetwork:
     """``options`` (design_options) fitted on the pick labels at ``labels_path``; ``folder/best.pt`` and
     ``folder/network.json`` (what it is and what its validation views say) written."""
+    if options.start_from is not None:
+        weights_of(options.start_from, options.model)  # refused before any work where it cannot start the fit
     labels = read_pick_labels(labels_path)
     if len(labels) == 0:
         raise ValueError(f"{labels_path}: these pick labels hold no row (every object rejected or no view held a "
@@ -121,7 +126,8 @@ def train_pick_network(labels_path: str | Path, folder: str | Path, options: Pic
                          f"of {options.validation:g} holds them all out: no object is left to train on (label more "
                          "objects, or give a smaller validation share)")
     result = train_on_pick_labels(labels, folder, pick_crop(labels), options)
-    network = PickNetwork(design, result, validation_of(labels, result.checkpoint, options), str(labels_path))
+    network = PickNetwork(design, result, validation_of(labels, result.checkpoint, options), str(labels_path),
+                          options.start_from)
     (Path(folder) / RECORD).write_text(json.dumps(network.to_json(), indent=1) + "\n")
     return network
 

@@ -10,6 +10,7 @@ Checkpoints hold plain values only (``weights_only`` loads them) and the crop re
 
 from __future__ import annotations
 
+import pickle
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -172,9 +173,15 @@ def train_on_pick_labels(labels: PickLabels, folder: str | Path, crop: dict,
 
 def weights_of(checkpoint: str, model: str) -> dict:
     """The state dict of ``checkpoint`` (loaded weights-only), which must hold a ``model`` network."""
-    saved = torch.load(checkpoint, map_location="cpu", weights_only=True)
-    if saved.get("model") != model:
-        raise ValueError(f"{checkpoint}: holds a {saved.get('model')!r} network; a fit of {model!r} cannot start "
+    try:
+        saved = torch.load(checkpoint, map_location="cpu", weights_only=True)
+    except (RuntimeError, EOFError, pickle.UnpicklingError) as error:
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ValueError(f"{checkpoint}: not a checkpoint a fit can start from ({reason}): name a best.pt of "
+                         "`onepiece pick-train`") from None
+    if not isinstance(saved, dict) or saved.get("model") != model:
+        held = saved.get("model") if isinstance(saved, dict) else type(saved).__name__
+        raise ValueError(f"{checkpoint}: holds a {held!r} network; a fit of {model!r} cannot start "
                          "from it: name a checkpoint of the same model")
     return saved["state_dict"]
 
