@@ -35,9 +35,14 @@ def _pooled_cell(picks: dict) -> str:
     return f"{100 * rate:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
 
 
+def _source(n: dict) -> str:
+    """The objects a network was labelled on, and where its fit started where not from fresh weights."""
+    return f"`{n['made']['objects']}`" + (", fit started from the shipped network" if n.get("start_from") else "")
+
+
 def _row(n: dict) -> str:
     made, fitted, val = n["made"], n["network"], n["network"]["validation"]
-    return (f"| `{made['objects']}` | {n['label_seed']} | {n['fit_seed']} | {made['labels']} | "
+    return (f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {made['labels']} | "
             f"{made['core_seconds']:.0f} | {fitted['fit_seconds']:.0f} | "
             f"{100 * val['top1']:.0f}% against {100 * val['guess']:.0f}% | "
             f"{_cell(n['picks']['household'])} | {_cell(n['picks']['unseen'])} | {_pooled_cell(n['picks'])} |")
@@ -58,15 +63,17 @@ def own_network_section(result: dict, target: float) -> list[str]:
     if not networks:
         return []
     made = networks[0]["made"]
-    groups = {n["made"]["objects"]: [] for n in networks}
+    groups: dict[tuple[str, str | None], list[dict]] = {}
     for n in networks:
-        groups[n["made"]["objects"]].append(n)
+        groups.setdefault((n["made"]["objects"], n.get("start_from")), []).append(n)
     return [f"## A network made by the two commands{_title(made)}: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
             f"({made['views']} views an object, {made['per_view']} candidates executed a view, {_hand(made)}; "
             "docs/planning.md) on the objects each row names (`--objects`; its default objects were "
             f"`{FIRST_OBJECTS}`, and are `{PICK_LABEL_OBJECTS}` since this page's trials), and `onepiece pick-train` "
-            "with its defaults (the shipped design), at each label seed and fit seed; each network judged as "
+            "with its defaults (the shipped design; from fresh weights unless the row says it started from the "
+            "network shipped for the default job's gripper, `--start-from shipped`), at each label seed and fit "
+            "seed; each network judged as "
             f"`onepiece pick` judges it ({result['views']} views an object, its first 3 grasps checked), the network "
             "chooser alone, on the views that judge the shipped network above, executed by the same hand"
             f"{_shipped_words(shipped)}. Nothing here was chosen on either set.", "",
@@ -77,8 +84,9 @@ def own_network_section(result: dict, target: float) -> list[str]:
             *(_beside_heuristics(networks, target) if shipped is None else [
                 f"| shipped | | | {SHIPPED_LABELS} | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} "
                 f"| {_pooled_cell(shipped)} |", "",
-                *(line for objects, group in groups.items()
-                  for line in (_verdict(objects, group, shipped, target) + _against_first(group, groups), ""))])]
+                *(line for group in groups.values()
+                  for line in (_verdict(group, shipped, target) + _against_first(group, groups), ""))]),
+            *(_started_beside(groups) if shipped is None else [])]
 
 
 def _shipped_words(shipped: dict | None) -> str:
@@ -100,7 +108,7 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
         picks = n["picks"]
         others = {m: {s: picks[s]["others"][m] for s in SETS} for m in HEURISTICS}
         gain = paired_gain([_both(picks)], [_both(others["top_down"])], VIEWS)
-        lines.append(f"| `{n['made']['objects']}` | {n['label_seed']} | {n['fit_seed']} | {_pooled_cell(picks)} | "
+        lines.append(f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {_pooled_cell(picks)} | "
                      + " | ".join(_pooled_cell(others[m]) for m in HEURISTICS) + f" | {gain_words(gain)} |")
     pooled = [_pooled(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
@@ -108,27 +116,48 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
             f"{'**met**' if met == len(pooled) else '**not met**'} by {met} of the {len(pooled)} networks.", ""]
 
 
-def _against_first(networks: list[dict], groups: dict[str, list[dict]]) -> str:
-    """`` Against ...``: ``networks`` against those labelled on FIRST_OBJECTS at the same label and fit seeds
-    ('' where they are those, or none share their seeds)."""
-    first = {(n["label_seed"], n["fit_seed"]): n for n in groups.get(FIRST_OBJECTS, [])}
-    pairs = [(n, first[n["label_seed"], n["fit_seed"]]) for n in networks
-             if networks[0]["made"]["objects"] != FIRST_OBJECTS and (n["label_seed"], n["fit_seed"]) in first]
-    if not pairs:
+def _same_seeds(networks: list[dict], base: list[dict]) -> tuple[list[dict], list[dict]]:
+    """``networks`` and ``base`` paired at the same label and fit seeds (those both hold)."""
+    by_seeds = {(n["label_seed"], n["fit_seed"]): n for n in base}
+    pairs = [(n, by_seeds[n["label_seed"], n["fit_seed"]]) for n in networks
+             if (n["label_seed"], n["fit_seed"]) in by_seeds]
+    return [_both(n["picks"]) for n, _ in pairs], [_both(b["picks"]) for _, b in pairs]
+
+
+def _against_first(networks: list[dict], groups: dict[tuple[str, str | None], list[dict]]) -> str:
+    """`` Against ...``: fresh fits against those labelled on FIRST_OBJECTS at the same label and fit seeds, a
+    fit started from the shipped network against the fresh fits on the same labels ('' where none pair)."""
+    objects, started = networks[0]["made"]["objects"], networks[0].get("start_from")
+    base = groups.get((objects, None), []) if started else groups.get((FIRST_OBJECTS, None), [])
+    tried, paired = _same_seeds(networks, base) if started or objects != FIRST_OBJECTS else ([], [])
+    if not tried:
         return ""
-    gain = paired_gain([_both(n["picks"]) for n, _ in pairs], [_both(f["picks"]) for _, f in pairs], VIEWS)
-    return (f" Against the networks labelled on `{FIRST_OBJECTS}` ({pairs[0][1]['made']['labels']} labels) at the "
-            f"same seeds, over both sets: {gain_words(gain)}.")
+    gain = paired_gain(tried, paired, VIEWS)
+    against = ("fitted from fresh weights on the same labels" if started else
+               f"labelled on `{FIRST_OBJECTS}` ({base[0]['made']['labels']} labels)")
+    return f" Against the networks {against} at the same seeds, over both sets: {gain_words(gain)}."
 
 
-def _verdict(objects: str, networks: list[dict], shipped: dict, target: float) -> str:
-    """The networks labelled on ``objects`` against the shipped one, and the target over both sets."""
+def _started_beside(groups: dict[tuple[str, str | None], list[dict]]) -> list[str]:
+    """For a hand judged beside the heuristics: each group of fits started from the shipped network against the
+    fresh fits on the same labels at the same seeds."""
+    lines = []
+    for group in groups.values():
+        sentence = _against_first(group, groups).strip() if group[0].get("start_from") else ""
+        lines += [sentence, ""] if sentence else []
+    return lines
+
+
+def _verdict(networks: list[dict], shipped: dict, target: float) -> str:
+    """``networks`` (one source, one start) against the shipped one, and the target over both sets."""
     gain = paired_gain([_both(n["picks"]) for n in networks], [_both(shipped)] * len(networks), VIEWS)
     household = paired_gain([n["picks"]["household"]["per_object"] for n in networks],
                             [shipped["household"]["per_object"]] * len(networks), VIEWS)
     pooled = [_pooled(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
-    return (f"Labelled on `{objects}` ({networks[0]['made']['labels']} labels), against the shipped network on the "
+    started = ", each fit started from the shipped network" if networks[0].get("start_from") else ""
+    return (f"Labelled on `{networks[0]['made']['objects']}` ({networks[0]['made']['labels']} labels){started}, "
+            "against the shipped network on the "
             f"same views, over both sets: {gain_words(gain)}; on the household set alone: {gain_words(household)} "
             "(a network made so replaces the shipped one where the household interval lies above zero: "
             f"{'it does' if household.verdict == 'kept' else 'the shipped one stays'}). The first-attempt target "
