@@ -35,9 +35,16 @@ def _pooled_cell(picks: dict) -> str:
     return f"{100 * rate:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
 
 
+def _started(n: dict) -> str:
+    """Where the fit of ``n`` started ('' from fresh weights)."""
+    if not n.get("start_from"):
+        return ""
+    return f"fit started from `{n['network']['start_from'].rsplit('/', 1)[-1]}` (the box gripper's shipped network)"
+
+
 def _source(n: dict) -> str:
     """The objects a network was labelled on, and where its fit started where not from fresh weights."""
-    return f"`{n['made']['objects']}`" + (", fit started from the shipped network" if n.get("start_from") else "")
+    return f"`{n['made']['objects']}`" + (f", {_started(n)}" if n.get("start_from") else "")
 
 
 def _row(n: dict) -> str:
@@ -71,9 +78,9 @@ def own_network_section(result: dict, target: float) -> list[str]:
             f"({made['views']} views an object, {made['per_view']} candidates executed a view, {_hand(made)}; "
             "docs/planning.md) on the objects each row names (`--objects`; its default objects were "
             f"`{FIRST_OBJECTS}`, and are `{PICK_LABEL_OBJECTS}` since this page's trials), and `onepiece pick-train` "
-            "with its defaults (the shipped design; from fresh weights unless the row says it started from the "
-            "network shipped for the default job's gripper, `--start-from shipped`), at each label seed and fit "
-            "seed; each network judged as "
+            "with its defaults (the shipped design; from fresh weights unless the row says its fit started from "
+            "the network shipped for the default job's box gripper, `--start-from shipped`), at each label seed "
+            "and fit seed; each network judged as "
             f"`onepiece pick` judges it ({result['views']} views an object, its first 3 grasps checked), the network "
             "chooser alone, on the views that judge the shipped network above, executed by the same hand"
             f"{_shipped_words(shipped)}. Nothing here was chosen on either set.", "",
@@ -155,7 +162,7 @@ def _verdict(networks: list[dict], shipped: dict, target: float) -> str:
                             [shipped["household"]["per_object"]] * len(networks), VIEWS)
     pooled = [_pooled(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
-    started = ", each fit started from the shipped network" if networks[0].get("start_from") else ""
+    started = f", each {_started(networks[0])}" if networks[0].get("start_from") else ""
     return (f"Labelled on `{networks[0]['made']['objects']}` ({networks[0]['made']['labels']} labels){started}, "
             "against the shipped network on the "
             f"same views, over both sets: {gain_words(gain)}; on the household set alone: {gain_words(household)} "
