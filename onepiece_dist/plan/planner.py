@@ -337,8 +337,9 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     proposals = propose(observation, scorer.record, spec, rng)
     _refuse_plane_alone(observation, proposals)
     clock = time.perf_counter()
-    scores = on_target(proposals, scorer.score(proposals.crops, spec.batch_size), scorer.gripper, spec,
-                       observation.source)
+    from onepiece_dist.plan.redraw import redrawn_scores  # it reads this module's Seen and planned_crops
+
+    scores = on_target(proposals, redrawn_scores(proposals, scorer, spec), scorer.gripper, spec, observation.source)
     scored = time.perf_counter()
     grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
     grasps = tuple(g for g in grasps if np.isfinite(g.score))

@@ -43,6 +43,9 @@ class PlanSpec(Frozen):
     device: Literal["auto", "cpu", "cuda"] = Field("auto", description="Where the network scores: a CUDA GPU when "
                                                    "there is one (auto), else the CPU.")
     seed: int = Field(0, ge=0, lt=2**63, description="Seed of the sampling and of the crops' resampling.")
+    score_draws: int = Field(1, ge=1, le=16, description="Draws of each of the 32 best-scored candidates' crop "
+                             "points scored and averaged (plan.redraw: a crop holds a random subset of the points "
+                             "inside the closing region, so one draw's score moves with it); 1: one draw.")
     top_down: bool = Field(True, description="Also propose the three top-down grasps across the object's narrow "
                            "horizontal axis (the top-down baseline's), cropped and checked as the sampled ones (kept "
                            "by the pick trials: docs/picks.md); in pick labels without a checkpoint they are always "
