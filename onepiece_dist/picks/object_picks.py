@@ -35,9 +35,9 @@ from onepiece_dist.plan.planner import (
     check_ranked,
     gravity,
     rank,
+    scores_of,
     with_context,
 )
-from onepiece_dist.plan.redraw import redrawn_scores
 from onepiece_dist.plan.scorer import GraspScorer, cut_crops
 from onepiece_dist.specs.plan import PickSpec
 
@@ -185,7 +185,7 @@ def choose(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
         normals = cloud_normals(proposals.object_points, proposals.object_points, proposals.viewpoint)
         scores = antipodal_scores(proposals.object_points, normals, proposals.poses, scorer.gripper)
     else:
-        scores = redrawn_scores(proposals, scorer, plan)
+        scores = scores_of(proposals, scorer, plan)
     checking = method == "network" and pool == "view" and plan.check_first > 0
     ranked = rank(proposals, scores, scorer.record, plan, keep=max(spec.attempts, plan.check_first * checking))
     if checking:

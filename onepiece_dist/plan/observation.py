@@ -8,9 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
+from onepiece_dist.core.cloud.support_check import support_plane
 from onepiece_dist.core.frames import transform_points
 from onepiece_dist.core.raycast import import_open3d
 from onepiece_dist.errors import CloudRejected
+from onepiece_dist.specs.plan import PlanSpec
 
 MIN_POINTS = 50  # fewer observed points hold no grasp worth planning
 MAX_DIAGONAL = 5.0  # m: a larger cloud is in other units (millimetres give 1000x)
@@ -95,3 +97,26 @@ def depth_to_cloud(depth: np.ndarray, fx: float, fy: float, cx: float, cy: float
         pose = np.asarray(camera_pose, dtype=np.float64)
         points, viewpoint, up = transform_points(points, pose), pose[:3, 3].copy(), np.array([0.0, 0.0, 1.0])
     return Observation(check_cloud(points, source), viewpoint, source, up)
+
+
+ESTIMATED_DISTANCE = 0.6  # m above the support plane's points where a camera of unknown position is put
+
+
+def with_viewpoint(observation: Observation, spec: PlanSpec) -> tuple[Observation, tuple[str, ...]]:
+    """``observation`` with a camera position: its own, or where none was given, one estimated on the side the
+    surface was seen from (ESTIMATED_DISTANCE along the support plane's normal, which faces the objects on it),
+    said in the notes; refused where it cannot be estimated (no support plane)."""
+    if observation.viewpoint is not None:
+        return observation, ()
+    plane = None
+    if spec.support_plane == "auto":
+        plane = support_plane(observation.points, np.random.default_rng([spec.seed, 56]), up=observation.up)
+    if plane is None:
+        raise CloudRejected(f"{observation.source}: no camera position and no support plane to estimate it from: "
+                            "give the camera's position in the cloud's frame (--viewpoint x,y,z; a camera-frame "
+                            "cloud: 0,0,0) so that normals face the camera")
+    eye = observation.points[plane.inliers].mean(axis=0) + ESTIMATED_DISTANCE * plane.normal
+    note = (f"no viewpoint given: the camera was estimated at ({eye[0]:+.3f}, {eye[1]:+.3f}, {eye[2]:+.3f}), "
+            f"{ESTIMATED_DISTANCE} m above the support plane on the side the objects stand; give --viewpoint for "
+            "normals that face the real camera")
+    return Observation(observation.points, eye, observation.source, observation.up), (note,)

@@ -29,7 +29,8 @@ from onepiece_dist.core.frames import apply_rotation, compose_poses, quat_from_m
 from onepiece_dist.core.grasp_context import WORLD_DOWN, grasp_context
 from onepiece_dist.core.hand_frames import to_panda
 from onepiece_dist.errors import CloudRejected, SpecError
-from onepiece_dist.plan.observation import Observation
+from onepiece_dist.plan.observation import Observation, with_viewpoint
+from onepiece_dist.plan.redraw import redrawn_scores
 from onepiece_dist.plan.scorer import CropRecord, Crops, GraspScorer, cut_crops
 from onepiece_dist.plan.targets import SeenObject, grasped_objects, seen_objects, target_object
 from onepiece_dist.specs.job import GripperSpec
@@ -337,9 +338,7 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     proposals = propose(observation, scorer.record, spec, rng)
     _refuse_plane_alone(observation, proposals)
     clock = time.perf_counter()
-    from onepiece_dist.plan.redraw import redrawn_scores  # it reads this module's Seen and planned_crops
-
-    scores = on_target(proposals, redrawn_scores(proposals, scorer, spec), scorer.gripper, spec, observation.source)
+    scores = on_target(proposals, scores_of(proposals, scorer, spec), scorer.gripper, spec, observation.source)
     scored = time.perf_counter()
     grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
     grasps = tuple(g for g in grasps if np.isfinite(g.score))
@@ -354,6 +353,13 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     counts = dataclasses.replace(proposals.counts, scored=len(scores))
     return GraspPlan(observation.source, grasps, counts, proposals.plane, seconds, notes + _unchecked(spec, proposals),
                      seen_objects(proposals.apart))
+
+
+def scores_of(proposals: Proposals, scorer: GraspScorer, spec: PlanSpec) -> np.ndarray:
+    """``scorer``'s scores of ``proposals``, over ``spec.score_draws`` draws of the points (plan.redraw)."""
+    seen = Seen.of(proposals)
+    return redrawn_scores(proposals.crops, proposals.poses, scorer, spec,
+                          lambda poses, rng: planned_crops(seen, poses, scorer.record, rng)[0])
 
 
 def on_target(proposals: Proposals, scores: np.ndarray, gripper: GripperSpec, spec: PlanSpec, source: str
@@ -373,26 +379,3 @@ def _unchecked(spec: PlanSpec, proposals: Proposals) -> tuple[str, ...]:
         return ()
     return (f"the first {spec.check_first} grasps are in the network's order, not checked: the check stands the "
             "shape the view implies on a support plane, and this cloud has none (--no-plane, or none found)",)
-
-
-ESTIMATED_DISTANCE = 0.6  # m above the support plane's points where a camera of unknown position is put
-
-
-def with_viewpoint(observation: Observation, spec: PlanSpec) -> tuple[Observation, tuple[str, ...]]:
-    """``observation`` with a camera position: its own, or where none was given, one estimated on the side the
-    surface was seen from (ESTIMATED_DISTANCE along the support plane's normal, which faces the objects on it),
-    said in the notes; refused where it cannot be estimated (no support plane)."""
-    if observation.viewpoint is not None:
-        return observation, ()
-    plane = None
-    if spec.support_plane == "auto":
-        plane = support_plane(observation.points, np.random.default_rng([spec.seed, 56]), up=observation.up)
-    if plane is None:
-        raise CloudRejected(f"{observation.source}: no camera position and no support plane to estimate it from: "
-                            "give the camera's position in the cloud's frame (--viewpoint x,y,z; a camera-frame "
-                            "cloud: 0,0,0) so that normals face the camera")
-    eye = observation.points[plane.inliers].mean(axis=0) + ESTIMATED_DISTANCE * plane.normal
-    note = (f"no viewpoint given: the camera was estimated at ({eye[0]:+.3f}, {eye[1]:+.3f}, {eye[2]:+.3f}), "
-            f"{ESTIMATED_DISTANCE} m above the support plane on the side the objects stand; give --viewpoint for "
-            "normals that face the real camera")
-    return Observation(observation.points, eye, observation.source, observation.up), (note,)
