@@ -18,6 +18,7 @@ from benchmarks.pages.pick_noisy_labels_section import noisy_labels_section
 from benchmarks.pages.pick_own_section import own_network_section
 from benchmarks.pages.pick_panda_section import panda_section
 from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
+from benchmarks.pages.pick_score_draws_section import score_draws_section
 from benchmarks.pages.pick_sets import (
     HOUSEHOLD_SETS,
     LABELS,
@@ -182,7 +183,7 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_own_network", "pick_own_network_panda", "pick_own_network_robotiq_2f85",
+SECTIONS = ("pick_score_draws", "pick_own_network", "pick_own_network_panda", "pick_own_network_robotiq_2f85",
             "pick_own_network_robotiq_2f140", "pick_panda", "pick_panda_check", "pick_clutter_panda",
             "pick_clutter_panda_pile", "pick_clearance_panda",
             "pick_clearance_panda_pile", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
@@ -215,7 +216,8 @@ def render_picks_page() -> str:
                   "the title says how each attempt ended.", ""]
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
     target = (picks or {}).get("targets", {}).get("first_attempt", 0.85)
-    render = {"pick_own_network": lambda r: own_network_section(r, target),
+    render = {"pick_score_draws": score_draws_section,
+              "pick_own_network": lambda r: own_network_section(r, target),
               "pick_own_network_panda": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f85": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f140": lambda r: own_network_section(r, target),
