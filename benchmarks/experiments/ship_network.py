@@ -187,8 +187,8 @@ def ship_own(gripper: str) -> dict:
 
     source = f"benchmarks/results/pick_own_network_{gripper}.json"
     result = json.loads((ROOT / source).read_text())
-    made = next(n for n in result["networks"]
-                if n["made"]["objects"] == PICK_LABEL_OBJECTS and (n["label_seed"], n["fit_seed"]) == (0, 0))
+    made = next(n for n in result["networks"] if n["made"]["objects"] == PICK_LABEL_OBJECTS
+                and (n["label_seed"], n["fit_seed"]) == (0, 0) and not n.get("start_from"))
     point = {"checkpoint": made["network"]["checkpoint"], "design": made["network"]["design"],
              "labels": made["made"]["labels"]}
     figures = {f"{name}_first_attempt": {"rate": made["picks"][name]["first_attempt"],
