@@ -16,13 +16,12 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import time
 from datetime import date
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parents[1]
 ROOT = HERE.parent
-VIEWS = 8
+VIEWS = 8  # pick_own_network's
 SETS = ("household", "unseen")
 MIX = "pybullet_random_urdfs_0_32__shapes_groceries_0_16__shapes_vessels_0_16"  # pick_own_network.tag's folders
 NETWORKS = {  # name -> (checkpoint, gripper preset; None: the shipped network, the default job's box gripper)
@@ -36,24 +35,13 @@ NETWORKS = {  # name -> (checkpoint, gripper preset; None: the shipped network, 
 
 def judged(name: str, draws: int) -> dict:
     """NETWORKS[name] with ``draws`` score draws on each of SETS, as `onepiece pick` judges it."""
-    from benchmarks.experiments.pick_own_network import hand
-    from benchmarks.experiments.picks import sets
-    from onepiece_dist.picks.runner import run_picks
-    from onepiece_dist.specs.plan import PickSpec, PlanSpec
+    from benchmarks.experiments import pick_own_network
+    from onepiece_dist.specs.plan import PlanSpec
 
     checkpoint, gripper = NETWORKS[name]
-    path, out = None if checkpoint is None else str(ROOT / checkpoint), {}
-    for set_name in SETS:
-        spec = PickSpec(objects=sets()[set_name][0](), checkpoint=path,
-                        output=str(ROOT / "data" / "score_draws" / f"{name}_d{draws}" / set_name), views=VIEWS,
-                        methods=("network",), pictures=0, gripper=hand(gripper), plan=PlanSpec(score_draws=draws))
-        start = time.perf_counter()
-        report = run_picks(spec)
-        method = report.methods[0]
-        out[set_name] = {"first_attempt": method.first_attempt, "interval": list(method.first_attempt_interval),
-                         "views": method.views, "per_object": report.first_picks("network"),
-                         "seconds": round(time.perf_counter() - start, 1)}
-    return out
+    return pick_own_network.judged(None if checkpoint is None else ROOT / checkpoint, name, gripper,
+                                   plan=PlanSpec(score_draws=draws),
+                                   folder=ROOT / "data" / "score_draws" / f"{name}_d{draws}")
 
 
 def main() -> None:

@@ -15,22 +15,22 @@ SETS = ("household", "unseen")
 SHIPPED_LABELS = 81152  # both shipped networks': plan/networks/*.json
 
 
-def _both(picks: dict) -> dict[str, int]:
+def both_sets(picks: dict) -> dict[str, int]:
     """Object name -> views picked at the first attempt, over both sets."""
     return {name: n for set_name in SETS for name, n in picks[set_name]["per_object"].items()}
 
 
 def _pooled(picks: dict) -> tuple[float, tuple[float, float]]:
-    rates = np.array([n / VIEWS for n in _both(picks).values()])
+    rates = np.array([n / VIEWS for n in both_sets(picks).values()])
     return float(rates.mean()), bootstrap_interval(rates)
 
 
-def _cell(figure: dict) -> str:
+def cell(figure: dict) -> str:
     low, high = figure["interval"]
     return f"{100 * figure['first_attempt']:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
 
 
-def _pooled_cell(picks: dict) -> str:
+def pooled_cell(picks: dict) -> str:
     rate, (low, high) = _pooled(picks)
     return f"{100 * rate:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
 
@@ -44,7 +44,8 @@ def _started(n: dict) -> str:
 
 def _source(n: dict) -> str:
     """The objects a network was labelled on, and where its fit started where not from fresh weights."""
-    return f"`{n['made']['objects']}`" + (f", {_started(n)}" if n.get("start_from") else "")
+    started = _started(n)
+    return f"`{n['made']['objects']}`" + (f", {started}" if started else "")
 
 
 def _row(n: dict) -> str:
@@ -52,7 +53,7 @@ def _row(n: dict) -> str:
     return (f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {made['labels']} | "
             f"{made['core_seconds']:.0f} | {fitted['fit_seconds']:.0f} | "
             f"{100 * val['top1']:.0f}% against {100 * val['guess']:.0f}% | "
-            f"{_cell(n['picks']['household'])} | {_cell(n['picks']['unseen'])} | {_pooled_cell(n['picks'])} |")
+            f"{cell(n['picks']['household'])} | {cell(n['picks']['unseen'])} | {pooled_cell(n['picks'])} |")
 
 
 def _hand(made: dict) -> str:
@@ -89,8 +90,8 @@ def own_network_section(result: dict, target: float) -> list[str]:
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
             *(_row(n) for n in networks),
             *(_beside_heuristics(networks, target) if shipped is None else [
-                f"| shipped | | | {SHIPPED_LABELS} | | | | {_cell(shipped['household'])} | {_cell(shipped['unseen'])} "
-                f"| {_pooled_cell(shipped)} |", "",
+                f"| shipped | | | {SHIPPED_LABELS} | | | | {cell(shipped['household'])} | {cell(shipped['unseen'])} "
+                f"| {pooled_cell(shipped)} |", "",
                 *(line for group in groups.values()
                   for line in (_verdict(group, shipped, target) + _against_first(group, groups), ""))]),
             *(_started_beside(groups) if shipped is None else [])]
@@ -115,9 +116,9 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
     for n in networks:
         picks = n["picks"]
         others = {m: {s: picks[s]["others"][m] for s in SETS} for m in HEURISTICS}
-        gain = paired_gain([_both(picks)], [_both(others["top_down"])], VIEWS)
-        lines.append(f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {_pooled_cell(picks)} | "
-                     + " | ".join(_pooled_cell(others[m]) for m in HEURISTICS) + f" | {gain_words(gain)} |")
+        gain = paired_gain([both_sets(picks)], [both_sets(others["top_down"])], VIEWS)
+        lines.append(f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {pooled_cell(picks)} | "
+                     + " | ".join(pooled_cell(others[m]) for m in HEURISTICS) + f" | {gain_words(gain)} |")
     pooled = [_pooled(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
     return [*lines, "", f"The first-attempt target over both sets (>= {100 * target:.0f}%): "
@@ -129,7 +130,7 @@ def _same_seeds(networks: list[dict], base: list[dict]) -> tuple[list[dict], lis
     by_seeds = {(n["label_seed"], n["fit_seed"]): n for n in base}
     pairs = [(n, by_seeds[n["label_seed"], n["fit_seed"]]) for n in networks
              if (n["label_seed"], n["fit_seed"]) in by_seeds]
-    return [_both(n["picks"]) for n, _ in pairs], [_both(b["picks"]) for _, b in pairs]
+    return [both_sets(n["picks"]) for n, _ in pairs], [both_sets(b["picks"]) for _, b in pairs]
 
 
 def _against_first(networks: list[dict], groups: dict[tuple[str, str | None], list[dict]]) -> str:
@@ -158,12 +159,12 @@ def _started_beside(groups: dict[tuple[str, str | None], list[dict]]) -> list[st
 
 def _verdict(networks: list[dict], shipped: dict, target: float) -> str:
     """``networks`` (one source, one start) against the shipped one, and the target over both sets."""
-    gain = paired_gain([_both(n["picks"]) for n in networks], [_both(shipped)] * len(networks), VIEWS)
+    gain = paired_gain([both_sets(n["picks"]) for n in networks], [both_sets(shipped)] * len(networks), VIEWS)
     household = paired_gain([n["picks"]["household"]["per_object"] for n in networks],
                             [shipped["household"]["per_object"]] * len(networks), VIEWS)
     pooled = [_pooled(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
-    started = f", each {_started(networks[0])}" if networks[0].get("start_from") else ""
+    started = _started(networks[0]) and f", each {_started(networks[0])}"
     return (f"Labelled on `{networks[0]['made']['objects']}` ({networks[0]['made']['labels']} labels){started}, "
             "against the shipped network on the "
             f"same views, over both sets: {gain_words(gain)}; on the household set alone: {gain_words(household)} "

@@ -3,11 +3,9 @@ benchmarks/experiments/pick_score_draws.py): each network with k draws against o
 
 from __future__ import annotations
 
-from benchmarks.pages.pick_own_section import _both, _cell, _pooled_cell
+from benchmarks.pages.pick_own_section import both_sets, cell, pooled_cell
 from benchmarks.pages.pick_trials_section import VIEWS, gain_words
 from onepiece_dist.stats.intervals import paired_gain
-
-SETS = ("household", "unseen")
 
 
 def score_draws_section(result: dict) -> list[str]:
@@ -29,14 +27,14 @@ def score_draws_section(result: dict) -> list[str]:
         for k in counts:
             if (name, k) in runs:
                 picks = runs[name, k]
-                lines.append(f"| `{name}` | {hand} | {k} | {_cell(picks['household'])} | "
-                             f"{_cell(picks['unseen'])} | {_pooled_cell(picks)} |")
+                lines.append(f"| `{name}` | {hand} | {k} | {cell(picks['household'])} | "
+                             f"{cell(picks['unseen'])} | {pooled_cell(picks)} |")
     lines.append("")
     for k in counts[1:]:
         pairs = [(runs[n, k], runs[n, 1]) for n in names if (n, k) in runs and (n, 1) in runs]
         if not pairs:
             continue
-        both = paired_gain([_both(a) for a, _ in pairs], [_both(b) for _, b in pairs], VIEWS)
+        both = paired_gain([both_sets(a) for a, _ in pairs], [both_sets(b) for _, b in pairs], VIEWS)
         house = paired_gain([a["household"]["per_object"] for a, _ in pairs],
                             [b["household"]["per_object"] for _, b in pairs], VIEWS)
         lines += [f"{k} draws against one, the networks as seeds, over both sets: {gain_words(both)}; on the household "
