@@ -166,6 +166,37 @@ def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others
     assert typo.exit_code == 2 and "pandas: not a gripper spec: no such file, nor a preset (panda," in typo.output
 
 
+@pytest.mark.sim
+def test_a_hand_none_ships_for_with_the_default_region_plans_with_the_default_network_carried(tmp_path):
+    from onepiece_dist.errors import CheckpointRejected
+    from onepiece_dist.picks.runner import with_network
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import NETWORK, planning_network
+    from onepiece_dist.specs.job import GripperSpec
+    from onepiece_dist.specs.plan import PickSpec
+
+    hand = GripperSpec(name="my_hand", max_opening=0.09, finger_length=0.05, palm_depth=0.05, closing_force=60.0)
+    with pytest.raises(CheckpointRejected, match="another gripper"):  # given as a checkpoint: refused as before
+        GraspScorer(NETWORK, hand, device="cpu")
+    carried = GraspScorer(NETWORK, hand, device="cpu", carried=True)
+    assert carried.gripper == hand and carried.record.grid_shape() == GraspScorer(NETWORK).record.grid_shape()
+    assert planning_network(hand).path == NETWORK and planning_network(hand).carried_from == "onepiece_box"
+    assert planning_network(GripperSpec()).carried_from is None
+    picks = with_network(PickSpec(gripper=hand))
+    assert picks.checkpoint == str(NETWORK) and picks.carried and not with_network(PickSpec()).carried
+    wider = hand.model_copy(update={"max_opening": 0.12, "closing_width": 0.12})
+    with pytest.raises(CheckpointRejected, match="closing region is its own .* closing_width=0.12"):
+        planning_network(wider)
+    np.save(tmp_path / "depth.npy", depth_millimetres().astype(np.float64) / 1000)
+    (tmp_path / "my_hand.yaml").write_text(hand.model_dump_json())
+    result = CliRunner().invoke(app, ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}",
+                                      "--gripper", str(tmp_path / "my_hand.yaml"), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "no network ships for the gripper 'my_hand': planning with the default job's network" in result.output
+    plan = json.loads((tmp_path / "out" / "grasps.json").read_text())
+    assert plan["carried_from"] == "onepiece_box" and plan["grasps"]
+
+
 def test_intrinsics_made_for_another_image_are_refused_and_a_ros_camera_info_is_read(tmp_path):
     from onepiece_dist.plan.robot import read_observation
 

@@ -72,10 +72,11 @@ def network(path: Path, label_seed: int, fit_seed: int, prefix: str = "", start_
 
 
 def judged(checkpoint: Path | None, name: str, gripper: str | None, others: tuple[str, ...] = (), plan=None,
-           folder: Path | None = None) -> dict:
+           folder: Path | None = None, carried: bool = False) -> dict:
     """``checkpoint`` (None: the network shipped for ``gripper``) on each of SETS, executed by ``gripper``, as
-    `onepiece pick` judges it (with ``plan``, a PlanSpec, where given); with ``others`` (pick methods: random,
-    top_down) judged on the same views too. Its picks are written under ``folder`` (default: this experiment's)."""
+    `onepiece pick` judges it (with ``plan``, a PlanSpec, where given; ``carried``: a checkpoint trained for another
+    gripper, carried to this one); with ``others`` (pick methods: random, top_down) judged on the same views too.
+    Its picks are written under ``folder`` (default: this experiment's)."""
     from benchmarks.experiments.picks import sets
     from onepiece_dist.picks.runner import run_picks
     from onepiece_dist.specs.plan import PickSpec
@@ -84,7 +85,7 @@ def judged(checkpoint: Path | None, name: str, gripper: str | None, others: tupl
     for set_name in SETS:
         spec = PickSpec(objects=sets()[set_name][0](), checkpoint=None if checkpoint is None else str(checkpoint),
                         output=str(folder / set_name), views=VIEWS, methods=("network", *others), pictures=0,
-                        gripper=hand(gripper), **({} if plan is None else {"plan": plan}))
+                        gripper=hand(gripper), carried=carried, **({} if plan is None else {"plan": plan}))
         start = time.perf_counter()
         report = run_picks(spec)
         figures = {m.method: {"first_attempt": m.first_attempt, "interval": list(m.first_attempt_interval),

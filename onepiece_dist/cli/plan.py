@@ -145,7 +145,8 @@ def grasp(
         raise typer.Exit(EXIT_USAGE) from None
     if checkpoint is None:
         err(shipped_summary(planned.gripper))
-    extra = {"checkpoint": planned.checkpoint or "shipped", "output_frame": planned.frame}
+    extra = {"checkpoint": planned.checkpoint or "shipped", "output_frame": planned.frame,
+             **({"carried_from": planned.carried_from} if planned.carried_from else {})}
     json_path, png = write_plan(planned.plan, planned.observation, planned.gripper, out, extra=extra)
     if as_json:
         typer.echo(json_path.read_text())

@@ -79,7 +79,7 @@ class ObjectPicks:
     node: str = ""
 
 
-_SCORERS: dict[tuple[str, str], GraspScorer] = {}
+_SCORERS: dict[tuple[str, str, bool], GraspScorer] = {}
 
 
 def process_scorer(spec: PickSpec) -> GraspScorer:
@@ -88,9 +88,9 @@ def process_scorer(spec: PickSpec) -> GraspScorer:
     import torch
 
     torch.set_num_threads(1)  # one core per worker; and the same sums, so the same ranking, in every process
-    key = (spec.checkpoint, spec.gripper.model_dump_json() if spec.gripper else "")
+    key = (spec.checkpoint, spec.gripper.model_dump_json() if spec.gripper else "", spec.carried)
     if key not in _SCORERS:
-        _SCORERS[key] = GraspScorer(spec.checkpoint, spec.gripper, device="cpu")
+        _SCORERS[key] = GraspScorer(spec.checkpoint, spec.gripper, "cpu", spec.carried)
     return _SCORERS[key]
 
 

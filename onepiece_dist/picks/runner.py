@@ -20,7 +20,7 @@ from onepiece_dist.objects import ObjectRef, resolve_source
 from onepiece_dist.picks.clutter import groups_of, pick_scene
 from onepiece_dist.picks.object_picks import ObjectPicks, ViewPicks, pick_object
 from onepiece_dist.plan.scorer import GraspScorer
-from onepiece_dist.plan.shipped import shipped_network
+from onepiece_dist.plan.shipped import planning_network
 from onepiece_dist.runtime.actors import restartable_actor
 from onepiece_dist.runtime.crashes import CrashLog, crash_folder, running
 from onepiece_dist.runtime.pinned_child import PinnedSimulation
@@ -127,7 +127,7 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
     ``picks.json`` into ``spec.output`` and return the report."""
     units = pick_units(spec)  # a bad source is a usage error, found before any Ray starts
     spec = with_network(spec)
-    GraspScorer(spec.checkpoint, spec.gripper, device="cpu")  # a bad checkpoint fails here, not in every worker
+    GraspScorer(spec.checkpoint, spec.gripper, "cpu", spec.carried)  # a bad checkpoint fails here, not in a worker
     Path(spec.output).mkdir(parents=True, exist_ok=True)
     if in_process:
         results = run_each_in_process(pick_task(spec), spec, units, progress)
@@ -139,10 +139,12 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
 
 
 def with_network(spec: PickSpec) -> PickSpec:
-    """``spec`` naming its network: the one shipped for its gripper where it names no checkpoint."""
+    """``spec`` naming its network where it names no checkpoint: the one shipped for its gripper, or the default
+    job's carried to it (plan.shipped.planning_network)."""
     if spec.checkpoint is not None:
         return spec
-    return spec.model_copy(update={"checkpoint": str(shipped_network(spec.gripper))})
+    network = planning_network(spec.gripper)
+    return spec.model_copy(update={"checkpoint": str(network.path), "carried": network.carried_from is not None})
 
 
 def pick_units(spec: PickSpec) -> list:

@@ -25,7 +25,7 @@ from onepiece_dist.plan.camera_files import (
 from onepiece_dist.plan.observation import Observation, read_cloud
 from onepiece_dist.plan.planner import GraspCheck, GraspPlan, plan_grasps
 from onepiece_dist.plan.scorer import GraspScorer
-from onepiece_dist.plan.shipped import shipped_network
+from onepiece_dist.plan.shipped import PlanningNetwork, planning_network
 from onepiece_dist.specs.job import GripperSpec
 from onepiece_dist.specs.plan import PlanSpec
 
@@ -33,13 +33,15 @@ from onepiece_dist.specs.plan import PlanSpec
 @dataclass(frozen=True)
 class RobotPlan:
     """The plan (in the base frame with a camera pose, else the cloud's), the observation in that frame, the
-    gripper it was planned for, the checkpoint that scored it (None: the shipped network) and the frame's name."""
+    gripper it was planned for, the checkpoint that scored it (None: the shipped network), the frame's name, and
+    the gripper the shipped network was trained for where it was carried to this one (plan.shipped)."""
 
     plan: GraspPlan
     observation: Observation
     gripper: GripperSpec
     checkpoint: str | None
     frame: str
+    carried_from: str | None = None
 
 
 def read_observation(cloud: str | Path, intrinsics: str | None = None, depth_scale: float | None = None,
@@ -79,9 +81,11 @@ def plan_from_files(cloud: str | Path, checkpoint: str | Path | None = None, spe
     if pose is not None and spec.target is not None:  # the target is given in the base frame; planning is not
         target = transform_points(np.array([spec.target]), invert_poses(pose[None])[0])[0]
         spec = spec.model_copy(update={"target": tuple(float(v) for v in target)})
-    scorer = GraspScorer(checkpoint or shipped_network(gripper), gripper, spec.device)
+    network = PlanningNetwork(Path(checkpoint)) if checkpoint is not None else planning_network(gripper)
+    scorer = GraspScorer(network.path, gripper, spec.device, carried=network.carried_from is not None)
     plan = plan_grasps(observation, scorer, spec, check)
     if pose is not None:
         plan, observation = plan.transformed(pose), in_frame(observation, pose)
     frame = "the robot's base frame" if pose is not None else "the cloud's frame"
-    return RobotPlan(plan, observation, scorer.gripper, None if checkpoint is None else str(checkpoint), frame)
+    return RobotPlan(plan, observation, scorer.gripper, None if checkpoint is None else str(checkpoint), frame,
+                     network.carried_from)

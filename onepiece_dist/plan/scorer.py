@@ -72,15 +72,18 @@ def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.
 
 class GraspScorer:
     """A checkpoint ready to score crops. ``gripper``: the gripper the caller plans for; a checkpoint trained for
-    another is refused (its crops would mean other shapes)."""
+    another is refused (its crops would mean other shapes), unless ``carried``: then its crops are cut in
+    ``gripper``'s closing region and its grasps proposed for ``gripper`` (plan.shipped.planning_network carries the
+    default job's network to a hand with the same closing region; docs/picks.md says what that picks)."""
 
-    def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto"):
+    def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto",
+                 carried: bool = False):
         from onepiece_dist.learn.models import CONTEXT_MODELS
         from onepiece_dist.learn.train import read_network, resolve_device
 
         self.path = str(checkpoint)
         saved = read_network(self.path)
-        self.record = _crop_record(saved, gripper)
+        self.record = _crop_record(saved, gripper, carried)
         self.device = resolve_device(device)
         self.reads_context = saved.model in CONTEXT_MODELS
         self.reads_space = saved.model in SPACE_MODELS
@@ -138,8 +141,9 @@ class GraspScorer:
         return np.ascontiguousarray(values, dtype=np.float32)
 
 
-def _crop_record(saved, gripper: GripperSpec | None) -> CropRecord:
-    """The crop ``saved`` (learn.train.SavedNetwork) was trained on, checked against the caller's ``gripper``."""
+def _crop_record(saved, gripper: GripperSpec | None, carried: bool = False) -> CropRecord:
+    """The crop ``saved`` (learn.train.SavedNetwork) was trained on, checked against the caller's ``gripper``
+    (``carried``: that crop cut by ``gripper``)."""
     path, crop = saved.path, saved.crop
     if crop is None:
         if gripper is None:
@@ -153,6 +157,8 @@ def _crop_record(saved, gripper: GripperSpec | None) -> CropRecord:
     differs = [name for name in GripperSpec.model_fields if getattr(gripper, name) != getattr(trained, name)]
     if differs == ["name"]:  # the same hand under another name
         return CropRecord(trained, voxel, points, saved.model)
+    if carried:
+        return CropRecord(gripper, voxel, points, saved.model)
     raise CheckpointRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
                              f"{', '.join(differs)}: trained {', '.join(f'{n}={getattr(trained, n)}' for n in differs)}"
                              "): plan with the checkpoint's gripper, or train a network for this one")

@@ -4,11 +4,19 @@ when no checkpoint is given: the default job's box gripper's (``pick_view.pt``),
 (``pick_view_robotiq_2f85.pt``, ``pick_view_robotiq_2f140.pt``: made by ``onepiece pick-labels`` and ``onepiece
 pick-train`` with their defaults).
 Each and its record (how it was trained, what it picks) are package data in ``plan/networks/``, made by the
-committed command ``python -m benchmarks.experiments.ship_network`` (docs/picks.md)."""
+committed command ``python -m benchmarks.experiments.ship_network`` (docs/picks.md).
+
+A hand none ships for whose closing region is the default job's gripper's (the region every crop is cut in) is
+planned for by the default job's network carried to it: its crops cut in that hand's region, which holds the same
+shapes, and its grasps proposed and checked with that hand (``planning_network``). What it picks carried to the
+preset hands, beside their own networks, is ``carried.json``, made by ``python -m
+benchmarks.experiments.pick_carried``. A hand with another region is refused: carried to the Robotiq 2F-140's
+wider region it picks far less than that hand's own network (docs/picks.md)."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 from onepiece_dist.errors import CheckpointRejected, CloudRejected
@@ -19,6 +27,36 @@ SHIPPED = {"onepiece_box": "pick_view", "franka_panda": "pick_view_panda",  # gr
            "robotiq_2f_85": "pick_view_robotiq_2f85", "robotiq_2f_140": "pick_view_robotiq_2f140"}
 NETWORK = FOLDER / f"{SHIPPED[GripperSpec().name]}.pt"  # the default job's gripper's
 RECORD = NETWORK.with_suffix(".json")
+CARRIED = FOLDER / "carried.json"  # what the default job's network picks carried to the preset hands
+REGION = ("closing_depth", "closing_width", "closing_height")  # the gripper fields a crop is cut by
+
+
+@dataclass(frozen=True)
+class PlanningNetwork:
+    """The network that plans for a gripper where no checkpoint is given: its ``path``, and ``carried_from``, the
+    gripper it was trained for where it is carried to another hand (None: trained for this one)."""
+
+    path: Path
+    carried_from: str | None = None
+
+
+def planning_network(gripper: GripperSpec | None = None) -> PlanningNetwork:
+    """The network shipped for ``gripper``; where none ships for it, the default job's carried to it when its
+    closing region is that network's (:class:`CheckpointRejected` naming the fix where it is not)."""
+    gripper = gripper or GripperSpec()
+    if gripper.name in SHIPPED:
+        return PlanningNetwork(shipped_network(gripper))
+    default = GripperSpec()
+    differs = [name for name in REGION if getattr(gripper, name) != getattr(default, name)]
+    if differs:
+        raise CheckpointRejected(
+            f"no network ships for the gripper {gripper.name!r}, and the default job's network is carried only to "
+            f"a hand whose closing region is its own ({', '.join(f'{n}={getattr(default, n)}' for n in REGION)} m; "
+            f"this hand's {', '.join(f'{n}={getattr(gripper, n)}' for n in differs)}): networks ship for "
+            f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140); make one for this gripper "
+            "(onepiece pick-labels --gripper ... --out labels/, then onepiece pick-train labels/pick_labels.zarr) "
+            "and give --checkpoint")
+    return PlanningNetwork(shipped_network(), default.name)
 
 
 def network_path(gripper: GripperSpec | None = None) -> Path:
@@ -52,6 +90,8 @@ def shipped_record(gripper: GripperSpec | None = None) -> dict:
 
 def shipped_summary(gripper: GripperSpec | None = None) -> str:
     """One line for the user: which network plans for ``gripper`` and what it picks."""
+    if gripper is not None and gripper.name not in SHIPPED:
+        return carried_summary(gripper)
     record, name = shipped_record(gripper), network_path(gripper).name
     if not record:
         return f"planning with the shipped network {name}"
@@ -68,3 +108,17 @@ def shipped_summary(gripper: GripperSpec | None = None) -> str:
 def _rate(figure: dict) -> str:
     low, high = figure["interval"]
     return f"{100 * figure['rate']:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
+
+
+def carried_summary(gripper: GripperSpec) -> str:
+    """One line for the user: the default job's network carried to ``gripper``, and what it picks carried to the
+    preset hands whose closing region is its own (carried.json), beside their own networks."""
+    hands = json.loads(CARRIED.read_text())["hands"] if CARRIED.is_file() else []
+    same = [h for h in hands if h["same_region"]]
+    measured = "; ".join(f"carried to the {h['gripper']} hand it picks {_rate(h['carried'])} of "
+                         f"{h['carried']['views']} views of household objects at the first attempt in simulation, "
+                         f"that hand's own network {_rate(h['own'])}" for h in same)
+    return (f"no network ships for the gripper {gripper.name!r}: planning with the default job's network "
+            f"{NETWORK.name} carried to it (its crops cut in this hand's closing region, the same as that network's)"
+            f"{': ' + measured if measured else ''} (docs/picks.md); a network of its own: onepiece pick-labels "
+            "--gripper ... --out labels/, then onepiece pick-train labels/pick_labels.zarr")
