@@ -169,9 +169,10 @@ def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others
 @pytest.mark.sim
 def test_a_hand_none_ships_for_with_the_default_region_plans_with_the_default_network_carried(tmp_path):
     from onepiece_dist.errors import CheckpointRejected
+    from onepiece_dist.gripper.presets import gripper_fields
     from onepiece_dist.picks.runner import with_network
     from onepiece_dist.plan.scorer import GraspScorer
-    from onepiece_dist.plan.shipped import NETWORK, planning_network
+    from onepiece_dist.plan.shipped import CARRIED, NETWORK, planning_network
     from onepiece_dist.specs.job import GripperSpec
     from onepiece_dist.specs.plan import PickSpec
 
@@ -187,14 +188,26 @@ def test_a_hand_none_ships_for_with_the_default_region_plans_with_the_default_ne
     wider = hand.model_copy(update={"max_opening": 0.12, "closing_width": 0.12})
     with pytest.raises(CheckpointRejected, match="closing region is its own .* closing_width=0.12"):
         planning_network(wider)
+    for measured in json.loads(CARRIED.read_text())["hands"]:  # the record the planner quotes agrees with the rule
+        renamed = GripperSpec.model_validate({**gripper_fields(measured["preset"]), "name": "renamed"})
+        if measured["same_region"]:
+            assert planning_network(renamed).carried_from == "onepiece_box"
+        else:
+            pytest.raises(CheckpointRejected, planning_network, renamed)
     np.save(tmp_path / "depth.npy", depth_millimetres().astype(np.float64) / 1000)
     (tmp_path / "my_hand.yaml").write_text(hand.model_dump_json())
     result = CliRunner().invoke(app, ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}",
                                       "--gripper", str(tmp_path / "my_hand.yaml"), "--out", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert "no network ships for the gripper 'my_hand': planning with the default job's network" in result.output
+    assert "carried to the franka_panda and robotiq_2f_85 hands it picks" in result.output  # what carried.json holds
     plan = json.loads((tmp_path / "out" / "grasps.json").read_text())
     assert plan["carried_from"] == "onepiece_box" and plan["grasps"]
+    (tmp_path / "wide.yaml").write_text(wider.model_dump_json())
+    refused = CliRunner().invoke(app, ["pick", "--objects", "primitives[0:1]", "--gripper", str(tmp_path / "wide.yaml"),
+                                       "--in-process", "--out", str(tmp_path / "picks")])
+    assert refused.exit_code == 2 and "closing region is its own" in refused.output, refused.output
+    assert not (tmp_path / "picks" / "picks.json").exists()
 
 
 def test_intrinsics_made_for_another_image_are_refused_and_a_ros_camera_info_is_read(tmp_path):

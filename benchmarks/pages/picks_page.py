@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from benchmarks.pages.committed import load
+from benchmarks.pages.pick_carried_section import carried_section
 from benchmarks.pages.pick_ceiling_section import ceiling_section, ranked_draws_section, reranked_section
 from benchmarks.pages.pick_check_section import check_trials_section, panda_check_section
 from benchmarks.pages.pick_clearance_section import clearance_section
@@ -184,7 +185,7 @@ def _dense_line(plan: dict) -> str:
 
 # results rendered after the benchmark's, in this order
 SECTIONS = ("pick_score_draws", "pick_own_network", "pick_own_network_panda", "pick_own_network_robotiq_2f85",
-            "pick_own_network_robotiq_2f140", "pick_panda", "pick_panda_check", "pick_clutter_panda",
+            "pick_own_network_robotiq_2f140", "pick_carried", "pick_panda", "pick_panda_check", "pick_clutter_panda",
             "pick_clutter_panda_pile", "pick_clearance_panda",
             "pick_clearance_panda_pile", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
             "pick_clearance_pile", "pick_depth_noise", "pick_depth_noise_panda", "pick_noise_views",
@@ -221,6 +222,7 @@ def render_picks_page() -> str:
               "pick_own_network_panda": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f85": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f140": lambda r: own_network_section(r, target),
+              "pick_carried": carried_section,
               "pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
                                                     load("pick_panda_then")),
               "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda")),

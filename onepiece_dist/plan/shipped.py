@@ -90,7 +90,7 @@ def shipped_record(gripper: GripperSpec | None = None) -> dict:
 
 def shipped_summary(gripper: GripperSpec | None = None) -> str:
     """One line for the user: which network plans for ``gripper`` and what it picks."""
-    if gripper is not None and gripper.name not in SHIPPED:
+    if gripper is not None and planning_network(gripper).carried_from is not None:
         return carried_summary(gripper)
     record, name = shipped_record(gripper), network_path(gripper).name
     if not record:
@@ -115,9 +115,10 @@ def carried_summary(gripper: GripperSpec) -> str:
     preset hands whose closing region is its own (carried.json), beside their own networks."""
     hands = json.loads(CARRIED.read_text())["hands"] if CARRIED.is_file() else []
     same = [h for h in hands if h["same_region"]]
-    measured = "; ".join(f"carried to the {h['gripper']} hand it picks {_rate(h['carried'])} of "
-                         f"{h['carried']['views']} views of household objects at the first attempt in simulation, "
-                         f"that hand's own network {_rate(h['own'])}" for h in same)
+    measured = (f"carried to the {' and '.join(h['gripper'] for h in same)} hands it picks "
+                f"{' and '.join(_rate(h['carried']) for h in same)} of {same[0]['carried']['views']} views of "
+                f"household objects at the first attempt in simulation, their own networks "
+                f"{' and '.join(_rate(h['own']) for h in same)}") if same else ""
     return (f"no network ships for the gripper {gripper.name!r}: planning with the default job's network "
             f"{NETWORK.name} carried to it (its crops cut in this hand's closing region, the same as that network's)"
             f"{': ' + measured if measured else ''} (docs/picks.md); a network of its own: onepiece pick-labels "

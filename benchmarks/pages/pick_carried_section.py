@@ -1,0 +1,58 @@
+"""The default job's network carried to other hands (results/pick_carried.json,
+benchmarks/experiments/pick_carried.py): for each preset hand, the carried network beside the hand's own shipped
+network and the top-down baseline on the same views."""
+
+from __future__ import annotations
+
+from benchmarks.pages.pick_own_section import both_sets, cell, pooled_cell
+from benchmarks.pages.pick_trials_section import VIEWS
+from onepiece_dist.stats.intervals import paired_gain
+
+SETS = ("household", "unseen")
+
+
+def _top_down(picks: dict) -> dict:
+    return {s: picks[s]["others"]["top_down"] for s in SETS}
+
+
+def _region(hand: dict) -> str:
+    r = hand["region"]
+    size = " x ".join(f"{100 * r[n]:g}" for n in ("closing_depth", "closing_width", "closing_height"))
+    return f"{size} cm ({'the same' if hand['same_region'] else 'another'})"
+
+
+def _against(tried: dict, base: dict, set_names: tuple[str, ...]) -> str:
+    """The paired gain of ``tried`` over ``base`` on the objects of ``set_names``: points [interval over objects]."""
+    pick = both_sets if len(set_names) == 2 else (lambda p: p[set_names[0]]["per_object"])
+    gain = paired_gain([pick(tried)], [pick(base)], VIEWS)
+    low, high = gain.interval
+    return f"{100 * gain.gain:+.1f} points [{100 * low:+.1f}, {100 * high:+.1f}]"
+
+
+def carried_section(result: dict) -> list[str]:
+    lines = [f"## The default job's network carried to other hands: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}. Where no network ships for a hand whose closing region (the "
+             "box every crop is cut in) is the default job's gripper's, the planner carries the default job's "
+             "network to it (`plan.shipped.planning_network`): its crops cut in that hand's region, its grasps "
+             "proposed, checked and executed by that hand. Here it is carried to each preset hand, beside that "
+             f"hand's own shipped network and the top-down baseline on the same views ({result['views']} views an "
+             "object, the planner's defaults: its first 3 grasps checked), first attempt:", "",
+             "| hand | closing region (against the box gripper's) | network | household | unseen | both sets "
+             "(28 objects) |", "| --- | --- | --- | --- | --- | --- |"]
+    for hand in result["hands"]:
+        carried, own = hand["carried_picks"], hand["own_picks"]
+        rows = (("carried", carried), ("its own", own), ("top-down", _top_down(carried)))
+        lines += [f"| {hand['gripper']} | {_region(hand)} | {name} | {cell(p['household'])} | {cell(p['unseen'])} | "
+                  f"{pooled_cell(p)} |" for name, p in rows]
+    lines.append("")
+    for hand in result["hands"]:
+        carried, own = hand["carried_picks"], hand["own_picks"]
+        lines += [f"- {hand['gripper']}: carried against its own network, paired over objects: "
+                  f"{_against(carried, own, SETS)} over both sets, {_against(carried, own, ('household',))} on the "
+                  f"household set; against top-down {_against(carried, _top_down(carried), SETS)} over both sets."]
+    same = [h["gripper"] for h in result["hands"] if h["same_region"]]
+    lines += ["", f"Carried only where the closing region is the network's own ({', '.join(same)} here): a hand "
+              "with another region is refused with the fields that differ. A preset's own network is replaced "
+              "only where the carried one's interval over the household objects lies above zero (the trials' "
+              "rule).", ""]
+    return lines
