@@ -167,46 +167,44 @@ def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others
 
 
 @pytest.mark.sim
-def test_a_hand_none_ships_for_with_the_default_region_plans_with_the_default_network_carried(tmp_path):
+def test_a_hand_none_ships_for_whose_region_holds_the_networks_plans_with_it_carried(tmp_path):
     from onepiece_dist.errors import CheckpointRejected
-    from onepiece_dist.gripper.presets import gripper_fields
     from onepiece_dist.picks.runner import with_network
     from onepiece_dist.plan.scorer import GraspScorer
-    from onepiece_dist.plan.shipped import CARRIED, NETWORK, planning_network
-    from onepiece_dist.specs.job import GripperSpec
+    from onepiece_dist.plan.shipped import CARRIED, NETWORK, REGION, planning_network
+    from onepiece_dist.specs.job import GripperSpec, VoxelSpec
     from onepiece_dist.specs.plan import PickSpec
 
-    hand = GripperSpec(name="my_hand", max_opening=0.09, finger_length=0.05, palm_depth=0.05, closing_force=60.0)
+    default = GripperSpec()
+    hand = GripperSpec(name="my_hand", max_opening=0.1, closing_width=0.1, finger_length=0.06, closing_depth=0.05,
+                       palm_depth=0.05, closing_force=60.0)  # a closing region larger than the network's
     with pytest.raises(CheckpointRejected, match="another gripper"):  # given as a checkpoint: refused as before
         GraspScorer(NETWORK, hand, device="cpu")
-    carried = GraspScorer(NETWORK, hand, device="cpu", carried=True)
-    assert carried.gripper == hand and carried.record.grid_shape() == GraspScorer(NETWORK).record.grid_shape()
+    carried = GraspScorer(NETWORK, hand, device="cpu", carried=True)  # the hand's geometry, the network's region
+    assert carried.gripper == hand.model_copy(update={n: getattr(default, n) for n in REGION})
+    assert carried.record.grid_shape() == GraspScorer(NETWORK).record.grid_shape() != VoxelSpec().grid_shape(hand)
     assert planning_network(hand).path == NETWORK and planning_network(hand).carried_from == "onepiece_box"
     assert planning_network(GripperSpec()).carried_from is None
     picks = with_network(PickSpec(gripper=hand))
     assert picks.checkpoint == str(NETWORK) and picks.carried and not with_network(PickSpec()).carried
-    wider = hand.model_copy(update={"max_opening": 0.12, "closing_width": 0.12})
-    with pytest.raises(CheckpointRejected, match="closing region is its own .* closing_width=0.12"):
-        planning_network(wider)
-    for measured in json.loads(CARRIED.read_text())["hands"]:  # the record the planner quotes agrees with the rule
-        renamed = GripperSpec.model_validate({**gripper_fields(measured["preset"]), "name": "renamed"})
-        if measured["same_region"]:
-            assert planning_network(renamed).carried_from == "onepiece_box"
-        else:
-            pytest.raises(CheckpointRejected, planning_network, renamed)
+    small = GripperSpec(name="small", max_opening=0.05, closing_width=0.05)
+    with pytest.raises(CheckpointRejected, match="closing region holds its own .* closing_width=0.05"):
+        planning_network(small)
+    for measured in json.loads(CARRIED.read_text())["hands"]:  # the hands the planner quotes, each one it carries to
+        assert all(measured["region"][n] >= getattr(default, n) for n in REGION)
     np.save(tmp_path / "depth.npy", depth_millimetres().astype(np.float64) / 1000)
     (tmp_path / "my_hand.yaml").write_text(hand.model_dump_json())
     result = CliRunner().invoke(app, ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}",
                                       "--gripper", str(tmp_path / "my_hand.yaml"), "--out", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert "no network ships for the gripper 'my_hand': planning with the default job's network" in result.output
-    assert "carried to the franka_panda and robotiq_2f_85 hands it picks" in result.output  # what carried.json holds
+    assert "carried to the franka_panda" in result.output  # what carried.json holds
     plan = json.loads((tmp_path / "out" / "grasps.json").read_text())
     assert plan["carried_from"] == "onepiece_box" and plan["grasps"]
-    (tmp_path / "wide.yaml").write_text(wider.model_dump_json())
-    refused = CliRunner().invoke(app, ["pick", "--objects", "primitives[0:1]", "--gripper", str(tmp_path / "wide.yaml"),
-                                       "--in-process", "--out", str(tmp_path / "picks")])
-    assert refused.exit_code == 2 and "closing region is its own" in refused.output, refused.output
+    (tmp_path / "small.yaml").write_text(small.model_dump_json())
+    refused = CliRunner().invoke(app, ["pick", "--objects", "primitives[0:1]", "--gripper",
+                                       str(tmp_path / "small.yaml"), "--in-process", "--out", str(tmp_path / "picks")])
+    assert refused.exit_code == 2 and "closing region holds its own" in refused.output, refused.output
     assert not (tmp_path / "picks" / "picks.json").exists()
 
 

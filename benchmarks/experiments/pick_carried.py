@@ -1,19 +1,21 @@
 """The default job's network carried to other hands (issue 55: a network out of the box for a hand none ships for):
-the shipped box gripper's network planning for each preset hand, its crops cut in that hand's closing region and its
-grasps proposed, checked and executed by that hand, judged by `onepiece pick` on the household and unseen sets (8
-views an object, the planner's defaults: its first 3 grasps checked), beside the hand's own shipped network and the
-top-down baseline on the same views.
+the shipped box gripper's network planning for each hand, its grasps proposed, checked and executed by that hand and
+its crops cut in its own closing region, judged by `onepiece pick` on the household and unseen sets (8 views an
+object, the planner's defaults: its first 3 grasps checked), beside the hand's own shipped network where one ships
+and the top-down baseline on the same views.
 
-    .venv/bin/python -m benchmarks.experiments.pick_carried
+    .venv/bin/python -m benchmarks.experiments.pick_carried [--hands panda,robotiq_2f140]
 
-The Franka hand and the Robotiq 2F-85 cut their crops in the box gripper's closing region (4 x 8 x 2 cm): there
-the carried network sees the shapes it was trained on. The 2F-140's region is wider and deeper: the counter-case.
+Hands: the three presets (the Franka hand and the Robotiq 2F-85 have the box gripper's 4 x 8 x 2 cm closing region;
+the 2F-140's is 5 x 14 x 2 cm) and the Franka Panda read from pybullet_data's URDF (`gripper: {urdf: ...}`: 5 cm
+fingers, the URDF's 20 N; no network ships for it). ``--hands`` measures those again, keeping the others' results.
 Results: benchmarks/results/pick_carried.json, rendered on docs/picks.md; the planner's record of what carrying
 picks (plan.shipped.carried_summary): onepiece_dist/plan/networks/carried.json.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import platform
 import time
@@ -25,8 +27,16 @@ import numpy as np
 from benchmarks.experiments.pick_own_network import ROOT, SETS, VIEWS, hand, judged
 
 HERE = Path(__file__).resolve().parents[1]
-HANDS = ("panda", "robotiq_2f85", "robotiq_2f140")
 RESULTS = HERE / "results" / "pick_carried.json"
+
+
+def hands() -> dict[str, str | dict]:
+    """Each hand measured: its name here -> what `hand` takes."""
+    import pybullet_data
+
+    urdf = str(Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf")
+    return {"panda": "panda", "robotiq_2f85": "robotiq_2f85", "robotiq_2f140": "robotiq_2f140",
+            "panda_urdf": {"urdf": urdf}}
 
 
 def both_sets(picks: dict) -> dict[str, int]:
@@ -43,22 +53,21 @@ def pooled(picks: dict) -> dict:
     return {"rate": float(rates.mean()), "interval": [low, high], "views": VIEWS * len(rates)}
 
 
-def measured(preset: str) -> dict:
-    """The carried network and the hand's own on the same views, top-down beside them."""
-    from onepiece_dist.plan.shipped import NETWORK, REGION
+def measured(name: str, given: str | dict) -> dict:
+    """The carried network and, where one ships, the hand's own on the same views, top-down beside them."""
+    from onepiece_dist.plan.shipped import NETWORK, REGION, SHIPPED
     from onepiece_dist.specs.job import GripperSpec
 
-    gripper, default, folder = hand(preset), GripperSpec(), ROOT / "data" / "carried" / preset
+    gripper, default, folder = hand(given), GripperSpec(), ROOT / "data" / "carried" / name
     start = time.perf_counter()
-    carried = judged(NETWORK, "carried", preset, ("top_down",), folder=folder / "carried", carried=True)
-    own = judged(None, "own", preset, folder=folder / "own")
-    return {"preset": preset, "gripper": gripper.name,
+    carried = judged(NETWORK, "carried", given, ("top_down",), folder=folder / "carried", carried=True)
+    own = judged(None, "own", given, folder=folder / "own") if gripper.name in SHIPPED else None
+    return {"hand": name, "gripper": gripper.name, "region": {n: getattr(gripper, n) for n in REGION},
             "same_region": all(getattr(gripper, n) == getattr(default, n) for n in REGION),
-            "region": {n: getattr(gripper, n) for n in REGION}, "carried_picks": carried, "own_picks": own,
-            "seconds": round(time.perf_counter() - start, 1)}
+            "carried_picks": carried, "own_picks": own, "seconds": round(time.perf_counter() - start, 1)}
 
 
-def record(hands: list[dict]) -> dict:
+def record(measures: list[dict]) -> dict:
     """What the planner quotes of carrying (plan.shipped.carried_summary): per hand, pooled over both sets."""
     from onepiece_dist.plan.shipped import NETWORK
     from onepiece_dist.specs.job import GripperSpec
@@ -68,20 +77,29 @@ def record(hands: list[dict]) -> dict:
 
     return {"network": NETWORK.name, "trained_for": GripperSpec().name,
             "made_by": "python -m benchmarks.experiments.pick_carried", "from": "benchmarks/results/pick_carried.json",
-            "hands": [{"preset": h["preset"], "gripper": h["gripper"], "same_region": h["same_region"],
-                       "carried": pooled(h["carried_picks"]), "own": pooled(h["own_picks"]),
-                       "top_down": pooled(top_down(h))} for h in hands]}
+            "hands": [{"hand": h["hand"], "gripper": h["gripper"], "region": h["region"],
+                       "carried": pooled(h["carried_picks"]), "own": h["own_picks"] and pooled(h["own_picks"]),
+                       "top_down": pooled(top_down(h))} for h in measures]}
 
 
 def main() -> None:
     from onepiece_dist.plan.shipped import CARRIED
 
-    hands = [measured(preset) for preset in HANDS]
-    result = {"command": ".venv/bin/python -m benchmarks.experiments.pick_carried", "date": date.today().isoformat(),
-              "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "views": VIEWS, "hands": hands}
-    RESULTS.write_text(json.dumps(result, indent=1) + "\n")
-    CARRIED.write_text(json.dumps(record(hands), indent=1) + "\n")
-    print(RESULTS, CARRIED)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--hands", default=",".join(hands()), help="Hands to measure (again).")
+    wanted = parser.parse_args().hands.split(",")
+    kept = {h["hand"]: h for h in json.loads(RESULTS.read_text())["hands"]} if RESULTS.is_file() else {}
+    for name, given in hands().items():
+        if name not in wanted:
+            continue
+        kept[name] = measured(name, given)
+        ordered = [kept[k] for k in hands() if k in kept]  # written as each hand lands
+        result = {"command": ".venv/bin/python -m benchmarks.experiments.pick_carried", "views": VIEWS,
+                  "date": date.today().isoformat(), "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
+                  "hands": ordered}
+        RESULTS.write_text(json.dumps(result, indent=1) + "\n")
+        CARRIED.write_text(json.dumps(record(ordered), indent=1) + "\n")
+        print(name, RESULTS, CARRIED, flush=True)
 
 
 if __name__ == "__main__":

@@ -95,8 +95,8 @@ def judged(checkpoint: Path | None, name: str, gripper: str | None, others: tupl
     return out
 
 
-def hand(gripper: str | None):
-    """The GripperSpec of the preset ``gripper`` (None: the default job's)."""
+def hand(gripper: str | dict | None):
+    """The GripperSpec of the preset ``gripper`` (or fields, or ``{"urdf": PATH}``; None: the default job's)."""
     from onepiece_dist.gripper.presets import gripper_fields
     from onepiece_dist.specs.job import GripperSpec
 

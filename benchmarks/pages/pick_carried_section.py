@@ -18,7 +18,7 @@ def _top_down(picks: dict) -> dict:
 def _region(hand: dict) -> str:
     r = hand["region"]
     size = " x ".join(f"{100 * r[n]:g}" for n in ("closing_depth", "closing_width", "closing_height"))
-    return f"{size} cm ({'the same' if hand['same_region'] else 'another'})"
+    return f"{size} cm ({'the same' if hand['same_region'] else 'larger'})"
 
 
 def _against(tried: dict, base: dict, set_names: tuple[str, ...]) -> str:
@@ -32,27 +32,30 @@ def _against(tried: dict, base: dict, set_names: tuple[str, ...]) -> str:
 def carried_section(result: dict) -> list[str]:
     lines = [f"## The default job's network carried to other hands: `{result['command']}`", "",
              f"{result['date']}, {result['machine']}. Where no network ships for a hand whose closing region (the "
-             "box every crop is cut in) is the default job's gripper's, the planner carries the default job's "
-             "network to it (`plan.shipped.planning_network`): its crops cut in that hand's region, its grasps "
-             "proposed, checked and executed by that hand. Here it is carried to each preset hand, beside that "
-             f"hand's own shipped network and the top-down baseline on the same views ({result['views']} views an "
-             "object, the planner's defaults: its first 3 grasps checked), first attempt:", "",
+             "box every crop is cut in) holds the default job's gripper's, the planner carries the default job's "
+             "network to it (`plan.shipped.planning_network`): its grasps proposed, checked and executed by that "
+             "hand, its crops cut in the network's own region (the shapes it was trained on). Here it is carried to "
+             "each preset hand, beside that hand's own shipped network, and to the Franka Panda read from "
+             "pybullet_data's URDF (none ships for it), with the top-down baseline on the same views "
+             f"({result['views']} views an object, the planner's defaults: its first 3 grasps checked), first "
+             "attempt:", "",
              "| hand | closing region (against the box gripper's) | network | household | unseen | both sets "
              "(28 objects) |", "| --- | --- | --- | --- | --- | --- |"]
     for hand in result["hands"]:
         carried, own = hand["carried_picks"], hand["own_picks"]
-        rows = (("carried", carried), ("its own", own), ("top-down", _top_down(carried)))
+        rows = (("carried", carried), *((("its own", own),) if own else ()), ("top-down", _top_down(carried)))
         lines += [f"| {hand['gripper']} | {_region(hand)} | {name} | {cell(p['household'])} | {cell(p['unseen'])} | "
                   f"{pooled_cell(p)} |" for name, p in rows]
     lines.append("")
     for hand in result["hands"]:
         carried, own = hand["carried_picks"], hand["own_picks"]
-        lines += [f"- {hand['gripper']}: carried against its own network, paired over objects: "
-                  f"{_against(carried, own, SETS)} over both sets, {_against(carried, own, ('household',))} on the "
-                  f"household set; against top-down {_against(carried, _top_down(carried), SETS)} over both sets."]
-    same = [h["gripper"] for h in result["hands"] if h["same_region"]]
-    lines += ["", f"Carried only where the closing region is the network's own ({', '.join(same)} here): a hand "
-              "with another region is refused with the fields that differ. A preset's own network is replaced "
+        against_own = (f"against its own network {_against(carried, own, SETS)} over both sets, "
+                       f"{_against(carried, own, ('household',))} on the household set; " if own else
+                       "no network ships for it; ")
+        lines += [f"- {hand['gripper']}, carried, paired over objects: {against_own}against top-down "
+                  f"{_against(carried, _top_down(carried), SETS)} over both sets."]
+    lines += ["", "A hand whose closing region is smaller than the network's in any extent is refused, naming the "
+              "fields: the network would judge points its fingers cannot reach. A preset's own network is replaced "
               "only where the carried one's interval over the household objects lies above zero (the trials' "
               "rule).", ""]
     return lines

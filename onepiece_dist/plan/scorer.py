@@ -72,9 +72,9 @@ def cut_crops(cloud: np.ndarray, poses: np.ndarray, record: CropRecord, rng: np.
 
 class GraspScorer:
     """A checkpoint ready to score crops. ``gripper``: the gripper the caller plans for; a checkpoint trained for
-    another is refused (its crops would mean other shapes), unless ``carried``: then its crops are cut in
-    ``gripper``'s closing region and its grasps proposed for ``gripper`` (plan.shipped.planning_network carries the
-    default job's network to a hand with the same closing region; docs/picks.md says what that picks)."""
+    another is refused (its crops would mean other shapes), unless ``carried``: then its grasps are proposed for
+    ``gripper`` and its crops cut in its own closing region (plan.shipped.planning_network carries the default job's
+    network to a hand whose closing region holds its own; docs/picks.md says what that picks)."""
 
     def __init__(self, checkpoint: str | os.PathLike, gripper: GripperSpec | None = None, device: str = "auto",
                  carried: bool = False):
@@ -143,7 +143,7 @@ class GraspScorer:
 
 def _crop_record(saved, gripper: GripperSpec | None, carried: bool = False) -> CropRecord:
     """The crop ``saved`` (learn.train.SavedNetwork) was trained on, checked against the caller's ``gripper``
-    (``carried``: that crop cut by ``gripper``)."""
+    (``carried``: ``gripper`` cutting that crop's region)."""
     path, crop = saved.path, saved.crop
     if crop is None:
         if gripper is None:
@@ -157,8 +157,9 @@ def _crop_record(saved, gripper: GripperSpec | None, carried: bool = False) -> C
     differs = [name for name in GripperSpec.model_fields if getattr(gripper, name) != getattr(trained, name)]
     if differs == ["name"]:  # the same hand under another name
         return CropRecord(trained, voxel, points, saved.model)
-    if carried:
-        return CropRecord(gripper, voxel, points, saved.model)
+    if carried:  # the network's own region, cut by the caller's hand
+        region = {name: getattr(trained, name) for name in ("closing_depth", "closing_width", "closing_height")}
+        return CropRecord(gripper.model_copy(update=region), voxel, points, saved.model)
     raise CheckpointRejected(f"{path}: the checkpoint was trained for another gripper (it differs in "
                              f"{', '.join(differs)}: trained {', '.join(f'{n}={getattr(trained, n)}' for n in differs)}"
                              "): plan with the checkpoint's gripper, or train a network for this one")

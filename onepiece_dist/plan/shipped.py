@@ -6,12 +6,13 @@ pick-train`` with their defaults).
 Each and its record (how it was trained, what it picks) are package data in ``plan/networks/``, made by the
 committed command ``python -m benchmarks.experiments.ship_network`` (docs/picks.md).
 
-A hand none ships for whose closing region is the default job's gripper's (the region every crop is cut in) is
-planned for by the default job's network carried to it: its crops cut in that hand's region, which holds the same
-shapes, and its grasps proposed and checked with that hand (``planning_network``). What it picks carried to the
-preset hands, beside their own networks, is ``carried.json``, made by ``python -m
-benchmarks.experiments.pick_carried``. A hand with another region is refused: carried to the Robotiq 2F-140's
-wider region it picks far less than that hand's own network (docs/picks.md)."""
+A hand none ships for whose closing region holds the default job's gripper's (the box every crop is cut in: 4 x 8 x
+2 cm) is planned for by the default job's network carried to it (``planning_network``): its crops cut in that
+network's own region, so that it sees the shapes it was trained on, and its grasps proposed, checked and executed by
+that hand. What it picks carried to the preset hands, beside their own networks and top-down, and to the Franka
+Panda read from its URDF, is ``carried.json``, made by ``python -m benchmarks.experiments.pick_carried``
+(docs/picks.md). A hand whose region is smaller in any extent is refused: the network would judge points its fingers
+cannot reach."""
 
 from __future__ import annotations
 
@@ -42,17 +43,17 @@ class PlanningNetwork:
 
 def planning_network(gripper: GripperSpec | None = None) -> PlanningNetwork:
     """The network shipped for ``gripper``; where none ships for it, the default job's carried to it when its
-    closing region is that network's (:class:`CheckpointRejected` naming the fix where it is not)."""
+    closing region holds that network's (:class:`CheckpointRejected` naming the fix where it does not)."""
     gripper = gripper or GripperSpec()
     if gripper.name in SHIPPED:
         return PlanningNetwork(shipped_network(gripper))
     default = GripperSpec()
-    differs = [name for name in REGION if getattr(gripper, name) != getattr(default, name)]
-    if differs:
+    smaller = [name for name in REGION if getattr(gripper, name) < getattr(default, name) - 1e-12]
+    if smaller:
         raise CheckpointRejected(
             f"no network ships for the gripper {gripper.name!r}, and the default job's network is carried only to "
-            f"a hand whose closing region is its own ({', '.join(f'{n}={getattr(default, n)}' for n in REGION)} m; "
-            f"this hand's {', '.join(f'{n}={getattr(gripper, n)}' for n in differs)}): networks ship for "
+            f"a hand whose closing region holds its own ({', '.join(f'{n}={getattr(default, n)}' for n in REGION)} "
+            f"m; this hand's {', '.join(f'{n}={getattr(gripper, n)}' for n in smaller)}): networks ship for "
             f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140); make one for this gripper "
             "(onepiece pick-labels --gripper ... --out labels/, then onepiece pick-train labels/pick_labels.zarr) "
             "and give --checkpoint")
@@ -112,14 +113,14 @@ def _rate(figure: dict) -> str:
 
 def carried_summary(gripper: GripperSpec) -> str:
     """One line for the user: the default job's network carried to ``gripper``, and what it picks carried to the
-    preset hands whose closing region is its own (carried.json), beside their own networks."""
+    preset hands (carried.json), beside their own networks."""
     hands = json.loads(CARRIED.read_text())["hands"] if CARRIED.is_file() else []
-    same = [h for h in hands if h["same_region"]]
+    same = [h for h in hands if h.get("own")]
     measured = (f"carried to the {' and '.join(h['gripper'] for h in same)} hands it picks "
                 f"{' and '.join(_rate(h['carried']) for h in same)} of {same[0]['carried']['views']} views of "
                 f"household objects at the first attempt in simulation, their own networks "
                 f"{' and '.join(_rate(h['own']) for h in same)}") if same else ""
     return (f"no network ships for the gripper {gripper.name!r}: planning with the default job's network "
-            f"{NETWORK.name} carried to it (its crops cut in this hand's closing region, the same as that network's)"
+            f"{NETWORK.name} carried to it (its crops cut in that network's closing region, which this hand's holds)"
             f"{': ' + measured if measured else ''} (docs/picks.md); a network of its own: onepiece pick-labels "
             "--gripper ... --out labels/, then onepiece pick-train labels/pick_labels.zarr")

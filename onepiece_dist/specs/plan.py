@@ -126,9 +126,9 @@ class PickSpec(Frozen):
     checkpoint: str | None = Field(None, description="The network's checkpoint (best.pt of a train stage); none: "
                                    "the network shipped for the gripper (onepiece_dist/plan/networks/), or the "
                                    "default job's carried to a gripper none ships for (plan.shipped).")
-    carried: bool = Field(False, description="The checkpoint was trained for another gripper: its crops are cut in "
-                          "this gripper's closing region and its grasps planned for this gripper (set where the "
-                          "default job's network is carried; docs/picks.md says what that picks).")
+    carried: bool = Field(False, description="The checkpoint was trained for another gripper: its grasps are "
+                          "planned for this gripper and its crops cut in the checkpoint's own closing region (set "
+                          "where the default job's network is carried; docs/picks.md says what that picks).")
     output: str = Field("onepiece-out/picks", description="Folder for picks.json and the pictures.")
     views: int = Field(3, ge=1, le=64, description="Camera poses per object.")
     first_view: int = Field(0, ge=0, le=4096, description="The first view's index: views first_view to first_view "
