@@ -167,13 +167,13 @@ def test_the_panda_preset_plans_with_the_franka_hands_shipped_network_and_others
 
 
 @pytest.mark.sim
-def test_a_hand_none_ships_for_whose_region_holds_the_networks_plans_with_it_carried(tmp_path):
+def test_a_hand_none_ships_for_is_planned_for_by_the_network_carried_only_when_asked_and_its_region_holds(tmp_path):
     from onepiece_dist.errors import CheckpointRejected
     from onepiece_dist.picks.runner import with_network
     from onepiece_dist.plan.scorer import GraspScorer
-    from onepiece_dist.plan.shipped import CARRIED, NETWORK, REGION, planning_network
+    from onepiece_dist.plan.shipped import CARRIED, NETWORK, REGION, PlanningNetwork, planning_network
     from onepiece_dist.specs.job import GripperSpec, VoxelSpec
-    from onepiece_dist.specs.plan import PickSpec
+    from onepiece_dist.specs.plan import PickSpec, PlanSpec
 
     default = GripperSpec()
     hand = GripperSpec(name="my_hand", max_opening=0.1, closing_width=0.1, finger_length=0.06, closing_depth=0.05,
@@ -183,27 +183,35 @@ def test_a_hand_none_ships_for_whose_region_holds_the_networks_plans_with_it_car
     carried = GraspScorer(NETWORK, hand, device="cpu", carried=True)  # the hand's geometry, the network's region
     assert carried.gripper == hand.model_copy(update={n: getattr(default, n) for n in REGION})
     assert carried.record.grid_shape() == GraspScorer(NETWORK).record.grid_shape() != VoxelSpec().grid_shape(hand)
-    assert planning_network(hand).path == NETWORK and planning_network(hand).carried_from == "onepiece_box"
-    assert planning_network(GripperSpec()).carried_from is None
-    picks = with_network(PickSpec(gripper=hand))
+    with pytest.raises(CheckpointRejected, match="no network ships for the gripper 'my_hand'.*--carry: carried to"):
+        planning_network(hand)  # not asked: refused, saying what carrying picked
+    assert planning_network(hand, carry=True) == PlanningNetwork(NETWORK, "onepiece_box")
+    assert planning_network(GripperSpec(), carry=True).carried_from is None
+    with pytest.raises(CheckpointRejected, match="no network ships"):
+        with_network(PickSpec(gripper=hand))
+    picks = with_network(PickSpec(gripper=hand, plan=PlanSpec(carry=True)))
     assert picks.checkpoint == str(NETWORK) and picks.carried and not with_network(PickSpec()).carried
     small = GripperSpec(name="small", max_opening=0.05, closing_width=0.05)
     with pytest.raises(CheckpointRejected, match="closing region holds its own .* closing_width=0.05"):
-        planning_network(small)
+        planning_network(small, carry=True)
     for measured in json.loads(CARRIED.read_text())["hands"]:  # the hands the planner quotes, each one it carries to
         assert all(measured["region"][n] >= getattr(default, n) for n in REGION)
     np.save(tmp_path / "depth.npy", depth_millimetres().astype(np.float64) / 1000)
     (tmp_path / "my_hand.yaml").write_text(hand.model_dump_json())
-    result = CliRunner().invoke(app, ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}",
-                                      "--gripper", str(tmp_path / "my_hand.yaml"), "--out", str(tmp_path / "out")])
+    run = ["grasp", str(tmp_path / "depth.npy"), "--intrinsics", f"{FX},{FY},{CX},{CY}", "--gripper",
+           str(tmp_path / "my_hand.yaml")]
+    refused = CliRunner().invoke(app, [*run, "--out", str(tmp_path / "r")])
+    assert refused.exit_code == 2 and "--carry" in refused.output and not (tmp_path / "r").exists()
+    result = CliRunner().invoke(app, [*run, "--carry", "--out", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert "no network ships for the gripper 'my_hand': planning with the default job's network" in result.output
-    assert "carried to the franka_panda" in result.output  # what carried.json holds
+    assert "franka_panda 80% against its own network" in result.output  # what carried.json holds
     plan = json.loads((tmp_path / "out" / "grasps.json").read_text())
     assert plan["carried_from"] == "onepiece_box" and plan["grasps"]
     (tmp_path / "small.yaml").write_text(small.model_dump_json())
     refused = CliRunner().invoke(app, ["pick", "--objects", "primitives[0:1]", "--gripper",
-                                       str(tmp_path / "small.yaml"), "--in-process", "--out", str(tmp_path / "picks")])
+                                       str(tmp_path / "small.yaml"), "--carry", "--in-process", "--out",
+                                       str(tmp_path / "picks")])
     assert refused.exit_code == 2 and "closing region holds its own" in refused.output, refused.output
     assert not (tmp_path / "picks" / "picks.json").exists()
 

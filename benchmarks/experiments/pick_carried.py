@@ -77,7 +77,8 @@ def record(measures: list[dict]) -> dict:
 
     return {"network": NETWORK.name, "trained_for": GripperSpec().name,
             "made_by": "python -m benchmarks.experiments.pick_carried", "from": "benchmarks/results/pick_carried.json",
-            "hands": [{"hand": h["hand"], "gripper": h["gripper"], "region": h["region"],
+            "hands": [{"hand": h["hand"], "region": h["region"],
+                       "gripper": h["gripper"] + (" read from its URDF" if h["hand"].endswith("_urdf") else ""),
                        "carried": pooled(h["carried_picks"]), "own": h["own_picks"] and pooled(h["own_picks"]),
                        "top_down": pooled(top_down(h))} for h in measures]}
 

@@ -32,13 +32,13 @@ def _against(tried: dict, base: dict, set_names: tuple[str, ...]) -> str:
 def carried_section(result: dict) -> list[str]:
     lines = [f"## The default job's network carried to other hands: `{result['command']}`", "",
              f"{result['date']}, {result['machine']}. Where no network ships for a hand whose closing region (the "
-             "box every crop is cut in) holds the default job's gripper's, the planner carries the default job's "
-             "network to it (`plan.shipped.planning_network`): its grasps proposed, checked and executed by that "
-             "hand, its crops cut in the network's own region (the shapes it was trained on). Here it is carried to "
-             "each preset hand, beside that hand's own shipped network, and to the Franka Panda read from "
-             "pybullet_data's URDF (none ships for it), with the top-down baseline on the same views "
-             f"({result['views']} views an object, the planner's defaults: its first 3 grasps checked), first "
-             "attempt:", "",
+             "box every crop is cut in) holds the default job's gripper's, the planner asked to (`--carry`, "
+             "`PlanSpec.carry`) carries the default job's network to it (`plan.shipped.planning_network`): its "
+             "grasps proposed, checked and executed by that hand, its crops cut in the network's own region (the "
+             "shapes it was trained on). Here it is carried to each preset hand, beside that hand's own shipped "
+             "network, and to the Franka Panda read from pybullet_data's URDF (none ships for it), with the "
+             f"top-down baseline on the same views ({result['views']} views an object, the planner's defaults: its "
+             "first 3 grasps checked), first attempt:", "",
              "| hand | closing region (against the box gripper's) | network | household | unseen | both sets "
              "(28 objects) |", "| --- | --- | --- | --- | --- | --- |"]
     for hand in result["hands"]:
@@ -54,7 +54,9 @@ def carried_section(result: dict) -> list[str]:
                        "no network ships for it; ")
         lines += [f"- {hand['gripper']}, carried, paired over objects: {against_own}against top-down "
                   f"{_against(carried, _top_down(carried), SETS)} over both sets."]
-    lines += ["", "A hand whose closing region is smaller than the network's in any extent is refused, naming the "
+    lines += ["", "Carrying is asked for, not assumed: carried to the Franka Panda read from its URDF (a 20 N grip, "
+              "100 g fingers) the network picks less than top-down. A hand whose closing region is smaller than "
+              "the network's in any extent is refused even so, naming the "
               "fields: the network would judge points its fingers cannot reach. A preset's own network is replaced "
               "only where the carried one's interval over the household objects lies above zero (the trials' "
               "rule).", ""]

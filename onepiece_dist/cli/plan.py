@@ -19,6 +19,10 @@ from onepiece_dist.errors import (
     SpecError,
 )
 
+CARRY_HELP = ("Where no network ships for --gripper and no checkpoint is given, plan with the default job's network "
+              "carried to it (its crops cut in that network's 4 x 8 x 2 cm closing region, which the gripper's must "
+              "hold); what carrying picked on other hands, some below top-down: docs/picks.md.")
+
 
 def _floats(text: str | None, count: int, name: str) -> list[float] | None:
     if text is None:
@@ -122,6 +126,7 @@ def grasp(
                                              "object; by default objects 1 cm or more apart are told apart, each "
                                              "with its own top-down grasps and checked shape (docs/planning.md).")
                           ] = False,
+    carry: Annotated[bool, typer.Option("--carry", help=CARRY_HELP)] = False,
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
     device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
@@ -137,14 +142,14 @@ def grasp(
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check,
                         check_shape=check_shape, objects_apart=not one_object, denoise="auto" if denoise else "none",
-                        drop_flying=drop_flying, target=None if aim is None else tuple(aim))
+                        drop_flying=drop_flying, target=None if aim is None else tuple(aim), carry=carry)
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, gripper_option(gripper))
     except (OnePieceError, ValueError) as error:
         err(f"error: {error}")
         raise typer.Exit(EXIT_USAGE) from None
     if checkpoint is None:
-        err(shipped_summary(planned.gripper))
+        err(shipped_summary(planned.gripper, carry))
     extra = {"checkpoint": planned.checkpoint or "shipped", "output_frame": planned.frame,
              **({"carried_from": planned.carried_from} if planned.carried_from else {})}
     json_path, png = write_plan(planned.plan, planned.observation, planned.gripper, out, extra=extra)
@@ -204,6 +209,7 @@ def pick(
                                                       "it).")] = None,
     units: Annotated[str | None, typer.Option(help="Units of the objects' mesh files: m, cm or mm (default: m).")
                      ] = None,
+    carry: Annotated[bool, typer.Option("--carry", help=CARRY_HELP)] = False,
     address: Address = None,
     in_process: Annotated[bool, typer.Option("--in-process", help="Run in this process without Ray.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
@@ -220,10 +226,12 @@ def pick(
                   "attempts": attempts, "seed": seed, **({"clutter": clutter} if clutter != 1 else {}),
                   **({"pile": True} if pile else {}), **({"units": units} if units is not None else {}),
                   **({"gripper": gripper_option(gripper).model_dump(mode="json")} if gripper is not None else {})})
+    if carry:
+        given["plan"] = {**given.get("plan", {}), "carry": True}
     try:
         spec = parse_pick_spec(given, str(spec_file or "command line"))
         if spec.checkpoint is None:
-            err(shipped_summary(spec.gripper).replace("planning with", "picking with", 1))
+            err(shipped_summary(spec.gripper, spec.plan.carry).replace("planning with", "picking with", 1))
         report = run_picks(spec, address=address, in_process=in_process,
                            progress=lambda o: err(f"{o.name}: {o.status} {o.reason}".rstrip()))
     except (SpecError, SourceError, CloudRejected, CheckpointRejected) as error:

@@ -140,10 +140,10 @@ def run_picks(spec: PickSpec, address: str | None = None, in_process: bool = Fal
 
 def with_network(spec: PickSpec) -> PickSpec:
     """``spec`` naming its network where it names no checkpoint: the one shipped for its gripper, or the default
-    job's carried to it (plan.shipped.planning_network)."""
+    job's carried to it where ``spec.plan.carry`` allows (plan.shipped.planning_network)."""
     if spec.checkpoint is not None:
         return spec
-    network = planning_network(spec.gripper)
+    network = planning_network(spec.gripper, spec.plan.carry)
     return spec.model_copy(update={"checkpoint": str(network.path), "carried": network.carried_from is not None})
 
 

@@ -6,13 +6,14 @@ pick-train`` with their defaults).
 Each and its record (how it was trained, what it picks) are package data in ``plan/networks/``, made by the
 committed command ``python -m benchmarks.experiments.ship_network`` (docs/picks.md).
 
-A hand none ships for whose closing region holds the default job's gripper's (the box every crop is cut in: 4 x 8 x
-2 cm) is planned for by the default job's network carried to it (``planning_network``): its crops cut in that
-network's own region, so that it sees the shapes it was trained on, and its grasps proposed, checked and executed by
-that hand. What it picks carried to the preset hands, beside their own networks and top-down, and to the Franka
-Panda read from its URDF, is ``carried.json``, made by ``python -m benchmarks.experiments.pick_carried``
-(docs/picks.md). A hand whose region is smaller in any extent is refused: the network would judge points its fingers
-cannot reach."""
+A hand none ships for is refused; asked to (``PlanSpec.carry``, ``--carry``), where its closing region holds the
+default job's gripper's (the box every crop is cut in: 4 x 8 x 2 cm), it is planned for by the default job's network
+carried to it (``planning_network``): its crops cut in that network's own region, so that it sees the shapes it was
+trained on, and its grasps proposed, checked and executed by that hand. Carrying is asked for, not assumed: carried
+to the Franka Panda read from its URDF it picks less than top-down. What it picks carried to the preset hands,
+beside their own networks and top-down, and to that URDF hand, is ``carried.json``, made by ``python -m
+benchmarks.experiments.pick_carried`` (docs/picks.md). A hand whose region is smaller in any extent is refused even
+so: the network would judge points its fingers cannot reach."""
 
 from __future__ import annotations
 
@@ -41,12 +42,19 @@ class PlanningNetwork:
     carried_from: str | None = None
 
 
-def planning_network(gripper: GripperSpec | None = None) -> PlanningNetwork:
-    """The network shipped for ``gripper``; where none ships for it, the default job's carried to it when its
-    closing region holds that network's (:class:`CheckpointRejected` naming the fix where it does not)."""
+def planning_network(gripper: GripperSpec | None = None, carry: bool = False) -> PlanningNetwork:
+    """The network shipped for ``gripper``; where none ships for it and ``carry`` (PlanSpec.carry) allows it, the
+    default job's carried to it when its closing region holds that network's (:class:`CheckpointRejected` naming
+    the fix where it does not)."""
     gripper = gripper or GripperSpec()
     if gripper.name in SHIPPED:
         return PlanningNetwork(shipped_network(gripper))
+    if not carry:
+        raise CheckpointRejected(f"no network ships for the gripper {gripper.name!r}: networks ship for "
+                                 f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140); make "
+                                 "one for this gripper (onepiece pick-labels --gripper ... --out labels/, then "
+                                 "onepiece pick-train labels/pick_labels.zarr) and give --checkpoint, or plan with "
+                                 f"the default job's network carried to it (--carry: {carried_figures()})")
     default = GripperSpec()
     smaller = [name for name in REGION if getattr(gripper, name) < getattr(default, name) - 1e-12]
     if smaller:
@@ -89,9 +97,9 @@ def shipped_record(gripper: GripperSpec | None = None) -> dict:
     return json.loads(record.read_text()) if record.is_file() else {}
 
 
-def shipped_summary(gripper: GripperSpec | None = None) -> str:
-    """One line for the user: which network plans for ``gripper`` and what it picks."""
-    if gripper is not None and planning_network(gripper).carried_from is not None:
+def shipped_summary(gripper: GripperSpec | None = None, carry: bool = False) -> str:
+    """One line for the user: which network plans for ``gripper`` (``carry``: PlanSpec.carry) and what it picks."""
+    if gripper is not None and planning_network(gripper, carry).carried_from is not None:
         return carried_summary(gripper)
     record, name = shipped_record(gripper), network_path(gripper).name
     if not record:
@@ -112,15 +120,24 @@ def _rate(figure: dict) -> str:
 
 
 def carried_summary(gripper: GripperSpec) -> str:
-    """One line for the user: the default job's network carried to ``gripper``, and what it picks carried to the
-    preset hands (carried.json), beside their own networks."""
-    hands = json.loads(CARRIED.read_text())["hands"] if CARRIED.is_file() else []
-    same = [h for h in hands if h.get("own")]
-    measured = (f"carried to the {' and '.join(h['gripper'] for h in same)} hands it picks "
-                f"{' and '.join(_rate(h['carried']) for h in same)} of {same[0]['carried']['views']} views of "
-                f"household objects at the first attempt in simulation, their own networks "
-                f"{' and '.join(_rate(h['own']) for h in same)}") if same else ""
+    """One line for the user: the default job's network carried to ``gripper``, and what carrying picked."""
     return (f"no network ships for the gripper {gripper.name!r}: planning with the default job's network "
-            f"{NETWORK.name} carried to it (its crops cut in that network's closing region, which this hand's holds)"
-            f"{': ' + measured if measured else ''} (docs/picks.md); a network of its own: onepiece pick-labels "
-            "--gripper ... --out labels/, then onepiece pick-train labels/pick_labels.zarr")
+            f"{NETWORK.name} carried to it (its crops cut in that network's closing region, which this hand's holds; "
+            f"{carried_figures()}); a network of its own: onepiece pick-labels --gripper ... --out labels/, then "
+            "onepiece pick-train labels/pick_labels.zarr")
+
+
+def carried_figures() -> str:
+    """What the default job's network picked carried to each hand measured (carried.json), against that hand's
+    own network where one ships, else against top-down."""
+    if not CARRIED.is_file():
+        return "docs/picks.md"
+    hands = json.loads(CARRIED.read_text())["hands"]
+    against = ", ".join(f"{h['gripper']} {_percent(h['carried'])} against " + (
+        f"its own network {_percent(h['own'])}" if h["own"] else f"top-down {_percent(h['top_down'])}") for h in hands)
+    return (f"carried to other hands it picked, at the first attempt on {hands[0]['carried']['views']} views of "
+            f"household objects in simulation, {against}: docs/picks.md")
+
+
+def _percent(figure: dict) -> str:
+    return f"{100 * figure['rate']:.0f}%"
