@@ -2,7 +2,8 @@
 the shipped box gripper's network planning for each hand, its grasps proposed, checked and executed by that hand and
 its crops cut in its own closing region, judged by `onepiece pick` on the household and unseen sets (8 views an
 object, the planner's defaults: its first 3 grasps checked), beside the hand's own shipped network where one ships
-and the top-down baseline on the same views.
+and the top-down baseline on the same views; for a hand none ships for, also the network its refusal's fix makes
+(`onepiece pick-labels --gripper` and `onepiece pick-train` with their defaults).
 
     .venv/bin/python -m benchmarks.experiments.pick_carried [--hands panda,robotiq_2f140]
 
@@ -62,9 +63,29 @@ def measured(name: str, given: str | dict) -> dict:
     start = time.perf_counter()
     carried = judged(NETWORK, "carried", given, ("top_down",), folder=folder / "carried", carried=True)
     own = judged(None, "own", given, folder=folder / "own") if gripper.name in SHIPPED else None
+    made = None if own else made_network(given, folder)
     return {"hand": name, "gripper": gripper.name, "region": {n: getattr(gripper, n) for n in REGION},
             "same_region": all(getattr(gripper, n) == getattr(default, n) for n in REGION),
-            "carried_picks": carried, "own_picks": own, "seconds": round(time.perf_counter() - start, 1)}
+            "carried_picks": carried, "own_picks": own, "made": made,
+            "seconds": round(time.perf_counter() - start, 1)}
+
+
+def made_network(given: str | dict, folder: Path) -> dict:
+    """For a hand none ships for, the fix its refusal names: `onepiece pick-labels --gripper` with its defaults and
+    `onepiece pick-train` (the shipped design, seed 0), judged on the same views."""
+    from onepiece_dist.learn.pick_network import SHIPPED_DESIGN, design_options, train_pick_network
+    from onepiece_dist.picks.pick_labels import labels_made, run_pick_labels
+    from onepiece_dist.specs.plan import PickLabelSpec
+    from onepiece_dist.store.pick_labels import read_pick_labels
+
+    spec = PickLabelSpec(output=str(folder / "labels"), gripper=given)
+    path = labels_made(spec) or run_pick_labels(spec)
+    made = read_pick_labels(path)
+    network = train_pick_network(path, folder / "net", design_options(SHIPPED_DESIGN, 0))
+    return {"labels": len(made), "objects": spec.objects, "success_rate": round(float(made.success.mean()), 4),
+            "core_seconds": made.attrs["core_seconds"], "wall_seconds": made.attrs["wall_seconds"],
+            "fit_seconds": round(network.result.seconds, 1), "validation": network.to_json()["validation"],
+            "picks": judged(network.result.checkpoint, "made", given, folder=folder / "made")}
 
 
 def record(measures: list[dict]) -> dict:

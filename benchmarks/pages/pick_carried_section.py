@@ -43,14 +43,18 @@ def carried_section(result: dict) -> list[str]:
              "(28 objects) |", "| --- | --- | --- | --- | --- | --- |"]
     for hand in result["hands"]:
         carried, own = hand["carried_picks"], hand["own_picks"]
-        rows = (("carried", carried), *((("its own", own),) if own else ()), ("top-down", _top_down(carried)))
+        made = hand.get("made")
+        rows = (("carried", carried), *((("its own", own),) if own else ()),
+                *(((f"made by pick-labels and pick-train ({made['labels']} labels)", made["picks"]),) if made else ()),
+                ("top-down", _top_down(carried)))
         lines += [f"| {hand['gripper']} | {_region(hand)} | {name} | {cell(p['household'])} | {cell(p['unseen'])} | "
                   f"{pooled_cell(p)} |" for name, p in rows]
     lines.append("")
     for hand in result["hands"]:
         carried, own = hand["carried_picks"], hand["own_picks"]
-        against_own = (f"against its own network {_against(carried, own, SETS)} over both sets, "
-                       f"{_against(carried, own, ('household',))} on the household set; " if own else
+        mine = own or (hand.get("made") or {}).get("picks")
+        against_own = (f"against its {'own' if own else 'made'} network {_against(carried, mine, SETS)} over both "
+                       f"sets, {_against(carried, mine, ('household',))} on the household set; " if mine else
                        "no network ships for it; ")
         lines += [f"- {hand['gripper']}, carried, paired over objects: {against_own}against top-down "
                   f"{_against(carried, _top_down(carried), SETS)} over both sets."]
