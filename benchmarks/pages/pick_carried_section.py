@@ -11,6 +11,16 @@ from onepiece_dist.stats.intervals import paired_gain
 SETS = ("household", "unseen")
 
 
+def _name(hand: dict) -> str:
+    return hand["gripper"] + (" read from its URDF" if hand["hand"].endswith("_urdf") else "")
+
+
+def both_rate(picks: dict) -> float:
+    """The first-attempt share of both sets' views."""
+    counts = both_sets(picks)
+    return sum(counts.values()) / (VIEWS * len(counts))
+
+
 def _top_down(picks: dict) -> dict:
     return {s: picks[s]["others"]["top_down"] for s in SETS}
 
@@ -47,7 +57,7 @@ def carried_section(result: dict) -> list[str]:
         rows = (("carried", carried), *((("its own", own),) if own else ()),
                 *(((f"made by pick-labels and pick-train ({made['labels']} labels)", made["picks"]),) if made else ()),
                 ("top-down", _top_down(carried)))
-        lines += [f"| {hand['gripper']} | {_region(hand)} | {name} | {cell(p['household'])} | {cell(p['unseen'])} | "
+        lines += [f"| {_name(hand)} | {_region(hand)} | {name} | {cell(p['household'])} | {cell(p['unseen'])} | "
                   f"{pooled_cell(p)} |" for name, p in rows]
     lines.append("")
     for hand in result["hands"]:
@@ -56,10 +66,15 @@ def carried_section(result: dict) -> list[str]:
         against_own = (f"against its {'own' if own else 'made'} network {_against(carried, mine, SETS)} over both "
                        f"sets, {_against(carried, mine, ('household',))} on the household set; " if mine else
                        "no network ships for it; ")
-        lines += [f"- {hand['gripper']}, carried, paired over objects: {against_own}against top-down "
-                  f"{_against(carried, _top_down(carried), SETS)} over both sets."]
-    lines += ["", "Carrying is asked for, not assumed: carried to the Franka Panda read from its URDF (a 20 N grip, "
-              "100 g fingers) the network picks less than top-down. A hand whose closing region is smaller than "
+        made = (hand.get("made") or {}).get("picks")
+        made_line = (f" The made network against top-down: {_against(made, _top_down(carried), SETS)} over both sets."
+                     if made else "")
+        lines += [f"- {_name(hand)}, carried, paired over objects: {against_own}against top-down "
+                  f"{_against(carried, _top_down(carried), SETS)} over both sets.{made_line}"]
+    below = [_name(h) for h in result["hands"]
+             if both_rate(h["carried_picks"]) < both_rate(_top_down(h["carried_picks"]))]
+    lines += ["", f"Carried to {', '.join(below) or 'none of them'} the network picks less than top-down over both "
+              "sets: carrying is asked for (`--carry`), not assumed. A hand whose closing region is smaller than "
               "the network's in any extent is refused even so, naming the "
               "fields: the network would judge points its fingers cannot reach. A preset's own network is replaced "
               "only where the carried one's interval over the household objects lies above zero (the trials' "

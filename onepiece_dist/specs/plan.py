@@ -62,8 +62,8 @@ class PlanSpec(Frozen):
     carry: bool = Field(False, description="Where no network ships for the gripper and no checkpoint is given, plan "
                         "with the default job's network carried to it (its crops cut in that network's closing "
                         "region, which the gripper's must hold; plan.shipped.planning_network); else such a gripper "
-                        "is refused. Carried, it picked about as the preset hands' own networks, and 12 points below "
-                        "top-down with the Franka Panda read from its URDF (docs/picks.md).")
+                        "is refused. Carried, it picked about as the preset hands' own networks, and below top-down "
+                        "with the Franka Panda read from its URDF (docs/picks.md).")
     check_shape: Literal["hull", "carved", "mirrored"] = Field(
         "hull", description="The shape checked on: the object's observed points and their shadows on the support "
         "plane as one convex hull; that hull less every voxel the camera saw through (carved: an opening it looked "
