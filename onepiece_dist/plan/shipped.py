@@ -31,6 +31,9 @@ NETWORK = FOLDER / f"{SHIPPED[GripperSpec().name]}.pt"  # the default job's grip
 RECORD = NETWORK.with_suffix(".json")
 CARRIED = FOLDER / "carried.json"  # what the default job's network picks carried to the preset hands
 REGION = ("closing_depth", "closing_width", "closing_height")  # the gripper fields a crop is cut by
+SHIP_FOR = f"networks ship for {', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140)"
+MAKE_ONE = ("make one for this gripper (onepiece pick-labels --gripper ... --out labels/, then onepiece pick-train "
+            "labels/pick_labels.zarr) and give --checkpoint")
 
 
 @dataclass(frozen=True)
@@ -50,21 +53,15 @@ def planning_network(gripper: GripperSpec | None = None, carry: bool = False) ->
     if gripper.name in SHIPPED:
         return PlanningNetwork(shipped_network(gripper))
     if not carry:
-        raise CheckpointRejected(f"no network ships for the gripper {gripper.name!r}: networks ship for "
-                                 f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140); make "
-                                 "one for this gripper (onepiece pick-labels --gripper ... --out labels/, then "
-                                 "onepiece pick-train labels/pick_labels.zarr) and give --checkpoint, or plan with "
-                                 f"the default job's network carried to it (--carry: {carried_figures()})")
+        raise CheckpointRejected(f"no network ships for the gripper {gripper.name!r}: {SHIP_FOR}; {MAKE_ONE}, or plan "
+                                 f"with the default job's network carried to it (--carry: {carried_figures()})")
     default = GripperSpec()
     smaller = [name for name in REGION if getattr(gripper, name) < getattr(default, name) - 1e-12]
     if smaller:
         raise CheckpointRejected(
             f"no network ships for the gripper {gripper.name!r}, and the default job's network is carried only to "
             f"a hand whose closing region holds its own ({', '.join(f'{n}={getattr(default, n)}' for n in REGION)} "
-            f"m; this hand's {', '.join(f'{n}={getattr(gripper, n)}' for n in smaller)}): networks ship for "
-            f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140); make one for this gripper "
-            "(onepiece pick-labels --gripper ... --out labels/, then onepiece pick-train labels/pick_labels.zarr) "
-            "and give --checkpoint")
+            f"m; this hand's {', '.join(f'{n}={getattr(gripper, n)}' for n in smaller)}): {SHIP_FOR}; {MAKE_ONE}")
     return PlanningNetwork(shipped_network(), default.name)
 
 
@@ -73,10 +70,7 @@ def network_path(gripper: GripperSpec | None = None) -> Path:
     naming the grippers networks ship for where none ships for this one."""
     name = (gripper or GripperSpec()).name
     if name not in SHIPPED:
-        raise CheckpointRejected(f"no network ships for the gripper {name!r}: networks ship for "
-                                 f"{', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140); "
-                                 "make one for this gripper (onepiece pick-labels --gripper ... --out labels/, then "
-                                 "onepiece pick-train labels/pick_labels.zarr) and give --checkpoint")
+        raise CheckpointRejected(f"no network ships for the gripper {name!r}: {SHIP_FOR}; {MAKE_ONE}")
     return FOLDER / f"{SHIPPED[name]}.pt"
 
 
