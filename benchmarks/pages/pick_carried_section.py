@@ -46,7 +46,8 @@ def carried_section(result: dict) -> list[str]:
              "`PlanSpec.carry`) carries the default job's network to it (`plan.shipped.planning_network`): its "
              "grasps proposed, checked and executed by that hand, its crops cut in the network's own region (the "
              "shapes it was trained on). Here it is carried to each preset hand, beside that hand's own shipped "
-             "network, and to the Franka Panda read from pybullet_data's URDF (none ships for it), with the "
+             "network, and to the Franka Panda read from pybullet_data's URDF (none ships for it: beside it the "
+             "network its refusal's fix makes, pick-labels and pick-train with their defaults), with the "
              f"top-down baseline on the same views ({result['views']} views an object, the planner's defaults: its "
              "first 3 grasps checked), first attempt:", "",
              "| hand | closing region (against the box gripper's) | network | household | unseen | both sets "
