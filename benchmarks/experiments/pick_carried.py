@@ -23,9 +23,8 @@ import time
 from datetime import date
 from pathlib import Path
 
-import numpy as np
-
 from benchmarks.experiments.pick_own_network import ROOT, SETS, VIEWS, hand, judged
+from benchmarks.pages.pick_own_section import both_sets, pooled_rate
 
 HERE = Path(__file__).resolve().parents[1]
 RESULTS = HERE / "results" / "pick_carried.json"
@@ -40,18 +39,10 @@ def hands() -> dict[str, str | dict]:
             "panda_urdf": {"urdf": urdf}}
 
 
-def both_sets(picks: dict) -> dict[str, int]:
-    """Object name -> views picked at the first attempt, over both sets."""
-    return {name: n for set_name in SETS for name, n in picks[set_name]["per_object"].items()}
-
-
 def pooled(picks: dict) -> dict:
     """The first-attempt rate over both sets' objects, its interval over objects and its views."""
-    from onepiece_dist.stats.intervals import bootstrap_interval
-
-    rates = np.array([n / VIEWS for n in both_sets(picks).values()])
-    low, high = bootstrap_interval(rates)
-    return {"rate": float(rates.mean()), "interval": [low, high], "views": VIEWS * len(rates)}
+    rate, (low, high) = pooled_rate(picks)
+    return {"rate": rate, "interval": [low, high], "views": VIEWS * len(both_sets(picks))}
 
 
 def measured(name: str, given: str | dict) -> dict:

@@ -19,17 +19,17 @@ import platform
 from datetime import date
 from pathlib import Path
 
+from benchmarks.experiments.pick_own_network import ROOT, SETS, VIEWS, tag
+from onepiece_dist.specs.plan import PICK_LABEL_OBJECTS
+
 HERE = Path(__file__).resolve().parents[1]
-ROOT = HERE.parent
-VIEWS = 8  # pick_own_network's
-SETS = ("household", "unseen")
-MIX = "pybullet_random_urdfs_0_32__shapes_groceries_0_16__shapes_vessels_0_16"  # pick_own_network.tag's folders
+MIX = tag(PICK_LABEL_OBJECTS)  # the folders' prefix of pick_own_network's networks on pick-labels' default objects
 NETWORKS = {  # name -> (checkpoint, gripper preset; None: the shipped network, the default job's box gripper)
     "shipped": (None, None),
     "shipped_panda": (None, "panda"),
-    "own_mix_l0_f0": (f"data/own_network/net_{MIX}_l0_f0/best.pt", None),
-    "own_mix_l1_f0": (f"data/own_network/net_{MIX}_l1_f0/best.pt", None),
-    "own_panda_mix_l0_f0": (f"data/own_network_panda/net_{MIX}_l0_f0/best.pt", "panda"),
+    "own_mix_l0_f0": (f"data/own_network/net_{MIX}l0_f0/best.pt", None),
+    "own_mix_l1_f0": (f"data/own_network/net_{MIX}l1_f0/best.pt", None),
+    "own_panda_mix_l0_f0": (f"data/own_network_panda/net_{MIX}l0_f0/best.pt", "panda"),
 }  # the own_* networks: pick_own_network's on pick-labels' default objects
 
 

@@ -4,7 +4,7 @@ network and the top-down baseline on the same views."""
 
 from __future__ import annotations
 
-from benchmarks.pages.pick_own_section import both_sets, cell, pooled_cell
+from benchmarks.pages.pick_own_section import both_sets, cell, pooled_cell, pooled_rate
 from benchmarks.pages.pick_trials_section import VIEWS
 from onepiece_dist.stats.intervals import paired_gain
 
@@ -13,12 +13,6 @@ SETS = ("household", "unseen")
 
 def _name(hand: dict) -> str:
     return hand["gripper"] + (" read from its URDF" if hand["hand"].endswith("_urdf") else "")
-
-
-def both_rate(picks: dict) -> float:
-    """The first-attempt share of both sets' views."""
-    counts = both_sets(picks)
-    return sum(counts.values()) / (VIEWS * len(counts))
 
 
 def _top_down(picks: dict) -> dict:
@@ -73,7 +67,7 @@ def carried_section(result: dict) -> list[str]:
         lines += [f"- {_name(hand)}, carried, paired over objects: {against_own}against top-down "
                   f"{_against(carried, _top_down(carried), SETS)} over both sets.{made_line}"]
     below = [_name(h) for h in result["hands"]
-             if both_rate(h["carried_picks"]) < both_rate(_top_down(h["carried_picks"]))]
+             if pooled_rate(h["carried_picks"])[0] < pooled_rate(_top_down(h["carried_picks"]))[0]]
     lines += ["", f"Carried to {', '.join(below) or 'none of them'} the network picks less than top-down over both "
               "sets: carrying is asked for (`--carry`), not assumed. A hand whose closing region is smaller than "
               "the network's in any extent is refused even so, naming the "

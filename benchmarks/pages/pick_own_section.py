@@ -20,7 +20,8 @@ def both_sets(picks: dict) -> dict[str, int]:
     return {name: n for set_name in SETS for name, n in picks[set_name]["per_object"].items()}
 
 
-def _pooled(picks: dict) -> tuple[float, tuple[float, float]]:
+def pooled_rate(picks: dict) -> tuple[float, tuple[float, float]]:
+    """The first-attempt rate over both sets' objects and its interval over objects."""
     rates = np.array([n / VIEWS for n in both_sets(picks).values()])
     return float(rates.mean()), bootstrap_interval(rates)
 
@@ -31,7 +32,7 @@ def cell(figure: dict) -> str:
 
 
 def pooled_cell(picks: dict) -> str:
-    rate, (low, high) = _pooled(picks)
+    rate, (low, high) = pooled_rate(picks)
     return f"{100 * rate:.0f}% [{100 * low:.0f}%, {100 * high:.0f}%]"
 
 
@@ -119,7 +120,7 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
         gain = paired_gain([both_sets(picks)], [both_sets(others["top_down"])], VIEWS)
         lines.append(f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {pooled_cell(picks)} | "
                      + " | ".join(pooled_cell(others[m]) for m in HEURISTICS) + f" | {gain_words(gain)} |")
-    pooled = [_pooled(n["picks"])[0] for n in networks]
+    pooled = [pooled_rate(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
     return [*lines, "", f"The first-attempt target over both sets (>= {100 * target:.0f}%): "
             f"{'**met**' if met == len(pooled) else '**not met**'} by {met} of the {len(pooled)} networks.", ""]
@@ -162,7 +163,7 @@ def _verdict(networks: list[dict], shipped: dict, target: float) -> str:
     gain = paired_gain([both_sets(n["picks"]) for n in networks], [both_sets(shipped)] * len(networks), VIEWS)
     household = paired_gain([n["picks"]["household"]["per_object"] for n in networks],
                             [shipped["household"]["per_object"]] * len(networks), VIEWS)
-    pooled = [_pooled(n["picks"])[0] for n in networks]
+    pooled = [pooled_rate(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
     started = _started(networks[0]) and f", each {_started(networks[0])}"
     return (f"Labelled on `{networks[0]['made']['objects']}` ({networks[0]['made']['labels']} labels){started}, "

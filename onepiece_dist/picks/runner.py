@@ -144,7 +144,7 @@ def with_network(spec: PickSpec) -> PickSpec:
     if spec.checkpoint is not None:
         return spec
     network = planning_network(spec.gripper, spec.plan.carry)
-    return spec.model_copy(update={"checkpoint": str(network.path), "carried": network.carried_from is not None})
+    return spec.model_copy(update={"checkpoint": str(network.path), "carried": network.carried})
 
 
 def pick_units(spec: PickSpec) -> list:

@@ -82,7 +82,7 @@ def plan_from_files(cloud: str | Path, checkpoint: str | Path | None = None, spe
         target = transform_points(np.array([spec.target]), invert_poses(pose[None])[0])[0]
         spec = spec.model_copy(update={"target": tuple(float(v) for v in target)})
     network = PlanningNetwork(Path(checkpoint)) if checkpoint is not None else planning_network(gripper, spec.carry)
-    scorer = GraspScorer(network.path, gripper, spec.device, carried=network.carried_from is not None)
+    scorer = GraspScorer(network.path, gripper, spec.device, carried=network.carried)
     plan = plan_grasps(observation, scorer, spec, check)
     if pose is not None:
         plan, observation = plan.transformed(pose), in_frame(observation, pose)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from onepiece_dist.errors import CheckpointRejected, CloudRejected
+from onepiece_dist.plan.scorer import REGION
 from onepiece_dist.specs.job import GripperSpec
 
 FOLDER = Path(__file__).resolve().parent / "networks"
@@ -30,7 +31,6 @@ SHIPPED = {"onepiece_box": "pick_view", "franka_panda": "pick_view_panda",  # gr
 NETWORK = FOLDER / f"{SHIPPED[GripperSpec().name]}.pt"  # the default job's gripper's
 RECORD = NETWORK.with_suffix(".json")
 CARRIED = FOLDER / "carried.json"  # what the default job's network picks carried to the preset hands
-REGION = ("closing_depth", "closing_width", "closing_height")  # the gripper fields a crop is cut by
 SHIP_FOR = f"networks ship for {', '.join(SHIPPED)} (gripper presets panda, robotiq_2f85, robotiq_2f140)"
 MAKE_ONE = ("make one for this gripper (onepiece pick-labels --gripper ... --out labels/, then onepiece pick-train "
             "labels/pick_labels.zarr) and give --checkpoint")
@@ -43,6 +43,10 @@ class PlanningNetwork:
 
     path: Path
     carried_from: str | None = None
+
+    @property
+    def carried(self) -> bool:
+        return self.carried_from is not None
 
 
 def planning_network(gripper: GripperSpec | None = None, carry: bool = False) -> PlanningNetwork:
@@ -93,7 +97,7 @@ def shipped_record(gripper: GripperSpec | None = None) -> dict:
 
 def shipped_summary(gripper: GripperSpec | None = None, carry: bool = False) -> str:
     """One line for the user: which network plans for ``gripper`` (``carry``: PlanSpec.carry) and what it picks."""
-    if gripper is not None and planning_network(gripper, carry).carried_from is not None:
+    if gripper is not None and planning_network(gripper, carry).carried:
         return carried_summary(gripper)
     record, name = shipped_record(gripper), network_path(gripper).name
     if not record:
@@ -117,8 +121,7 @@ def carried_summary(gripper: GripperSpec) -> str:
     """One line for the user: the default job's network carried to ``gripper``, and what carrying picked."""
     return (f"no network ships for the gripper {gripper.name!r}: planning with the default job's network "
             f"{NETWORK.name} carried to it (its crops cut in that network's closing region, which this hand's holds; "
-            f"{carried_figures()}); a network of its own: onepiece pick-labels --gripper ... --out labels/, then "
-            "onepiece pick-train labels/pick_labels.zarr")
+            f"{carried_figures()}); or {MAKE_ONE}")
 
 
 def carried_figures() -> str:
