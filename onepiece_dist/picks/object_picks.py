@@ -204,7 +204,7 @@ def _full_mesh_proposals(spec: PickSpec, scorer: GraspScorer, mesh, seen: PickVi
     found = sample_candidates(mesh, surface, normals, spec.mesh_candidates, gripper, spec.sampler, rng)
     poses = compose_poses(seen.resting[None], found.poses)
     table = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(0, bool))
-    poses = poses[above_plane(poses, gripper, table)]
+    poses = poses[above_plane(poses, gripper, table, spec.plan.table_clearance)]
     world_surface = transform_points(surface, seen.resting)
     crops, keep = cut_crops(world_surface, poses, scorer.record, rng).holding(spec.plan.min_points)
     if not keep.any():

@@ -169,7 +169,7 @@ def propose(observation: Observation, record: CropRecord, spec: PlanSpec, rng: n
     table = points[plane.inliers] if plane is not None else np.zeros((0, 3))
     thin, thin_table = _thin(objects, spec.downsample), _thin(table, spec.downsample)
     found = sample_cloud_grasps(thin, spec.candidates, gripper, rng, observation.viewpoint, thin_table, plane,
-                                spec.orientations)
+                                spec.orientations, spec.table_clearance)
     sampled = time.perf_counter()
     apart = separate_objects(objects) if spec.objects_apart else [objects]
     added = (np.concatenate([top_down_grasps(o, gravity(plane), gripper) for o in apart]) if spec.top_down

@@ -24,7 +24,7 @@ CURVATURE_NEIGHBOURS = 32  # normals in a curvature axis's neighbourhood
 INITIAL_BITE = 0.01  # m of the object between the fingertips at the shallowest placement (GPD's init_bite)
 BITE_STEP = 0.005  # m the hand is pushed in per step (GPD's deepenHand)
 PLACEMENTS = (0.0, -0.5, 0.5, -0.25, 0.25)  # lateral hand shifts, as shares of half the opening
-PLANE_CLEARANCE = 0.002  # m every gripper box corner keeps above a support plane
+PLANE_CLEARANCE = 0.002  # m every gripper box corner keeps above a support plane (PlanSpec.table_clearance)
 ROUNDING = 1e-9  # m: far above a computed distance's rounding (about 1e-15 m here)
 
 
@@ -141,19 +141,21 @@ def _poses_at(centres: np.ndarray, approach: np.ndarray, closing: np.ndarray, de
 
 @dataclass(frozen=True)
 class Blockers:
-    """What an open gripper must stay clear of: the observed ``points`` (m, 3) and a support ``plane`` (or None).
-    ``high`` holds the points more than PLANE_CLEARANCE above the plane (less ROUNDING), the only ones a gripper
-    above the plane can meet: its boxes are convex and every corner lies PLANE_CLEARANCE above it. Poses above the
-    plane are tried on those alone, the same answer from a fraction of the pairs (most of a view is its table)."""
+    """What an open gripper must stay clear of: the observed ``points`` (m, 3) and a support ``plane`` (or None),
+    which every corner of its boxes keeps ``clearance`` (m) above. ``high`` holds the points more than
+    ``clearance`` above the plane (less ROUNDING), the only ones a gripper above the plane can meet: its boxes are
+    convex and every corner lies ``clearance`` above it. Poses above the plane are tried on those alone, the same
+    answer from a fraction of the pairs (most of a view is its table)."""
 
     points: np.ndarray
     plane: SupportPlane | None
     high: np.ndarray
+    clearance: float = PLANE_CLEARANCE
 
     @classmethod
-    def of(cls, points: np.ndarray, plane: SupportPlane | None) -> Blockers:
-        high = points if plane is None else points[plane.distance(points) > PLANE_CLEARANCE - ROUNDING]
-        return cls(points, plane, high)
+    def of(cls, points: np.ndarray, plane: SupportPlane | None, clearance: float = PLANE_CLEARANCE) -> Blockers:
+        high = points if plane is None else points[plane.distance(points) > clearance - ROUNDING]
+        return cls(points, plane, high, clearance)
 
     def blocked(self, poses: np.ndarray, gripper: GripperSpec) -> tuple[np.ndarray, np.ndarray]:
         """(n,) bool above the plane and meeting a point, (n,) bool meeting a point or the plane. A pose that meets
@@ -162,7 +164,7 @@ class Blockers:
         if self.plane is None:
             hit = collides(self.points, poses, gripper)
             return hit, hit
-        above = above_plane(poses, gripper, self.plane)
+        above = above_plane(poses, gripper, self.plane, self.clearance)
         hit_points = np.zeros(len(poses), dtype=bool)
         hit_points[above] = collides(self.high, poses[above], gripper)
         return hit_points, hit_points | ~above
@@ -190,14 +192,15 @@ def deepest_free(blockers: Blockers, centres: np.ndarray, approach: np.ndarray, 
 
 
 def best_placement(points: np.ndarray, centres: np.ndarray, approach: np.ndarray, closing: np.ndarray,
-                   gripper: GripperSpec, plane: SupportPlane | None = None
+                   gripper: GripperSpec, plane: SupportPlane | None = None, clearance: float = PLANE_CLEARANCE
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`deepest_free` at the first of PLACEMENTS lateral shifts of the hand along its closing axis (GPD's
-    finger placements) whose shallowest bite is free; hands no shift frees are tried at the next. Returns the
-    poses, (n,) bool free at some shift, and (n,) bool not free and meeting the plane at some shift."""
+    finger placements) whose shallowest bite is free (and ``clearance`` above ``plane``); hands no shift frees are
+    tried at the next. Returns the poses, (n,) bool free at some shift, and (n,) bool not free and meeting the
+    plane at some shift."""
     poses = np.zeros((len(centres), 4, 4))
     free, below = np.zeros(len(centres), bool), np.zeros(len(centres), bool)
-    todo, blockers = np.arange(len(centres)), Blockers.of(points, plane)
+    todo, blockers = np.arange(len(centres)), Blockers.of(points, plane, clearance)
     for shift in PLACEMENTS:
         if len(todo) == 0:
             break
@@ -209,20 +212,22 @@ def best_placement(points: np.ndarray, centres: np.ndarray, approach: np.ndarray
     return poses, free, below & ~free
 
 
-def above_plane(poses: np.ndarray, gripper: GripperSpec, plane: SupportPlane) -> np.ndarray:
-    """(n,) bool: every corner of the open gripper's palm and fingers lies PLANE_CLEARANCE above ``plane``."""
+def above_plane(poses: np.ndarray, gripper: GripperSpec, plane: SupportPlane,
+                clearance: float = PLANE_CLEARANCE) -> np.ndarray:
+    """(n,) bool: every corner of the open gripper's palm and fingers lies ``clearance`` (m) above ``plane``."""
     corners = np.concatenate([box_corners(lo, hi) for lo, hi in gripper_boxes(gripper)])  # (24, 3)
     world = apply_rotation(poses[:, None, :3, :3], corners[None]) + poses[:, None, :3, 3]
-    return np.all(plane.distance(world) > PLANE_CLEARANCE, axis=1)
+    return np.all(plane.distance(world) > clearance, axis=1)
 
 
 def sample_cloud_grasps(cloud: np.ndarray, count: int, gripper: GripperSpec, rng: np.random.Generator,
                         viewpoint: np.ndarray | None = None, obstacles: np.ndarray | None = None,
-                        plane: SupportPlane | None = None, orientations: int = 8) -> CloudCandidates:
+                        plane: SupportPlane | None = None, orientations: int = 8,
+                        clearance: float = PLANE_CLEARANCE) -> CloudCandidates:
     """Up to ``count`` collision-free candidates on ``cloud`` (m, 3) float, the object's observed points.
 
     obstacles : (q, 3) points the gripper must also stay clear of (a table's observed points), or None
-    plane : a support plane the gripper must stay above, or None
+    plane : a support plane every corner of the open gripper must stay ``clearance`` (m) above, or None
     Samples ``ceil(count / orientations)`` points, ``orientations`` approach directions each, the deepest free
     bite of each; keeps those free of every point and above the plane.
     """
@@ -236,7 +241,7 @@ def sample_cloud_grasps(cloud: np.ndarray, count: int, gripper: GripperSpec, rng
     centres, approach, closing = hand_frames(points[seeds], normals, axes, orientations)
     blockers = points if obstacles is None or len(obstacles) == 0 else np.vstack([points, obstacles])
     probe = blockers[rng.permutation(len(blockers))]  # random order: the collision cascade's prefixes find most
-    poses, free, below = best_placement(probe, centres, approach, closing, gripper, plane)
+    poses, free, below = best_placement(probe, centres, approach, closing, gripper, plane, clearance)
     return CloudCandidates(poses[free][:count], len(centres), int(np.sum(~free & ~below)), int(below.sum()))
 
 
