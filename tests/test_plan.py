@@ -321,6 +321,33 @@ def test_the_top_down_grasps_join_the_pool_by_default_and_the_rest_is_unchanged(
     assert np.allclose(added.poses[n:, :3, 0] @ gravity(added.plane), 1)  # each approaches along gravity
 
 
+def test_the_open_gripper_keeps_the_table_clearance_asked_for_from_the_spec_and_the_command(tmp_path):
+    from onepiece_dist.cli.main import app
+    from onepiece_dist.core.cloud.grasps import SupportPlane
+    from onepiece_dist.plan.planner import propose
+    from onepiece_dist.plan.scorer import CropRecord
+
+    seen = seen_cloud(box_mesh((0.04, 0.03, 0.06)))
+    floor = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.03, np.zeros(0, bool))  # z = -0.03, under the box
+    observation = Observation(np.vstack([seen.points, _floor(-0.03)]), seen.viewpoint, "box on a floor")
+    spec, gripper = JobSpec(), GripperSpec()
+    record = CropRecord(spec.gripper, spec.voxel, spec.sim.points_per_grasp, "pointnet_context")
+    low, high = (propose(observation, record, PlanSpec(table_clearance=gap, top_down=False),
+                         np.random.default_rng(0)) for gap in (0.002, 0.012))
+    assert above_plane(high.poses, gripper, floor, 0.012 - 1e-3).all() and len(high.poses) > 20
+    assert above_plane(low.poses, gripper, floor, 0.002 - 1e-3).all()
+    assert not above_plane(low.poses, gripper, floor, 0.012 - 1e-3).all()  # 2 mm lets hands go lower
+    checkpoint, out = save_checkpoint(tmp_path / "net.pt"), tmp_path / "grasps"
+    cloud = tmp_path / "cloud.npy"
+    np.save(cloud, observation.points)
+    ran = CliRunner().invoke(app, ["grasp", str(cloud), "--checkpoint", str(checkpoint), "--out", str(out),
+                                   "--viewpoint", ",".join(map(str, seen.viewpoint)), "--table-clearance", "0.012",
+                                   "--check", "0"])
+    assert ran.exit_code == 0, ran.output
+    poses = np.array([g["pose"] for g in json.loads((out / "grasps.json").read_text())["grasps"]])
+    assert len(poses) and above_plane(poses, gripper, floor, 0.012 - 1e-3).all()
+
+
 FIRST_PLAN = """
 import sys
 import numpy as np

@@ -7,8 +7,9 @@ planner keeps is judged here: the shipped network's chooser alone (its first 3 g
 plans), the household and unseen sets at 40 views an object (the first 8 the benchmark's, the other 32 seen by no
 choice made before), paired over objects against the 2 mm the planner used.
 
-    .venv/bin/python -m benchmarks.experiments.pick_table_gap [--gaps 0.002,0.008]
+    .venv/bin/python -m benchmarks.experiments.pick_table_gap [--gaps 0.002,0.008] [--gripper panda]
 
+With ``--gripper panda`` the Franka hand's shipped network plans, checks and executes (results/..._panda.json).
 Results: benchmarks/results/pick_table_gap.json (a height run again replaces its own results only), rendered into
 docs/picks.md by benchmarks/pages/pick_table_gap_section.py.
 """
@@ -18,28 +19,39 @@ from __future__ import annotations
 import json
 import platform
 from datetime import date
+from pathlib import Path
 
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.experiments.pick_panda_check import slim
 from benchmarks.pages.pick_sets import paired_first_attempts as paired
 
 RESULTS = HERE / "results" / "pick_table_gap.json"
+COMMAND = ".venv/bin/python -m benchmarks.experiments.pick_table_gap"
 SETS = ("household", "unseen")
 GAPS = (0.002, 0.005, 0.008, 0.012)  # m: PlanSpec.table_clearance judged; the first is the planner's before
 VIEWS = 40  # an object: the benchmark's 8, then 32 no choice was made on
 
 
-def judged(gap: float) -> dict:
-    """The shipped network's chooser on both sets at ``gap``: each set's report, cut to what is read."""
-    from benchmarks.experiments.picks import run_set, sets, shipped
+def network(hand: str) -> Path:
+    """The network shipped for ``hand`` (a preset's name, or default: the default job's box gripper)."""
+    from onepiece_dist.gripper.presets import gripper_fields
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.job import GripperSpec
+
+    return shipped_network(None if hand == "default" else GripperSpec.model_validate(gripper_fields(hand)))
+
+
+def judged(gap: float, hand: str) -> dict:
+    """The network shipped for ``hand``, its chooser on both sets at ``gap``: each set's report, cut to what is
+    read."""
+    from benchmarks.experiments.picks import run_set, sets
     from onepiece_dist.specs.plan import PlanSpec
 
-    checkpoint, _ = shipped()
-    found = {"gap": gap, "views": VIEWS, "sets": []}
+    found, folder = {"gap": gap, "views": VIEWS, "sets": []}, ROOT / "data" / RESULTS.stem
     for set_name in SETS:
         objects, source = sets()[set_name]
-        found["sets"].append(slim(run_set(set_name, objects(), source, checkpoint,
-                                          ROOT / "data" / "pick_table_gap" / f"{gap:g}", ("network",),
+        found["sets"].append(slim(run_set(set_name, objects(), source, network(hand),
+                                          folder / ("" if hand == "default" else hand) / f"{gap:g}", ("network",),
                                           PlanSpec(table_clearance=gap), VIEWS)))
         print(gap, set_name, found["sets"][-1]["methods"][0]["first_attempt"], flush=True)
     return found
@@ -59,15 +71,17 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--gaps", default=",".join(f"{g:g}" for g in GAPS))
+    parser.add_argument("--gripper", choices=("default", "panda"), default="default")
     args = parser.parse_args()
-    kept = json.loads(RESULTS.read_text())["runs"] if RESULTS.is_file() else {}
-    out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_table_gap", "date": date.today().isoformat(),
-           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "base": f"{GAPS[0]:g}",
-           "runs": kept}
+    mine = RESULTS if args.gripper == "default" else RESULTS.with_name(f"{RESULTS.stem}_{args.gripper}.json")
+    kept = json.loads(mine.read_text())["runs"] if mine.is_file() else {}
+    out = {"command": COMMAND + ("" if args.gripper == "default" else f" --gripper {args.gripper}"),
+           "date": date.today().isoformat(), "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",
+           "network": network(args.gripper).name, "base": f"{GAPS[0]:g}", "runs": kept}
     for gap in (float(g) for g in args.gaps.split(",")):
-        out["runs"][f"{gap:g}"] = judged(gap)
+        out["runs"][f"{gap:g}"] = judged(gap, args.gripper)
         versus(out["runs"], out["base"])
-        RESULTS.write_text(json.dumps(out, indent=1) + "\n")
+        mine.write_text(json.dumps(out, indent=1) + "\n")
     print(json.dumps({name: run.get("versus") for name, run in out["runs"].items()}, indent=1))
 
 

@@ -127,6 +127,10 @@ def grasp(
                                              "with its own top-down grasps and checked shape (docs/planning.md).")
                           ] = False,
     carry: Annotated[bool, typer.Option("--carry", help=CARRY_HELP)] = False,
+    table_clearance: Annotated[float | None, typer.Option(min=0.0, max=0.05, help="Height (m) every corner of the "
+                                                          "open gripper keeps above the table; raise it where the "
+                                                          "robot's calibration is coarser (default: the planner's, "
+                                                          "measured in docs/picks.md).")] = None,
     seed: Annotated[int, typer.Option(help="Seed of the sampling.")] = 0,
     device: Annotated[str, typer.Option(help="auto, cpu or cuda.")] = "auto",
     as_json: Annotated[bool, typer.Option("--json", help="Print the plan as JSON on stdout.")] = False,
@@ -142,7 +146,8 @@ def grasp(
         spec = PlanSpec(candidates=candidates, top_k=top, seed=seed, device=device,
                         support_plane="none" if no_plane else "auto", top_down=top_down, check_first=check,
                         check_shape=check_shape, objects_apart=not one_object, denoise="auto" if denoise else "none",
-                        drop_flying=drop_flying, target=None if aim is None else tuple(aim), carry=carry)
+                        drop_flying=drop_flying, target=None if aim is None else tuple(aim), carry=carry,
+                        **({} if table_clearance is None else {"table_clearance": table_clearance}))
         planned = plan_grasps(cloud, checkpoint, spec, intrinsics, depth_scale, None if view is None else tuple(view),
                               camera_pose, workspace, gripper_option(gripper))
     except (OnePieceError, ValueError) as error:
