@@ -323,7 +323,7 @@ def test_the_top_down_grasps_join_the_pool_by_default_and_the_rest_is_unchanged(
 
 def test_the_open_gripper_keeps_the_table_clearance_asked_for_from_the_spec_and_the_command(tmp_path):
     from onepiece_dist.cli.main import app
-    from onepiece_dist.core.cloud.grasps import SupportPlane
+    from onepiece_dist.core.cloud.grasps import PLANE_CLEARANCE, SupportPlane
     from onepiece_dist.plan.planner import propose
     from onepiece_dist.plan.scorer import CropRecord
 
@@ -337,6 +337,7 @@ def test_the_open_gripper_keeps_the_table_clearance_asked_for_from_the_spec_and_
     assert above_plane(high.poses, gripper, floor, 0.012 - 1e-3).all() and len(high.poses) > 20
     assert above_plane(low.poses, gripper, floor, 0.002 - 1e-3).all()
     assert not above_plane(low.poses, gripper, floor, 0.012 - 1e-3).all()  # 2 mm lets hands go lower
+    assert PlanSpec().table_clearance == PLANE_CLEARANCE  # the sampler's default is the planner's
     checkpoint, out = save_checkpoint(tmp_path / "net.pt"), tmp_path / "grasps"
     cloud = tmp_path / "cloud.npy"
     np.save(cloud, observation.points)

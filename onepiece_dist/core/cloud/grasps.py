@@ -24,7 +24,7 @@ CURVATURE_NEIGHBOURS = 32  # normals in a curvature axis's neighbourhood
 INITIAL_BITE = 0.01  # m of the object between the fingertips at the shallowest placement (GPD's init_bite)
 BITE_STEP = 0.005  # m the hand is pushed in per step (GPD's deepenHand)
 PLACEMENTS = (0.0, -0.5, 0.5, -0.25, 0.25)  # lateral hand shifts, as shares of half the opening
-PLANE_CLEARANCE = 0.002  # m every gripper box corner keeps above a support plane (PlanSpec.table_clearance)
+PLANE_CLEARANCE = 0.008  # m every gripper box corner keeps above a support plane (PlanSpec.table_clearance's)
 ROUNDING = 1e-9  # m: far above a computed distance's rounding (about 1e-15 m here)
 
 
