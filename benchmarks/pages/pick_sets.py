@@ -17,6 +17,13 @@ def pct(value: float) -> str:
     return f"{100 * value:.0f}%"
 
 
+def against(value: float, target: float) -> str:
+    """``value`` as pct does, or to a tenth of a point where the whole percent would read as the other side of
+    ``target`` (84.8% against 85% reads "85%" rounded, yet misses it)."""
+    rounded = round(100 * value) / 100
+    return pct(value) if (rounded >= target) == (value >= target) else f"{100 * value:.1f}%"
+
+
 def interval(pair) -> str:
     return f"[{pct(pair[0])}, {pct(pair[1])}]"
 
@@ -97,10 +104,11 @@ def target_rows(results: list[dict], targets: dict) -> list[str]:
     best = max((pooled(sets, h) for h in HEURISTICS if h in methods), key=lambda m: m["first_attempt"])
     gap = full["first_attempt"] - rate
     lines = [f"| household first attempt >= {pct(targets['first_attempt'])} ({net['objects']} objects) | "
-             f"{pct(rate)} | {met(rate >= targets['first_attempt'])} |"]
+             f"{against(rate, targets['first_attempt'])} | {met(rate >= targets['first_attempt'])} |"]
     if unseen is not None:
         alone = method_of(unseen, "network")
-        lines.append(f"| the same on the unseen set alone ({alone['views']} views) | {pct(alone['first_attempt'])} "
+        lines.append(f"| the same on the unseen set alone ({alone['views']} views) | "
+                     f"{against(alone['first_attempt'], targets['first_attempt'])} "
                      f"{interval(alone['first_attempt_interval'])} | "
                      f"{met(alone['first_attempt'] >= targets['first_attempt'])} |")
     lines.append(f"| >= {100 * targets['above_heuristics']:.0f} points above the best heuristic "
@@ -109,7 +117,7 @@ def target_rows(results: list[dict], targets: dict) -> list[str]:
                  f"{met(rate - best['first_attempt'] >= targets['above_heuristics'])} |")
     if procedural is not None:
         p_rate = method_of(procedural, "network")["first_attempt"]
-        lines.append(f"| procedural first attempt >= {pct(targets['procedural'])} | {pct(p_rate)} | "
-                     f"{met(p_rate >= targets['procedural'])} |")
+        lines.append(f"| procedural first attempt >= {pct(targets['procedural'])} | "
+                     f"{against(p_rate, targets['procedural'])} | {met(p_rate >= targets['procedural'])} |")
     return [*lines, f"| within {100 * targets['full_mesh_gap']:.0f} points of the network on full-mesh candidates "
             f"({pct(full['first_attempt'])}) | {100 * -gap:+.0f} points | {met(gap <= targets['full_mesh_gap'])} |"]

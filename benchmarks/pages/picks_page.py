@@ -23,6 +23,7 @@ from benchmarks.pages.pick_score_draws_section import score_draws_section
 from benchmarks.pages.pick_sets import (
     HOUSEHOLD_SETS,
     LABELS,
+    against,
     failure_table,
     interval,
     method_table,
@@ -59,7 +60,8 @@ def headline(picks: dict) -> list[str]:
     check = sets[0]["spec"]["plan"].get("check_first", 0)
     checked = f", its first {check} grasps checked in simulation," if check else ""
     return [f"On {where}, the network (`{picks['training']['checkpoint']}`){checked} picks "
-            f"**{pct(net['first_attempt'])}** {interval(net['first_attempt_interval'])} at the first attempt from one "
+            f"**{against(net['first_attempt'], picks['targets']['first_attempt'])}** "
+            f"{interval(net['first_attempt_interval'])} at the first attempt from one "
             f"depth view ({net['views']} views).", "", "| target | figure | |", "| --- | --- | --- |",
             *target_rows(picks["sets"], picks["targets"]), "",
             *(f"{s['name'].capitalize()} set: {s['verdict']}." for s in sets)]

@@ -80,6 +80,9 @@ class ObjectPicks:
 
 
 _SCORERS: dict[tuple[str, str, bool], GraspScorer] = {}
+# m: a full-mesh candidate is sampled at a fixed depth and cannot be pushed back as the view's hands are
+# (PlanSpec.table_clearance); it is dropped only where its open gripper would meet the table
+MESH_TABLE_CLEARANCE = 0.002
 
 
 def process_scorer(spec: PickSpec) -> GraspScorer:
@@ -204,7 +207,7 @@ def _full_mesh_proposals(spec: PickSpec, scorer: GraspScorer, mesh, seen: PickVi
     found = sample_candidates(mesh, surface, normals, spec.mesh_candidates, gripper, spec.sampler, rng)
     poses = compose_poses(seen.resting[None], found.poses)
     table = SupportPlane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(0, bool))
-    poses = poses[above_plane(poses, gripper, table, spec.plan.table_clearance)]
+    poses = poses[above_plane(poses, gripper, table, MESH_TABLE_CLEARANCE)]
     world_surface = transform_points(surface, seen.resting)
     crops, keep = cut_crops(world_surface, poses, scorer.record, rng).holding(spec.plan.min_points)
     if not keep.any():
