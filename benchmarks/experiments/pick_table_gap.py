@@ -7,9 +7,10 @@ planner keeps is judged here: the shipped network's chooser alone (its first 3 g
 plans), the household and unseen sets at 40 views an object (the first 8 the benchmark's, the other 32 seen by no
 choice made before), paired over objects against the 2 mm the planner used.
 
-    .venv/bin/python -m benchmarks.experiments.pick_table_gap [--gaps 0.002,0.008] [--gripper panda]
+    .venv/bin/python -m benchmarks.experiments.pick_table_gap [--gaps 0.002,0.008] [--gripper panda|robotiq_2f85|...]
 
-With ``--gripper panda`` the Franka hand's shipped network plans, checks and executes (results/..._panda.json).
+With ``--gripper panda`` (or robotiq_2f85, robotiq_2f140) the network shipped for that preset hand plans, checks
+and executes (results/pick_table_gap_panda.json, and so on).
 Results: benchmarks/results/pick_table_gap.json (a height run again replaces its own results only), rendered into
 docs/picks.md by benchmarks/pages/pick_table_gap_section.py.
 """
@@ -71,7 +72,7 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--gaps", default=",".join(f"{g:g}" for g in GAPS))
-    parser.add_argument("--gripper", choices=("default", "panda"), default="default")
+    parser.add_argument("--gripper", choices=("default", "panda", "robotiq_2f85", "robotiq_2f140"), default="default")
     args = parser.parse_args()
     mine = RESULTS if args.gripper == "default" else RESULTS.with_name(f"{RESULTS.stem}_{args.gripper}.json")
     kept = json.loads(mine.read_text())["runs"] if mine.is_file() else {}

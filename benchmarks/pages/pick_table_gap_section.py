@@ -9,7 +9,7 @@ import numpy as np
 from benchmarks.pages.pick_sets import interval, method_of, pct, pooled
 
 SETS = ("household", "unseen")
-HANDS = {"panda": "Franka hand"}
+HANDS = {"panda": "Franka hand", "robotiq_2f85": "Robotiq 2F-85", "robotiq_2f140": "Robotiq 2F-140"}
 CHOSEN = "0.008"  # the height kept: chosen among 5, 8 and 12 mm on the box gripper's views 8-23 (commit 3146b2e)
 CHOSEN_BEFORE = 24  # the box gripper's views from here on were judged after that choice
 

@@ -187,7 +187,8 @@ def _dense_line(plan: dict) -> str:
 
 
 # results rendered after the benchmark's, in this order
-SECTIONS = ("pick_table_gap", "pick_table_gap_panda", "pick_score_draws", "pick_own_network", "pick_own_network_panda",
+SECTIONS = ("pick_table_gap", "pick_table_gap_panda", "pick_table_gap_robotiq_2f85", "pick_table_gap_robotiq_2f140",
+            "pick_score_draws", "pick_own_network", "pick_own_network_panda",
             "pick_own_network_robotiq_2f85",
             "pick_own_network_robotiq_2f140", "pick_carried", "pick_panda", "pick_panda_check", "pick_clutter_panda",
             "pick_clutter_panda_pile", "pick_clearance_panda",
@@ -222,6 +223,7 @@ def render_picks_page() -> str:
         lines += [f"![{Path(p).stem}]({Path(p).relative_to('docs')})" for p in picks["pictures"]] + [""]
     target = (picks or {}).get("targets", {}).get("first_attempt", 0.85)
     render = {"pick_table_gap": table_gap_section, "pick_table_gap_panda": table_gap_section,
+              "pick_table_gap_robotiq_2f85": table_gap_section, "pick_table_gap_robotiq_2f140": table_gap_section,
               "pick_score_draws": score_draws_section,
               "pick_own_network": lambda r: own_network_section(r, target),
               "pick_own_network_panda": lambda r: own_network_section(r, target),
