@@ -4,9 +4,8 @@ support plane, paired over objects against the height it kept before."""
 
 from __future__ import annotations
 
-import numpy as np
-
 from benchmarks.pages.pick_sets import interval, method_of, pct, pooled
+from benchmarks.pages.pick_sets import paired_first_attempts as paired
 
 SETS = ("household", "unseen")
 HANDS = {"panda": "Franka hand", "robotiq_2f85": "Robotiq 2F-85", "robotiq_2f140": "Robotiq 2F-140"}
@@ -32,22 +31,17 @@ def _gain(pair: dict | None) -> str:
 
 def _after(run: dict, base: dict, set_names: tuple[str, ...]) -> str:
     """``run`` against ``base`` on the views from CHOSEN_BEFORE on, paired over the objects of ``set_names``."""
-    from onepiece_dist.stats.intervals import bootstrap_interval
 
-    def shares(judged: dict) -> dict[str, float]:
-        return {o["name"]: sum(list(v["attempts"]["network"][:1]) == [True] for v in views) / len(views)
-                for s in judged["sets"] if s["name"] in set_names for o in s["objects"]
-                if (views := [v for v in o.get("views", ()) if v["view"] >= CHOSEN_BEFORE])}
+    def later(judged: dict) -> list[dict]:
+        return [{**s, "objects": [{**o, "views": [v for v in o.get("views", ()) if v["view"] >= CHOSEN_BEFORE]}
+                                  for o in s["objects"]]} for s in judged["sets"] if s["name"] in set_names]
 
-    now, was = shares(run), shares(base)
-    differences = np.array([now[k] - was[k] for k in sorted(set(now) & set(was))])
-    low, high = bootstrap_interval(differences)
-    return f"{100 * differences.mean():+.1f} [{100 * low:+.1f}, {100 * high:+.1f}]"
+    return _gain(paired(later(run), later(base), "network"))
 
 
 def _on_another_hand(runs: dict, kept: str) -> list[str]:
     """What the height the planner keeps (chosen on the box gripper) does on this hand, over both sets."""
-    run = next((r for gap, r in runs.items() if _cm(gap) == kept), None)
+    run = runs.get(CHOSEN)
     if run is None or "versus" not in run:
         return [f"The planner keeps {kept}, chosen on the box gripper's views; not judged on this hand."]
     low, high = run["versus"]["all objects"]["interval"]
@@ -79,7 +73,8 @@ def table_gap_section(result: dict) -> list[str]:
              f"by no choice made before), first attempt, paired over objects against {_cm(base)}:", "",
              "| the open gripper above the plane | household [95% CI over objects] | unseen | both sets | "
              "against the first, household | unseen | both sets |", "| --- | --- | --- | --- | --- | --- | --- |"]
-    for gap, run in sorted(runs.items(), key=lambda item: float(item[0])):
+    ordered = sorted(runs.items(), key=lambda item: float(item[0]))
+    for gap, run in ordered:
         by_set = {s["name"]: s for s in run["sets"]}
         both = pooled(run["sets"], "network")
         versus = run.get("versus", {})
@@ -90,7 +85,7 @@ def table_gap_section(result: dict) -> list[str]:
     kept = _cm(str(PlanSpec().table_clearance))
     if hand:
         return [*lines, "", *_on_another_hand(runs, kept), ""]
-    tried = [_verdict(gap, run) for gap, run in sorted(runs.items(), key=lambda item: float(item[0])) if gap != base]
+    tried = [_verdict(gap, run) for gap, run in ordered if gap != base]
     lines += ["", f"Each height against {_cm(base)}, kept where the paired interval over the household objects lies "
               f"above zero (the trials' rule): {'; '.join(tried)}. The planner keeps {kept} "
               "(`onepiece grasp --table-clearance`).", ""]
