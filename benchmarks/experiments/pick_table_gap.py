@@ -23,6 +23,7 @@ from datetime import date
 from pathlib import Path
 
 from benchmarks.experiments.pick_curve import HERE, ROOT
+from benchmarks.experiments.pick_own_network import hand
 from benchmarks.experiments.pick_panda_check import slim
 from benchmarks.pages.pick_sets import paired_first_attempts as paired
 
@@ -33,26 +34,24 @@ GAPS = (0.002, 0.005, 0.008, 0.012)  # m: PlanSpec.table_clearance judged; the f
 VIEWS = 40  # an object: the benchmark's 8, then 32 no choice was made on
 
 
-def network(hand: str) -> Path:
-    """The network shipped for ``hand`` (a preset's name, or default: the default job's box gripper)."""
-    from onepiece_dist.gripper.presets import gripper_fields
+def network(name: str) -> Path:
+    """The network shipped for the hand ``name`` (a preset's name, or default: the default job's box gripper)."""
     from onepiece_dist.plan.shipped import shipped_network
-    from onepiece_dist.specs.job import GripperSpec
 
-    return shipped_network(None if hand == "default" else GripperSpec.model_validate(gripper_fields(hand)))
+    return shipped_network(hand(None if name == "default" else name))
 
 
-def judged(gap: float, hand: str) -> dict:
-    """The network shipped for ``hand``, its chooser on both sets at ``gap``: each set's report, cut to what is
-    read."""
+def judged(gap: float, name: str) -> dict:
+    """The network shipped for the hand ``name``, its chooser on both sets at ``gap``: each set's report, cut to
+    what is read."""
     from benchmarks.experiments.picks import run_set, sets
     from onepiece_dist.specs.plan import PlanSpec
 
     found, folder = {"gap": gap, "views": VIEWS, "sets": []}, ROOT / "data" / RESULTS.stem
     for set_name in SETS:
         objects, source = sets()[set_name]
-        found["sets"].append(slim(run_set(set_name, objects(), source, network(hand),
-                                          folder / ("" if hand == "default" else hand) / f"{gap:g}", ("network",),
+        found["sets"].append(slim(run_set(set_name, objects(), source, network(name),
+                                          folder / ("" if name == "default" else name) / f"{gap:g}", ("network",),
                                           PlanSpec(table_clearance=gap), VIEWS)))
         print(gap, set_name, found["sets"][-1]["methods"][0]["first_attempt"], flush=True)
     return found
