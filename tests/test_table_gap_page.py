@@ -31,3 +31,22 @@ def test_a_height_is_kept_by_the_household_interval_and_another_hand_hears_what_
     assert "the Franka hand" in other and "shows a loss" in other and "views 24 to 39" not in other
     panda["runs"]["0.008"]["versus"]["all objects"]["interval"] = [-0.01, 0.04]
     assert "neither a gain nor a loss" in "\n".join(table_gap_section(panda))
+
+
+def test_each_hands_record_quotes_its_run_at_the_planners_default_and_those_views_are_the_benchmarks():
+    from benchmarks.experiments.pick_own_network import hand
+    from benchmarks.experiments.ship_network import hand_figures
+    from onepiece_dist.plan.shipped import shipped_record
+
+    picks = json.loads((ROOT / "benchmarks" / "results" / "picks.json").read_text())
+    again = hand_figures("default")  # the box gripper's run, cut to the first 8 views: the benchmark's figures
+    for judged in picks["sets"][:2]:
+        network = next(m for m in judged["methods"] if m["method"] == "network")
+        mine = again[f"{judged['name']}_first_attempt"]
+        assert mine["rate"] == network["first_attempt"] and mine["interval"] == network["first_attempt_interval"]
+    for name in ("panda", "robotiq_2f85", "robotiq_2f140"):  # what `onepiece grasp --gripper` quotes
+        record, figures = shipped_record(hand(name)), hand_figures(name)
+        for key, figure in figures.items():
+            assert record[key] == figure, f"stale record: python -m benchmarks.experiments.ship_network " \
+                                          f"--record-picks --gripper {name}"
+        assert figures["household_first_attempt"]["views"] == 128

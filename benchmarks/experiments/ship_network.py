@@ -9,6 +9,8 @@ the record. With --gripper panda it ships the Franka hand's network instead (pic
 figures the benchmark gave it on that hand) as onepiece_dist/plan/networks/pick_view_panda.pt. With --gripper
 robotiq_2f85 (or robotiq_2f140) it ships the network `onepiece pick-labels` and `onepiece pick-train` made with
 their defaults for that hand (benchmarks/experiments/pick_own_network.py, seed 0) as pick_view_robotiq_2f85.pt.
+With --record-picks and --gripper, that hand's record takes its figures at the planner's default from
+pick_table_gap's run for the hand (its first 8 views an object: the benchmark's views and draws).
 
     .venv/bin/python -m benchmarks.experiments.ship_network [--record-picks]
         [--gripper panda|robotiq_2f85|robotiq_2f140]
@@ -20,6 +22,7 @@ import argparse
 import json
 from pathlib import Path
 
+import numpy as np
 import torch
 
 HERE = Path(__file__).resolve().parents[1]
@@ -147,6 +150,38 @@ def record_picks() -> dict:
     return record
 
 
+def record_hand_picks(gripper: str) -> dict:
+    """The record of the network shipped for the preset ``gripper`` with its figures at the planner's default
+    (hand_figures)."""
+    from benchmarks.experiments.pick_own_network import hand
+    from onepiece_dist.plan.shipped import network_path
+
+    record_path = network_path(hand(gripper)).with_suffix(".json")
+    record = {**json.loads(record_path.read_text()), **hand_figures(gripper)}
+    record_path.write_text(json.dumps(record, indent=1) + "\n")
+    return record
+
+
+def hand_figures(gripper: str) -> dict:
+    """The first attempts on the household and unseen sets of the network shipped for ``gripper`` at the
+    planner's default: pick_table_gap_<gripper>.json's run at ``PlanSpec().table_clearance``, its first VIEWS
+    views an object (the pick benchmark's views and draws: the box gripper's run gives picks.json's figures)."""
+    from benchmarks.experiments.picks import VIEWS
+    from onepiece_dist.specs.plan import PlanSpec
+    from onepiece_dist.stats.intervals import bootstrap_interval
+
+    source = "benchmarks/results/pick_table_gap" + ("" if gripper == "default" else f"_{gripper}") + ".json"
+    run = json.loads((ROOT / source).read_text())["runs"][f"{PlanSpec().table_clearance:g}"]
+    figures = {}
+    for judged in run["sets"]:
+        rates = np.array([np.mean([v["attempts"]["network"][0] for v in o["views"] if v["view"] < VIEWS])
+                          for o in judged["objects"] if o["status"] == "ok"])
+        figures[f"{judged['name']}_first_attempt"] = {
+            "rate": float(rates.mean()), "interval": list(bootstrap_interval(rates)), "views": VIEWS * len(rates),
+            "from": f"{source} (the planner's default, its first {VIEWS} views an object)"}
+    return figures
+
+
 def _figures(sets: list[dict], source: str) -> dict:
     """The network's first attempts on the household and unseen ``sets`` (a pick benchmark's), as a record keeps
     them."""
@@ -206,6 +241,9 @@ def main() -> None:
                         help="panda: ship the Franka hand's network (benchmarks/experiments/pick_panda.py); "
                              "robotiq_2f85, robotiq_2f140: a network made by the two commands (pick_own_network.py)")
     args = parser.parse_args()
+    if args.record_picks and args.gripper != "default":
+        print(record_hand_picks(args.gripper))
+        return
     if args.gripper == "panda":
         print(ship_panda())
         return
