@@ -305,3 +305,48 @@ def test_the_last_grasp_checked_stops_drawing_once_its_place_is_settled_and_ever
         assert taken[:-1] == [draws] * (len(taken) - 1)  # only the last grasp's draws are ever left out
         saved += draws * len(taken) - sum(taken)
     assert saved > 0
+
+
+def test_later_grasps_are_checked_only_where_none_before_held_every_draw_and_stop_at_the_first_that_does():
+    from onepiece_dist.picks.shape_check import _in_order, lazy_order
+    from onepiece_dist.plan.planner import PlannedGrasp
+
+    def asked_and_order(shares, count, later):
+        asked = []
+
+        def share(k, earlier):
+            asked.append(k)
+            return shares[k]
+
+        return asked, lazy_order(count, share, later)
+
+    assert asked_and_order([1.0, 0.5, 1.0, 1.0], 2, 2) == ([0], None)  # the first held: nothing more is asked
+    asked, order = asked_and_order([0.75, 0.5, 0.0, 1.0, 1.0], 3, 2)
+    assert asked == [0, 1, 2, 3] and list(order) == [3, 0, 1, 2]  # the fourth held every draw: the fifth not asked
+    asked, order = asked_and_order([0.25, 0.5, 0.0, 0.75, 0.5], 3, 2)
+    assert asked == [0, 1, 2, 3, 4] and list(order) == [3, 1, 4, 0, 2]  # none held: every one asked, ties in rank
+    asked, order = asked_and_order([0.25, 0.5, 0.0, 0.75, 0.5], 3, 0)
+    assert asked == [0, 1, 2] and list(order) == [1, 0, 2]  # without later ones: the first three alone
+    pose = np.eye(4)
+    ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, 0.9 - 0.1 * k, 100) for k in range(6))
+    moved = _in_order(ranked, np.array([3, 0, 1, 2]))  # the grasps not asked keep their rank after those asked
+    assert [g.score for g in moved] == [ranked[i].score for i in (3, 0, 1, 2, 4, 5)]
+    assert [g.rank for g in moved] == [1, 2, 3, 4, 5, 6]
+
+
+def test_the_planner_hands_the_check_the_next_grasps_as_later_ones_and_keeps_enough_ranked():
+    from onepiece_dist.plan.planner import PlannedGrasp, checked_count, checked_first
+    from onepiece_dist.specs.plan import PlanSpec
+
+    pose = np.eye(4)
+    ranked = tuple(PlannedGrasp(k + 1, pose, pose, 0.08, 0.0, 0.9 - 0.1 * k, 100) for k in range(8))
+    seen = []
+
+    def check(first, proposals, gripper, later):
+        seen.append((len(first), later))
+        return tuple(reversed(first))
+
+    out = checked_first(ranked, None, None, 3, check, more=2)
+    assert seen == [(5, 2)] and [g.score for g in out][:5] == [ranked[i].score for i in (4, 3, 2, 1, 0)]
+    assert [g.score for g in out][5:] == [g.score for g in ranked[5:]]
+    assert checked_count(PlanSpec(check_more=4)) == 7 and checked_count(PlanSpec(check_first=0, check_more=4)) == 0

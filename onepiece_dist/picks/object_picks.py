@@ -33,6 +33,7 @@ from onepiece_dist.plan.planner import (
     Proposals,
     Seen,
     check_ranked,
+    checked_count,
     gravity,
     rank,
     scores_of,
@@ -190,7 +191,7 @@ def choose(method: str, spec: PickSpec, scorer: GraspScorer, seen: PickView,
     else:
         scores = scores_of(proposals, scorer, plan)
     checking = method == "network" and pool == "view" and plan.check_first > 0
-    ranked = rank(proposals, scores, scorer.record, plan, keep=max(spec.attempts, plan.check_first * checking))
+    ranked = rank(proposals, scores, scorer.record, plan, keep=max(spec.attempts, checked_count(plan) * checking))
     if checking:
         check = view_check(plan, spec.sim, np.random.default_rng(seen.check_seed))
         ranked = check_ranked(ranked, proposals, scores, scorer.record, plan, check)

@@ -122,27 +122,28 @@ def held_shares(shape: CompletedShape | None, poses: np.ndarray, gripper: Grippe
 
 
 def checked(ranked: tuple[PlannedGrasp, ...], shape: CompletedShape | None, gripper: GripperSpec, sim: SimSpec,
-            draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
+            draws: int, rng: np.random.Generator, later: int = 0) -> tuple[PlannedGrasp, ...]:
     """``ranked`` reordered by how often each held on ``shape`` (the network's order on ties), ranks numbered
-    again; unchanged where there is no shape to check on (lazily: ``lazy_order``)."""
+    again; unchanged where there is no shape to check on (lazily: ``lazy_order``; its last ``later`` checked only
+    where none before held every draw)."""
     if len(ranked) < 2:
         return ranked
     held = shape_draws(shape, gripper, sim, draws, rng)
-    return ranked if held is None else _checked_with(ranked, lambda k: held, draws)
+    return ranked if held is None else _checked_with(ranked, lambda k: held, draws, later)
 
 
 def checked_apart(ranked: tuple[PlannedGrasp, ...], shapes: list[CompletedShape | None], gripper: GripperSpec,
-                  sim: SimSpec, draws: int, rng: np.random.Generator) -> tuple[PlannedGrasp, ...]:
+                  sim: SimSpec, draws: int, rng: np.random.Generator, later: int = 0) -> tuple[PlannedGrasp, ...]:
     """``ranked`` reordered by how often each held on its own shape (``shapes``, one a grasp: the object it closes
     on), the network's order on ties; unchanged where a grasp has no shape to check on (lazily:
-    ``lazy_order``)."""
+    ``lazy_order``, as ``checked``)."""
     if len(ranked) < 2 or any(shape is None for shape in shapes):
         return ranked
-    return _checked_with(ranked, lambda k: shape_draws(shapes[k], gripper, sim, draws, rng), draws)
+    return _checked_with(ranked, lambda k: shape_draws(shapes[k], gripper, sim, draws, rng), draws, later)
 
 
 def _checked_with(ranked: tuple[PlannedGrasp, ...], held_of: Callable[[int], Callable[..., list[bool]]],
-                  draws: int) -> tuple[PlannedGrasp, ...]:
+                  draws: int, later: int = 0) -> tuple[PlannedGrasp, ...]:
     """``ranked`` reordered lazily (lazy_order) by the draws ``held_of(k)`` executes of each grasp k, each
     checked grasp with how many of its draws held (PlannedGrasp.held)."""
     executed: dict[int, list[bool]] = {}
@@ -151,7 +152,7 @@ def _checked_with(ranked: tuple[PlannedGrasp, ...], held_of: Callable[[int], Cal
         executed[k] = held_of(k)(ranked[k].pose, settled_against(earlier, draws))
         return share_of(executed[k], draws)
 
-    order = lazy_order(len(ranked), share)
+    order = lazy_order(len(ranked) - later, share, later)
     annotated = tuple(dataclasses.replace(g, held=(sum(executed[k]), len(executed[k]))) if k in executed else g
                       for k, g in enumerate(ranked))
     return annotated if order is None else _in_order(annotated, order)
@@ -163,23 +164,28 @@ def share_of(outcomes: list[bool], draws: int) -> float:
     return sum(outcomes) / draws
 
 
-def lazy_order(count: int, share: Callable[[int, np.ndarray | None], float]) -> np.ndarray | None:
+def lazy_order(count: int, share: Callable[[int, np.ndarray | None], float], later: int = 0) -> np.ndarray | None:
     """The order of ``count`` ranked grasps by ``share(k, earlier)`` of each, asked in rank order; None (the
     network's order) where the first held every draw: no later grasp can pass it (ties keep the network's order),
     so the rest keep the network's order too and the check costs a third of its draws. The last grasp is given
     the ``earlier`` shares and stops drawing once its place among them is settled. Either way the order is what
     executing every draw would give: each grasp's draws come from the stream in rank order, and only draws after
-    every other grasp's are left out."""
+    every other grasp's are left out. Where none of the ``count`` held every draw, up to ``later`` more are asked
+    in rank order (every draw) until one does; the order then covers every grasp asked."""
     first = share(0, None)
     if first >= 1.0:
         return None
     shares = [first]
     for k in range(1, count):
-        shares.append(share(k, np.array(shares) if k == count - 1 else None))
+        shares.append(share(k, np.array(shares) if k == count - 1 and not later else None))
+    while len(shares) < count + later and max(shares) < 1.0:
+        shares.append(share(len(shares), None))
     return np.argsort(-np.array(shares), kind="stable")
 
 
 def _in_order(ranked: tuple[PlannedGrasp, ...], order: np.ndarray) -> tuple[PlannedGrasp, ...]:
+    """``ranked`` in ``order`` (the grasps it covers), those it does not cover after them in rank order."""
+    order = [*order, *range(len(order), len(ranked))]
     return tuple(dataclasses.replace(ranked[i], rank=k + 1) for k, i in enumerate(order))
 
 
@@ -189,15 +195,15 @@ def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator
     ``spec.seed``)."""
     rng = np.random.default_rng([spec.seed, CHECK_STREAM]) if rng is None else rng
 
-    def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec
+    def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec, later: int = 0
               ) -> tuple[PlannedGrasp, ...]:
         seen = Seen.of(proposals)
         objects = seen.separate()
         if len(objects) == 1:  # one object: its shape from every observed point
-            return checked(ranked, check_shape(seen, spec.check_shape), gripper, sim, spec.check_draws, rng)
+            return checked(ranked, check_shape(seen, spec.check_shape), gripper, sim, spec.check_draws, rng, later)
         mine = [g.object for g in ranked]  # the object each closes on, found as it was planned
         shapes = {k: check_shape(seen, spec.check_shape, objects[k]) for k in sorted(set(mine))}  # those grasped
-        return checked_apart(ranked, [shapes[k] for k in mine], gripper, sim, spec.check_draws, rng)
+        return checked_apart(ranked, [shapes[k] for k in mine], gripper, sim, spec.check_draws, rng, later)
 
     return check
 

@@ -301,27 +301,34 @@ def _refuse_plane_alone(observation: Observation, proposals: Proposals) -> None:
 
 # a check of the first ranked grasps (their proposals, the gripper) that returns them reordered: the planner holds
 # no simulator, so one is handed in (picks.shape_check.view_check) where the spec asks for it (check_first)
-GraspCheck = Callable[[tuple[PlannedGrasp, ...], Proposals, GripperSpec], tuple[PlannedGrasp, ...]]
+GraspCheck = Callable[[tuple[PlannedGrasp, ...], Proposals, GripperSpec, int], tuple[PlannedGrasp, ...]]
 
 
 def checked_first(grasps: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec, count: int,
-                  check: GraspCheck, extra: PlannedGrasp | None = None) -> tuple[PlannedGrasp, ...]:
+                  check: GraspCheck, extra: PlannedGrasp | None = None, more: int = 0) -> tuple[PlannedGrasp, ...]:
     """``grasps`` (ranked) with their first ``count`` reordered by ``check``, ``extra`` checked beside them (last
-    on ties; taken out of the rest where it is there), the rest as they were; ranks numbered again."""
+    on ties; taken out of the rest where it is there), the next ``more`` checked too where none of those held
+    every draw; the rest as they were; ranks numbered again."""
     first, rest = grasps[:count], grasps[count:]
     if extra is not None and not any(np.array_equal(g.pose, extra.pose) for g in first):
         first, rest = (*first, extra), tuple(g for g in rest if not np.array_equal(g.pose, extra.pose))
-    ordered = check(first, proposals, gripper) + rest
+    later, rest = rest[:more], rest[more:]
+    ordered = check((*first, *later), proposals, gripper, len(later)) + rest
     return tuple(dataclasses.replace(g, rank=k + 1) for k, g in enumerate(ordered))
 
 
 def check_ranked(grasps: tuple[PlannedGrasp, ...], proposals: Proposals, scores: np.ndarray, record: CropRecord,
                  spec: PlanSpec, check: GraspCheck) -> tuple[PlannedGrasp, ...]:
     """``grasps`` (ranked) with the first ``spec.check_first`` reordered by ``check``, the best top-down grasp
-    checked beside them where ``spec.check_top_down`` asks (checked_first): the planner's and the pick benchmark's
-    one check."""
+    checked beside them where ``spec.check_top_down`` asks, the next ``spec.check_more`` where none of those held
+    every draw (checked_first): the planner's and the pick benchmark's one check."""
     extra = best_top_down(proposals, scores, record) if spec.check_top_down else None
-    return checked_first(grasps, proposals, record.gripper, spec.check_first, check, extra)
+    return checked_first(grasps, proposals, record.gripper, spec.check_first, check, extra, spec.check_more)
+
+
+def checked_count(spec: PlanSpec) -> int:
+    """How many ranked grasps the check may execute (check_first, then check_more where none of those held)."""
+    return spec.check_first + spec.check_more * bool(spec.check_first)
 
 
 def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | None = None,
@@ -340,7 +347,7 @@ def plan_grasps(observation: Observation, scorer: GraspScorer, spec: PlanSpec | 
     clock = time.perf_counter()
     scores = on_target(proposals, scores_of(proposals, scorer, spec), scorer.gripper, spec, observation.source)
     scored = time.perf_counter()
-    grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, spec.check_first))
+    grasps = rank(proposals, scores, scorer.record, spec, keep=max(spec.top_k, checked_count(spec)))
     grasps = tuple(g for g in grasps if np.isfinite(g.score))
     ranked = time.perf_counter()
     if spec.check_first:

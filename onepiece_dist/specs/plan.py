@@ -60,6 +60,9 @@ class PlanSpec(Frozen):
                              "planner without a simulator must. Needs a support plane (else the order stands).")
     check_draws: int = Field(4, ge=1, le=32, description="Executions of each checked grasp, each with the "
                              "protocol's pose and friction noise (4 choose as well as 8 or 16: docs/picks.md).")
+    check_more: int = Field(0, ge=0, le=50, description="Where none of the first check_first grasps held every "
+                            "draw, the next ones checked in rank order, up to this many more, until one does; all "
+                            "checked are then reordered as the first are. 0: the first check_first alone.")
     check_top_down: bool = Field(False, description="Also check the best-scored top-down grasp (top_down) beside "
                                  "the first check_first, placed first only where it held more often than each.")
     carry: bool = Field(False, description="Where no network ships for the gripper and no checkpoint is given, plan "

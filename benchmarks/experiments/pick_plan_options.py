@@ -1,0 +1,80 @@
+"""The planner's options judged at 40 views an object (issue 55). The check (``PlanSpec.check_first``) reorders the
+network's first 3 grasps by how often each held on the shape the view implies; its gain is bounded by what those
+three are. After non-maximum suppression at 1 cm and 30 degrees, the first three can be near copies of one grasp,
+which fail together on the true shape: the check then has nothing to choose. Each variant changes the planner's
+spec as VARIANTS says; the network shipped for the default job's box gripper, its chooser alone, the household and
+unseen sets at 40 views an object (the first 8 the benchmark's), paired over objects against the planner's default
+as pick_table_gap judged it on the same views and draws (its 8 mm run: the default's height).
+
+    .venv/bin/python -m benchmarks.experiments.pick_plan_options [--variants nms_2cm_45,nms_3cm_60]
+
+Results: benchmarks/results/pick_plan_options.json (a variant run again replaces its own results only), rendered
+into docs/picks.md by benchmarks/pages/pick_plan_options_section.py.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+from datetime import date
+
+from benchmarks.experiments.pick_curve import HERE, ROOT
+from benchmarks.experiments.pick_panda_check import slim
+from benchmarks.experiments.pick_table_gap import RESULTS as TABLE_GAP
+from benchmarks.experiments.pick_table_gap import SETS, VIEWS, network
+from benchmarks.pages.pick_sets import paired_first_attempts as paired
+
+RESULTS = HERE / "results" / "pick_plan_options.json"
+COMMAND = ".venv/bin/python -m benchmarks.experiments.pick_plan_options"
+VARIANTS = {"nms_2cm_45": {"nms_distance": 0.02, "nms_angle_deg": 45.0},  # PlanSpec fields changed
+            "nms_3cm_60": {"nms_distance": 0.03, "nms_angle_deg": 60.0},
+            "nms_5mm_15": {"nms_distance": 0.005, "nms_angle_deg": 15.0},
+            "nms_none": {"nms_distance": 0.0, "nms_angle_deg": 0.0},
+            "check_more_3": {"check_more": 3}, "check_more_7": {"check_more": 7}}
+
+
+def base_run() -> dict:
+    """pick_table_gap's run at the planner's default height: the default planner on the same views and draws."""
+    from onepiece_dist.specs.plan import PlanSpec
+
+    return json.loads(TABLE_GAP.read_text())["runs"][f"{PlanSpec().table_clearance:g}"]
+
+
+def judged(name: str, base: dict) -> dict:
+    """The shipped network's chooser on both sets with the planner's spec changed as VARIANTS[name] says, paired
+    over objects against ``base`` per set and over both."""
+    from benchmarks.experiments.picks import run_set, sets
+    from onepiece_dist.specs.plan import PlanSpec
+
+    found = {"plan": VARIANTS[name], "views": VIEWS, "sets": []}
+    for set_name in SETS:
+        objects, source = sets()[set_name]
+        found["sets"].append(slim(run_set(set_name, objects(), source, network("default"),
+                                          ROOT / "data" / RESULTS.stem / name, ("network",),
+                                          PlanSpec(**VARIANTS[name]), VIEWS)))
+        print(name, set_name, found["sets"][-1]["methods"][0]["first_attempt"], flush=True)
+    pairs = {s["name"]: paired([s], [b for b in base["sets"] if b["name"] == s["name"]], "network")
+             for s in found["sets"]}
+    found["versus"] = {**pairs, "all objects": paired(found["sets"], base["sets"], "network")}
+    return found
+
+
+def main() -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--variants", default=",".join(VARIANTS))
+    args = parser.parse_args()
+    kept = json.loads(RESULTS.read_text())["variants"] if RESULTS.is_file() else {}
+    base = base_run()
+    out = {"command": COMMAND, "date": date.today().isoformat(),
+           "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "network": network("default").name,
+           "base": {"gap": base["gap"], "from": TABLE_GAP.name}, "variants": kept}
+    for name in args.variants.split(","):
+        out["variants"][name] = judged(name, base)
+        RESULTS.write_text(json.dumps(out, indent=1) + "\n")
+    print(json.dumps({name: run["versus"] for name, run in out["variants"].items()}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,55 @@
+"""The planner's options at 40 views an object (results/pick_plan_options.json,
+benchmarks/experiments/pick_plan_options.py): the shipped network's picks with the planner's spec changed, paired
+over objects against the planner's default on the same views and draws."""
+
+from __future__ import annotations
+
+from benchmarks.pages.pick_sets import interval, pct, pooled
+from benchmarks.pages.pick_table_gap_section import _cell, _gain
+
+WHAT = {"nms_distance": "suppression distance {:g} m", "nms_angle_deg": "suppression angle {:g} degrees",
+        "check_more": "up to {} more grasps checked where none of the first 3 held every draw"}
+
+
+def _what(plan: dict) -> str:
+    if plan.get("nms_distance") == 0:
+        return "no non-maximum suppression"
+    return ", ".join(WHAT.get(field, field + " {}").format(value) for field, value in plan.items())
+
+
+def _row(name: str, run: dict, versus: dict | None) -> str:
+    by_set = {s["name"]: s for s in run["sets"]}
+    both = pooled(run["sets"], "network")
+    versus = versus or {}
+    return (f"| {name} | {_cell(by_set['household'])} | {_cell(by_set['unseen'])} | "
+            f"{pct(both['first_attempt'])} {interval(both['first_attempt_interval'])} | "
+            f"{_gain(versus.get('household'))} | {_gain(versus.get('unseen'))} | {_gain(versus.get('all objects'))} |")
+
+
+def _verdict(name: str, run: dict) -> str:
+    kept = run["versus"]["household"]["interval"][0] > 0
+    return f"`{name}`: {'kept' if kept else 'not kept'}"
+
+
+def plan_options_section(result: dict, table_gap: dict) -> list[str]:
+    """The variants of ``result`` against the planner's default: ``table_gap``'s run (pick_table_gap.json) at the
+    height ``result`` names."""
+    gap, variants = result["base"]["gap"], result["variants"]
+    base = table_gap["runs"][f"{gap:g}"]
+    views = next(iter(variants.values()))["views"] if variants else 0
+    lines = [f"## The planner's options at {views} views an object: `{result['command']}`", "",
+             f"{result['date']}, {result['machine']}. The check reorders the network's first 3 grasps by how often "
+             "each held on the shape the view implies, so what it can gain is bounded by what those three are: "
+             "after non-maximum suppression at 1 cm and 30 degrees they may be near copies of one grasp, and where "
+             "none of them held every draw the network's order stands. Each variant changes the planner's spec "
+             f"(`PlanSpec`); the network shipped for the box gripper (`{result['network']}`), its chooser alone, "
+             f"{views} views an object (the first 8 the benchmark's), first attempt, paired over objects against "
+             f"the planner's default on the same views and draws (pick_table_gap's run at {1000 * gap:g} mm, "
+             "above):", "",
+             "| planner | household [95% CI over objects] | unseen | both sets | against the default, household | "
+             "unseen | both sets |", "| --- | --- | --- | --- | --- | --- | --- |",
+             _row("the default", base, None)]
+    lines += [_row(f"`{name}`: {_what(run['plan'])}", run, run.get("versus")) for name, run in variants.items()]
+    tried = [_verdict(name, run) for name, run in variants.items()]
+    return [*lines, "", "Each against the default, kept where the paired interval over the household objects lies "
+            f"above zero (the trials' rule): {'; '.join(tried)}.", ""]

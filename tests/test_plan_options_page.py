@@ -1,0 +1,26 @@
+"""The picks page's section on the planner's options (issue 55): each variant is kept only by the trials' rule on the
+household objects, and says what it changed."""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_a_planner_option_is_kept_by_its_household_interval_and_says_what_it_changed():
+    from benchmarks.pages.pick_plan_options_section import plan_options_section
+
+    result, table_gap = (json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
+                         for name in ("pick_plan_options", "pick_table_gap"))
+    page = "\n".join(plan_options_section(result, table_gap))
+    for name, run in result["variants"].items():
+        verdict = "kept" if run["versus"]["household"]["interval"][0] > 0 else "not kept"
+        assert f"`{name}`: {verdict}" in page.rpartition("the trials' rule")[2]
+    assert "up to 7 more grasps checked where none of the first 3 held every draw" in page
+    assert "no non-maximum suppression" in page
+    lifted = copy.deepcopy(result)
+    lifted["variants"]["check_more_3"]["versus"]["household"]["interval"] = [0.001, 0.02]
+    assert "`check_more_3`: kept" in "\n".join(plan_options_section(lifted, table_gap))  # the rule reads the interval
