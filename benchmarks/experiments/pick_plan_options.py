@@ -1,10 +1,12 @@
 """The planner's options judged at 40 views an object (issue 55). The check (``PlanSpec.check_first``) reorders the
 network's first 3 grasps by how often each held on the shape the view implies; its gain is bounded by what those
 three are. After non-maximum suppression at 1 cm and 30 degrees, the first three can be near copies of one grasp,
-which fail together on the true shape: the check then has nothing to choose. Each variant changes the planner's
-spec as VARIANTS says; the network shipped for the default job's box gripper, its chooser alone, the household and
-unseen sets at 40 views an object (the first 8 the benchmark's), paired over objects against the planner's default
-as pick_table_gap judged it on the same views and draws (its 8 mm run: the default's height).
+which fail together on the true shape: the check then has nothing to choose (the ``nms_`` variants); and where
+none of the three held every draw the network's order stands, where later grasps checked might hold (the
+``check_more_`` variants: ``PlanSpec.check_more``). Each variant changes the planner's spec as VARIANTS says;
+the network shipped for the default job's box gripper, its chooser alone, the household and unseen sets at 40
+views an object (the first 8 the benchmark's), paired over objects against the planner's default as pick_table_gap
+judged it on the same views and draws (its 8 mm run: the default's height).
 
     .venv/bin/python -m benchmarks.experiments.pick_plan_options [--variants nms_2cm_45,nms_3cm_60]
 
