@@ -3,10 +3,11 @@ network's first 3 grasps by how often each held on the shape the view implies; i
 three are. After non-maximum suppression at 1 cm and 30 degrees, the first three can be near copies of one grasp,
 which fail together on the true shape: the check then has nothing to choose (the ``nms_`` variants); and where
 none of the three held every draw the network's order stands, where later grasps checked might hold (the
-``check_more_`` variants: ``PlanSpec.check_more``). Each variant changes the planner's spec as VARIANTS says;
-the network shipped for the default job's box gripper, its chooser alone, the household and unseen sets at 40
-views an object (the first 8 the benchmark's), paired over objects against the planner's default as pick_table_gap
-judged it on the same views and draws (its 8 mm run: the default's height).
+``check_more_`` variants: ``PlanSpec.check_more``). The check's shape and draws, last judged with the open gripper
+2 mm over the table, are judged again (``carved``, ``check_draws_8``). Each variant changes the planner's spec as
+VARIANTS says; the network shipped for the default job's box gripper, its chooser alone, the household and unseen
+sets at 40 views an object (the first 8 the benchmark's), paired over objects against the planner's default as
+pick_table_gap judged it on the same views and draws (its 8 mm run: the default's height).
 
     .venv/bin/python -m benchmarks.experiments.pick_plan_options [--variants nms_2cm_45,nms_3cm_60]
 
@@ -32,7 +33,8 @@ VARIANTS = {"nms_2cm_45": {"nms_distance": 0.02, "nms_angle_deg": 45.0},  # Plan
             "nms_3cm_60": {"nms_distance": 0.03, "nms_angle_deg": 60.0},
             "nms_5mm_15": {"nms_distance": 0.005, "nms_angle_deg": 15.0},
             "nms_none": {"nms_distance": 0.0, "nms_angle_deg": 0.0},
-            "check_more_3": {"check_more": 3}, "check_more_7": {"check_more": 7}}
+            "check_more_3": {"check_more": 3}, "check_more_7": {"check_more": 7},
+            "carved": {"check_shape": "carved"}, "check_draws_8": {"check_draws": 8}}
 
 
 def base_run() -> dict:

@@ -8,7 +8,8 @@ from benchmarks.pages.pick_sets import interval, pct, pooled
 from benchmarks.pages.pick_table_gap_section import _cell, _gain
 
 WHAT = {"nms_distance": "suppression distance {:g} m", "nms_angle_deg": "suppression angle {:g} degrees",
-        "check_more": "up to {} more grasps checked where none of the first 3 held every draw"}
+        "check_more": "up to {} more grasps checked where none of the first 3 held every draw",
+        "check_shape": "checked on the {} shape", "check_draws": "each checked grasp executed {} times"}
 
 
 def _what(plan: dict) -> str:
