@@ -22,7 +22,6 @@ import argparse
 import json
 from pathlib import Path
 
-import numpy as np
 import torch
 
 HERE = Path(__file__).resolve().parents[1]
@@ -167,18 +166,17 @@ def hand_figures(gripper: str) -> dict:
     planner's default: pick_table_gap_<gripper>.json's run at ``PlanSpec().table_clearance``, its first VIEWS
     views an object (the pick benchmark's views and draws: the box gripper's run gives picks.json's figures)."""
     from benchmarks.experiments.picks import VIEWS
+    from benchmarks.pages.pick_sets import pooled, views_kept
     from onepiece_dist.specs.plan import PlanSpec
-    from onepiece_dist.stats.intervals import bootstrap_interval
 
     source = "benchmarks/results/pick_table_gap" + ("" if gripper == "default" else f"_{gripper}") + ".json"
     run = json.loads((ROOT / source).read_text())["runs"][f"{PlanSpec().table_clearance:g}"]
     figures = {}
-    for judged in run["sets"]:
-        rates = np.array([np.mean([v["attempts"]["network"][0] for v in o["views"] if v["view"] < VIEWS])
-                          for o in judged["objects"] if o["status"] == "ok"])
+    for judged in views_kept(run["sets"], lambda view: view < VIEWS):
+        network = pooled([judged], "network")
         figures[f"{judged['name']}_first_attempt"] = {
-            "rate": float(rates.mean()), "interval": list(bootstrap_interval(rates)), "views": VIEWS * len(rates),
-            "from": f"{source} (the planner's default, its first {VIEWS} views an object)"}
+            "rate": network["first_attempt"], "interval": list(network["first_attempt_interval"]),
+            "views": network["views"], "from": f"{source} (the planner's default, its first {VIEWS} views an object)"}
     return figures
 
 

@@ -44,6 +44,12 @@ def loaded_objects(sets: list[dict]) -> list[tuple[dict, dict]]:
     return [(s, o) for s in sets for o in s["objects"] if o["status"] == "ok" and o["views"]]
 
 
+def views_kept(sets: list[dict], keep) -> list[dict]:
+    """``sets`` with each object's views cut to those whose index ``keep(view)`` accepts."""
+    return [{**s, "objects": [{**o, "views": [v for v in o.get("views", ()) if keep(v["view"])]}
+                              for o in s["objects"]]} for s in sets]
+
+
 def first_attempt_share(obj: dict, method: str) -> float:
     """``method``'s first-attempt share of one object's views."""
     return sum(list(v["attempts"][method][:1]) == [True] for v in obj["views"]) / len(obj["views"])

@@ -4,7 +4,7 @@ support plane, paired over objects against the height it kept before."""
 
 from __future__ import annotations
 
-from benchmarks.pages.pick_sets import interval, method_of, pct, pooled
+from benchmarks.pages.pick_sets import interval, method_of, pct, pooled, views_kept
 from benchmarks.pages.pick_sets import paired_first_attempts as paired
 
 SETS = ("household", "unseen")
@@ -33,8 +33,7 @@ def _after(run: dict, base: dict, set_names: tuple[str, ...]) -> str:
     """``run`` against ``base`` on the views from CHOSEN_BEFORE on, paired over the objects of ``set_names``."""
 
     def later(judged: dict) -> list[dict]:
-        return [{**s, "objects": [{**o, "views": [v for v in o.get("views", ()) if v["view"] >= CHOSEN_BEFORE]}
-                                  for o in s["objects"]]} for s in judged["sets"] if s["name"] in set_names]
+        return views_kept([s for s in judged["sets"] if s["name"] in set_names], lambda view: view >= CHOSEN_BEFORE)
 
     return _gain(paired(later(run), later(base), "network"))
 
