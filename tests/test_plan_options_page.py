@@ -24,3 +24,21 @@ def test_a_planner_option_is_kept_by_its_household_interval_and_says_what_it_cha
     lifted = copy.deepcopy(result)
     lifted["variants"]["check_more_3"]["versus"]["household"]["interval"] = [0.001, 0.02]
     assert "`check_more_3`: kept" in "\n".join(plan_options_section(lifted, table_gap))  # the rule reads the interval
+
+
+
+def test_a_network_variant_says_which_network_and_a_planner_option_plans_with_the_shipped_one():
+    from benchmarks.experiments.pick_plan_options import NETWORKS, checkpoint
+    from benchmarks.experiments.pick_table_gap import network
+    from benchmarks.pages.pick_plan_options_section import plan_options_section
+
+    assert checkpoint("nms_none") == network("default")
+    result, table_gap = (json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
+                         for name in ("pick_plan_options", "pick_table_gap"))
+    page = "\n".join(plan_options_section(result, table_gap))
+    judged = [name for name, run in result["variants"].items() if "network" in run]
+    assert judged and set(judged) <= set(NETWORKS)
+    for name in judged:
+        label, fit = result["variants"][name]["network"]
+        assert (f"`{name}`: the network a user makes with pick-labels' defaults (label seed {label}) and "
+                f"pick-train started from the shipped one (fit seed {fit})") in page

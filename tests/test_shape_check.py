@@ -350,3 +350,21 @@ def test_the_planner_hands_the_check_the_next_grasps_as_later_ones_and_keeps_eno
     assert seen == [(5, 2)] and [g.score for g in out][:5] == [ranked[i].score for i in (4, 3, 2, 1, 0)]
     assert [g.score for g in out][5:] == [g.score for g in ranked[5:]]
     assert checked_count(PlanSpec(check_more=4)) == 7 and checked_count(PlanSpec(check_first=0, check_more=4)) == 0
+
+
+@pytest.mark.sim
+def test_the_checked_shape_weighs_what_check_density_says_and_a_heavy_one_slips():
+    from onepiece_dist.picks.shape_check import check_sim, held_shares
+    from onepiece_dist.plan.scorer import GraspScorer
+    from onepiece_dist.plan.shipped import shipped_network
+    from onepiece_dist.specs.plan import PlanSpec
+
+    gripper = GraspScorer(shipped_network(), device="cpu").gripper
+    points = seen_box()
+    shape, across = completed_shape(points, FLOOR), np.stack(top_down_grasps(points, np.array([0, 0, -1.0]), gripper))
+    assert check_sim(PlanSpec(), PICK_SIM) == PICK_SIM  # default: the protocol's density
+    heavy = check_sim(PlanSpec(check_density=20_000.0), PICK_SIM)  # the box at the simulator's 2 kg ceiling
+    assert heavy.density == 20_000.0 and heavy.label_trials == PICK_SIM.label_trials
+    held = held_shares(shape, across, gripper, PICK_SIM, 4, np.random.default_rng(0))
+    slipped = held_shares(shape, across, gripper, heavy, 4, np.random.default_rng(0))
+    assert held.max() >= 0.75 and slipped.max() == 0.0

@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import platform
 from datetime import date
+from pathlib import Path
 
 from benchmarks.experiments.pick_curve import HERE, ROOT
 from benchmarks.experiments.pick_panda_check import slim
@@ -34,7 +35,27 @@ VARIANTS = {"nms_2cm_45": {"nms_distance": 0.02, "nms_angle_deg": 45.0},  # Plan
             "nms_5mm_15": {"nms_distance": 0.005, "nms_angle_deg": 15.0},
             "nms_none": {"nms_distance": 0.0, "nms_angle_deg": 0.0},
             "check_more_3": {"check_more": 3}, "check_more_7": {"check_more": 7},
-            "carved": {"check_shape": "carved"}, "check_draws_8": {"check_draws": 8}}
+            "carved": {"check_shape": "carved"}, "check_draws_8": {"check_draws": 8},
+            "check_density_100": {"check_density": 100.0}, "check_density_200": {"check_density": 200.0},
+            "check_top_down": {"check_top_down": True}}
+OWN_OBJECTS = "pybullet:random_urdfs[0:32]+shapes:groceries[0:16]+shapes:vessels[0:16]"  # pick-labels' default
+NETWORKS = {f"own_l{label}_f{fit}": (label, fit) for label in (0, 1) for fit in (0, 1)}  # (label seed, fit seed)
+
+
+def checkpoint(name: str) -> Path:
+    """The network variant ``name`` plans with: where NETWORKS names it, the network pick_own_network made of
+    pick-labels' defaults at its label seed and pick-train started from the shipped one at its fit seed (made here
+    unless kept); else the network shipped for the box gripper."""
+    from benchmarks.experiments import pick_own_network as own
+
+    if name not in NETWORKS:
+        return network("default")
+    label, fit = NETWORKS[name]
+    prefix = "from_shipped_" + own.tag(OWN_OBJECTS)
+    path = ROOT / "data" / own.named(None) / f"net_{prefix}l{label}_f{fit}" / "best.pt"
+    if not path.is_file():
+        own.network(own.labels(label, None, OWN_OBJECTS)[0], label, fit, prefix, "shipped")
+    return path
 
 
 def base_run() -> dict:
@@ -50,12 +71,12 @@ def judged(name: str, base: dict) -> dict:
     from benchmarks.experiments.picks import run_set, sets
     from onepiece_dist.specs.plan import PlanSpec
 
-    found = {"plan": VARIANTS[name], "views": VIEWS, "sets": []}
+    plan, planner = VARIANTS.get(name, {}), checkpoint(name)
+    found = {"plan": plan, "views": VIEWS, "sets": [], **({"network": NETWORKS[name]} if name in NETWORKS else {})}
     for set_name in SETS:
         objects, source = sets()[set_name]
-        found["sets"].append(slim(run_set(set_name, objects(), source, network("default"),
-                                          ROOT / "data" / RESULTS.stem / name, ("network",),
-                                          PlanSpec(**VARIANTS[name]), VIEWS)))
+        found["sets"].append(slim(run_set(set_name, objects(), source, planner, ROOT / "data" / RESULTS.stem / name,
+                                          ("network",), PlanSpec(**plan), VIEWS)))
         print(name, set_name, found["sets"][-1]["methods"][0]["first_attempt"], flush=True)
     pairs = {s["name"]: paired([s], [b for b in base["sets"] if b["name"] == s["name"]], "network")
              for s in found["sets"]}
@@ -67,7 +88,7 @@ def main() -> None:
     import argparse
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--variants", default=",".join(VARIANTS))
+    parser.add_argument("--variants", default=",".join(VARIANTS) + "," + ",".join(NETWORKS))
     args = parser.parse_args()
     kept = json.loads(RESULTS.read_text())["variants"] if RESULTS.is_file() else {}
     base = base_run()

@@ -9,10 +9,17 @@ from benchmarks.pages.pick_table_gap_section import _cell, _gain
 
 WHAT = {"nms_distance": "suppression distance {:g} m", "nms_angle_deg": "suppression angle {:g} degrees",
         "check_more": "up to {} more grasps checked where none of the first 3 held every draw",
-        "check_shape": "checked on the {} shape", "check_draws": "each checked grasp executed {} times"}
+        "check_shape": "checked on the {} shape", "check_draws": "each checked grasp executed {} times",
+        "check_density": "the checked shape at {:g} kg/m^3 (the protocol's objects: 400)",
+        "check_top_down": "the best-scored top-down grasp checked beside the first 3"}
 
 
-def _what(plan: dict) -> str:
+def _what(run: dict) -> str:
+    plan = run["plan"]
+    if "network" in run:
+        label, fit = run["network"]
+        return (f"the network a user makes with pick-labels' defaults (label seed {label}) and pick-train started "
+                f"from the shipped one (fit seed {fit}), pick_own_network's, the planner's default")
     if plan.get("nms_distance") == 0:
         return "no non-maximum suppression"
     return ", ".join(WHAT.get(field, field + " {}").format(value) for field, value in plan.items())
@@ -43,14 +50,16 @@ def plan_options_section(result: dict, table_gap: dict) -> list[str]:
              "each held on the shape the view implies, so what it can gain is bounded by what those three are: "
              "after non-maximum suppression at 1 cm and 30 degrees they may be near copies of one grasp, and where "
              "none of them held every draw the network's order stands. Each variant changes the planner's spec "
-             f"(`PlanSpec`); the network shipped for the box gripper (`{result['network']}`), its chooser alone, "
+             "(`PlanSpec`) or, where it says so, its network (the `own_` variants: networks a user makes with the "
+             "two commands, started from the shipped one, whose gain at 8 views an object, below, is judged here "
+             f"again); else the network shipped for the box gripper (`{result['network']}`), its chooser alone, "
              f"{views} views an object (the first 8 the benchmark's), first attempt, paired over objects against "
              f"the planner's default on the same views and draws (pick_table_gap's run at {1000 * gap:g} mm, "
              "above):", "",
              "| planner | household [95% CI over objects] | unseen | both sets | against the default, household | "
              "unseen | both sets |", "| --- | --- | --- | --- | --- | --- | --- |",
              _row("the default", base, None)]
-    lines += [_row(f"`{name}`: {_what(run['plan'])}", run, run.get("versus")) for name, run in variants.items()]
+    lines += [_row(f"`{name}`: {_what(run)}", run, run.get("versus")) for name, run in variants.items()]
     tried = [_verdict(name, run) for name, run in variants.items()]
     return [*lines, "", "Each against the default, kept where the paired interval over the household objects lies "
             f"above zero (the trials' rule): {'; '.join(tried)}.", ""]

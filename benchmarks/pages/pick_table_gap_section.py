@@ -96,3 +96,25 @@ def table_gap_section(result: dict) -> list[str]:
                   f"{_after(chosen, runs[base], ('household',))}, unseen {_after(chosen, runs[base], ('unseen',))}, "
                   f"both sets {_after(chosen, runs[base], SETS)}.", ""]
     return lines
+
+
+def more_views_line(result: dict | None, target: float) -> list[str]:
+    """The headline's figure at every view of ``result``'s run at the planner's height (pick_table_gap.json): the
+    same network and planner, five times the views, and the views judged after every choice alone."""
+    run = (result or {}).get("runs", {}).get(CHOSEN)
+    if run is None:
+        return []
+    sets = [s for s in run["sets"] if s["name"] in SETS]
+    every, later = pooled(sets, "network"), pooled(views_kept(sets, lambda view: view >= CHOSEN_BEFORE), "network")
+    by_set = ", ".join(f"{s['name']} {_one(method_of(s, 'network')['first_attempt'])}" for s in sets)
+    said = "**met** there" if every["first_attempt"] >= target else "**not met** there either"
+    return [f"At {run['views']} views an object (the table-gap run at the planner's default, below: the same "
+            f"network and planner; the first 8 views are these), it picks {_one(every['first_attempt'])} "
+            f"{interval(every['first_attempt_interval'])} pooled over {every['objects']} objects ({by_set}): "
+            f"the target of {pct(target)} {said}; on views {CHOSEN_BEFORE} to "
+            f"{run['views'] - 1} alone, judged after every choice the planner's defaults were made on, "
+            f"{_one(later['first_attempt'])} {interval(later['first_attempt_interval'])}."]
+
+
+def _one(rate: float) -> str:
+    return f"{100 * rate:.1f}%"

@@ -32,7 +32,7 @@ from benchmarks.pages.pick_sets import (
     pooled,
     target_rows,
 )
-from benchmarks.pages.pick_table_gap_section import table_gap_section
+from benchmarks.pages.pick_table_gap_section import more_views_line, table_gap_section
 from benchmarks.pages.pick_trials_section import (
     both_section,
     household_labels_section,
@@ -212,7 +212,8 @@ def render_picks_page() -> str:
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
-        lines += [*headline(picks), *clutter_pointer(load("pick_clutter"), load("pick_clearance")), "",
+        lines += [*headline(picks), "", *more_views_line(load("pick_table_gap"), picks["targets"]["first_attempt"]),
+                  *clutter_pointer(load("pick_clutter"), load("pick_clearance")), "",
                   f"## How: `{picks['command']}`", "", _how(picks), ""]
         for result in picks["sets"]:
             lines += [f"## {result['name'].capitalize()} objects: {result['source']}", "",

@@ -189,11 +189,16 @@ def _in_order(ranked: tuple[PlannedGrasp, ...], order: np.ndarray) -> tuple[Plan
     return tuple(dataclasses.replace(ranked[i], rank=k + 1) for k, i in enumerate(order))
 
 
+def check_sim(spec: PlanSpec, sim: SimSpec) -> SimSpec:
+    """The protocol ``sim`` the check executes with: at ``spec.check_density`` where set (the shape's mass)."""
+    return sim if spec.check_density is None else sim.model_copy(update={"density": spec.check_density})
+
+
 def view_check(spec: PlanSpec, sim: SimSpec = PICK_SIM, rng: np.random.Generator | None = None) -> GraspCheck:
     """The planner's check (planner.GraspCheck) as ``spec`` asks for it: ``spec.check_draws`` executions of each
-    grasp by the ``sim`` protocol (default: the pick benchmark's), drawn from ``rng`` (default: seeded by
-    ``spec.seed``)."""
-    rng = np.random.default_rng([spec.seed, CHECK_STREAM]) if rng is None else rng
+    grasp by the ``sim`` protocol (default: the pick benchmark's; its density ``spec.check_density`` where set),
+    drawn from ``rng`` (default: seeded by ``spec.seed``)."""
+    rng, sim = np.random.default_rng([spec.seed, CHECK_STREAM]) if rng is None else rng, check_sim(spec, sim)
 
     def check(ranked: tuple[PlannedGrasp, ...], proposals: Proposals, gripper: GripperSpec, later: int = 0
               ) -> tuple[PlannedGrasp, ...]:

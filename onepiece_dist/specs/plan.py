@@ -63,6 +63,9 @@ class PlanSpec(Frozen):
     check_more: int = Field(0, ge=0, le=50, description="Where none of the first check_first grasps held every "
                             "draw, the next ones checked in rank order, up to this many more, until one does; all "
                             "checked are then reordered as the first are. 0: the first check_first alone.")
+    check_density: float | None = Field(None, gt=10, le=20_000, description="Density (kg/m^3) of the shape "
+                                        "checked on; None: the pick protocol's. A view's hull fills what is "
+                                        "hollow: a mug's hull weighs about 4 times the mug at one density.")
     check_top_down: bool = Field(False, description="Also check the best-scored top-down grasp (top_down) beside "
                                  "the first check_first, placed first only where it held more often than each.")
     carry: bool = Field(False, description="Where no network ships for the gripper and no checkpoint is given, plan "
