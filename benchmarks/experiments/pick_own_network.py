@@ -5,11 +5,12 @@ judged by `onepiece pick` on the household and unseen sets (8 views an object, t
 grasps checked), the network chooser alone, beside the shipped network on the same views.
 
     .venv/bin/python -m benchmarks.experiments.pick_own_network [--label-seeds 0,1] [--fit-seeds 0,1]
-        [--gripper panda] [--objects SOURCE] [--start-from shipped]
+        [--gripper panda] [--objects SOURCE] [--start-from shipped] [--again]
 
 With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it; ``--objects`` labels
 other objects (pick-labels' default today; more of them: more labels); ``--start-from shipped`` starts each fit
-from the network shipped for the default job's gripper (`onepiece pick-train --start-from shipped`). Labels:
+from the network shipped for the default job's gripper (`onepiece pick-train --start-from shipped`); ``--again``
+judges every network already judged again with today's planner (its labels and fit kept). Labels:
 data/own_network[_panda]/labels_s<L>/ (kept where they hold labels of the same spec); networks:
 data/own_network[_panda]/net_l<L>_f<F>/best.pt; results: benchmarks/results/pick_own_network[_panda].json (written
 as each network lands; a run again judges only what is not in it), rendered on docs/picks.md.
@@ -21,6 +22,7 @@ import argparse
 import json
 import platform
 import time
+from collections.abc import Callable
 from datetime import date
 from pathlib import Path
 
@@ -110,6 +112,21 @@ def ships_for(gripper: str | None) -> bool:
     return hand(gripper).name in SHIPPED
 
 
+def judge_again(result: dict, gripper: str | None, others: tuple[str, ...], write: Callable[[], None]) -> None:
+    """Every network of ``result`` (and the shipped one where it was judged) judged again as `onepiece pick`
+    judges today (the planner's defaults), its labels and fit kept: the rows stay comparable with each other."""
+    if result["shipped"] is not None:
+        result["shipped"] = judged(None, "shipped", gripper)
+        write()
+    for entry in result["networks"]:
+        checkpoint = ROOT / entry["network"]["checkpoint"]
+        if not checkpoint.is_file():
+            raise SystemExit(f"{checkpoint}: not here; run without --again to make it (its labels and fit)")
+        entry["picks"] = judged(checkpoint, checkpoint.parent.name.removeprefix("net_"), gripper, others)
+        write()
+        print(checkpoint.parent.name, {k: v["first_attempt"] for k, v in entry["picks"].items()}, flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--label-seeds", default="0,1")
@@ -119,6 +136,8 @@ def main() -> None:
     parser.add_argument("--objects", default=None, help=f"pick-labels --objects (default: {FIRST_OBJECTS})")
     parser.add_argument("--start-from", default=None, choices=("shipped",),
                         help="pick-train --start-from shipped: each fit starts from the default job's shipped network")
+    parser.add_argument("--again", action="store_true",
+                        help="judge every network already judged again with today's planner (labels and fits kept)")
     args = parser.parse_args()
     path = HERE / "results" / f"pick_{named(args.gripper)}.json"
     result = json.loads(path.read_text()) if path.is_file() else {"networks": [], "shipped": None}
@@ -132,6 +151,8 @@ def main() -> None:
 
     judged_beside = result["shipped"] is None and bool(result["networks"])  # its rows stay comparable
     others = ("random", "top_down") if judged_beside or not ships_for(args.gripper) else ()
+    if args.again:
+        return judge_again(result, args.gripper, others, write)
     if result["shipped"] is None and not others:
         result["shipped"] = judged(None, "shipped", args.gripper)
         write()
