@@ -122,8 +122,8 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
                      + " | ".join(pooled_cell(others[m]) for m in HEURISTICS) + f" | {gain_words(gain)} |")
     pooled = [pooled_rate(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
-    return [*lines, "", f"The first-attempt target over both sets (>= {100 * target:.0f}%): "
-            f"{'**met**' if met == len(pooled) else '**not met**'} by {met} of the {len(pooled)} networks.", ""]
+    return [*lines, "", f"The first-attempt target over both sets (>= {100 * target:.0f}%) reached by {met} of the "
+            f"{len(pooled)} networks: {'**met**' if met == len(pooled) else '**not met**'}.", ""]
 
 
 def _same_seeds(networks: list[dict], base: list[dict]) -> tuple[list[dict], list[dict]]:
@@ -171,5 +171,5 @@ def _verdict(networks: list[dict], shipped: dict, target: float) -> str:
             f"same views, over both sets: {gain_words(gain)}; on the household set alone: {gain_words(household)} "
             "(a network made so replaces the shipped one where the household interval lies above zero: "
             f"{'it does' if household.verdict == 'kept' else 'the shipped one stays'}). The first-attempt target "
-            f"over both sets (>= {100 * target:.0f}%): {'**met**' if met == len(pooled) else '**not met**'} by {met} "
-            f"of the {len(pooled)} networks (mean {100 * float(np.mean(pooled)):.1f}%).")
+            f"over both sets (>= {100 * target:.0f}%) reached by {met} of the {len(pooled)} networks (mean "
+            f"{100 * float(np.mean(pooled)):.1f}%): {'**met**' if met == len(pooled) else '**not met**'}.")
