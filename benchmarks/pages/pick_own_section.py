@@ -100,7 +100,7 @@ def own_network_section(result: dict, target: float) -> list[str]:
 
 def _shipped_words(shipped: dict | None) -> str:
     if shipped is None:
-        return " (no network shipped for it when these were judged)"
+        return " (no network shipped for it when the first of these was judged; each is judged beside the heuristics)"
     return " (shipped: the network shipped for it, the same run's figures)"
 
 
