@@ -42,6 +42,16 @@ def tag(objects: str | None) -> str:
     return "" if objects is None else "".join(c if c.isalnum() else "_" for c in objects).strip("_") + "_"
 
 
+def net_prefix(objects: str | None, start_from: str | None) -> str:
+    """The networks' folder prefix for labels of ``objects`` fitted from ``start_from`` (None: fresh weights)."""
+    return ("from_shipped_" if start_from else "") + tag(objects)
+
+
+def net_name(prefix: str, label_seed: int, fit_seed: int) -> str:
+    """The folder (under data/own_network[_gripper]/) of the fit at ``fit_seed`` on ``label_seed``'s labels."""
+    return f"net_{prefix}l{label_seed}_f{fit_seed}"
+
+
 def labels(seed: int, gripper: str | None, objects: str | None = None) -> tuple[Path, dict]:
     """The default pick labels at ``seed`` with ``gripper`` (a preset; None: the default job's) of ``objects``
     (None: FIRST_OBJECTS), made unless kept, and what making them cost."""
@@ -66,7 +76,7 @@ def network(path: Path, label_seed: int, fit_seed: int, prefix: str = "", start_
     from onepiece_dist.plan.shipped import shipped_network
 
     start = None if start_from is None else str(shipped_network())
-    network = train_pick_network(path, path.parent.parent / f"net_{prefix}l{label_seed}_f{fit_seed}",
+    network = train_pick_network(path, path.parent.parent / net_name(prefix, label_seed, fit_seed),
                                  design_options(SHIPPED_DESIGN, fit_seed, start_from=start))
     started = {} if start is None else {"start_from": str(Path(start).relative_to(ROOT))}
     return {**network.to_json(), **started, "checkpoint": str(network.result.checkpoint.relative_to(ROOT)),
@@ -162,7 +172,7 @@ def main() -> None:
         for fit_seed in (int(s) for s in args.fit_seeds.split(",")):
             if (made["objects"], args.start_from, label_seed, fit_seed) in done:
                 continue
-            prefix = ("from_shipped_" if args.start_from else "") + tag(args.objects)
+            prefix = net_prefix(args.objects, args.start_from)
             fitted = network(labelled, label_seed, fit_seed, prefix, args.start_from)
             entry = {"label_seed": label_seed, "fit_seed": fit_seed, "made": made, "network": fitted,
                      **({"start_from": args.start_from} if args.start_from else {}),

@@ -51,8 +51,8 @@ def checkpoint(name: str) -> Path:
     if name not in NETWORKS:
         return network("default")
     label, fit = NETWORKS[name]
-    prefix = "from_shipped_" + own.tag(OWN_OBJECTS)
-    path = ROOT / "data" / own.named(None) / f"net_{prefix}l{label}_f{fit}" / "best.pt"
+    prefix = own.net_prefix(OWN_OBJECTS, "shipped")
+    path = ROOT / "data" / own.named(None) / own.net_name(prefix, label, fit) / "best.pt"
     if not path.is_file():
         own.network(own.labels(label, None, OWN_OBJECTS)[0], label, fit, prefix, "shipped")
     return path

@@ -7,18 +7,15 @@ from __future__ import annotations
 import numpy as np
 
 from benchmarks.pages.pick_clutter_section import hand_words
+from benchmarks.pages.pick_sets import pct1
 from onepiece_dist.stats.intervals import bootstrap_interval
-
-
-def _pct(value: float) -> str:
-    return f"{100 * value:.1f}%"
 
 
 def _network(picks: dict | None, name: str) -> str:
     found = next((s for s in (picks or {}).get("sets", []) if s["name"] == name), None)
     if found is None:
         return "-"
-    return _pct(next(m["first_attempt"] for m in found["methods"] if m["method"] == "network"))
+    return pct1(next(m["first_attempt"] for m in found["methods"] if m["method"] == "network"))
 
 
 def pooled_ceiling(result: dict) -> tuple[float, tuple[float, float], int]:
@@ -34,21 +31,21 @@ def ceiling_section(result: dict, picks: dict | None, pooled_top_down: float | N
     """The section: each set's one-draw share, repeated share and held-out rate; pooled against the benchmark's
     ``targets`` (first_attempt, above_heuristics) where given."""
     screen, selection, shortlist, judge = (result[k] for k in ("screen", "selection", "shortlist", "judge"))
-    rows = [f"| {name} | {s['views']} | {s['candidates']} | {_pct(s['one_draw']['rate'])} | "
-            f"{_pct(s['repeated']['rate'])} | {_pct(s['first_held_out']['rate'])} | "
-            f"{_pct(s['best_held_out']['rate'])} [{_pct(s['best_held_out']['interval'][0])}, "
-            f"{_pct(s['best_held_out']['interval'][1])}] | {_network(picks, name)} |"
+    rows = [f"| {name} | {s['views']} | {s['candidates']} | {pct1(s['one_draw']['rate'])} | "
+            f"{pct1(s['repeated']['rate'])} | {pct1(s['first_held_out']['rate'])} | "
+            f"{pct1(s['best_held_out']['rate'])} [{pct1(s['best_held_out']['interval'][0])}, "
+            f"{pct1(s['best_held_out']['interval'][1])}] | {_network(picks, name)} |"
             for name, s in result["sets"].items()]
     rate, (low, high), objects = pooled_ceiling(result)
-    words = [f"Pooled over the {objects} objects, the ceiling is **{_pct(rate)}** [{_pct(low)}, {_pct(high)}]"]
+    words = [f"Pooled over the {objects} objects, the ceiling is **{pct1(rate)}** [{pct1(low)}, {pct1(high)}]"]
     if targets is not None:
         target, above = targets["first_attempt"], targets["above_heuristics"]
         inside = " (though within its interval)" if rate < target <= high else ""
-        words[0] += (f": the target of {_pct(target)} at the first attempt lies "
+        words[0] += (f": the target of {pct1(target)} at the first attempt lies "
                      f"{'within' if rate >= target else 'above'} it{inside}")
     if targets is not None and pooled_top_down is not None:
         needed = pooled_top_down + above
-        words.append(f"{100 * above:.0f} points above top-down ({_pct(pooled_top_down)}) needs {_pct(needed)}, "
+        words.append(f"{100 * above:.0f} points above top-down ({pct1(pooled_top_down)}) needs {pct1(needed)}, "
                      f"{'within' if needed <= rate else 'above'} it"
                      f"{' and its interval' if needed > high else ''}")
     hand = ", the Franka hand" if result.get("gripper") else ""
@@ -76,9 +73,9 @@ def ranked_draws_section(result: dict) -> list[str]:
     """Where the ranking loses (results/pick_ranked_draws.json): the network's first grasps drawn again."""
     top, draws = result["top"], result["draws"]
     half = draws // 2
-    rows = [f"| {name} | {s['views']} | {_pct(s['first_draw0'])} | {_pct(s['first'])} | {_pct(s['first_judged'])} | "
-            f"{_pct(s['best_of_3'])} | {_pct(s['best_of_10'])} | {_pct(s['pairs_in_order'])} of {s['pairs']} | "
-            f"{_pct(s['top_down_share'])} ({s['top_down_grasps']}) | {_pct(s['other_share'])} |"
+    rows = [f"| {name} | {s['views']} | {pct1(s['first_draw0'])} | {pct1(s['first'])} | {pct1(s['first_judged'])} | "
+            f"{pct1(s['best_of_3'])} | {pct1(s['best_of_10'])} | {pct1(s['pairs_in_order'])} of {s['pairs']} | "
+            f"{pct1(s['top_down_share'])} ({s['top_down_grasps']}) | {pct1(s['other_share'])} |"
             for name, s in result["sets"].items()]
     gains = {name: s["best_of_3"] - s["first_judged"] for name, s in result["sets"].items()}
     return [f"## Where the ranking loses: `{result['command']}`", "",
@@ -103,7 +100,7 @@ def reranked_section(result: dict, fit: dict | None = None) -> list[str]:
     re-ranking networks were fitted (results/pick_rerank_fit.json)."""
     sets = result["sets"]
     names = list(next(iter(sets.values()))["chosen"])
-    rows = [f"| `{name}` | " + " | ".join(f"{_pct(s['chosen'][name]['3'])} | {_pct(s['chosen'][name]['10'])}"
+    rows = [f"| `{name}` | " + " | ".join(f"{pct1(s['chosen'][name]['3'])} | {pct1(s['chosen'][name]['10'])}"
                                           for s in sets.values()) + " |" for name in names]
     moved = [v for s in sets.values() for v in s["views_elsewhere"]]
     best = {w: max(names, key=lambda n: s["chosen"][n]["3"]) for w, s in sets.items()}

@@ -4,9 +4,7 @@ and against the check at the protocol's own."""
 
 from __future__ import annotations
 
-
-def _pct(value: float) -> str:
-    return f"{100 * value:.1f}%"
+from benchmarks.pages.pick_sets import pct1
 
 
 def _interval(d: dict, mean: str, interval: str) -> str:
@@ -33,7 +31,7 @@ def noise_lines(by_scale: dict, scaled: str = "noise") -> list[str]:
     scales = sorted((s for s in by_scale if s != "stored_agree"), key=float)
     if not scales:
         return []
-    rows = [f"| {float(s):g}x | {k} | {w} | {_pct(d['checked'])} | {_interval(d, 'gain_by_object', 'gain_interval')} "
+    rows = [f"| {float(s):g}x | {k} | {w} | {pct1(d['checked'])} | {_interval(d, 'gain_by_object', 'gain_interval')} "
             f"| {_interval(d['versus'], 'mean', 'interval')} |"
             for s in scales for k, by_set in by_scale[s].items() for w, d in by_set.items()]
     agree = by_scale.get("stored_agree", {})

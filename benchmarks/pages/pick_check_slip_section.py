@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from benchmarks.pages.pick_check_noise_section import _interval, _pct
+from benchmarks.pages.pick_check_noise_section import _interval
+from benchmarks.pages.pick_sets import pct1
 
 
 def slip_lines(summary: dict) -> list[str]:
@@ -12,8 +13,8 @@ def slip_lines(summary: dict) -> list[str]:
     3's paired difference over all objects lies above zero)."""
     if not summary:
         return []
-    rows = [f"| {k} | {w} | {d['views']} | {_pct(d['first'])} | {_pct(d['checked'])} | "
-            f"{_interval(d['versus'], 'mean', 'interval')} | {_pct(d['surest'])} | {d['changed']} |"
+    rows = [f"| {k} | {w} | {d['views']} | {pct1(d['first'])} | {pct1(d['checked'])} | "
+            f"{_interval(d['versus'], 'mean', 'interval')} | {pct1(d['surest'])} | {d['changed']} |"
             for k in ("3", "5") for w, d in summary[k].items()]
     agree = " and ".join(f"{n} of {summary['3'][w]['views']} {w} views" for w, n in summary["stored_agree"].items())
     pooled = summary["3"]["all objects"]["versus"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from benchmarks.pages.pick_check_noise_section import noise_lines
 from benchmarks.pages.pick_check_slip_section import slip_lines
+from benchmarks.pages.pick_sets import pct1
 
 RULES = {
     "shipped": "the network's score (its own order)",
@@ -17,10 +18,6 @@ RULES = {
 }
 
 
-def _pct(value: float) -> str:
-    return f"{100 * value:.1f}%"
-
-
 def _rule(name: str, result: dict) -> str:
     base, _, scale = name.rpartition("_x") if "_x" in name else (name, "", "")
     words = RULES[base].format(samples=result["samples"], **result["near"])
@@ -31,8 +28,8 @@ def robust_rank_section(result: dict) -> list[str]:
     """The shipped network's best grasps ordered by their scores under pose noise and by their neighbourhoods."""
     sets = result["sets"]
     names = list(next(iter(sets.values()))["chosen"])
-    rows = [f"| {_rule(name, result)} | " + " | ".join(f"{_pct(s['chosen'][name]['3'])} | "
-                                                       f"{_pct(s['chosen'][name]['10'])}" for s in sets.values())
+    rows = [f"| {_rule(name, result)} | " + " | ".join(f"{pct1(s['chosen'][name]['3'])} | "
+                                                       f"{pct1(s['chosen'][name]['10'])}" for s in sets.values())
             + " |" for name in names]
     gains = {w: {n: s["chosen"][n]["3"] - s["chosen"]["shipped"]["3"] for n in names} for w, s in sets.items()}
     both = [n for n in names if n != "shipped" and all(g[n] > 0 for g in gains.values())]
@@ -85,7 +82,7 @@ def rank_features_section(result: dict) -> list[str]:
     for which, s in sets.items():
         for name, o in s["objects"].items():
             lines.append(f"| {which} | {name} | " + " | ".join(str(o["first"].get(e, 0)) for e in ENDS) + " | "
-                         + " | ".join(_pct(v) for v in o["shares"]) + " |")
+                         + " | ".join(pct1(v) for v in o["shares"]) + " |")
     never = [f"{name} ({which})" for which, s in sets.items() for name, o in s["objects"].items()
              if o["shares"][2] < 0.1]
     lines += ["", "Objects on which even the surest of the first 10 picks under 10% of its draws (no ranking of "
@@ -103,9 +100,9 @@ def _prior_lines(result: dict, prior: dict) -> list[str]:
             "`picks.rank_features`; `score_under_noise`: the mean score of 16 perturbed poses, above), a logistic "
             "model of each grasp's share of draws on those and the network's score, fitted on the household "
             "set's ranked grasps (standardized weights: "
-            f"{weights}): choosing the first 3's best by it picks {_pct(unseen[1])} of the unseen set's draws "
-            f"against the network's order's {_pct(unseen[0])} ({100 * gains[0]:+.1f} points), and on the household "
-            f"set, each object judged by a model fitted without it, {_pct(left_out[1])} against {_pct(left_out[0])} "
+            f"{weights}): choosing the first 3's best by it picks {pct1(unseen[1])} of the unseen set's draws "
+            f"against the network's order's {pct1(unseen[0])} ({100 * gains[0]:+.1f} points), and on the household "
+            f"set, each object judged by a model fitted without it, {pct1(left_out[1])} against {pct1(left_out[0])} "
             f"({100 * gains[1]:+.1f}): " + ("kept." if kept else "not kept: what the view shows of a grasp beyond "
                                              "the network's score does not tell the surer apart.")]
 
@@ -115,8 +112,8 @@ def shape_check_section(result: dict) -> list[str]:
     from benchmarks.experiments.pick_shape_check import paired_check
 
     sets, checks = result["sets"], [str(k) for k in result["checks"]]
-    rows = [f"| {which} | {k or 'none'} | {_pct(m[k]['first_attempt'])} [{_pct(m[k]['interval'][0])}, "
-            f"{_pct(m[k]['interval'][1])}] | {_pct(m[k]['within_3'])} | {m[k]['views']} | "
+    rows = [f"| {which} | {k or 'none'} | {pct1(m[k]['first_attempt'])} [{pct1(m[k]['interval'][0])}, "
+            f"{pct1(m[k]['interval'][1])}] | {pct1(m[k]['within_3'])} | {m[k]['views']} | "
             + _lost(m[k]["failures"])
             + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in checks]
     gains = [paired_check(result, k) for k in checks[1:]]
@@ -139,10 +136,10 @@ def shape_check_section(result: dict) -> list[str]:
                   "| checked | set | views | the network's first | the check's first | gain over objects [95% CI] | "
                   "the surest of those (an oracle) | reordered | the check held the network's first |",
                   "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
-                  *(f"| {k} | {w} | {d['views']} | {_pct(d['first'])} | {_pct(d['checked'])} | "
+                  *(f"| {k} | {w} | {d['views']} | {pct1(d['first'])} | {pct1(d['checked'])} | "
                     f"{100 * d['gain_by_object']:+.1f} [{100 * d['gain_interval'][0]:+.1f}, "
-                    f"{100 * d['gain_interval'][1]:+.1f}] | {_pct(d['surest'])} | {d['reordered']} views | "
-                    f"{_pct(d['check_held_first'])} of its draws |" for k, by_set in drawn.items()
+                    f"{100 * d['gain_interval'][1]:+.1f}] | {pct1(d['surest'])} | {d['reordered']} views | "
+                    f"{pct1(d['check_held_first'])} of its draws |" for k, by_set in drawn.items()
                     for w, d in by_set.items()), ""]
     lines += _density_lines(result.get("expected_density", {}))
     lines += shape_lines(result.get("expected_shapes", {}))
@@ -193,8 +190,8 @@ def more_views_lines(more: dict | None) -> list[str]:
              f"benchmark's), the check at its default {more['check_draws']} draws a grasp:", "",
              "| set | checked | first attempt [95% CI over objects] | views | first attempts lost | seconds |",
              "| --- | --- | --- | --- | --- | --- |",
-             *(f"| {which} | {_run_name(k)} | {_pct(m[k]['first_attempt'])} [{_pct(m[k]['interval'][0])}, "
-               f"{_pct(m[k]['interval'][1])}] | {m[k]['views']} | "
+             *(f"| {which} | {_run_name(k)} | {pct1(m[k]['first_attempt'])} [{pct1(m[k]['interval'][0])}, "
+               f"{pct1(m[k]['interval'][1])}] | {m[k]['views']} | "
                + _lost(m[k]["failures"])
                + f" | {m[k]['seconds']:.0f} |" for which, m in sets.items() for k in m), ""]
     runs = list(next(iter(sets.values())))
@@ -259,7 +256,7 @@ def _density_lines(by_scale: dict) -> list[str]:
     """The check with its shape's mass guessed wrong (results' expected_density): the 8-draw gain of its choice."""
     if not by_scale:
         return []
-    rows = [f"| {scale}x | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
+    rows = [f"| {scale}x | {k} | {w} | {pct1(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
             f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] |"
             for scale, by_k in by_scale.items() for k, by_set in by_k.items() for w, d in by_set.items()]
     return ["A robot does not know its object's mass: the same measure with the check's shape at other multiples "
@@ -275,9 +272,9 @@ def shape_lines(by_shape: dict) -> list[str]:
     if not by_shape:
         return []
     shapes = [name for name in by_shape if name not in ("versus", "rows")]
-    rows = [f"| {shape} | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
-            f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] | {_pct(d['surest'])} | "
-            f"{_pct(d['check_held_first'])} of its draws | {_seconds(d.get('seconds_a_view'))} |"
+    rows = [f"| {shape} | {k} | {w} | {pct1(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
+            f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] | {pct1(d['surest'])} | "
+            f"{pct1(d['check_held_first'])} of its draws | {_seconds(d.get('seconds_a_view'))} |"
             for shape in shapes for k, by_set in by_shape[shape].items() for w, d in by_set.items()]
     lines = ["The hull fills a mug's or a bowl's opening, so a grasp on its rim meets a solid there. Carved, the hull "
              "loses every voxel (4 mm) whose centre the camera saw through by more than 5 mm (the view's depth "
@@ -309,8 +306,8 @@ def judged_shape_lines(result: dict) -> list[str]:
     for shape, by_set in result.get("judged_shapes", {}).items():
         for k in next(iter(by_set.values())):
             gain = paired_check(result, k, shape)
-            firsts = "; ".join(f"{w} {_pct(result['sets'][w]['0']['first_attempt'])} -> "
-                               f"{_pct(m[k]['first_attempt'])} ({m[k]['seconds']:.0f} s)" for w, m in by_set.items())
+            firsts = "; ".join(f"{w} {pct1(result['sets'][w]['0']['first_attempt'])} -> "
+                               f"{pct1(m[k]['first_attempt'])} ({m[k]['seconds']:.0f} s)" for w, m in by_set.items())
             lines += [f"The first {k} checked on the {shape} shape, by the benchmark's one draw: {firsts}; paired over "
                       "objects " + "; ".join(f"{name} {100 * g['mean']:+.1f} points [{100 * g['interval'][0]:+.1f}, "
                                              f"{100 * g['interval'][1]:+.1f}]" for name, g in gain["sets"].items())
@@ -332,7 +329,7 @@ def draws_lines(by_count: dict) -> list[str]:
     if not by_count:
         return []
     counts = sorted((n for n in by_count if n != "versus"), key=int)
-    rows = [f"| {n} | {k} | {w} | {_pct(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
+    rows = [f"| {n} | {k} | {w} | {pct1(d['checked'])} | {100 * d['gain_by_object']:+.1f} "
             f"[{100 * d['gain_interval'][0]:+.1f}, {100 * d['gain_interval'][1]:+.1f}] |"
             for n in counts for k, by_set in by_count[n].items() for w, d in by_set.items()]
     few, many = (by_count[n]["3"]["all objects"] for n in (counts[0], counts[-1]))

@@ -17,11 +17,15 @@ def pct(value: float) -> str:
     return f"{100 * value:.0f}%"
 
 
+def pct1(value: float) -> str:
+    return f"{100 * value:.1f}%"
+
+
 def against(value: float, target: float) -> str:
     """``value`` as pct does, or to a tenth of a point where the whole percent would read as the other side of
     ``target`` (84.8% against 85% reads "85%" rounded, yet misses it)."""
     rounded = round(100 * value) / 100
-    return pct(value) if (rounded >= target) == (value >= target) else f"{100 * value:.1f}%"
+    return pct(value) if (rounded >= target) == (value >= target) else pct1(value)
 
 
 def interval(pair) -> str:

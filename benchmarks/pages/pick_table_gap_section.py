@@ -4,7 +4,7 @@ support plane, paired over objects against the height it kept before."""
 
 from __future__ import annotations
 
-from benchmarks.pages.pick_sets import interval, method_of, pct, pooled, views_kept
+from benchmarks.pages.pick_sets import interval, method_of, pct, pct1, pooled, views_kept
 from benchmarks.pages.pick_sets import paired_first_attempts as paired
 
 SETS = ("household", "unseen")
@@ -29,11 +29,16 @@ def _gain(pair: dict | None) -> str:
     return f"{100 * pair['mean']:+.1f} [{100 * low:+.1f}, {100 * high:+.1f}]"
 
 
+def _judged_after(sets: list[dict]) -> list[dict]:
+    """``sets`` cut to the views from CHOSEN_BEFORE on: those judged after the planner's height was chosen."""
+    return views_kept(sets, lambda view: view >= CHOSEN_BEFORE)
+
+
 def _after(run: dict, base: dict, set_names: tuple[str, ...]) -> str:
     """``run`` against ``base`` on the views from CHOSEN_BEFORE on, paired over the objects of ``set_names``."""
 
     def later(judged: dict) -> list[dict]:
-        return views_kept([s for s in judged["sets"] if s["name"] in set_names], lambda view: view >= CHOSEN_BEFORE)
+        return _judged_after([s for s in judged["sets"] if s["name"] in set_names])
 
     return _gain(paired(later(run), later(base), "network"))
 
@@ -105,16 +110,12 @@ def more_views_line(result: dict | None, target: float) -> list[str]:
     if run is None:
         return []
     sets = [s for s in run["sets"] if s["name"] in SETS]
-    every, later = pooled(sets, "network"), pooled(views_kept(sets, lambda view: view >= CHOSEN_BEFORE), "network")
-    by_set = ", ".join(f"{s['name']} {_one(method_of(s, 'network')['first_attempt'])}" for s in sets)
+    every, later = pooled(sets, "network"), pooled(_judged_after(sets), "network")
+    by_set = ", ".join(f"{s['name']} {pct1(method_of(s, 'network')['first_attempt'])}" for s in sets)
     said = "**met** there" if every["first_attempt"] >= target else "**not met** there either"
     return [f"At {run['views']} views an object (the table-gap run at the planner's default, below: the same "
-            f"network and planner; the first 8 views are these), it picks {_one(every['first_attempt'])} "
+            f"network and planner; the first 8 views are these), it picks {pct1(every['first_attempt'])} "
             f"{interval(every['first_attempt_interval'])} pooled over {every['objects']} objects ({by_set}): "
             f"the target of {pct(target)} {said}; on views {CHOSEN_BEFORE} to "
             f"{run['views'] - 1} alone, judged after every choice the planner's defaults were made on, "
-            f"{_one(later['first_attempt'])} {interval(later['first_attempt_interval'])}."]
-
-
-def _one(rate: float) -> str:
-    return f"{100 * rate:.1f}%"
+            f"{pct1(later['first_attempt'])} {interval(later['first_attempt_interval'])}."]
