@@ -364,3 +364,34 @@ def test_a_label_store_written_before_the_top_down_field_reads_as_having_execute
     assert PickLabelSpec.model_validate(written).plan.top_down is True  # today's default would misread it
     today = PickLabelSpec().model_dump(mode="json")
     assert PickLabelSpec.stored(today) == PickLabelSpec()  # a store that says so keeps what it says
+
+
+def test_a_label_store_written_before_the_table_clearance_field_reads_as_made_2_mm_over_the_table(tmp_path):
+    written = PickLabelSpec(output=str(tmp_path)).model_dump(mode="json")
+    del written["plan"]["table_clearance"]  # as the stores made before plan.table_clearance existed keep it
+    stored = PickLabelSpec.stored(written)
+    assert stored.plan.table_clearance == 0.002 != PickLabelSpec().plan.table_clearance
+    assert stored != PickLabelSpec(output=str(tmp_path))  # today's spec is not the one those labels were made by
+    assert PickLabelSpec.stored(PickLabelSpec(output=str(tmp_path)).model_dump(mode="json")).plan.table_clearance \
+        == PickLabelSpec().plan.table_clearance
+
+
+def test_labels_made_2_mm_over_the_table_are_kept_and_never_taken_for_todays(tmp_path):
+    from onepiece_dist.errors import SpecError
+    from onepiece_dist.picks.pick_labels import labels_made
+    from onepiece_dist.store.pick_labels import LabelledObject, write_pick_labels
+
+    rows = 2
+    made = LabelledObject(0, "box", "ok", points=np.zeros((rows, 8, 3), np.float16),
+                          context=np.zeros((rows, 6), np.float32), space=np.zeros((rows, 0), np.float16),
+                          outline=np.zeros((rows, 4, 3), np.float16), success=np.ones(rows, bool),
+                          held=np.ones(rows, np.int8), failure=np.zeros(rows, np.int8),
+                          view=np.zeros(rows, np.int16), pose=np.tile(np.eye(4), (rows, 1, 1)))
+    today = PickLabelSpec(output=str(tmp_path))
+    written = today.model_dump(mode="json")
+    del written["plan"]["table_clearance"]
+    write_pick_labels(tmp_path / "pick_labels.zarr", [made], written, 1.0, 1.0)
+    with pytest.raises(SpecError, match="table_clearance|plan"):
+        labels_made(today)
+    then = today.model_copy(update={"plan": today.plan.model_copy(update={"table_clearance": 0.002})})
+    assert labels_made(then) == tmp_path / "pick_labels.zarr"

@@ -231,6 +231,7 @@ def parse_pick_label_spec(data: dict[str, Any], source: str = "<pick label spec>
 # pick-labels' default objects: at the same label count the Franka hand's network picks more of the household
 # meshes on these than on pybullet:random_urdfs[0:64], the box gripper's as many (docs/picks.md, "A network made
 # by the two commands").
+PLANNER_CLEARANCE_BEFORE = 0.002  # m: the planner's fixed table clearance before PlanSpec.table_clearance existed
 PICK_LABEL_OBJECTS = "pybullet:random_urdfs[0:32]+shapes:groceries[0:16]+shapes:vessels[0:16]"
 
 
@@ -278,6 +279,9 @@ class PickLabelSpec(Frozen):
 
     @classmethod
     def stored(cls, data: dict[str, Any]) -> PickLabelSpec:
-        """The spec a label store kept (its attrs): stores written before ``plan.top_down`` existed executed no
-        top-down grasps, so its absence there reads False, never today's default."""
-        return cls.model_validate({**data, "plan": {"top_down": False, **data.get("plan", {})}})
+        """The spec a label store kept (its attrs), read as it was made, never as today's defaults would: stores
+        written before ``plan.top_down`` existed executed no top-down grasps (its absence reads False), and those
+        written before ``plan.table_clearance`` existed sampled their hands 2 mm over the table (its absence reads
+        PLANNER_CLEARANCE_BEFORE), not today's 8 mm."""
+        before = {"top_down": False, "table_clearance": PLANNER_CLEARANCE_BEFORE}
+        return cls.model_validate({**data, "plan": {**before, **data.get("plan", {})}})
