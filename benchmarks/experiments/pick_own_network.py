@@ -5,13 +5,15 @@ judged by `onepiece pick` on the household and unseen sets (8 views an object, t
 grasps checked), the network chooser alone, beside the shipped network on the same views.
 
     .venv/bin/python -m benchmarks.experiments.pick_own_network [--label-seeds 0,1] [--fit-seeds 0,1]
-        [--gripper panda] [--objects SOURCE] [--start-from shipped] [--again]
+        [--gripper panda] [--objects SOURCE] [--start-from shipped] [--label-clearance M] [--again]
 
 With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it; ``--objects`` labels
 other objects (pick-labels' default today; more of them: more labels); ``--start-from shipped`` starts each fit
-from the network shipped for the default job's gripper (`onepiece pick-train --start-from shipped`); ``--again``
+from the network shipped for the default job's gripper (`onepiece pick-train --start-from shipped`);
+``--label-clearance`` plans the labels' candidates with the open gripper that high over the table (default: the
+planner's today, 8 mm; every row before it was recorded was labelled at 2 mm, the planner's then); ``--again``
 judges every network already judged again with today's planner (its labels and fit kept). Labels:
-data/own_network[_panda]/labels_s<L>/ (kept where they hold labels of the same spec); networks:
+data/own_network[_panda]/labels_[gap8mm_]s<L>/ (kept where they hold labels of the same spec); networks:
 data/own_network[_panda]/net_l<L>_f<F>/best.pt; results: benchmarks/results/pick_own_network[_panda].json (written
 as each network lands; a run again judges only what is not in it), rendered on docs/picks.md.
 """
@@ -25,6 +27,8 @@ import time
 from collections.abc import Callable
 from datetime import date
 from pathlib import Path
+
+from onepiece_dist.specs.plan import PLANNER_CLEARANCE_BEFORE, PlanSpec
 
 HERE = Path(__file__).resolve().parents[1]
 ROOT = HERE.parent
@@ -42,9 +46,22 @@ def tag(objects: str | None) -> str:
     return "" if objects is None else "".join(c if c.isalnum() else "_" for c in objects).strip("_") + "_"
 
 
-def net_prefix(objects: str | None, start_from: str | None) -> str:
-    """The networks' folder prefix for labels of ``objects`` fitted from ``start_from`` (None: fresh weights)."""
-    return ("from_shipped_" if start_from else "") + tag(objects)
+def height_tag(clearance: float) -> str:
+    """The folders' prefix for labels whose candidates kept the open gripper ``clearance`` (m) over the table (none
+    for the 2 mm of the planner before PlanSpec.table_clearance: every folder labelled then)."""
+    return "" if clearance == PLANNER_CLEARANCE_BEFORE else f"gap{1000 * clearance:g}mm_"
+
+
+def net_prefix(objects: str | None, start_from: str | None, clearance: float = PLANNER_CLEARANCE_BEFORE) -> str:
+    """The networks' folder prefix for labels of ``objects`` made ``clearance`` over the table, fitted from
+    ``start_from`` (None: fresh weights)."""
+    return ("from_shipped_" if start_from else "") + height_tag(clearance) + tag(objects)
+
+
+def label_height(entry: dict) -> float:
+    """The height (m) over the table the candidates of a network's labels kept (rows made before it was recorded:
+    the planner's 2 mm then)."""
+    return entry["made"].get("table_clearance", PLANNER_CLEARANCE_BEFORE)
 
 
 def net_name(prefix: str, label_seed: int, fit_seed: int) -> str:
@@ -52,19 +69,22 @@ def net_name(prefix: str, label_seed: int, fit_seed: int) -> str:
     return f"net_{prefix}l{label_seed}_f{fit_seed}"
 
 
-def labels(seed: int, gripper: str | None, objects: str | None = None) -> tuple[Path, dict]:
+def labels(seed: int, gripper: str | None, objects: str | None = None,
+           clearance: float = PLANNER_CLEARANCE_BEFORE) -> tuple[Path, dict]:
     """The default pick labels at ``seed`` with ``gripper`` (a preset; None: the default job's) of ``objects``
-    (None: FIRST_OBJECTS), made unless kept, and what making them cost."""
+    (None: FIRST_OBJECTS), their candidates planned ``clearance`` over the table, made unless kept, and what making
+    them cost."""
     from onepiece_dist.picks.pick_labels import labels_made, run_pick_labels
     from onepiece_dist.specs.plan import PickLabelSpec
     from onepiece_dist.store.pick_labels import read_pick_labels
 
-    spec = PickLabelSpec(output=str(ROOT / "data" / named(gripper) / f"labels_{tag(objects)}s{seed}"), seed=seed,
-                         objects=objects or FIRST_OBJECTS, **({"gripper": gripper} if gripper else {}))
+    folder = ROOT / "data" / named(gripper) / f"labels_{height_tag(clearance)}{tag(objects)}s{seed}"
+    spec = PickLabelSpec(output=str(folder), seed=seed, objects=objects or FIRST_OBJECTS,
+                         plan=PlanSpec(table_clearance=clearance), **({"gripper": gripper} if gripper else {}))
     path = labels_made(spec) or run_pick_labels(spec)
     made = read_pick_labels(path)
     return path, {"seed": seed, "objects": spec.objects, "views": spec.views, "per_view": spec.per_view,
-                  "gripper": spec.gripper.name, "labels": len(made),
+                  "table_clearance": clearance, "gripper": spec.gripper.name, "labels": len(made),
                   "success_rate": round(float(made.success.mean()), 4),
                   "core_seconds": made.attrs["core_seconds"], "wall_seconds": made.attrs["wall_seconds"]}
 
@@ -146,6 +166,9 @@ def main() -> None:
     parser.add_argument("--objects", default=None, help=f"pick-labels --objects (default: {FIRST_OBJECTS})")
     parser.add_argument("--start-from", default=None, choices=("shipped",),
                         help="pick-train --start-from shipped: each fit starts from the default job's shipped network")
+    parser.add_argument("--label-clearance", type=float, default=PlanSpec().table_clearance,
+                        help="m the labels' candidates keep the open gripper over the table (default: the planner's "
+                             f"today; {PLANNER_CLEARANCE_BEFORE} before PlanSpec.table_clearance existed)")
     parser.add_argument("--again", action="store_true",
                         help="judge every network already judged again with today's planner (labels and fits kept)")
     args = parser.parse_args()
@@ -166,20 +189,21 @@ def main() -> None:
     if result["shipped"] is None and not others:
         result["shipped"] = judged(None, "shipped", args.gripper)
         write()
-    done = {(n["made"]["objects"], n.get("start_from"), n["label_seed"], n["fit_seed"]) for n in result["networks"]}
+    done = {(n["made"]["objects"], label_height(n), n.get("start_from"), n["label_seed"], n["fit_seed"])
+            for n in result["networks"]}
     for label_seed in (int(s) for s in args.label_seeds.split(",")):
-        labelled, made = labels(label_seed, args.gripper, args.objects)
+        labelled, made = labels(label_seed, args.gripper, args.objects, args.label_clearance)
         for fit_seed in (int(s) for s in args.fit_seeds.split(",")):
-            if (made["objects"], args.start_from, label_seed, fit_seed) in done:
+            if (made["objects"], args.label_clearance, args.start_from, label_seed, fit_seed) in done:
                 continue
-            prefix = net_prefix(args.objects, args.start_from)
+            prefix = net_prefix(args.objects, args.start_from, args.label_clearance)
             fitted = network(labelled, label_seed, fit_seed, prefix, args.start_from)
             entry = {"label_seed": label_seed, "fit_seed": fit_seed, "made": made, "network": fitted,
                      **({"start_from": args.start_from} if args.start_from else {}),
                      "picks": judged(ROOT / fitted["checkpoint"], f"{prefix}l{label_seed}_f{fit_seed}", args.gripper,
                                      others)}
             result["networks"] = sorted([*result["networks"], entry], key=lambda n: (
-                n["made"]["labels"], n.get("start_from") or "", n["label_seed"], n["fit_seed"]))
+                n["made"]["labels"], label_height(n), n.get("start_from") or "", n["label_seed"], n["fit_seed"]))
             write()
             print(label_seed, fit_seed, {k: v["first_attempt"] for k, v in entry["picks"].items()}, flush=True)
     print(path)

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmarks.experiments.pick_own_network import FIRST_OBJECTS
+from benchmarks.experiments.pick_own_network import FIRST_OBJECTS, label_height
 from benchmarks.pages.pick_trials_section import VIEWS, gain_words
-from onepiece_dist.specs.plan import PICK_LABEL_OBJECTS
+from onepiece_dist.specs.plan import PICK_LABEL_OBJECTS, PLANNER_CLEARANCE_BEFORE
 from onepiece_dist.stats.intervals import bootstrap_interval, paired_gain
 
 SETS = ("household", "unseen")
@@ -43,10 +43,24 @@ def _started(n: dict) -> str:
     return f"fit started from `{n['network']['start_from'].rsplit('/', 1)[-1]}` (the box gripper's shipped network)"
 
 
+def _height(n: dict) -> str:
+    """How high over the table the candidates of ``n``'s labels kept the open gripper ('' at the 2 mm of every
+    row labelled before the height was a field)."""
+    height = label_height(n)
+    return "" if height == PLANNER_CLEARANCE_BEFORE else f"labelled {1000 * height:g} mm over the table"
+
+
 def _source(n: dict) -> str:
-    """The objects a network was labelled on, and where its fit started where not from fresh weights."""
-    started = _started(n)
-    return f"`{n['made']['objects']}`" + (f", {started}" if started else "")
+    """The objects a network was labelled on, how high over the table where not at 2 mm, and where its fit started
+    where not from fresh weights."""
+    return ", ".join([f"`{n['made']['objects']}`", *(words for words in (_height(n), _started(n)) if words)])
+
+
+Group = tuple[str, float, str | None]  # objects, the labels' height over the table, where the fit started
+
+
+def _group(n: dict) -> Group:
+    return n["made"]["objects"], label_height(n), n.get("start_from")
 
 
 def _row(n: dict) -> str:
@@ -72,14 +86,16 @@ def own_network_section(result: dict, target: float) -> list[str]:
     if not networks:
         return []
     made = networks[0]["made"]
-    groups: dict[tuple[str, str | None], list[dict]] = {}
+    groups: dict[Group, list[dict]] = {}
     for n in networks:
-        groups.setdefault((n["made"]["objects"], n.get("start_from")), []).append(n)
+        groups.setdefault(_group(n), []).append(n)
     return [f"## A network made by the two commands{_title(made)}: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
             f"({made['views']} views an object, {made['per_view']} candidates executed a view, {_hand(made)}; "
             "docs/planning.md) on the objects each row names (`--objects`; its default objects were "
-            f"`{FIRST_OBJECTS}`, and are `{PICK_LABEL_OBJECTS}` since this page's trials), and `onepiece pick-train` "
+            f"`{FIRST_OBJECTS}`, and are `{PICK_LABEL_OBJECTS}` since this page's trials; their candidates planned "
+            f"with the open gripper {1000 * PLANNER_CLEARANCE_BEFORE:g} mm over the table, the planner's height then, "
+            "unless the row says otherwise), and `onepiece pick-train` "
             "with its defaults (the shipped design; from fresh weights unless the row says its fit started from "
             "the network shipped for the default job's box gripper, `--start-from shipped`), at each label seed "
             "and fit seed; each network judged as "
@@ -126,29 +142,50 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
             f"{len(pooled)} networks: {'**met**' if met == len(pooled) else '**not met**'}.", ""]
 
 
-def _same_seeds(networks: list[dict], base: list[dict]) -> tuple[list[dict], list[dict]]:
-    """``networks`` and ``base`` paired at the same label and fit seeds (those both hold)."""
+def _same_seeds(networks: list[dict], base: list[dict], set_name: str | None = None
+                ) -> tuple[list[dict], list[dict]]:
+    """``networks`` and ``base`` paired at the same label and fit seeds (those both hold): their first picks per
+    object over both sets, or on ``set_name`` alone."""
     by_seeds = {(n["label_seed"], n["fit_seed"]): n for n in base}
     pairs = [(n, by_seeds[n["label_seed"], n["fit_seed"]]) for n in networks
              if (n["label_seed"], n["fit_seed"]) in by_seeds]
-    return [both_sets(n["picks"]) for n, _ in pairs], [both_sets(b["picks"]) for _, b in pairs]
+
+    def picked(n: dict) -> dict[str, int]:
+        return both_sets(n["picks"]) if set_name is None else n["picks"][set_name]["per_object"]
+    return [picked(n) for n, _ in pairs], [picked(b) for _, b in pairs]
 
 
-def _against_first(networks: list[dict], groups: dict[tuple[str, str | None], list[dict]]) -> str:
-    """`` Against ...``: fresh fits against those labelled on FIRST_OBJECTS at the same label and fit seeds, a
-    fit started from the shipped network against the fresh fits on the same labels ('' where none pair)."""
-    objects, started = networks[0]["made"]["objects"], networks[0].get("start_from")
-    base = groups.get((objects, None), []) if started else groups.get((FIRST_OBJECTS, None), [])
-    tried, paired = _same_seeds(networks, base) if started or objects != FIRST_OBJECTS else ([], [])
+def _base(networks: list[dict], groups: dict[Group, list[dict]]) -> tuple[list[dict], str]:
+    """The networks ``networks`` are paired against and what they are: labels made higher over the table against
+    those made at the 2 mm before, on the same objects and fitted the same way; else a fit started from the shipped
+    network against the fresh fits on the same labels; else fresh fits against those labelled on FIRST_OBJECTS."""
+    objects, height, started = _group(networks[0])
+    if height != PLANNER_CLEARANCE_BEFORE:
+        return (groups.get((objects, PLANNER_CLEARANCE_BEFORE, started), []),
+                f"labelled {1000 * PLANNER_CLEARANCE_BEFORE:g} mm over the table on the same objects, fitted the "
+                "same way,")
+    if started:
+        return groups.get((objects, height, None), []), "fitted from fresh weights on the same labels"
+    if objects == FIRST_OBJECTS:
+        return [], ""
+    base = groups.get((FIRST_OBJECTS, height, None), [])
+    return base, f"labelled on `{FIRST_OBJECTS}` ({base[0]['made']['labels'] if base else 0} labels)"
+
+
+def _against_first(networks: list[dict], groups: dict[Group, list[dict]]) -> str:
+    """`` Against ...``: ``networks`` against those ``_base`` pairs them with at the same label and fit seeds ('' where
+    none pair)."""
+    base, against = _base(networks, groups)
+    tried, paired = _same_seeds(networks, base)
     if not tried:
         return ""
     gain = paired_gain(tried, paired, VIEWS)
-    against = ("fitted from fresh weights on the same labels" if started else
-               f"labelled on `{FIRST_OBJECTS}` ({base[0]['made']['labels']} labels)")
-    return f" Against the networks {against} at the same seeds, over both sets: {gain_words(gain)}."
+    by_set = "" if label_height(networks[0]) == PLANNER_CLEARANCE_BEFORE else "".join(
+        f"; on the {name} set: {gain_words(paired_gain(*_same_seeds(networks, base, name), VIEWS))}" for name in SETS)
+    return f" Against the networks {against} at the same seeds, over both sets: {gain_words(gain)}{by_set}."
 
 
-def _started_beside(groups: dict[tuple[str, str | None], list[dict]]) -> list[str]:
+def _started_beside(groups: dict[Group, list[dict]]) -> list[str]:
     """For a hand judged beside the heuristics: each group of fits started from the shipped network against the
     fresh fits on the same labels at the same seeds."""
     lines = []
@@ -166,7 +203,9 @@ def _verdict(networks: list[dict], shipped: dict, target: float) -> str:
     pooled = [pooled_rate(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
     started = _started(networks[0]) and f", each {_started(networks[0])}"
-    return (f"Labelled on `{networks[0]['made']['objects']}` ({networks[0]['made']['labels']} labels){started}, "
+    height = _height(networks[0]) and f", {_height(networks[0])}"
+    return (f"Labelled on `{networks[0]['made']['objects']}` ({networks[0]['made']['labels']} labels){height}"
+            f"{started}, "
             "against the shipped network on the "
             f"same views, over both sets: {gain_words(gain)}; on the household set alone: {gain_words(household)} "
             "(a network made so replaces the shipped one where the household interval lies above zero: "

@@ -1,0 +1,60 @@
+"""The own-network section of docs/picks.md: rows say how high over the table their labels were planned, and labels
+made at another height are judged against those made at 2 mm on the same objects, seeds and fit."""
+
+from __future__ import annotations
+
+import functools
+
+from benchmarks.pages.pick_own_section import own_network_section
+from onepiece_dist.specs.plan import PICK_LABEL_OBJECTS
+
+HOUSEHOLD = [f"h{i}.obj" for i in range(16)]
+UNSEEN = [f"u{i}.obj" for i in range(12)]
+
+
+def picks(household: int, unseen: int) -> dict:
+    """Every household object picked at ``household`` of its 8 views, every unseen one at ``unseen``."""
+    def one(names: list[str], n: int) -> dict:
+        return {"first_attempt": n / 8, "interval": [n / 8, n / 8], "views": 8 * len(names),
+                "per_object": dict.fromkeys(names, n)}
+    return {"household": one(HOUSEHOLD, household), "unseen": one(UNSEEN, unseen)}
+
+
+def row(label_seed: int, fit_seed: int, picked: dict, height: float | None, start_from: str | None = None) -> dict:
+    made = {"seed": label_seed, "objects": PICK_LABEL_OBJECTS, "views": 8, "per_view": 16,
+            "gripper": "onepiece_box", "labels": 8169, "core_seconds": 290.0,
+            **({} if height is None else {"table_clearance": height})}
+    network = {"fit_seconds": 50.0, "validation": {"top1": 0.9, "guess": 0.4},
+               **({} if start_from is None else {"start_from": "onepiece_dist/plan/networks/pick_view.pt"})}
+    return {"label_seed": label_seed, "fit_seed": fit_seed, "made": made, "network": network, "picks": picked,
+            **({} if start_from is None else {"start_from": start_from})}
+
+
+@functools.cache
+def section(gap_household: int) -> list[str]:
+    before = [row(s, f, picks(6, 5), None) for s in (0, 1) for f in (0, 1)]  # stored before the height was kept
+    today = [row(s, f, picks(gap_household, 5), 0.008) for s in (0, 1) for f in (0, 1)]
+    result = {"networks": [*before, *today], "shipped": picks(7, 6), "command": "cmd", "date": "d", "machine": "m",
+              "views": 8}
+    return own_network_section(result, 0.85)  # a list: read, never changed
+
+
+def test_a_row_labelled_8_mm_over_the_table_says_so_and_one_labelled_before_does_not():
+    lines = section(7)
+    rows = [line for line in lines if line.startswith(f"| `{PICK_LABEL_OBJECTS}`")]
+    assert len(rows) == 8
+    assert sum("labelled 8 mm over the table" in line for line in rows) == 4
+    assert "2 mm over the table, the planner's height then" in lines[2]
+
+
+def test_labels_made_8_mm_over_the_table_are_judged_against_those_made_at_2_mm_at_the_same_seeds():
+    verdicts = [line for line in section(7) if line.startswith("Labelled on") and "8 mm over the table" in line]
+    assert len(verdicts) == 1
+    against = verdicts[0].split("Against the networks labelled 2 mm over the table on the same objects")[1]
+    assert against.startswith(", fitted the same way, at the same seeds, over both sets: +7.1 points")
+    assert "): kept" in against  # every household object one view higher, the unseen ones the same
+    assert "; on the household set: +12.5 points" in against and "; on the unseen set: +0.0 points" in against
+    lower = next(line for line in section(5) if line.startswith("Labelled on") and "8 mm over" in line)
+    assert "over both sets: -7.1 points" in lower.split("Against the networks labelled 2 mm")[1]
+    plain = next(line for line in section(7) if line.startswith("Labelled on") and "8 mm over" not in line)
+    assert "Against the networks labelled 2 mm" not in plain  # the 2 mm rows are the base, paired with nothing
