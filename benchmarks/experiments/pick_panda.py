@@ -21,7 +21,8 @@ import platform
 from datetime import date
 
 from benchmarks.experiments.pick_clutter import hand_record
-from benchmarks.experiments.pick_curve import BATCHES, HERE, OUT, ROOT, fit, label_spec, labelled
+from benchmarks.experiments.pick_curve import HERE, OUT, ROOT, fit, labelled
+from benchmarks.experiments.pick_relabelled import batch_record, recipe_specs
 
 RESULTS = HERE / "results" / "pick_panda.json"
 PICKS = ROOT / "data" / "pick_panda"
@@ -32,26 +33,12 @@ DESIGN = "context_balanced"
 def panda_specs():
     """The shipped network's two label batches' specs with the Franka hand: [(folder name, spec, shapes folder,
     shapes seed)]; each differs from the box palm's only in its gripper and folder."""
-    made = []
-    for (objects, folder, shapes, seed), top_down in zip(BATCHES[:2], (True, False), strict=True):
-        name = f"{folder}_panda" + ("_top_down" if top_down else "")
-        spec = label_spec(objects, name)
-        spec = type(spec).model_validate({**spec.model_dump(), "gripper": GRIPPER,
-                                          "plan": {**spec.plan.model_dump(), "top_down": top_down}})
-        made.append((name, spec, shapes, seed))
-    return made
+    return recipe_specs("_panda", GRIPPER)
 
 
 def panda_batches():
     """The batches of ``panda_specs`` labelled (here, unless their folders hold them): [(name, labels)]."""
     return [(name, labelled(spec, shapes, seed)) for name, spec, shapes, seed in panda_specs()]
-
-
-def batch_record(name: str, labels) -> dict:
-    return {"folder": f"data/{name}", "objects": labels.attrs["spec"]["objects"], "labels": len(labels),
-            "success_rate": round(float(labels.success.mean()), 4),
-            "top_down": bool(labels.attrs["spec"]["plan"].get("top_down", False)),
-            "core_seconds": labels.attrs["core_seconds"]}
 
 
 def trained(joined, seed: int, before: dict | None) -> dict:

@@ -7,7 +7,9 @@ none of the three held every draw the network's order stands, where later grasps
 2 mm over the table, are judged again (``carved``, ``check_draws_8``). Each variant changes the planner's spec as
 VARIANTS says; the network shipped for the default job's box gripper, its chooser alone, the household and unseen
 sets at 40 views an object (the first 8 the benchmark's), paired over objects against the planner's default as
-pick_table_gap judged it on the same views and draws (its 8 mm run: the default's height).
+pick_table_gap judged it on the same views and draws (its 8 mm run: the default's height). The ``own_`` variants
+plan with networks pick_own_network makes, the ``relabelled_`` ones (never run by default: pick_relabelled makes
+their networks first) with the shipped recipe labelled again by today's planner.
 
     .venv/bin/python -m benchmarks.experiments.pick_plan_options [--variants nms_2cm_45,nms_3cm_60]
 
@@ -40,14 +42,22 @@ VARIANTS = {"nms_2cm_45": {"nms_distance": 0.02, "nms_angle_deg": 45.0},  # Plan
             "check_top_down": {"check_top_down": True}}
 OWN_OBJECTS = "pybullet:random_urdfs[0:32]+shapes:groceries[0:16]+shapes:vessels[0:16]"  # pick-labels' default
 NETWORKS = {f"own_l{label}_f{fit}": (label, fit) for label in (0, 1) for fit in (0, 1)}  # (label seed, fit seed)
+RELABELLED = {f"relabelled_s{seed}": seed for seed in (0, 1)}  # pick_relabelled's networks: their fit seed
 
 
 def checkpoint(name: str) -> Path:
     """The network variant ``name`` plans with: where NETWORKS names it, the network pick_own_network made of
     pick-labels' defaults at its label seed and pick-train started from the shipped one at its fit seed (made here
-    unless kept); else the network shipped for the box gripper."""
+    unless kept); where RELABELLED does, pick_relabelled's network at its seed; else the network shipped for the box
+    gripper."""
     from benchmarks.experiments import pick_own_network as own
 
+    if name in RELABELLED:
+        path = ROOT / "data" / "pick_curve" / "relabelled" / name / "best.pt"
+        if not path.is_file():
+            raise SystemExit(f"{path}: not here; make it first: .venv/bin/python -m "
+                             f"benchmarks.experiments.pick_relabelled --seeds {RELABELLED[name]}")
+        return path
     if name not in NETWORKS:
         return network("default")
     label, fit = NETWORKS[name]
@@ -72,7 +82,8 @@ def judged(name: str, base: dict) -> dict:
     from onepiece_dist.specs.plan import PlanSpec
 
     plan, planner = VARIANTS.get(name, {}), checkpoint(name)
-    found = {"plan": plan, "views": VIEWS, "sets": [], **({"network": NETWORKS[name]} if name in NETWORKS else {})}
+    found = {"plan": plan, "views": VIEWS, "sets": [], **({"network": NETWORKS[name]} if name in NETWORKS else {}),
+             **({"relabelled": RELABELLED[name]} if name in RELABELLED else {})}
     for set_name in SETS:
         objects, source = sets()[set_name]
         found["sets"].append(slim(run_set(set_name, objects(), source, planner, ROOT / "data" / RESULTS.stem / name,

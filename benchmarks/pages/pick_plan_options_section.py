@@ -16,6 +16,9 @@ WHAT = {"nms_distance": "suppression distance {:g} m", "nms_angle_deg": "suppres
 
 def _what(run: dict) -> str:
     plan = run["plan"]
+    if "relabelled" in run:
+        return (f"the shipped recipe labelled again by the planner as it ships (pick_relabelled's network at seed "
+                f"{run['relabelled']}), the planner's default")
     if "network" in run:
         label, fit = run["network"]
         return (f"the network a user makes with pick-labels' defaults (label seed {label}) and pick-train started "
@@ -45,6 +48,8 @@ def plan_options_section(result: dict, table_gap: dict) -> list[str]:
     gap, variants = result["base"]["gap"], result["variants"]
     base = table_gap["runs"][f"{gap:g}"]
     views = next(iter(variants.values()))["views"] if variants else 0
+    relabelled = ("; the `relabelled_` variants: the shipped recipe labelled again by the planner as it ships, below"
+                  if any("relabelled" in run for run in variants.values()) else "")
     lines = [f"## The planner's options at {views} views an object: `{result['command']}`", "",
              f"{result['date']}, {result['machine']}. The check reorders the network's first 3 grasps by how often "
              "each held on the shape the view implies, so what it can gain is bounded by what those three are: "
@@ -52,7 +57,8 @@ def plan_options_section(result: dict, table_gap: dict) -> list[str]:
              "none of them held every draw the network's order stands. Each variant changes the planner's spec "
              "(`PlanSpec`) or, where it says so, its network (the `own_` variants: networks a user makes with the "
              "two commands, started from the shipped one, whose gain at 8 views an object, below, is judged here "
-             f"again); else the network shipped for the box gripper (`{result['network']}`), its chooser alone, "
+             f"again{relabelled}); else the network shipped for the box gripper (`{result['network']}`), its "
+             "chooser alone, "
              f"{views} views an object (the first 8 the benchmark's), first attempt, paired over objects against "
              f"the planner's default on the same views and draws (pick_table_gap's run at {1000 * gap:g} mm, "
              "above):", "",

@@ -20,6 +20,7 @@ from benchmarks.pages.pick_own_section import own_network_section
 from benchmarks.pages.pick_panda_section import panda_section
 from benchmarks.pages.pick_plan_options_section import plan_options_section
 from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
+from benchmarks.pages.pick_relabelled_section import relabelled_section
 from benchmarks.pages.pick_score_draws_section import score_draws_section
 from benchmarks.pages.pick_sets import (
     HOUSEHOLD_SETS,
@@ -189,7 +190,7 @@ def _dense_line(plan: dict) -> str:
 
 # results rendered after the benchmark's, in this order
 SECTIONS = ("pick_table_gap", "pick_table_gap_panda", "pick_table_gap_robotiq_2f85", "pick_table_gap_robotiq_2f140",
-            "pick_plan_options", "pick_score_draws", "pick_own_network", "pick_own_network_panda",
+            "pick_plan_options", "pick_score_draws", "pick_relabelled", "pick_own_network", "pick_own_network_panda",
             "pick_own_network_robotiq_2f85",
             "pick_own_network_robotiq_2f140", "pick_carried", "pick_panda", "pick_panda_check", "pick_clutter_panda",
             "pick_clutter_panda_pile", "pick_clearance_panda",
@@ -227,7 +228,7 @@ def render_picks_page() -> str:
     render = {"pick_table_gap": table_gap_section, "pick_table_gap_panda": table_gap_section,
               "pick_table_gap_robotiq_2f85": table_gap_section, "pick_table_gap_robotiq_2f140": table_gap_section,
               "pick_plan_options": lambda r: plan_options_section(r, load("pick_table_gap")),
-              "pick_score_draws": score_draws_section,
+              "pick_score_draws": score_draws_section, "pick_relabelled": relabelled_section,
               "pick_own_network": lambda r: own_network_section(r, target),
               "pick_own_network_panda": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f85": lambda r: own_network_section(r, target),
