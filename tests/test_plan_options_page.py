@@ -42,3 +42,27 @@ def test_a_network_variant_says_which_network_and_a_planner_option_plans_with_th
         label, fit = result["variants"][name]["network"]
         assert (f"`{name}`: the network a user makes with pick-labels' defaults (label seed {label}) and "
                 f"pick-train started from the shipped one (fit seed {fit})") in page
+
+
+def test_a_relabelled_variant_names_its_seed_and_one_whose_network_is_missing_says_how_to_make_it(tmp_path,
+                                                                                                monkeypatch):
+    import pytest
+
+    from benchmarks.experiments import pick_plan_options
+    from benchmarks.pages.pick_plan_options_section import plan_options_section
+
+    result, table_gap = (json.loads((ROOT / "benchmarks" / "results" / f"{name}.json").read_text())
+                         for name in ("pick_plan_options", "pick_table_gap"))
+    page = "\n".join(plan_options_section(result, table_gap))
+    relabelled = {name: run["relabelled"] for name, run in result["variants"].items() if "relabelled" in run}
+    for name, seed in relabelled.items():
+        assert f"`{name}`: the shipped recipe labelled again by the planner as it ships (pick_relabelled's network " \
+               f"at seed {seed})" in page
+    assert ("the `relabelled_` variants" in page) == bool(relabelled)
+    monkeypatch.setattr(pick_plan_options, "ROOT", tmp_path)  # a checkout without the network: refused, saying
+    with pytest.raises(SystemExit, match="pick_relabelled --seeds 1"):  # the command that makes it
+        pick_plan_options.checkpoint("relabelled_s1")
+    made = tmp_path / "data" / "pick_curve" / "relabelled" / "relabelled_s1" / "best.pt"
+    made.parent.mkdir(parents=True)
+    made.write_bytes(b"")
+    assert pick_plan_options.checkpoint("relabelled_s1") == made

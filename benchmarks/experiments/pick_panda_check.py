@@ -71,10 +71,10 @@ VIEW_KEPT = ("view", "attempts", "failures")  # what the pairings and the page r
 OBJECT_KEPT = ("index", "name", "status", "reason", "views")
 
 
-def slim(judged: dict) -> dict:
-    """A set's report with each object and view cut to what is read of them (VIEW_KEPT, OBJECT_KEPT): the
+def slim(judged: dict, view_kept: tuple[str, ...] = VIEW_KEPT) -> dict:
+    """A set's report with each object and view cut to what is read of them (``view_kept``, OBJECT_KEPT): the
     variants' many views would otherwise take megabytes of camera and pool figures nothing reads."""
-    objects = [{**{k: o[k] for k in OBJECT_KEPT if k in o}, "views": [{k: v[k] for k in VIEW_KEPT} for v in o["views"]]}
+    objects = [{**{k: o[k] for k in OBJECT_KEPT if k in o}, "views": [{k: v[k] for k in view_kept} for v in o["views"]]}
                for o in judged["objects"]]
     return {**judged, "objects": objects}
 
