@@ -80,3 +80,11 @@ def test_the_shipped_recipe_labelled_again_replaces_the_shipped_network_only_whe
     one_seed = relabelled_section(relabelled(7, seeds=1))[-1]  # one seed decides nothing
     assert one_seed.endswith(": the shipped one stays).")
     assert relabelled_section({**relabelled(7), "points": []}) == []
+    versus = {"mean": -0.015, "interval": [-0.029, 0.0]}
+    options = {"variants": {"nms_none": {"views": 40, "versus": {}},
+                            "relabelled_s0": {"views": 40, "relabelled": 0,
+                                              "versus": {"all objects": versus, "household": versus}}}}
+    assert relabelled_section(relabelled(7), options)[-1] == (
+        "At 40 views an object (the planner's options, above: the `relabelled_` variants), against the shipped "
+        "network on the same views and draws: seed 0: -1.5 [-2.9, +0.0] over both sets, household -1.5 [-2.9, +0.0].")
+    assert relabelled_section(relabelled(7), {"variants": {}})[-1] == higher[-1]  # none judged there: no line

@@ -4,6 +4,7 @@ benchmarks/experiments/pick_relabelled.py): each seed's network against the ship
 from __future__ import annotations
 
 from benchmarks.pages.pick_own_section import SETS, SHIPPED_LABELS, both_sets, cell, pooled_cell
+from benchmarks.pages.pick_table_gap_section import _gain
 from benchmarks.pages.pick_trials_section import VIEWS, gain_words
 from onepiece_dist.specs.plan import PLANNER_CLEARANCE_BEFORE
 from onepiece_dist.stats.intervals import paired_gain
@@ -39,7 +40,19 @@ def _against(points: list[dict], shipped: dict) -> str:
             f"rule: {replaces}).")
 
 
-def relabelled_section(result: dict) -> list[str]:
+def _more_views(options: dict | None) -> list[str]:
+    """The seeds' networks at 40 views an object, where the planner's options judged them (pick_plan_options)."""
+    runs = {name: run for name, run in (options or {}).get("variants", {}).items() if "relabelled" in run}
+    if not runs:
+        return []
+    views = next(iter(runs.values()))["views"]
+    said = "; ".join(f"seed {run['relabelled']}: {_gain(run['versus']['all objects'])} over both sets, household "
+                     f"{_gain(run['versus']['household'])}" for run in runs.values())
+    return ["", f"At {views} views an object (the planner's options, above: the `relabelled_` variants), against the "
+            f"shipped network on the same views and draws: {said}."]
+
+
+def relabelled_section(result: dict, options: dict | None = None) -> list[str]:
     points, shipped = result["points"], result["shipped"]
     if not points:
         return []
@@ -60,4 +73,4 @@ def relabelled_section(result: dict) -> list[str]:
             "both sets (28 objects) |", "| --- | --- | --- | --- | --- | --- | --- |",
             *(_point(p) for p in points),
             f"| shipped | {SHIPPED_LABELS} | | | {cell(shipped['household'])} | {cell(shipped['unseen'])} | "
-            f"{pooled_cell(shipped)} |", "", _against(points, shipped)]
+            f"{pooled_cell(shipped)} |", "", _against(points, shipped), *_more_views(options)]
