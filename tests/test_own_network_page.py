@@ -54,6 +54,7 @@ def test_labels_made_8_mm_over_the_table_are_judged_against_those_made_at_2_mm_a
     assert against.startswith(", fitted the same way, at the same seeds, over both sets: +7.1 points")
     assert "): kept" in against  # every household object one view higher, the unseen ones the same
     assert "; on the household set: +12.5 points" in against and "; on the unseen set: +0.0 points" in against
+    assert against.endswith(" The planner's options (above) judge such pairs again at 40 views an object.")
     lower = next(line for line in section(5) if line.startswith("Labelled on") and "8 mm over" in line)
     assert "over both sets: -7.1 points" in lower.split("Against the networks labelled 2 mm")[1]
     plain = next(line for line in section(7) if line.startswith("Labelled on") and "8 mm over" not in line)

@@ -66,3 +66,20 @@ def test_a_relabelled_variant_names_its_seed_and_one_whose_network_is_missing_sa
     made.parent.mkdir(parents=True)
     made.write_bytes(b"")
     assert pick_plan_options.checkpoint("relabelled_s1") == made
+
+
+def test_fresh_fits_on_labels_made_at_two_heights_are_paired_seed_for_seed():
+    from benchmarks.pages.pick_plan_options_section import _heights
+
+    def run(label: int, height: float, picked: int) -> dict:
+        views = [{"view": v, "attempts": {"network": [v < picked]}} for v in range(4)]
+        sets = [{"name": name, "objects": [{"name": f"{name}.obj", "status": "ok", "views": views}]}
+                for name in ("household", "unseen")]
+        return {"fresh": {"label": label, "fit": 0, "table_clearance": height}, "sets": sets}
+
+    variants = {"a": run(0, 0.002, 2), "b": run(0, 0.008, 3), "c": run(1, 0.002, 1)}  # label seed 1: one height
+    line = _heights(variants)[0]
+    assert line.startswith("Labels made 8 mm over the table against 2 mm, fitted from fresh weights at the same seeds")
+    assert "label seed 0, fit seed 0: +25.0 [+25.0, +25.0] over both sets (household +25.0" in line
+    assert "label seed 1" not in line  # only seeds judged at both heights pair
+    assert _heights({"a": variants["a"]}) == [] and _heights({"n": {"plan": {}}}) == []

@@ -44,13 +44,17 @@ VARIANTS = {"nms_2cm_45": {"nms_distance": 0.02, "nms_angle_deg": 45.0},  # Plan
 OWN_OBJECTS = "pybullet:random_urdfs[0:32]+shapes:groceries[0:16]+shapes:vessels[0:16]"  # pick-labels' default
 NETWORKS = {f"own_l{label}_f{fit}": (label, fit) for label in (0, 1) for fit in (0, 1)}  # (label seed, fit seed)
 RELABELLED = {f"relabelled_s{seed}": seed for seed in (0, 1)}  # pick_relabelled's networks: their fit seed
+# pick_own_network's fits from fresh weights on pick-labels' defaults, labelled 2 mm and 8 mm over the table:
+# name -> (label seed, fit seed, the labels' height over the table in m)
+FRESH = {f"own_{tag}l{label}_f0": (label, 0, height) for label in (0, 1)
+         for tag, height in (("fresh_", 0.002), ("gap8mm_", 0.008))}
 
 
 def checkpoint(name: str) -> Path:
     """The network variant ``name`` plans with: where NETWORKS names it, the network pick_own_network made of
     pick-labels' defaults at its label seed and pick-train started from the shipped one at its fit seed (made here
-    unless kept); where RELABELLED does, pick_relabelled's network at its seed; else the network shipped for the box
-    gripper."""
+    unless kept); where FRESH does, the same from fresh weights on labels made at its height over the table; where
+    RELABELLED does, pick_relabelled's network at its seed; else the network shipped for the box gripper."""
     from benchmarks.experiments import pick_own_network as own
 
     if name in RELABELLED:
@@ -59,13 +63,14 @@ def checkpoint(name: str) -> Path:
             raise SystemExit(f"{path}: not here; make it first: .venv/bin/python -m "
                              f"benchmarks.experiments.pick_relabelled --seeds {RELABELLED[name]}")
         return path
-    if name not in NETWORKS:
+    if name not in NETWORKS and name not in FRESH:
         return network("default")
-    label, fit = NETWORKS[name]
-    prefix = own.net_prefix(OWN_OBJECTS, "shipped")
+    label, fit, height, start = (*NETWORKS[name], own.PLANNER_CLEARANCE_BEFORE, "shipped") if name in NETWORKS \
+        else (*FRESH[name], None)
+    prefix = own.net_prefix(OWN_OBJECTS, start, height)
     path = ROOT / "data" / own.named(None) / own.net_name(prefix, label, fit) / "best.pt"
     if not path.is_file():
-        own.network(own.labels(label, None, OWN_OBJECTS)[0], label, fit, prefix, "shipped")
+        own.network(own.labels(label, None, OWN_OBJECTS, height)[0], label, fit, prefix, start)
     return path
 
 
@@ -84,7 +89,9 @@ def judged(name: str, base: dict) -> dict:
 
     plan, planner = VARIANTS.get(name, {}), checkpoint(name)
     found = {"plan": plan, "views": VIEWS, "sets": [], **({"network": NETWORKS[name]} if name in NETWORKS else {}),
-             **({"relabelled": RELABELLED[name]} if name in RELABELLED else {})}
+             **({"relabelled": RELABELLED[name]} if name in RELABELLED else {}),
+             **({"fresh": dict(zip(("label", "fit", "table_clearance"), FRESH[name], strict=True))}
+                if name in FRESH else {})}
     for set_name in SETS:
         objects, source = sets()[set_name]
         found["sets"].append(slim(run_set(set_name, objects(), source, planner, ROOT / "data" / RESULTS.stem / name,

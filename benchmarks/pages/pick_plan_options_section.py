@@ -4,7 +4,7 @@ over objects against the planner's default on the same views and draws."""
 
 from __future__ import annotations
 
-from benchmarks.pages.pick_sets import interval, pct, pooled
+from benchmarks.pages.pick_sets import interval, paired_first_attempts, pct, pooled
 from benchmarks.pages.pick_table_gap_section import _cell, _gain
 
 WHAT = {"nms_distance": "suppression distance {:g} m", "nms_angle_deg": "suppression angle {:g} degrees",
@@ -19,6 +19,11 @@ def _what(run: dict) -> str:
     if "relabelled" in run:
         return (f"the shipped recipe labelled again by the planner as it ships (pick_relabelled's network at seed "
                 f"{run['relabelled']}), the planner's default")
+    if "fresh" in run:
+        fresh = run["fresh"]
+        return (f"the network a user makes with pick-labels' defaults (label seed {fresh['label']}, labelled "
+                f"{1000 * fresh['table_clearance']:g} mm over the table) and pick-train from fresh weights (fit seed "
+                f"{fresh['fit']}), pick_own_network's, the planner's default")
     if "network" in run:
         label, fit = run["network"]
         return (f"the network a user makes with pick-labels' defaults (label seed {label}) and pick-train started "
@@ -56,7 +61,7 @@ def plan_options_section(result: dict, table_gap: dict) -> list[str]:
              "after non-maximum suppression at 1 cm and 30 degrees they may be near copies of one grasp, and where "
              "none of them held every draw the network's order stands. Each variant changes the planner's spec "
              "(`PlanSpec`) or, where it says so, its network (the `own_` variants: networks a user makes with the "
-             "two commands, started from the shipped one, whose gain at 8 views an object, below, is judged here "
+             "two commands, made as each row says, whose gains at 8 views an object, below, are judged here "
              f"again{relabelled}); else the network shipped for the box gripper (`{result['network']}`), its "
              "chooser alone, "
              f"{views} views an object (the first 8 the benchmark's), first attempt, paired over objects against "
@@ -68,4 +73,27 @@ def plan_options_section(result: dict, table_gap: dict) -> list[str]:
     lines += [_row(f"`{name}`: {_what(run)}", run, run.get("versus")) for name, run in variants.items()]
     tried = [_verdict(name, run) for name, run in variants.items()]
     return [*lines, "", "Each against the default, kept where the paired interval over the household objects lies "
-            f"above zero (the trials' rule): {'; '.join(tried)}.", ""]
+            f"above zero (the trials' rule): {'; '.join(tried)}.", "", *_heights(variants)]
+
+
+def _heights(variants: dict) -> list[str]:
+    """The `own_` networks fitted from fresh weights on labels made at two heights over the table, paired over
+    objects at the same label and fit seeds (on the same views and draws)."""
+    fresh = {(r["fresh"]["label"], r["fresh"]["fit"], r["fresh"]["table_clearance"]): r
+             for r in variants.values() if "fresh" in r}
+    heights = sorted({height for *_, height in fresh})
+    pairs = sorted({(label, fit) for label, fit, _ in fresh if all((label, fit, h) in fresh for h in heights)})
+    if len(heights) != 2 or not pairs:
+        return []
+    low, high = heights
+
+    def said(label: int, fit: int) -> str:
+        after, before = fresh[label, fit, high]["sets"], fresh[label, fit, low]["sets"]
+        def one(name: str) -> str:
+            return _gain(paired_first_attempts([s for s in after if s["name"] == name], before, "network"))
+        by_set = "; ".join(f"{name} {one(name)}" for name in ("household", "unseen"))
+        both = _gain(paired_first_attempts(after, before, "network"))
+        return f"label seed {label}, fit seed {fit}: {both} over both sets ({by_set})"
+    return [f"Labels made {1000 * high:g} mm over the table against {1000 * low:g} mm, fitted from fresh weights at "
+            "the same seeds (the `own_` rows above), paired over objects on the same views and draws: "
+            f"{'; '.join(said(*pair) for pair in pairs)}.", ""]
