@@ -21,8 +21,8 @@ import platform
 from datetime import date
 
 from benchmarks.experiments.pick_clutter import hand_record
-from benchmarks.experiments.pick_curve import HERE, OUT, ROOT, fit, labelled
-from benchmarks.experiments.pick_relabelled import batch_record, recipe_specs
+from benchmarks.experiments.pick_curve import HERE, OUT, ROOT, fit
+from benchmarks.experiments.pick_relabelled import batch_record, joined, labelled_batches, recipe_specs
 
 RESULTS = HERE / "results" / "pick_panda.json"
 PICKS = ROOT / "data" / "pick_panda"
@@ -38,15 +38,15 @@ def panda_specs():
 
 def panda_batches():
     """The batches of ``panda_specs`` labelled (here, unless their folders hold them): [(name, labels)]."""
-    return [(name, labelled(spec, shapes, seed)) for name, spec, shapes, seed in panda_specs()]
+    return labelled_batches(panda_specs())
 
 
-def trained(joined, seed: int, before: dict | None) -> dict:
-    """``DESIGN`` fitted at ``seed`` on the ``joined`` labels (kept from ``before`` where its checkpoint is still
+def trained(labels, seed: int, before: dict | None) -> dict:
+    """``DESIGN`` fitted at ``seed`` on the joined ``labels`` (kept from ``before`` where its checkpoint is still
     there)."""
     if before and (ROOT / before["checkpoint"]).is_file():
         return before
-    return fit(joined, len(joined), DESIGN, seed, OUT / "panda" / f"panda_s{seed}")
+    return fit(labels, len(labels), DESIGN, seed, OUT / "panda" / f"panda_s{seed}")
 
 
 def judged(point: dict, names: list[str], write) -> dict:
@@ -72,19 +72,17 @@ def main() -> None:
     args = parser.parse_args()
     before = {p["seed"]: p for p in (json.loads(RESULTS.read_text())["points"] if RESULTS.is_file() else [])}
     batches = panda_batches()
-    joined = batches[0][1]
-    for _, more in batches[1:]:
-        joined = joined.joined(more)
+    labels = joined(batches)
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_panda", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", **hand_record(GRIPPER),
-           "batches": [batch_record(name, labels) for name, labels in batches], "points": []}
+           "batches": [batch_record(name, made) for name, made in batches], "points": []}
 
     def write() -> None:
         RESULTS.write_text(json.dumps(out, indent=1) + "\n")
 
     for seed in (int(s) for s in args.seeds.split(",")):
         was = before.get(seed, {})
-        network = trained(joined, seed, was.get("network"))
+        network = trained(labels, seed, was.get("network"))
         point = {"seed": seed, "network": network, "sets": was.get("sets", []) if was.get("network") == network else []}
         out["points"].append(point)
         judged(point, args.sets.split(","), write)

@@ -29,6 +29,7 @@ from benchmarks.experiments.pick_panda_check import slim
 from benchmarks.experiments.pick_table_gap import RESULTS as TABLE_GAP
 from benchmarks.experiments.pick_table_gap import SETS, VIEWS, network
 from benchmarks.pages.pick_sets import paired_first_attempts as paired
+from onepiece_dist.specs.plan import PLANNER_CLEARANCE_BEFORE, PlanSpec
 
 RESULTS = HERE / "results" / "pick_plan_options.json"
 VIEW_KEPT = ("view", "attempts")  # of each view, what the section reads (each set keeps its first failures' counts)
@@ -47,7 +48,7 @@ RELABELLED = {f"relabelled_s{seed}": seed for seed in (0, 1)}  # pick_relabelled
 # pick_own_network's fits from fresh weights on pick-labels' defaults, labelled 2 mm and 8 mm over the table:
 # name -> (label seed, fit seed, the labels' height over the table in m)
 FRESH = {f"own_{tag}l{label}_f0": (label, 0, height) for label in (0, 1)
-         for tag, height in (("fresh_", 0.002), ("gap8mm_", 0.008))}
+         for tag, height in (("fresh_", PLANNER_CLEARANCE_BEFORE), ("gap8mm_", PlanSpec().table_clearance))}
 
 
 def checkpoint(name: str) -> Path:
@@ -65,7 +66,7 @@ def checkpoint(name: str) -> Path:
         return path
     if name not in NETWORKS and name not in FRESH:
         return network("default")
-    label, fit, height, start = (*NETWORKS[name], own.PLANNER_CLEARANCE_BEFORE, "shipped") if name in NETWORKS \
+    label, fit, height, start = (*NETWORKS[name], PLANNER_CLEARANCE_BEFORE, "shipped") if name in NETWORKS \
         else (*FRESH[name], None)
     prefix = own.net_prefix(OWN_OBJECTS, start, height)
     path = ROOT / "data" / own.named(None) / own.net_name(prefix, label, fit) / "best.pt"
@@ -76,8 +77,6 @@ def checkpoint(name: str) -> Path:
 
 def base_run() -> dict:
     """pick_table_gap's run at the planner's default height: the default planner on the same views and draws."""
-    from onepiece_dist.specs.plan import PlanSpec
-
     return json.loads(TABLE_GAP.read_text())["runs"][f"{PlanSpec().table_clearance:g}"]
 
 
@@ -85,8 +84,6 @@ def judged(name: str, base: dict) -> dict:
     """The shipped network's chooser on both sets with the planner's spec changed as VARIANTS[name] says, paired
     over objects against ``base`` per set and over both."""
     from benchmarks.experiments.picks import run_set, sets
-    from onepiece_dist.specs.plan import PlanSpec
-
     plan, planner = VARIANTS.get(name, {}), checkpoint(name)
     found = {"plan": plan, "views": VIEWS, "sets": [], **({"network": NETWORKS[name]} if name in NETWORKS else {}),
              **({"relabelled": RELABELLED[name]} if name in RELABELLED else {}),

@@ -44,13 +44,17 @@ def recipe_specs(suffix: str, gripper: str | None = None) -> list:
     return made
 
 
-def joined_labels(suffix: str, gripper: str | None = None):
-    """``recipe_specs``' batches labelled (here, unless their folders hold them): [(name, labels)] and all joined."""
-    batches = [(name, labelled(spec, shapes, seed)) for name, spec, shapes, seed in recipe_specs(suffix, gripper)]
-    joined = batches[0][1]
+def labelled_batches(specs: list) -> list:
+    """``recipe_specs``' batches labelled (here, unless their folders hold them): [(name, labels)]."""
+    return [(name, labelled(spec, shapes, seed)) for name, spec, shapes, seed in specs]
+
+
+def joined(batches: list):
+    """The labels of ``labelled_batches``, all joined in order."""
+    labels = batches[0][1]
     for _, more in batches[1:]:
-        joined = joined.joined(more)
-    return batches, joined
+        labels = labels.joined(more)
+    return labels
 
 
 def batch_record(name: str, labels) -> dict:
@@ -71,10 +75,11 @@ def main() -> None:
     parser.add_argument("--seeds", default="0")
     args = parser.parse_args()
     before = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {"points": []}
-    batches, joined = joined_labels(SUFFIX)
+    batches = labelled_batches(recipe_specs(SUFFIX))
+    labels = joined(batches)
     out = {"command": ".venv/bin/python -m benchmarks.experiments.pick_relabelled", "date": date.today().isoformat(),
            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}", "design": DESIGN,
-           "batches": [batch_record(name, labels) for name, labels in batches],
+           "batches": [batch_record(name, made) for name, made in batches],
            "shipped": shipped_picks(), "points": before["points"]}
 
     def write() -> None:
@@ -85,7 +90,7 @@ def main() -> None:
         if any(p["seed"] == seed for p in out["points"]):
             continue
         name = f"relabelled_s{seed}"
-        point = {"seed": seed, **fit(joined, len(joined), DESIGN, seed, OUT / "relabelled" / name)}
+        point = {"seed": seed, **fit(labels, len(labels), DESIGN, seed, OUT / "relabelled" / name)}
         point["picks"] = judged(HERE.parent / point["checkpoint"], name, None,
                                 folder=OUT / "relabelled" / "picks" / name)
         out["points"] = sorted([*out["points"], point], key=lambda p: p["seed"])
