@@ -92,7 +92,7 @@ def test_the_franka_hands_ceiling_is_judged_against_that_hands_network_and_top_d
 
     results = ROOT / "benchmarks" / "results"
     ceiling = json.loads((results / "pick_ceiling.json").read_text())
-    panda = json.loads((results / "pick_panda.json").read_text())
+    panda = json.loads((results / "pick_panda_2mm.json").read_text())  # the run the shipped network came from
     franka = picks_page._panda_picks(panda, json.loads((results / "picks.json").read_text()))
     assert franka["sets"] == panda["points"][0]["sets"]  # seed 0: the network shipped for the preset
     lines = picks_page._ceiling({**ceiling, "gripper": "panda"}, franka)
@@ -189,3 +189,37 @@ def test_the_first_fives_gain_is_said_to_hold_for_the_second_network_only_where_
     assert "With the network of seed 1" in holds and "household meshes pooled 0% with the first 3 checked" in holds
     assert "+100.0 points [+100.0, +100.0]: the first 5 pick more with this network too" in holds
     assert "+0.0 points [+0.0, +0.0]: with this network the interval does not lie above zero" in fails
+
+
+def test_the_franka_hands_labels_made_at_the_planners_height_replace_the_shipped_network_only_where_they_pick_more():
+    from benchmarks.pages.pick_panda_section import Shipped, panda_section
+
+    picks = json.loads((ROOT / "benchmarks" / "results" / "picks.json").read_text())
+
+    def made_at(height: float | None, rate: float) -> dict:
+        result = _panda_result(picks, rate)
+        result["points"].append({**_panda_result(picks, rate)["points"][0], "seed": 1})
+        for batch in result["batches"]:
+            if height is not None:
+                batch["table_clearance"] = height
+        return result
+
+    def shipped(rate: float) -> Shipped:  # the shipped network by today's planner: every view or none picked
+        record = made_at(None, 0.0)  # its run: before the height was recorded (2 mm)
+        counts = {s["name"]: {"per_object": {o["name"]: int(8 * rate) for o in s["objects"]}}
+                  for s in record["points"][0]["sets"]}
+        return Shipped(record, counts)
+
+    better = panda_section(made_at(0.008, 1.0), picks, shipped=shipped(0.0))
+    worse = panda_section(made_at(0.008, 0.0), picks, shipped=shipped(1.0))
+    assert "the open gripper 8 mm over the table" in better[2]
+    assert "Seed 0's network ships for the `panda` preset" in better[2]
+    assert "stays the one this recipe made before" in worse[2] and "Seed 0's network ships" not in worse[2]
+    assert "| set | chooser | 2 mm | 8 mm |" in better  # beside the run the shipped network came from
+    assert "| household | network on the view | 0% | 100% |" in better
+    verdict = next(line for line in better if line.startswith("Each seed's network of the labels made at 8 mm"))
+    assert "+100.0 points over 2 seeds" in verdict and "it does)." in verdict
+    verdict = next(line for line in worse if line.startswith("Each seed's network of the labels made at 8 mm"))
+    assert "-100.0 points over 2 seeds" in verdict and "the shipped one stays)." in verdict
+    same = panda_section(made_at(None, 1.0), picks, shipped=shipped(0.0))  # the shipped run itself: no comparison
+    assert not any(line.startswith("Each seed's network of the labels made at") for line in same)

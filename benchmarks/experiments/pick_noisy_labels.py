@@ -9,8 +9,9 @@ exact views), and each is judged as pick_depth_noise judges the shipped one, at 
     .venv/bin/python -m benchmarks.experiments.pick_noisy_labels [--seeds 0,1] [--noises 0.000001,0.002,0.004]
 
 Labels: data/pick_labels2_panda_noise/ (skipped where it holds labels of the same spec); networks:
-data/pick_curve/panda/noisy_labels_s<seed>/best.pt; results: benchmarks/results/pick_noisy_labels.json (a level
-already judged for a network is kept), rendered on docs/picks.md.
+data/pick_curve/panda/gap8mm_noisy_labels_s<seed>/best.pt (named by the labels' height); results:
+benchmarks/results/pick_noisy_labels.json (a level already judged for a network is kept), rendered on
+docs/picks.md. Its committed results came from labels planned 2 mm over the table (pick_panda_2mm.json's).
 """
 
 from __future__ import annotations
@@ -21,9 +22,16 @@ import platform
 from datetime import date
 
 from benchmarks.experiments.pick_clutter import hand_record
-from benchmarks.experiments.pick_curve import HERE, OUT, ROOT, fit, labelled
+from benchmarks.experiments.pick_curve import HERE, ROOT, fit, labelled
 from benchmarks.experiments.pick_depth_noise import BASELINE, level
-from benchmarks.experiments.pick_panda import DESIGN, GRIPPER, batch_record, panda_batches, panda_specs
+from benchmarks.experiments.pick_panda import (
+    DESIGN,
+    GRIPPER,
+    batch_record,
+    network_folder,
+    panda_batches,
+    panda_specs,
+)
 
 RESULTS = HERE / "results" / "pick_noisy_labels.json"
 NOISE = 0.002  # m: the relabelled batch's camera noise (a structured-light camera's at the benchmark's range)
@@ -44,10 +52,10 @@ def noisy_batch():
 def networks(seed: int, joined) -> dict[str, dict]:
     """labels -> the network fitted at ``seed``: the shipped recipe's (pick_panda's, fitted there) and the one on
     ``joined`` (fitted here unless its checkpoint is there)."""
-    exact = OUT / "panda" / f"panda_s{seed}"
+    exact = network_folder(seed)
     if not (exact / "best.pt").is_file():
         raise SystemExit(f"{exact / 'best.pt'} is missing: run benchmarks.experiments.pick_panda --seeds {seed}")
-    noisy = OUT / "panda" / f"noisy_labels_s{seed}"
+    noisy = network_folder(seed, "noisy_labels")
     made = (json.loads((noisy / "record.json").read_text()) if (noisy / "record.json").is_file()
             else fit(joined, len(joined), DESIGN, seed, noisy))
     (noisy / "record.json").write_text(json.dumps(made, indent=1) + "\n")

@@ -8,9 +8,14 @@ other chooser, all executed by that hand.
 
     .venv/bin/python -m benchmarks.experiments.pick_panda [--seeds 0,1] [--sets household,unseen,procedural]
 
-Labels: data/pick_labels_panda*/ (skipped where they hold labels of the same spec); the network:
-data/pick_curve/panda/panda_s<seed>/best.pt; results: benchmarks/results/pick_panda.json (a run again judges only
-the sets not yet in it, and fits again only where the checkpoint is missing), rendered on docs/picks.md.
+Labels: data/pick_labels_panda*/ (skipped where they hold labels of the same spec), planned as the planner plans
+today (the open gripper ``PlanSpec().table_clearance`` over the table), and judged by today's planner; the network:
+data/pick_curve/panda/gap8mm_panda_s<seed>/best.pt (its folder and the picks' name the labels' height); results:
+benchmarks/results/pick_panda.json (a run again judges only the sets not yet in it, and fits again only where the
+checkpoint is missing), rendered on docs/picks.md.
+
+The network shipped for the preset (``SHIPPED``) came from this recipe as it ran on 2026-12-05, labelled and judged
+with the open gripper 2 mm over the table, the planner's height then: results/pick_panda_2mm.json, kept as it was.
 """
 
 from __future__ import annotations
@@ -19,15 +24,20 @@ import argparse
 import json
 import platform
 from datetime import date
+from pathlib import Path
 
 from benchmarks.experiments.pick_clutter import hand_record
 from benchmarks.experiments.pick_curve import HERE, OUT, ROOT, fit
+from benchmarks.experiments.pick_own_network import height_tag
 from benchmarks.experiments.pick_relabelled import batch_record, joined, labelled_batches, recipe_specs
+from onepiece_dist.specs.plan import PlanSpec
 
 RESULTS = HERE / "results" / "pick_panda.json"
+SHIPPED = HERE / "results" / "pick_panda_2mm.json"  # the record the network shipped for the preset came from
 PICKS = ROOT / "data" / "pick_panda"
 GRIPPER = "panda"
 DESIGN = "context_balanced"
+HEIGHT = height_tag(PlanSpec().table_clearance)  # the networks' and picks' folders name the labels' height
 
 
 def panda_specs():
@@ -41,12 +51,18 @@ def panda_batches():
     return labelled_batches(panda_specs())
 
 
+def network_folder(seed: int, name: str = "panda") -> Path:
+    """The folder of the network ``name`` fitted at ``seed`` on labels of this recipe (named by their height: a
+    network of labels made at another height is never taken for it)."""
+    return OUT / "panda" / f"{HEIGHT}{name}_s{seed}"
+
+
 def trained(labels, seed: int, before: dict | None) -> dict:
     """``DESIGN`` fitted at ``seed`` on the joined ``labels`` (kept from ``before`` where its checkpoint is still
     there)."""
     if before and (ROOT / before["checkpoint"]).is_file():
         return before
-    return fit(labels, len(labels), DESIGN, seed, OUT / "panda" / f"panda_s{seed}")
+    return fit(labels, len(labels), DESIGN, seed, network_folder(seed))
 
 
 def judged(point: dict, names: list[str], write) -> dict:
@@ -58,7 +74,8 @@ def judged(point: dict, names: list[str], write) -> dict:
         if any(s["name"] == name for s in point["sets"]):
             continue
         objects, source = sets()[name]
-        result = run_set(name, objects(), source, ROOT / point["network"]["checkpoint"], PICKS / f"s{point['seed']}")
+        result = run_set(name, objects(), source, ROOT / point["network"]["checkpoint"],
+                         PICKS / f"{HEIGHT}s{point['seed']}")
         point["sets"] = sorted([*point["sets"], result], key=lambda s: list(sets()).index(s["name"]))
         write()
         print(point["seed"], name, {m["method"]: m["first_attempt"] for m in result["methods"]}, flush=True)

@@ -5,7 +5,7 @@ network (the top-down trial's, or of a trial judged against it that is kept: pic
 pick_top_down_both.json, pick_schedule.json, pick_outline.json, pick_top_draws.json; a seed is never chosen),
 copied into onepiece_dist/plan/networks/pick_view.pt with its record; after the pick benchmark
 (benchmarks/experiments/picks.py) has judged it, run again with --record-picks to write its household figures into
-the record. With --gripper panda it ships the Franka hand's network instead (pick_panda.json's seed 0, with the
+the record. With --gripper panda it ships the Franka hand's network instead (pick_panda_2mm.json's seed 0, with the
 figures the benchmark gave it on that hand) as onepiece_dist/plan/networks/pick_view_panda.pt. With --gripper
 robotiq_2f85 (or robotiq_2f140) it ships the network `onepiece pick-labels` and `onepiece pick-train` made with
 their defaults for that hand (benchmarks/experiments/pick_own_network.py, seed 0) as pick_view_robotiq_2f85.pt.
@@ -194,14 +194,15 @@ def _figures(sets: list[dict], source: str) -> dict:
 
 
 def ship_panda() -> dict:
-    """The Franka hand's network (results/pick_panda.json at seed 0: a seed is never chosen) shipped for the panda
+    """The Franka hand's network (results/pick_panda_2mm.json at seed 0: a seed is never chosen) shipped for the panda
     preset (plan.shipped.SHIPPED), with the figures the pick benchmark gave it on that hand."""
+    from benchmarks.experiments.pick_panda import SHIPPED
     from onepiece_dist.gripper.presets import gripper_fields
     from onepiece_dist.plan.shipped import network_path
     from onepiece_dist.specs.job import GripperSpec
 
-    source = "benchmarks/results/pick_panda.json"
-    result = json.loads((ROOT / source).read_text())
+    source = str(SHIPPED.relative_to(ROOT))
+    result = json.loads(SHIPPED.read_text())
     point = next(p for p in result["points"] if p["seed"] == 0)
     objects = " + ".join(b["objects"] + (" (labels executing the top-down grasps)" if b["top_down"] else "")
                          for b in result["batches"])

@@ -17,7 +17,7 @@ from benchmarks.pages.pick_flying_section import drop_section, flying_section, v
 from benchmarks.pages.pick_noise_section import noise_section, noise_views_section
 from benchmarks.pages.pick_noisy_labels_section import noisy_labels_section
 from benchmarks.pages.pick_own_section import own_network_section
-from benchmarks.pages.pick_panda_section import panda_section
+from benchmarks.pages.pick_panda_section import Shipped, panda_section
 from benchmarks.pages.pick_plan_options_section import plan_options_section
 from benchmarks.pages.pick_rank_section import rank_features_section, robust_rank_section, shape_check_section
 from benchmarks.pages.pick_relabelled_section import relabelled_section
@@ -209,7 +209,8 @@ def render_picks_page() -> str:
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
              f"benchmarks/results/picks.json, {', '.join(f'{name}.json' for name in SECTIONS)}, "
-             "pick_panda_50_iterations.json, pick_panda_then.json and plan.json: do not edit by hand. -->", ""]
+             "pick_panda_2mm.json, pick_panda_50_iterations.json, pick_panda_then.json and plan.json: do not edit by "
+             "hand. -->", ""]
     if picks is None:
         lines += ["The pick benchmark has not been run yet: `.venv/bin/python -m benchmarks.experiments.picks`.", ""]
     else:
@@ -236,20 +237,20 @@ def render_picks_page() -> str:
               "pick_own_network_robotiq_2f140": lambda r: own_network_section(r, target),
               "pick_carried": carried_section,
               "pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
-                                                    load("pick_panda_then")),
-              "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda")),
+                                                    load("pick_panda_then"), _shipped_panda()),
+              "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda_2mm")),
               "pick_clutter_panda": clutter_section, "pick_clutter_panda_pile": clutter_section,
               "pick_clutter_pile": clutter_section,
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section, "pick_clearance_pile": clearance_section,
               "pick_clearance_panda_pile": clearance_section,
               "pick_depth_noise": lambda r: noise_section(r, picks),
-              "pick_depth_noise_panda": lambda r: noise_section(r, _panda_picks(load("pick_panda"), picks)),
+              "pick_depth_noise_panda": lambda r: noise_section(r, _panda_picks(load("pick_panda_2mm"), picks)),
               "pick_noise_views": noise_views_section, "pick_noisy_labels": noisy_labels_section,
               "pick_flying_pixels": flying_section, "pick_veils": veils_section,
               "pick_flying_drop": drop_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
-              "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda"), picks)),
+              "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda_2mm"), picks)),
               "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_robust_rank": robust_rank_section, "pick_rank_features": rank_features_section,
@@ -279,6 +280,12 @@ def _ceiling(result: dict, picks: dict | None) -> list[str]:
     sets = [s for s in (picks or {}).get("sets", []) if s["name"] in HOUSEHOLD_SETS]
     top_down = pooled(sets, "top_down")["first_attempt"] if sets else None
     return ceiling_section(result, picks, top_down, (picks or {}).get("targets"))
+
+
+def _shipped_panda() -> Shipped | None:
+    """The run the network shipped for the Franka hand came from and that network's picks by today's planner."""
+    record, own = load("pick_panda_2mm"), load("pick_own_network_panda")
+    return None if record is None or own is None else Shipped(record, own["shipped"])
 
 
 def _panda_picks(result: dict | None, picks: dict | None) -> dict | None:
