@@ -92,7 +92,11 @@ def test_the_franka_hands_ceiling_is_judged_against_that_hands_network_and_top_d
 
     results = ROOT / "benchmarks" / "results"
     ceiling = json.loads((results / "pick_ceiling.json").read_text())
-    panda = json.loads((results / "pick_panda_2mm.json").read_text())  # the run the shipped network came from
+    from benchmarks.experiments.pick_clutter import SINGLE
+    from benchmarks.experiments.pick_panda import SHIPPED
+
+    assert SINGLE["panda"] == SHIPPED  # the clutter trials' one-object rates are the shipped network's
+    panda = json.loads(SHIPPED.read_text())  # the run the shipped network came from
     franka = picks_page._panda_picks(panda, json.loads((results / "picks.json").read_text()))
     assert franka["sets"] == panda["points"][0]["sets"]  # seed 0: the network shipped for the preset
     lines = picks_page._ceiling({**ceiling, "gripper": "panda"}, franka)
@@ -215,6 +219,8 @@ def test_the_franka_hands_labels_made_at_the_planners_height_replace_the_shipped
     assert "the open gripper 8 mm over the table" in better[2]
     assert "Seed 0's network ships for the `panda` preset" in better[2]
     assert "stays the one this recipe made before" in worse[2] and "Seed 0's network ships" not in worse[2]
+    assert "The issue's targets on the Franka hand (seed 0, labels 8 mm over the table, not shipped):" in worse
+    assert "The issue's targets on the Franka hand (seed 0):" in better
     assert "| set | chooser | 2 mm | 8 mm |" in better  # beside the run the shipped network came from
     assert "| household | network on the view | 0% | 100% |" in better
     verdict = next(line for line in better if line.startswith("Each seed's network of the labels made at 8 mm"))

@@ -110,17 +110,19 @@ def paired(scenes: dict, run: str, method: str, base: str, base_method: str = "n
             for name, d in per_set.items()}
 
 
+# the one-object run each hand's shipped network came from (pick_panda.SHIPPED: pick_panda imports this module)
+SINGLE = {"panda": HERE / "results" / "pick_panda_2mm.json"}
+
+
 def single_rates(gripper: str | None = None) -> dict:
     """Per set and method, the one-object benchmark's first attempt on the same objects (committed picks.json;
     with ``gripper`` panda, the Franka hand's seed-0 network's, pick_panda_2mm.json)."""
     if gripper is None:
         sets = json.loads((HERE / "results" / "picks.json").read_text())["sets"]
     else:
-        from benchmarks.experiments.pick_panda import GRIPPER, SHIPPED
-
-        if gripper != GRIPPER:
-            raise ValueError(f"no one-object benchmark of the {gripper!r} hand's network: only {GRIPPER!r}'s")
-        sets = json.loads(SHIPPED.read_text())["points"][0]["sets"]
+        if gripper not in SINGLE:
+            raise ValueError(f"no one-object benchmark of the {gripper!r} hand's network: only {', '.join(SINGLE)}'s")
+        sets = json.loads(SINGLE[gripper].read_text())["points"][0]["sets"]
     return {s["name"]: {m["method"]: m["first_attempt"] for m in s["methods"]} for s in sets}
 
 

@@ -198,11 +198,13 @@ def panda_section(result: dict, picks: dict | None, before: dict | None = None, 
     point = result["points"][0] if result["points"] else {"sets": []}
     if not point["sets"]:
         return [*lines, "No set has been judged yet."]
-    lines += [_how(result, point, _shipped_here(result, shipped)), ""]
+    ships = _shipped_here(result, shipped)
+    lines += [_how(result, point, ships), ""]
     targets = (picks or {}).get("targets", {"first_attempt": 0.85, "above_heuristics": 0.20, "procedural": 0.80,
                                             "full_mesh_gap": 0.05})
     if set(HOUSEHOLD_SETS) <= {s["name"] for s in point["sets"]}:
-        lines += [f"The issue's targets on the Franka hand (seed {point['seed']}):", "", "| target | figure | |",
+        whose = "" if ships else f", labels {_mm(_height(result))} over the table, not shipped"
+        lines += [f"The issue's targets on the Franka hand (seed {point['seed']}{whose}):", "", "| target | figure | |",
                   "| --- | --- | --- |", *target_rows(point["sets"], targets), ""]
     if len(result["points"]) > 1:
         lines += ["Each seed's network, first attempt:", "", *_seeds(result), ""]
