@@ -110,7 +110,7 @@ def paired(scenes: dict, run: str, method: str, base: str, base_method: str = "n
             for name, d in per_set.items()}
 
 
-# the one-object run each hand's shipped network came from (pick_panda.SHIPPED: pick_panda imports this module)
+# the one-object run each hand's shipped network came from (pick_panda.SHIPPED reads it here)
 SINGLE = {"panda": HERE / "results" / "pick_panda_2mm.json"}
 
 

@@ -26,16 +26,16 @@ import platform
 from datetime import date
 from pathlib import Path
 
-from benchmarks.experiments.pick_clutter import hand_record
+from benchmarks.experiments.pick_clutter import SINGLE, hand_record
 from benchmarks.experiments.pick_curve import HERE, OUT, ROOT, fit
 from benchmarks.experiments.pick_own_network import height_tag
 from benchmarks.experiments.pick_relabelled import batch_record, joined, labelled_batches, recipe_specs
 from onepiece_dist.specs.plan import PlanSpec
 
 RESULTS = HERE / "results" / "pick_panda.json"
-SHIPPED = HERE / "results" / "pick_panda_2mm.json"  # the record the network shipped for the preset came from
 PICKS = ROOT / "data" / "pick_panda"
 GRIPPER = "panda"
+SHIPPED = SINGLE[GRIPPER]  # the record the network shipped for the preset came from
 DESIGN = "context_balanced"
 HEIGHT = height_tag(PlanSpec().table_clearance)  # the networks' and picks' folders name the labels' height
 

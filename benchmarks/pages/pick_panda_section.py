@@ -7,11 +7,12 @@ from __future__ import annotations
 from typing import NamedTuple
 
 from benchmarks.pages.pick_clutter_section import solver_words
-from benchmarks.pages.pick_relabelled_section import _mm, against_shipped, replaces_shipped
+from benchmarks.pages.pick_relabelled_section import against_shipped, mm, replaces_shipped
 from benchmarks.pages.pick_sets import (
     HOUSEHOLD_SETS,
     LABELS,
     failure_table,
+    first_attempt_share,
     interval,
     method_of,
     paired_first_attempts,
@@ -47,7 +48,7 @@ def _how(result: dict, point: dict, shipped_here: bool = True) -> str:
             f"`{result['gripper']}` preset, whose physics and collision test carry the Franka hand's own collision "
             "mesh (pybullet_data franka_panda/meshes/collision/hand.obj, 20 cm across the closing axis, where "
             f"the box palm spans the 8 cm opening and its two 1 cm fingers{solver_words(result)}): the same two "
-            f"label batches labelled with that hand, the open gripper {_mm(_height(result))} over the table "
+            f"label batches labelled with that hand, the open gripper {mm(_height(result))} over the table "
             f"({batches}); design "
             f"`{net['design']}` fitted on all {net['labels']} labels; at seed {point['seed']} "
             f"({net['fit_seconds'] / 60:.0f} min, best epoch {net['best_epoch']['epoch']}, held-out AP "
@@ -156,8 +157,8 @@ def _then_judged_now(then: dict | None, point: dict) -> list[str]:
 def _first_picks(point: dict) -> dict:
     """``point``'s network on the household sets as pick_own_network records a network's picks: set -> object ->
     views picked at the first attempt."""
-    return {s["name"]: {"per_object": {o["name"]: sum(list(v["attempts"]["network"][:1]) == [True]
-                                                       for v in o["views"]) for o in s["objects"]}}
+    return {s["name"]: {"per_object": {o["name"]: round(first_attempt_share(o, "network") * len(o["views"]))
+                                       for o in s["objects"]}}
             for s in point["sets"] if s["name"] in HOUSEHOLD_SETS}
 
 
@@ -176,7 +177,7 @@ def at_the_planners_height(result: dict, shipped: Shipped) -> list[str]:
     from (``shipped.record``, labelled and judged at the planner's height then), and its networks against the
     shipped one judged by today's planner on the same views (``shipped.picks``)."""
     was = next((p for p in shipped.record["points"] if p["seed"] == result["points"][0]["seed"]), None)
-    then, now = _mm(_height(shipped.record)), _mm(_height(result))
+    then, now = mm(_height(shipped.record)), mm(_height(result))
     if was is None or then == now:
         return []
     labels = "; ".join(f"{b['labels']} labels, {pct(b['success_rate'])} picked" for b in shipped.record["batches"])
@@ -203,7 +204,7 @@ def panda_section(result: dict, picks: dict | None, before: dict | None = None, 
     targets = (picks or {}).get("targets", {"first_attempt": 0.85, "above_heuristics": 0.20, "procedural": 0.80,
                                             "full_mesh_gap": 0.05})
     if set(HOUSEHOLD_SETS) <= {s["name"] for s in point["sets"]}:
-        whose = "" if ships else f", labels {_mm(_height(result))} over the table, not shipped"
+        whose = "" if ships else f", labels {mm(_height(result))} over the table, not shipped"
         lines += [f"The issue's targets on the Franka hand (seed {point['seed']}{whose}):", "", "| target | figure | |",
                   "| --- | --- | --- |", *target_rows(point["sets"], targets), ""]
     if len(result["points"]) > 1:
@@ -213,7 +214,7 @@ def panda_section(result: dict, picks: dict | None, before: dict | None = None, 
     solved, now = point, "now"
     if height:  # the solver's history is the shipped network's run's
         solved = next(p for p in shipped.record["points"] if p["seed"] == point["seed"])
-        now = f"at {shipped.record.get('solver_iterations')} iterations, {_mm(_height(shipped.record))}"
+        now = f"at {shipped.record.get('solver_iterations')} iterations, {mm(_height(shipped.record))}"
     earlier = before_the_solver(before, solved, then, now) if before is not None else []
     lines += [*earlier, ""] if earlier else []
     lines += [*_comparison(point, picks), ""]

@@ -10,13 +10,13 @@ from onepiece_dist.specs.plan import PLANNER_CLEARANCE_BEFORE
 from onepiece_dist.stats.intervals import paired_gain
 
 
-def _mm(metres: float) -> str:
+def mm(metres: float) -> str:
     return f"{1000 * metres:g} mm"
 
 
 def _batch(batch: dict) -> str:
     return (f"| `{batch['folder']}` | `{batch['objects']}` | {batch['labels']} | {100 * batch['success_rate']:.0f}% | "
-            f"{'yes' if batch['top_down'] else 'no'} | {_mm(batch['table_clearance'])} | "
+            f"{'yes' if batch['top_down'] else 'no'} | {mm(batch['table_clearance'])} | "
             f"{batch['core_seconds']:.0f} |")
 
 
@@ -66,8 +66,8 @@ def relabelled_section(result: dict, options: dict | None = None) -> list[str]:
     heights = sorted({b["table_clearance"] for b in result["batches"]})
     return [f"## The shipped network's labels made again by the planner as it ships: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. The shipped network was fitted on labels whose candidates were "
-            f"planned with the open gripper {_mm(PLANNER_CLEARANCE_BEFORE)} over the table, the planner's height "
-            f"then; it plans {' and '.join(_mm(h) for h in heights)} over it. Its two label batches labelled again "
+            f"planned with the open gripper {mm(PLANNER_CLEARANCE_BEFORE)} over the table, the planner's height "
+            f"then; it plans {' and '.join(mm(h) for h in heights)} over it. Its two label batches labelled again "
             "by today's planner (the same objects, views, seeds and executions' protocol; the first executing the "
             "top-down grasps, as the shipped network's did):", "",
             "| folder | objects | labels | picked | top-down grasps executed | open gripper over the table | "
