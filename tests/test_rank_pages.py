@@ -4,6 +4,7 @@ sets, failures are counted by rank and object, and a prior is judged on grasps i
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def _robust_result(unseen_mean: float) -> dict:
@@ -110,6 +111,33 @@ def test_two_shapes_are_compared_by_the_draws_of_what_each_check_chose_paired_ov
     worse = shape_difference(rows, 3, "carved", "hull")
     assert "the hull shape **not kept**" in "\n".join(shape_lines({"versus": {"hull": {"3": {"all objects": worse}}}}))
     assert shape_lines({}) == []
+
+
+def test_the_shapes_checks_summed_choose_what_holds_most_over_all_three_from_rows_of_the_same_draws():
+    from benchmarks.experiments.pick_shape_check import expected_summed, summed_rows
+    from benchmarks.pages.pick_rank_section import shape_lines
+
+    def row(obj, shares, hull, other, name):  # a shape's measure: its own check beside the hull's
+        return {"object": obj, "shares": shares, "held_hull": hull, f"held_{name}": other, "seconds_hull": 1.0,
+                f"seconds_{name}": 2.0}
+
+    # each shape alone puts another grasp first; over all three, the second holds most (2.25 of 3 draws' shares)
+    carved = [row("a", [0.0, 1.0, 0.5], [1.0, 0.75, 0.0], [0.0, 1.0, 0.0], "carved"),
+              row("b", [1.0, 0.0, 0.0], [1.0, 0.0, 0.0], None, "carved")]  # no shape: the network's order stays
+    mirrored = [row("a", [0.0, 1.0, 0.5], [1.0, 0.75, 0.0], [0.0, 0.5, 1.0], "mirrored"),
+                row("b", [1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], "mirrored")]
+    joined = summed_rows({"carved": {"s": carved}, "mirrored": {"s": mirrored}})["s"]
+    assert joined[0]["held_summed"] == [1 / 3, 0.75, 1 / 3] and joined[1]["held_summed"] is None
+    assert joined[0]["seconds_summed"] == 5.0
+    kept = {"rows": {"carved": {"s": carved}, "mirrored": {"s": mirrored}}, "versus": {}}
+    expected_summed(kept)
+    assert kept["summed"]["3"]["s"]["checked"] == 1.0  # both views' chosen grasps hold at every judging draw
+    assert kept["versus"]["summed"]["3"]["s"]["mean"] == 0.5  # object a: 1.0 against the hull's 0.0; b: the same
+    page = "\n".join(shape_lines(kept))
+    assert "Summed, a grasp counts" in page and "| summed | 3 | s | 100.0% |" in page
+    assert "Summed" not in "\n".join(shape_lines({"hull": kept["summed"]}))
+    with pytest.raises(AssertionError):  # rows of other draws are never summed
+        summed_rows({"carved": {"s": carved}, "mirrored": {"s": [mirrored[1], mirrored[0]]}})
 
 
 def test_the_checks_draws_are_judged_by_their_first_draws_and_more_draws_must_choose_better():

@@ -14,6 +14,7 @@ objects with a bootstrap interval.
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --noise-scales 1,2,3   # the check's pose noise
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --friction-scales 0.75,0.5   # its fingers' friction
     .venv/bin/python -m benchmarks.experiments.pick_shape_check --check-shape carved --checks 3   # by the benchmark
+    .venv/bin/python -m benchmarks.experiments.pick_shape_check --summed   # the shapes' checks together, no sim
 
 Results: benchmarks/results/pick_shape_check.json, rendered into docs/picks.md.
 """
@@ -111,6 +112,31 @@ def _drawn_set(task) -> tuple[str, list[dict]]:
                      **({f"drawn_{name}": None if h is None else h.astype(int).tolist() for name, h in held.items()}
                         if draws != DRAWS else {})})
     return which, rows
+
+
+SUMMED = "summed"  # every shape's check at once: each grasp's held draws on SHAPES together
+
+
+def summed_rows(rows: dict[str, dict[str, list[dict]]]) -> dict[str, list[dict]]:
+    """Per set, the carved and the mirrored measures' rows (each beside the hull's, the same draws) joined: each
+    grasp's share of its check draws on every shape (SHAPES), and the seconds of all of them."""
+    def joined(c: dict, m: dict) -> dict:
+        assert (c["object"], c["shares"], c["held_hull"]) == (m["object"], m["shares"], m["held_hull"])
+        held = [c["held_hull"], c["held_carved"], m["held_mirrored"]]
+        return {**c, f"held_{SUMMED}": None if None in held else np.mean(held, axis=0).tolist(),
+                f"seconds_{SUMMED}": c["seconds_hull"] + c["seconds_carved"] + m["seconds_mirrored"]}
+
+    return {w: [joined(c, m) for c, m in zip(carved, rows["mirrored"][w], strict=True)]
+            for w, carved in rows["carved"].items()}
+
+
+def expected_summed(kept: dict) -> None:
+    """The check on every shape at once (SUMMED) into ``kept`` (expected_shapes), and against the hull's."""
+    found = summed_rows(kept["rows"])
+    rows = {**found, "all objects": [row for set_rows in found.values() for row in set_rows]}
+    kept[SUMMED] = {str(k): {w: drawn_summary(r, k, SUMMED) for w, r in rows.items()} for k in (3, LOOKED_AT)}
+    kept["versus"][SUMMED] = {str(k): {w: shape_difference(r, k, "hull", SUMMED) for w, r in rows.items()}
+                              for k in (3, LOOKED_AT)}
 
 
 def _first_of(held: list | None, k: int) -> int:
@@ -271,7 +297,11 @@ def main() -> None:
                         "beside the committed results")
     parser.add_argument("--check-top-down", action="store_true", help="with --views: the check with the best "
                         "top-down grasp beside the first ones, kept beside the runs at as many views")
+    parser.add_argument("--summed", action="store_true", help="only the check's choice on every shape at once, "
+                        "from the shapes' committed rows (nothing simulated), kept beside them")
     args = parser.parse_args()
+    if args.summed:
+        return _beside(lambda result: expected_summed(result["expected_shapes"]))
     sets = {"household": str(household_objects()), "unseen": str(household_objects(objects=UNSEEN))}
     if args.check_draws:
         found = expected_draws(sets, tuple(int(n) for n in args.check_draws.split(",")))

@@ -265,6 +265,10 @@ def _density_lines(by_scale: dict) -> list[str]:
             "| --- | --- | --- | --- | --- |", *rows, ""]
 
 
+SUMMED_LINE = (" Summed, a grasp counts its held draws on the three shapes together (a robot that cannot tell "
+               "which of them is the object pays for the three checks; `pick_shape_check --summed`, from their rows).")
+
+
 def shape_lines(by_shape: dict) -> list[str]:
     """The check on each shape (results' expected_shapes): the 8-draw gain of its choice, and the second shape's
     choice against the first's, paired over objects, with a verdict (the second kept where that interval over all
@@ -281,7 +285,8 @@ def shape_lines(by_shape: dict) -> list[str]:
              "rebuilt from the cloud and the camera's position, as the network's swept space reads it): an opening "
              "it looked into stays open, what it could not see stays solid. Mirrored, the hull also holds the points' "
              "half turn about the vertical axis of the circle that best fits their footprint (what a symmetric "
-             "object, a can or a box, shows of its far side). The same measure on each shape:", "",
+             "object, a can or a box, shows of its far side)." + SUMMED_LINE * ("summed" in shapes)
+             + " The same measure on each shape:", "",
              "| shape | checked | set | the check's first | gain over objects [95% CI] | the surest (an oracle) | "
              "the check held the network's first | the check's seconds a view (one worker) |",
              "| --- | --- | --- | --- | --- | --- | --- | --- |", *rows, ""]
