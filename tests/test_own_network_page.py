@@ -89,3 +89,27 @@ def test_the_shipped_recipe_labelled_again_replaces_the_shipped_network_only_whe
         "At 40 views an object (the planner's options, above: the `relabelled_` variants), against the shipped "
         "network on the same views and draws: seed 0: -1.5 [-2.9, +0.0] over both sets, household -1.5 [-2.9, +0.0].")
     assert relabelled_section(relabelled(7), {"variants": {}})[-1] == higher[-1]  # none judged there: no line
+
+
+def with_heuristics(network: int, top_down: int) -> dict:
+    """picks(network, network) with random (2 of 8 views) and top-down (``top_down``) judged on the same views."""
+    judged = picks(network, network)
+    for name, set_picks in judged.items():
+        names = HOUSEHOLD if name == "household" else UNSEEN
+        set_picks["others"] = {"random": picks(2, 2)[name], "top_down": picks(top_down, top_down)[name]}
+        assert list(set_picks["others"]["top_down"]["per_object"]) == names
+    return judged
+
+
+def test_a_hands_networks_are_judged_against_top_down_over_their_seeds_together_where_none_ships():
+    above = [row(s, 0, with_heuristics(7, 5), 0.008) for s in (0, 1)]
+    level = [row(s, 0, with_heuristics(5, 5), 0.008, start_from="shipped") for s in (0, 1)]
+    alone = [row(0, 0, with_heuristics(7, 5), None)]
+    result = {"networks": [*above, *level, *alone], "shipped": None, "command": "cmd", "date": "d", "machine": "m",
+              "views": 8}
+    pooled = [line for line in own_network_section(result, 0.85) if "against top-down on the same views" in line]
+    assert len(pooled) == 2  # one line a group of several networks; the lone network's row says "undecided"
+    assert "over the 2 networks (label and fit seeds): +25.0 points" in pooled[0]
+    assert pooled[0].endswith("**above top-down**.") and "fit started from" not in pooled[0]
+    assert "fit started from" in pooled[1] and pooled[1].endswith("+0.0 points [+0.0, +0.0]: **not shown above "
+                                                                   "top-down**.")

@@ -138,8 +138,27 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
                      + " | ".join(pooled_cell(others[m]) for m in HEURISTICS) + f" | {gain_words(gain)} |")
     pooled = [pooled_rate(n["picks"])[0] for n in networks]
     met = sum(rate >= target for rate in pooled)
-    return [*lines, "", f"The first-attempt target over both sets (>= {100 * target:.0f}%) reached by {met} of the "
+    return [*lines, "", *_groups_against_top_down(networks),
+            f"The first-attempt target over both sets (>= {100 * target:.0f}%) reached by {met} of the "
             f"{len(pooled)} networks: {'**met**' if met == len(pooled) else '**not met**'}.", ""]
+
+
+def _groups_against_top_down(networks: list[dict]) -> list[str]:
+    """Each group of two networks or more (the same objects, height and start) against top-down on the same views
+    over both sets, paired over objects over its seeds: one seed alone decides nothing, several may."""
+    groups: dict[Group, list[dict]] = {}
+    for n in networks:
+        groups.setdefault(_group(n), []).append(n)
+    lines = []
+    for group in (g for g in groups.values() if len(g) > 1):
+        top_down = [both_sets({s: n["picks"][s]["others"]["top_down"] for s in SETS}) for n in group]
+        gain = paired_gain([both_sets(n["picks"]) for n in group], top_down, VIEWS)
+        low, high = gain.interval
+        where = "above top-down" if low > 0 else "below top-down" if high < 0 else "not shown above top-down"
+        lines += [f"The {len(group)} networks on {_source(group[0])}, against top-down on the same views over both "
+                  f"sets, paired over objects over the {gain.seeds} networks (label and fit seeds): "
+                  f"{100 * gain.gain:+.1f} points [{100 * low:+.1f}, {100 * high:+.1f}]: **{where}**.", ""]
+    return lines
 
 
 def _same_seeds(networks: list[dict], base: list[dict], set_name: str | None = None
