@@ -63,6 +63,14 @@ def _group(n: dict) -> Group:
     return n["made"]["objects"], label_height(n), n.get("start_from")
 
 
+def _groups(networks: list[dict]) -> dict[Group, list[dict]]:
+    """``networks`` by group (_group), in their order."""
+    groups: dict[Group, list[dict]] = {}
+    for n in networks:
+        groups.setdefault(_group(n), []).append(n)
+    return groups
+
+
 def _row(n: dict) -> str:
     made, fitted, val = n["made"], n["network"], n["network"]["validation"]
     return (f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {made['labels']} | "
@@ -86,9 +94,7 @@ def own_network_section(result: dict, target: float) -> list[str]:
     if not networks:
         return []
     made = networks[0]["made"]
-    groups: dict[Group, list[dict]] = {}
-    for n in networks:
-        groups.setdefault(_group(n), []).append(n)
+    groups = _groups(networks)
     return [f"## A network made by the two commands{_title(made)}: `{result['command']}`", "",
             f"{result['date']}, {result['machine']}. What a user gets from `onepiece pick-labels` with its defaults "
             f"({made['views']} views an object, {made['per_view']} candidates executed a view, {_hand(made)}; "
@@ -146,11 +152,8 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
 def _groups_against_top_down(networks: list[dict]) -> list[str]:
     """Each group of two networks or more (the same objects, height and start) against top-down on the same views
     over both sets, paired over objects over its seeds: one seed alone decides nothing, several may."""
-    groups: dict[Group, list[dict]] = {}
-    for n in networks:
-        groups.setdefault(_group(n), []).append(n)
     lines = []
-    for group in (g for g in groups.values() if len(g) > 1):
+    for group in (g for g in _groups(networks).values() if len(g) > 1):
         top_down = [both_sets({s: n["picks"][s]["others"]["top_down"] for s in SETS}) for n in group]
         gain = paired_gain([both_sets(n["picks"]) for n in group], top_down, VIEWS)
         low, high = gain.interval

@@ -206,6 +206,7 @@ SECTIONS = ("pick_table_gap", "pick_table_gap_panda", "pick_table_gap_robotiq_2f
 
 def render_picks_page() -> str:
     picks, plan = load("picks"), load("plan")
+    shipped_panda = load("pick_panda_2mm")  # the run the Franka hand's shipped network came from: read once
     lines = ["# Picks from one camera", "",
              "<!-- Rendered by benchmarks/pages/report.py (benchmarks/pages/picks_page.py) from "
              f"benchmarks/results/picks.json, {', '.join(f'{name}.json' for name in SECTIONS)}, "
@@ -237,20 +238,20 @@ def render_picks_page() -> str:
               "pick_own_network_robotiq_2f140": lambda r: own_network_section(r, target),
               "pick_carried": carried_section,
               "pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
-                                                    load("pick_panda_then"), _shipped_panda()),
-              "pick_panda_check": lambda r: panda_check_section(r, load("pick_panda_2mm")),
+                                                    load("pick_panda_then"), _shipped_panda(shipped_panda)),
+              "pick_panda_check": lambda r: panda_check_section(r, shipped_panda),
               "pick_clutter_panda": clutter_section, "pick_clutter_panda_pile": clutter_section,
               "pick_clutter_pile": clutter_section,
               "pick_clearance_panda": clearance_section, "pick_clutter": clutter_section,
               "pick_clearance": clearance_section, "pick_clearance_pile": clearance_section,
               "pick_clearance_panda_pile": clearance_section,
               "pick_depth_noise": lambda r: noise_section(r, picks),
-              "pick_depth_noise_panda": lambda r: noise_section(r, _panda_picks(load("pick_panda_2mm"), picks)),
+              "pick_depth_noise_panda": lambda r: noise_section(r, _panda_picks(shipped_panda, picks)),
               "pick_noise_views": noise_views_section, "pick_noisy_labels": noisy_labels_section,
               "pick_flying_pixels": flying_section, "pick_veils": veils_section,
               "pick_flying_drop": drop_section,
               "pick_ceiling": lambda r: _ceiling(r, picks),
-              "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(load("pick_panda_2mm"), picks)),
+              "pick_ceiling_panda": lambda r: _ceiling(r, _panda_picks(shipped_panda, picks)),
               "pick_ranked_draws": ranked_draws_section,
               "pick_reranked": lambda r: reranked_section(r, load("pick_rerank_fit")),
               "pick_robust_rank": robust_rank_section, "pick_rank_features": rank_features_section,
@@ -282,9 +283,10 @@ def _ceiling(result: dict, picks: dict | None) -> list[str]:
     return ceiling_section(result, picks, top_down, (picks or {}).get("targets"))
 
 
-def _shipped_panda() -> Shipped | None:
-    """The run the network shipped for the Franka hand came from and that network's picks by today's planner."""
-    record, own = load("pick_panda_2mm"), load("pick_own_network_panda")
+def _shipped_panda(record: dict | None) -> Shipped | None:
+    """The run the network shipped for the Franka hand came from (``record``) and that network's picks by today's
+    planner."""
+    own = load("pick_own_network_panda")
     return None if record is None or own is None else Shipped(record, own["shipped"])
 
 
