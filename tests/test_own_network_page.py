@@ -113,3 +113,16 @@ def test_a_hands_networks_are_judged_against_top_down_over_their_seeds_together_
     assert pooled[0].endswith("**above top-down**.") and "fit started from" not in pooled[0]
     assert "fit started from" in pooled[1] and pooled[1].endswith("+0.0 points [+0.0, +0.0]: **not shown above "
                                                                    "top-down**.")
+
+
+def test_a_hand_read_from_its_urdf_is_named_so_and_its_networks_are_judged_beside_top_down():
+    read = [row(s, 0, with_heuristics(7, 5), 0.008) for s in (0, 1)]
+    for entry in read:
+        entry["made"] |= {"gripper": "panda", "urdf": "franka_panda/panda.urdf"}
+    result = {"networks": read, "shipped": None, "command": "cmd --gripper panda_urdf", "date": "d", "machine": "m",
+              "views": 8}
+    lines = own_network_section(result, 0.85)
+    assert lines[0] == ("## A network made by the two commands, the Franka Panda read from its URDF: "
+                        "`cmd --gripper panda_urdf`")
+    assert "read from pybullet_data's `franka_panda/panda.urdf`" in lines[2] and "the `panda` hand" not in lines[2]
+    assert any("against top-down on the same views" in line and line.endswith("**above top-down**.") for line in lines)

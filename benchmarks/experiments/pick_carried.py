@@ -23,7 +23,7 @@ import time
 from datetime import date
 from pathlib import Path
 
-from benchmarks.experiments.pick_own_network import ROOT, SETS, VIEWS, hand, judged
+from benchmarks.experiments.pick_own_network import ROOT, SETS, VIEWS, given, hand, judged
 from benchmarks.pages.pick_own_section import both_sets, pooled_rate
 
 HERE = Path(__file__).resolve().parents[1]
@@ -32,11 +32,8 @@ RESULTS = HERE / "results" / "pick_carried.json"
 
 def hands() -> dict[str, str | dict]:
     """Each hand measured: its name here -> what `hand` takes."""
-    import pybullet_data
-
-    urdf = str(Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf")
     return {"panda": "panda", "robotiq_2f85": "robotiq_2f85", "robotiq_2f140": "robotiq_2f140",
-            "panda_urdf": {"urdf": urdf}}
+            "panda_urdf": given("panda_urdf")}
 
 
 def pooled(picks: dict) -> dict:
@@ -102,10 +99,10 @@ def main() -> None:
     parser.add_argument("--hands", default=",".join(hands()), help="Hands to measure (again).")
     wanted = parser.parse_args().hands.split(",")
     kept = {h["hand"]: h for h in json.loads(RESULTS.read_text())["hands"]} if RESULTS.is_file() else {}
-    for name, given in hands().items():
+    for name, fields in hands().items():
         if name not in wanted:
             continue
-        kept[name] = measured(name, given)
+        kept[name] = measured(name, fields)
         ordered = [kept[k] for k in hands() if k in kept]  # written as each hand lands
         result = {"command": ".venv/bin/python -m benchmarks.experiments.pick_carried", "views": VIEWS,
                   "date": date.today().isoformat(), "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}",

@@ -7,7 +7,9 @@ grasps checked), the network chooser alone, beside the shipped network on the sa
     .venv/bin/python -m benchmarks.experiments.pick_own_network [--label-seeds 0,1] [--fit-seeds 0,1]
         [--gripper panda] [--objects SOURCE] [--start-from shipped] [--label-clearance M] [--again]
 
-With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it; ``--objects`` labels
+With ``--gripper panda`` the Franka hand labels and picks, beside the network shipped for it; with ``--gripper
+panda_urdf`` the Franka Panda read from pybullet_data's URDF (none ships for it: each network is judged beside random
+and top-down, as for any hand none ships for); ``--objects`` labels
 other objects (pick-labels' default today; more of them: more labels); ``--start-from shipped`` starts each fit
 from the network shipped for the default job's gripper (`onepiece pick-train --start-from shipped`);
 ``--label-clearance`` plans the labels' candidates with the open gripper that high over the table (default: the
@@ -34,11 +36,22 @@ HERE = Path(__file__).resolve().parents[1]
 ROOT = HERE.parent
 VIEWS = 8
 SETS = ("household", "unseen")
+READ_FROM_URDF = {"panda_urdf": ("franka_panda", "panda.urdf")}  # --gripper names of hands read from pybullet_data
 FIRST_OBJECTS = "pybullet:random_urdfs[0:64]"  # pick-labels' default objects when this experiment began
 
 
 def named(gripper: str | None) -> str:
     return "own_network" + ("" if gripper is None else f"_{gripper}")
+
+
+def given(gripper: str | None) -> str | dict | None:
+    """What a spec's ``gripper`` field takes for the ``--gripper`` name: a preset's name as it is, a hand read from
+    a URDF (READ_FROM_URDF) as ``{"urdf": PATH}``."""
+    if gripper not in READ_FROM_URDF:
+        return gripper
+    import pybullet_data
+
+    return {"urdf": str(Path(pybullet_data.getDataPath()).joinpath(*READ_FROM_URDF[gripper]))}
 
 
 def tag(objects: str | None) -> str:
@@ -80,11 +93,12 @@ def labels(seed: int, gripper: str | None, objects: str | None = None,
 
     folder = ROOT / "data" / named(gripper) / f"labels_{height_tag(clearance)}{tag(objects)}s{seed}"
     spec = PickLabelSpec(output=str(folder), seed=seed, objects=objects or FIRST_OBJECTS,
-                         plan=PlanSpec(table_clearance=clearance), **({"gripper": gripper} if gripper else {}))
+                         plan=PlanSpec(table_clearance=clearance), **({"gripper": given(gripper)} if gripper else {}))
     path = labels_made(spec) or run_pick_labels(spec)
     made = read_pick_labels(path)
     return path, {"seed": seed, "objects": spec.objects, "views": spec.views, "per_view": spec.per_view,
                   "table_clearance": clearance, "gripper": spec.gripper.name, "labels": len(made),
+                  **({"urdf": "/".join(READ_FROM_URDF[gripper])} if gripper in READ_FROM_URDF else {}),
                   "success_rate": round(float(made.success.mean()), 4),
                   "core_seconds": made.attrs["core_seconds"], "wall_seconds": made.attrs["wall_seconds"]}
 
@@ -128,10 +142,12 @@ def judged(checkpoint: Path | None, name: str, gripper: str | None, others: tupl
 
 
 def hand(gripper: str | dict | None):
-    """The GripperSpec of the preset ``gripper`` (or fields, or ``{"urdf": PATH}``; None: the default job's)."""
+    """The GripperSpec of the preset ``gripper`` (or a READ_FROM_URDF name, or fields, or ``{"urdf": PATH}``; None:
+    the default job's)."""
     from onepiece_dist.gripper.presets import gripper_fields
     from onepiece_dist.specs.job import GripperSpec
 
+    gripper = given(gripper) if isinstance(gripper, str) else gripper
     return GripperSpec.model_validate(gripper_fields(gripper)) if gripper else GripperSpec()
 
 
@@ -162,7 +178,8 @@ def main() -> None:
     parser.add_argument("--label-seeds", default="0,1")
     parser.add_argument("--fit-seeds", default="0,1")
     parser.add_argument("--gripper", default=None,
-                        help="a gripper preset (panda, robotiq_2f85, ...); default: the default job's")
+                        help="a gripper preset (panda, robotiq_2f85, ...) or panda_urdf (the Franka Panda read from "
+                             "pybullet_data's URDF); default: the default job's")
     parser.add_argument("--objects", default=None, help=f"pick-labels --objects (default: {FIRST_OBJECTS})")
     parser.add_argument("--start-from", default=None, choices=("shipped",),
                         help="pick-train --start-from shipped: each fit starts from the default job's shipped network")

@@ -81,11 +81,15 @@ def _row(n: dict) -> str:
 
 def _hand(made: dict) -> str:
     gripper = made.get("gripper", "onepiece_box")
+    if "urdf" in made:
+        return f"the Franka Panda's hand read from pybullet_data's `{made['urdf']}` (`--gripper` a YAML naming it)"
     return "the default job's box gripper" if gripper == "onepiece_box" else f"the `{gripper}` hand (`--gripper`)"
 
 
 def _title(made: dict) -> str:
     gripper = made.get("gripper", "onepiece_box")
+    if "urdf" in made:
+        return ", the Franka Panda read from its URDF"
     return {"onepiece_box": "", "franka_panda": ", the Franka hand"}.get(gripper, f", the `{gripper}` hand")
 
 

@@ -191,8 +191,8 @@ def _dense_line(plan: dict) -> str:
 # results rendered after the benchmark's, in this order
 SECTIONS = ("pick_table_gap", "pick_table_gap_panda", "pick_table_gap_robotiq_2f85", "pick_table_gap_robotiq_2f140",
             "pick_plan_options", "pick_score_draws", "pick_relabelled", "pick_own_network", "pick_own_network_panda",
-            "pick_own_network_robotiq_2f85",
-            "pick_own_network_robotiq_2f140", "pick_carried", "pick_panda", "pick_panda_check", "pick_clutter_panda",
+            "pick_own_network_robotiq_2f85", "pick_own_network_robotiq_2f140", "pick_own_network_panda_urdf",
+            "pick_carried", "pick_panda", "pick_panda_check", "pick_clutter_panda",
             "pick_clutter_panda_pile", "pick_clearance_panda",
             "pick_clearance_panda_pile", "pick_ceiling_panda", "pick_clutter", "pick_clutter_pile", "pick_clearance",
             "pick_clearance_pile", "pick_depth_noise", "pick_depth_noise_panda", "pick_noise_views",
@@ -236,6 +236,7 @@ def render_picks_page() -> str:
               "pick_own_network_panda": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f85": lambda r: own_network_section(r, target),
               "pick_own_network_robotiq_2f140": lambda r: own_network_section(r, target),
+              "pick_own_network_panda_urdf": lambda r: own_network_section(r, target),
               "pick_carried": carried_section,
               "pick_panda": lambda r: panda_section(r, picks, load("pick_panda_50_iterations"),
                                                     load("pick_panda_then"), _shipped_panda(shipped_panda)),
