@@ -117,6 +117,7 @@ def test_a_hands_networks_are_judged_against_top_down_over_their_seeds_together_
 
 def test_a_hand_read_from_its_urdf_is_named_so_and_its_networks_are_judged_beside_top_down():
     read = [row(s, 0, with_heuristics(7, 5), 0.008) for s in (0, 1)]
+    read += [row(s, 0, with_heuristics(6, 5), 0.008, start_from="shipped") for s in (0, 1)]  # no 2 mm rows
     for entry in read:
         entry["made"] |= {"gripper": "panda", "urdf": "franka_panda/panda.urdf"}
     result = {"networks": read, "shipped": None, "command": "cmd --gripper panda_urdf", "date": "d", "machine": "m",
@@ -126,3 +127,5 @@ def test_a_hand_read_from_its_urdf_is_named_so_and_its_networks_are_judged_besid
                         "`cmd --gripper panda_urdf`")
     assert "read from pybullet_data's `franka_panda/panda.urdf`" in lines[2] and "the `panda` hand" not in lines[2]
     assert any("against top-down on the same views" in line and line.endswith("**above top-down**.") for line in lines)
+    started = [line for line in lines if line.startswith("Against the networks fitted from fresh weights")]
+    assert len(started) == 1 and "over both sets: -12.5 points" in started[0]  # every object one view lower

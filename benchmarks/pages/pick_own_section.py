@@ -183,11 +183,12 @@ def _same_seeds(networks: list[dict], base: list[dict], set_name: str | None = N
 
 def _base(networks: list[dict], groups: dict[Group, list[dict]]) -> tuple[list[dict], str]:
     """The networks ``networks`` are paired against and what they are: labels made higher over the table against
-    those made at the 2 mm before, on the same objects and fitted the same way; else a fit started from the shipped
-    network against the fresh fits on the same labels; else fresh fits against those labelled on FIRST_OBJECTS."""
+    those made at the 2 mm before, on the same objects and fitted the same way, where there are such; else a fit
+    started from the shipped network against the fresh fits on the same labels; else fresh fits against those
+    labelled on FIRST_OBJECTS."""
     objects, height, started = _group(networks[0])
-    if height != PLANNER_CLEARANCE_BEFORE:
-        return (groups.get((objects, PLANNER_CLEARANCE_BEFORE, started), []),
+    if height != PLANNER_CLEARANCE_BEFORE and (objects, PLANNER_CLEARANCE_BEFORE, started) in groups:
+        return (groups[objects, PLANNER_CLEARANCE_BEFORE, started],
                 f"labelled {1000 * PLANNER_CLEARANCE_BEFORE:g} mm over the table on the same objects, fitted the "
                 "same way,")
     if started:
