@@ -4,7 +4,7 @@ network and the top-down baseline on the same views."""
 
 from __future__ import annotations
 
-from benchmarks.pages.pick_own_section import both_sets, cell, pooled_cell, pooled_rate
+from benchmarks.pages.pick_own_section import both_sets, cell, heuristic_picks, pooled_cell, pooled_rate
 from benchmarks.pages.pick_trials_section import VIEWS
 from onepiece_dist.stats.intervals import paired_gain
 
@@ -13,10 +13,6 @@ SETS = ("household", "unseen")
 
 def _name(hand: dict) -> str:
     return hand["gripper"] + (" read from its URDF" if hand["hand"].endswith("_urdf") else "")
-
-
-def _top_down(picks: dict) -> dict:
-    return {s: picks[s]["others"]["top_down"] for s in SETS}
 
 
 def _region(hand: dict) -> str:
@@ -51,7 +47,7 @@ def carried_section(result: dict) -> list[str]:
         made = hand.get("made")
         rows = (("carried", carried), *((("its own", own),) if own else ()),
                 *(((f"made by pick-labels and pick-train ({made['labels']} labels)", made["picks"]),) if made else ()),
-                ("top-down", _top_down(carried)))
+                ("top-down", heuristic_picks(carried)))
         lines += [f"| {_name(hand)} | {_region(hand)} | {name} | {cell(p['household'])} | {cell(p['unseen'])} | "
                   f"{pooled_cell(p)} |" for name, p in rows]
     lines.append("")
@@ -61,13 +57,13 @@ def carried_section(result: dict) -> list[str]:
         against_own = (f"against its {'own' if own else 'made'} network {_against(carried, mine, SETS)} over both "
                        f"sets, {_against(carried, mine, ('household',))} on the household set; " if mine else
                        "no network ships for it; ")
-        made = (hand.get("made") or {}).get("picks")
-        made_line = (f" The made network against top-down: {_against(made, _top_down(carried), SETS)} over both sets."
+        made, top_down = (hand.get("made") or {}).get("picks"), heuristic_picks(carried)
+        made_line = (f" The made network against top-down: {_against(made, top_down, SETS)} over both sets."
                      if made else "")
         lines += [f"- {_name(hand)}, carried, paired over objects: {against_own}against top-down "
-                  f"{_against(carried, _top_down(carried), SETS)} over both sets.{made_line}"]
+                  f"{_against(carried, top_down, SETS)} over both sets.{made_line}"]
     below = [_name(h) for h in result["hands"]
-             if pooled_rate(h["carried_picks"])[0] < pooled_rate(_top_down(h["carried_picks"]))[0]]
+             if pooled_rate(h["carried_picks"])[0] < pooled_rate(heuristic_picks(h["carried_picks"]))[0]]
     lines += ["", f"Carried to {', '.join(below) or 'none of them'} the network picks less than top-down over both "
               "sets: carrying is asked for (`--carry`), not assumed. A hand whose closing region is smaller than "
               "the network's in any extent is refused even so, naming the "

@@ -20,6 +20,11 @@ def both_sets(picks: dict) -> dict[str, int]:
     return {name: n for set_name in SETS for name, n in picks[set_name]["per_object"].items()}
 
 
+def heuristic_picks(picks: dict, method: str = "top_down") -> dict:
+    """The picks of the heuristic ``method`` judged on the same views as a network's ``picks``, set by set."""
+    return {s: picks[s]["others"][method] for s in SETS}
+
+
 def pooled_rate(picks: dict) -> tuple[float, tuple[float, float]]:
     """The first-attempt rate over both sets' objects and its interval over objects."""
     rates = np.array([n / VIEWS for n in both_sets(picks).values()])
@@ -142,7 +147,7 @@ def _beside_heuristics(networks: list[dict], target: float) -> list[str]:
              + "--- | " * len(HEURISTICS) + "--- |"]
     for n in networks:
         picks = n["picks"]
-        others = {m: {s: picks[s]["others"][m] for s in SETS} for m in HEURISTICS}
+        others = {m: heuristic_picks(picks, m) for m in HEURISTICS}
         gain = paired_gain([both_sets(picks)], [both_sets(others["top_down"])], VIEWS)
         lines.append(f"| {_source(n)} | {n['label_seed']} | {n['fit_seed']} | {pooled_cell(picks)} | "
                      + " | ".join(pooled_cell(others[m]) for m in HEURISTICS) + f" | {gain_words(gain)} |")
@@ -158,7 +163,7 @@ def _groups_against_top_down(networks: list[dict]) -> list[str]:
     over both sets, paired over objects over its seeds: one seed alone decides nothing, several may."""
     lines = []
     for group in (g for g in _groups(networks).values() if len(g) > 1):
-        top_down = [both_sets({s: n["picks"][s]["others"]["top_down"] for s in SETS}) for n in group]
+        top_down = [both_sets(heuristic_picks(n["picks"])) for n in group]
         gain = paired_gain([both_sets(n["picks"]) for n in group], top_down, VIEWS)
         low, high = gain.interval
         where = "above top-down" if low > 0 else "below top-down" if high < 0 else "not shown above top-down"
